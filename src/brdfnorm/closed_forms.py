@@ -1,0 +1,81 @@
+"""Closed-form albedos and normalization factors from the seed articles, and the folklore ones.
+
+Sources
+-------
+* Seed 000, "Phong Normalization Factor derivation": original Phong ∫cos^n θ dω = 2π/(n+1) (Eq. 1-2), so the
+  factor (n+1)/2π; the modified (BRDF) Phong ∫cos^(n+1) θ dω = 2π/(n+2), factor (n+2)/2π; Blinn-Phong at
+  L = N, ∫cos^n(θ/2) cos θ dω = 8π(2^(−n/2)+n)/((n+2)(n+4)) (Eq. 3 and the last display), "not (n+8)/8π".
+* (n+2)/2π normalizes the *distribution* (N·H)^n over projected half-vector solid angle,
+  ∫(N·H)^n (N·H) dω_h = 2π/(n+2) — a different quantity from the albedo, often confused with it.
+
+Every entry here is checked against quadrature in the tests; approximations are labelled as such.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def phong_original_albedo_normal(n: np.ndarray | float) -> np.ndarray:
+    """Albedo of the original Phong lobe max(0,R·V)^n/(N·L) at V = N: 2π/(n+1) (seed 000, Eq. 2)."""
+    return 2.0 * np.pi / (np.asarray(n, dtype=float) + 1.0)
+
+
+def phong_modified_albedo_normal(n: np.ndarray | float) -> np.ndarray:
+    """Albedo of the modified Phong lobe max(0,R·V)^n at normal incidence: 2π/(n+2) (seed 000)."""
+    return 2.0 * np.pi / (np.asarray(n, dtype=float) + 2.0)
+
+
+def blinn_phong_albedo_normal(n: np.ndarray | float) -> np.ndarray:
+    """Albedo of max(0,N·H)^n at L = N (equivalently V = N): 8π(2^(−n/2)+n)/((n+2)(n+4)) (seed 000)."""
+    n = np.asarray(n, dtype=float)
+    return 8.0 * np.pi * (np.exp2(-n / 2.0) + n) / ((n + 2.0) * (n + 4.0))
+
+
+def blinn_phong_folklore_factor(n: np.ndarray | float) -> np.ndarray:
+    """The folklore Blinn-Phong factor (n+8)/8π — an *approximation* of 1/blinn_phong_albedo_normal."""
+    return (np.asarray(n, dtype=float) + 8.0) / (8.0 * np.pi)
+
+
+def ndf_normalization_factor(n: np.ndarray | float) -> np.ndarray:
+    """(n+2)/2π, which makes (N·H)^n integrate to 1 against (N·H) dω_h (a distribution, not an albedo)."""
+    return (np.asarray(n, dtype=float) + 2.0) / (2.0 * np.pi)
+
+
+def ndf_projected_integral(n: np.ndarray | float) -> np.ndarray:
+    """∫ (N·H)^n (N·H) dω_h over the hemisphere = 2π/(n+2); the reciprocal of :func:`ndf_normalization_factor`."""
+    return 2.0 * np.pi / (np.asarray(n, dtype=float) + 2.0)
+
+
+@dataclass(frozen=True)
+class ClosedForm:
+    """A named formula: what it gives, whether it is exact, and where it comes from."""
+
+    name: str
+    formula: str
+    quantity: str  # "albedo" or "factor"
+    exact: bool
+    source: str
+    function: Callable[[np.ndarray | float], np.ndarray]
+
+
+CLOSED_FORMS: dict[str, ClosedForm] = {
+    form.name: form
+    for form in (
+        ClosedForm("phong-original", "2π/(n+1)", "albedo", True, "seed 000", phong_original_albedo_normal),
+        ClosedForm("phong-modified", "2π/(n+2)", "albedo", True, "seed 000", phong_modified_albedo_normal),
+        ClosedForm(
+            "blinn-phong-normal", "8π(2^(−n/2)+n)/((n+2)(n+4))", "albedo", True, "seed 000",
+            blinn_phong_albedo_normal,
+        ),
+        ClosedForm(
+            "blinn-phong-folklore", "(n+8)/(8π)", "factor", False, "folklore (seed 000 refutes it)",
+            blinn_phong_folklore_factor,
+        ),
+        ClosedForm("ndf-normalization", "(n+2)/(2π)", "factor", True, "NDF normalization",
+                   ndf_normalization_factor),
+    )
+}

@@ -1,0 +1,54 @@
+"""The project's exceptions: every bad input ends in one of these, never in a bare traceback.
+
+The CLI prints ``error: <where>: <message>`` on one line and exits 2 for a :class:`BrdfnormError`
+(bad input or usage), 1 for anything else (an internal error).
+"""
+
+from __future__ import annotations
+
+
+class BrdfnormError(Exception):
+    """Base class: a problem with what the user gave us (a file, an argument, a parameter)."""
+
+    def __init__(self, message: str, where: str | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.where = where
+
+    def __str__(self) -> str:
+        return f"{self.where}: {self.message}" if self.where else self.message
+
+
+class ParameterError(BrdfnormError, ValueError):
+    """A model parameter is unknown, of the wrong type, or outside a hard limit."""
+
+
+class ArgumentError(BrdfnormError, ValueError):
+    """A command-line or API argument is malformed (``where`` names the argument, e.g. ``--theta``)."""
+
+
+class ModelNotFoundError(BrdfnormError, LookupError):
+    """Neither a built-in model name nor a readable file."""
+
+
+class BrdfFileError(BrdfnormError):
+    """A problem in a ``.brdf`` file, located at ``FILE:LINE:COL`` in the file's own numbering."""
+
+    def __init__(self, message: str, path: str, line: int | None = None, column: int | None = None) -> None:
+        where = str(path)
+        if line is not None:
+            where += f":{line}"
+            if column is not None:
+                where += f":{column}"
+        super().__init__(message, where)
+        self.path = str(path)
+        self.line = line
+        self.column = column
+
+
+class EvaluationError(BrdfnormError, ArithmeticError):
+    """A BRDF could not be evaluated (non-finite values, loop budget exhausted, ...)."""
+
+
+class OutputError(BrdfnormError, OSError):
+    """An output file or directory cannot be written."""

@@ -1,0 +1,16 @@
+"""Built-in lobes and the registry that names them (the names are the CLI's model names)."""
+
+from __future__ import annotations
+
+from .base import Lobe, Model, Over, mirror
+from .blinn_phong import BlinnPhong
+from .blinn_phong_gaussian import BlinnPhongGaussian
+from .lambert import Lambert
+from .phong import PhongModified, PhongOriginal
+
+REGISTRY: dict[str, type[Model]] = {
+    cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian)
+}
+
+__all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "BlinnPhong", "BlinnPhongGaussian", "Lambert",
+           "PhongModified", "PhongOriginal"]

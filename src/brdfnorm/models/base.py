@@ -1,0 +1,132 @@
+"""The model interface every lobe implements, built-in (numpy) or read from a ``.brdf`` file (GLSL).
+
+Following pbrt-v4's BxDFs, a model is one small class that evaluates one lobe and knows a few facts about
+it. Directions live in the local frame N = +z, X = +x, Y = +y; ``L`` is the light (incoming) direction
+ω_i and ``V`` the view (outgoing) direction ω_o, both pointing away from the surface, as arrays of shape
+``(..., 3)``. Parameter values may be arrays broadcasting against the direction batch ``(...)`` — that is
+how a sweep over a parameter is integrated in one vectorized pass.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..parameters import Parameter, resolve
+
+Over = Literal["light", "view"]
+
+
+@dataclass(frozen=True)
+class Lobe:
+    """Where the integrand f(L, V)(N·ω) peaks as a function of the integration direction ω.
+
+    A hint for the integrator (:mod:`brdfnorm.integrate`), never a correctness requirement:
+    ``direction`` (..., 3) unit vector of the peak, ``width`` (...) its angular scale in radians,
+    ``support`` (...) the angle around ``direction`` beyond which the integrand is exactly zero (π if none).
+    """
+
+    direction: np.ndarray
+    width: np.ndarray
+    support: np.ndarray
+
+
+def mirror(direction: np.ndarray) -> np.ndarray:
+    """Mirror direction about N = +z: (x, y, z) -> (-x, -y, z)."""
+    out = np.array(direction, dtype=float, copy=True)
+    out[..., :2] *= -1.0
+    return out
+
+
+def normal_lobe(fixed: np.ndarray) -> Lobe:
+    """The uninformed hint: a broad lobe around N with no support limit."""
+    shape = np.shape(fixed)[:-1]
+    direction = np.zeros(shape + (3,))
+    direction[..., 2] = 1.0
+    return Lobe(direction, np.ones(shape), np.full(shape, np.pi))
+
+
+class Model(ABC):
+    """A BRDF with declared parameters, bound to parameter values.
+
+    Subclasses define :attr:`name`, :attr:`parameters`, :meth:`evaluate`, and optionally
+    :meth:`lobe`, :meth:`closed_form_albedo` and :meth:`projected`.
+    """
+
+    name: str = "model"
+    #: One-line formula shown by ``brdfnorm models``.
+    formula: str = ""
+    #: Declared parameters (name, kind, range, default).
+    parameters: tuple[Parameter, ...] = ()
+    #: Number of output channels (1 for a scalar lobe, 3 for RGB).
+    channels: int = 1
+    #: True when the albedo depends only on θ (not φ) of the fixed direction.
+    isotropic: bool = True
+
+    def __init__(self, **values: object) -> None:
+        self._params = resolve(self.parameters, values, where=self.name)
+
+    @property
+    def params(self) -> dict:
+        """The bound parameter values (defaults overridden by what was given)."""
+        return dict(self._params)
+
+    def with_params(self, **values: object) -> Model:
+        """A copy bound to other parameter values."""
+        clone = object.__new__(type(self))
+        clone.__dict__.update(self.__dict__)
+        merged = {**self._params, **values}
+        clone._params = resolve(self.parameters, merged, where=self.name)
+        return clone
+
+    def parameter(self, name: str) -> Parameter:
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        from ..errors import ParameterError
+
+        raise ParameterError(f"unknown parameter {name!r}", where=self.name)
+
+    # -- evaluation -------------------------------------------------------------------------------
+    @abstractmethod
+    def evaluate(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """f(L, V) for directions (..., 3) and parameter values broadcasting against (...): (..., C)."""
+
+    def projected(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """f(L, V)·(N·L), the light-integral integrand (overridden where the product is better behaved)."""
+        return self.evaluate(L, V, params) * L[..., 2:3]
+
+    def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """f(L, V) at the bound parameters; L and V broadcast against each other: (..., C)."""
+        L = np.asarray(L, dtype=float)
+        V = np.asarray(V, dtype=float)
+        L, V = np.broadcast_arrays(L, V)
+        return self.evaluate(L, V, self._params)
+
+    # -- facts for the integrator -------------------------------------------------------------------
+    def lobe(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> Lobe:
+        """Peak of the integrand over the free direction, given the fixed one (hint only)."""
+        return normal_lobe(fixed)
+
+    def closed_form_albedo(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> np.ndarray:
+        """Exact albedo where a closed form applies, NaN elsewhere; (..., C)."""
+        return np.full(np.shape(fixed)[:-1] + (self.channels,), np.nan)
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
+        return f"{type(self).__name__}({args})"
+
+
+def scalar_param(params: Mapping[str, object], name: str) -> np.ndarray:
+    """A float parameter as an array with a trailing channel-less shape, ready to broadcast."""
+    return np.asarray(params[name], dtype=float)
+
+
+def at_normal(fixed: np.ndarray) -> np.ndarray:
+    """Mask of fixed directions equal to N (where normal-incidence closed forms apply)."""
+    fixed = np.asarray(fixed, dtype=float)
+    return (fixed[..., 2] >= 1.0 - 1e-15) & (np.abs(fixed[..., 0]) + np.abs(fixed[..., 1]) <= 1e-15)

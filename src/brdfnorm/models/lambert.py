@@ -1,0 +1,23 @@
+"""Lambertian lobe f = reflectance/π; its albedo is the reflectance at every direction."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..parameters import Parameter
+from .base import Model, scalar_param
+
+
+class Lambert(Model):
+    name = "lambert"
+    formula = "f = reflectance / π"
+    parameters = (Parameter("reflectance", "float", 1.0, 0.0, 1.0, "diffuse reflectance (albedo)"),)
+
+    def evaluate(self, L, V, params):
+        rho = scalar_param(params, "reflectance")
+        shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(rho))
+        return np.broadcast_to(rho / np.pi, shape)[..., None] * np.ones(1)
+
+    def closed_form_albedo(self, fixed, params, over):
+        rho = scalar_param(params, "reflectance")
+        return np.broadcast_to(rho, np.broadcast_shapes(np.shape(fixed)[:-1], np.shape(rho)))[..., None] * 1.0

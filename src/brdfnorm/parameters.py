@@ -1,0 +1,108 @@
+"""Declared model parameters: name, kind, range and default, and validation of user values.
+
+Built-in lobes declare *hard* ranges (a negative Phong exponent is meaningless and refused); `.brdf` files
+declare *slider* ranges (BRDF Explorer's UI limits), so values outside them are accepted with a warning.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .errors import ParameterError
+
+Kind = Literal["float", "bool", "color"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One declared parameter of a model."""
+
+    name: str
+    kind: Kind = "float"
+    default: float | bool | tuple[float, float, float] = 0.0
+    minimum: float | None = None
+    maximum: float | None = None
+    description: str = ""
+    strict: bool = True  # True: range is a hard limit; False: slider range, warn only
+
+    def describe_range(self) -> str:
+        if self.kind == "bool":
+            return "0 or 1"
+        lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
+        hi = "inf" if self.maximum is None else f"{self.maximum:g}"
+        return f"[{lo}, {hi}]"
+
+    def parse(self, text: str) -> float | bool | tuple[float, float, float]:
+        """Parse a command-line value (``n=512``, ``normalized=0``, ``baseColor=0.5,0.5,0.5``)."""
+        text = text.strip()
+        try:
+            if self.kind == "bool":
+                lowered = text.lower()
+                if lowered in ("1", "true", "yes", "on"):
+                    return True
+                if lowered in ("0", "false", "no", "off"):
+                    return False
+                raise ValueError
+            if self.kind == "color":
+                parts = [float(p) for p in text.split(",")]
+                if len(parts) == 1:
+                    parts = parts * 3
+                if len(parts) != 3:
+                    raise ValueError
+                return tuple(parts)  # type: ignore[return-value]
+            return float(text)
+        except ValueError:
+            expected = {"bool": "0 or 1", "color": "R,G,B (three numbers)", "float": "a number"}[self.kind]
+            raise ParameterError(f"expected {expected}, got {text!r}", where=f"parameter {self.name}") from None
+
+    def validate(self, value: object) -> float | bool | tuple[float, float, float] | np.ndarray:
+        """Check type and range; returns the value in canonical form (arrays allowed for sweeps)."""
+        where = f"parameter {self.name}"
+        if isinstance(value, str):
+            value = self.parse(value)
+        if self.kind == "bool":
+            if isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, float)) and value in (0, 1)):
+                return bool(value)
+            raise ParameterError(f"expected 0 or 1, got {value!r}", where=where)
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"expected a number, got {value!r}", where=where) from None
+        if self.kind == "color" and array.ndim == 0:
+            array = np.full(3, float(array))
+        if self.kind == "color" and array.shape[-1:] != (3,):
+            raise ParameterError(f"expected 3 components (R,G,B), got {value!r}", where=where)
+        if self.kind == "float" and array.ndim == 0:
+            pass
+        if not np.all(np.isfinite(array)):
+            raise ParameterError(f"must be finite, got {value!r}", where=where)
+        low = self.minimum is not None and np.any(array < self.minimum)
+        high = self.maximum is not None and np.any(array > self.maximum)
+        if low or high:
+            message = f"value {value!r} outside {self.describe_range()}"
+            if self.strict:
+                raise ParameterError(message, where=where)
+            warnings.warn(f"{where}: {message} (the file's slider range; evaluating anyway)", stacklevel=3)
+        if array.ndim == 0:
+            return float(array)
+        if self.kind == "color" and array.ndim == 1:
+            return tuple(float(c) for c in array)  # type: ignore[return-value]
+        return array
+
+
+def resolve(parameters: tuple[Parameter, ...], values: Mapping[str, object], *, where: str = "") -> dict:
+    """Defaults overridden by ``values``; unknown names are refused with the list of known ones."""
+    known = {p.name: p for p in parameters}
+    for name in values:
+        if name not in known:
+            names = ", ".join(known) or "none"
+            raise ParameterError(f"unknown parameter {name!r} (known: {names})", where=where or None)
+    resolved = {}
+    for p in parameters:
+        resolved[p.name] = p.validate(values[p.name]) if p.name in values else p.default
+    return resolved
