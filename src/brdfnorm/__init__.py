@@ -3,8 +3,36 @@
 Directional albedo E(V) = ∫ f(L, V)(N·L) dL over the upper hemisphere (seed 002's statement), normalization
 factors 1/E under a named convention, fits of cheap formulas, shader code, and checks of the seed articles.
 Frame: N = +z, X = +x, Y = +y; angles in radians in the API, degrees on the command line.
+
+>>> import brdfnorm as bn
+>>> m = bn.load("blinn-phong", n=512)
+>>> round(float(bn.albedo(m, 0.0, method="quadrature", rtol=1e-12).value[0]), 12)
+0.048517341979
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from .albedo import AlbedoResult, albedo
+from .errors import BrdfnormError, ModelNotFoundError
+from .models import REGISTRY, Model
+from .normalize import NormalizationResult, normalize
+
 __version__ = "0.1.0"
+__all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
+           "normalize"]
+
+
+def load(name_or_path: str | Path, **params: object) -> Model:
+    """A built-in model by name (``brdfnorm models`` lists them) or a BRDF Explorer ``.brdf`` file by path."""
+    key = str(name_or_path)
+    if key in REGISTRY:
+        return REGISTRY[key](**params)
+    path = Path(key)
+    if path.suffix == ".brdf" or path.exists():
+        from .brdffile import load_brdf  # the GLSL toolchain loads only when a file is asked for
+
+        return load_brdf(path, **params)
+    raise ModelNotFoundError(f"unknown model {key!r}: not a built-in ({', '.join(REGISTRY)}) and no such file",
+                             where="model")

@@ -108,9 +108,12 @@ class Model(ABC):
         return self.evaluate(L, V, self._params)
 
     # -- facts for the integrator -------------------------------------------------------------------
-    def lobe(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> Lobe:
-        """Peak of the integrand over the free direction, given the fixed one (hint only)."""
-        return normal_lobe(fixed)
+    def lobe(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> Lobe | None:
+        """Peak of the integrand over the free direction, given the fixed one (a hint only).
+
+        None (the default) lets the integrator find it by sampling (:func:`brdfnorm.integrate.estimate_lobe`).
+        """
+        return None
 
     def closed_form_albedo(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> np.ndarray:
         """Exact albedo where a closed form applies, NaN elsewhere; (..., C)."""

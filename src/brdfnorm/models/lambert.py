@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..parameters import Parameter
-from .base import Model, scalar_param
+from .base import Model, normal_lobe, scalar_param
 
 
 class Lambert(Model):
@@ -17,6 +17,9 @@ class Lambert(Model):
         rho = scalar_param(params, "reflectance")
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(rho))
         return np.broadcast_to(rho / np.pi, shape)[..., None] * np.ones(1)
+
+    def lobe(self, fixed, params, over):
+        return normal_lobe(fixed)
 
     def closed_form_albedo(self, fixed, params, over):
         rho = scalar_param(params, "reflectance")

@@ -1,0 +1,256 @@
+"""Directional albedo of a model over many directions (and parameter values) at once.
+
+E(V) = ∫_H f(L, V)(N·L) dL — seed 002's energy-normalization integral, the light integrated with the view
+fixed (``over="light"``, the default). ``over="view"`` is the other reading: the light fixed and
+∫_H f(L, V)(N·V) dV; the two differ for non-reciprocal lobes such as the original Phong (2π/(n+1) against
+2π/(n+2) at normal incidence).
+
+Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.integrate`, any model),
+``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
+substituted silently), and those registered by other modules (``"series"`` for Blinn-Phong, seed 002's
+hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ArgumentError, EvaluationError
+from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
+from .models.base import Model, Over
+
+
+@dataclass(frozen=True)
+class AlbedoResult:
+    """Albedo over a batch of directions: arrays of the broadcast shape S of (theta, phi, parameters)."""
+
+    value: np.ndarray  # (*S, C)
+    error: np.ndarray  # (*S, C) error estimate (absolute)
+    evaluations: np.ndarray  # (*S,) integrand evaluations
+    converged: np.ndarray  # (*S,) bool
+    method: str
+    theta: np.ndarray  # (*S,) radians
+    phi: np.ndarray  # (*S,) radians
+    over: Over
+    params: dict = field(default_factory=dict)  # parameter values broadcast to S (colors: (*S, 3))
+    nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A batch of albedo integrals, flattened: K cases with their fixed direction and parameter values."""
+
+    model: Model
+    shape: tuple[int, ...]
+    theta: np.ndarray  # (*S,)
+    phi: np.ndarray  # (*S,)
+    fixed: np.ndarray  # (K, 3)
+    params: dict  # per parameter: shared by all cases, or one value per case (names in ``per_case``)
+    per_case: frozenset
+    broadcast_params: dict  # per parameter, broadcast to S for reporting
+    over: Over
+
+    def case_params(self, case: np.ndarray) -> dict:
+        """Parameter values for a vector of case indices (shared values stay shared)."""
+        return {name: value[case] if name in self.per_case else value for name, value in self.params.items()}
+
+    def integrand(self, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+        """f·cos over the free direction ω for the cases given, shape (M, C)."""
+        fixed = self.fixed[case]
+        params = self.case_params(case)
+        with np.errstate(all="ignore"):
+            if self.over == "light":
+                return self.model.projected(omega, fixed, params)
+            return self.model.evaluate(fixed, omega, params) * omega[:, 2:3]
+
+
+def _directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    st = np.sin(theta)
+    return np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def check_angles(theta, phi) -> tuple[np.ndarray, np.ndarray]:
+    """Validate polar angles in [0, π/2) and any finite azimuth (radians)."""
+    theta = np.asarray(theta, dtype=float)
+    phi = np.asarray(phi, dtype=float)
+    if not np.all(np.isfinite(theta)) or np.any(theta < 0) or np.any(theta >= np.pi / 2):
+        raise ArgumentError("polar angles must lie in [0°, 90°) (radians [0, π/2) in the API)", where="theta")
+    if not np.all(np.isfinite(phi)):
+        raise ArgumentError("azimuths must be finite", where="phi")
+    return theta, phi
+
+
+def check_tolerance(rtol: float, atol: float) -> None:
+    if not (np.isfinite(rtol) and np.isfinite(atol)) or rtol < 0 or atol < 0 or (rtol == 0 and atol == 0):
+        raise ArgumentError("tolerances must be finite, ≥ 0 and not both 0", where="rtol")
+    if rtol and rtol < 1e-14:
+        raise ArgumentError(f"rtol {rtol:g} is below what float64 quadrature can honour (≥ 1e-14)", where="rtol")
+    if rtol >= 1:
+        raise ArgumentError(f"rtol {rtol:g} is absurd (must be < 1)", where="rtol")
+
+
+def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
+    """Broadcast angles and (possibly array-valued) parameters into a flat batch of cases."""
+    if over not in ("light", "view"):
+        raise ArgumentError(f"over must be 'light' or 'view', got {over!r}", where="over")
+    theta, phi = check_angles(theta, phi)
+    bound = model.params
+    batch_shapes = []
+    for p in model.parameters:
+        value = np.asarray(bound[p.name])
+        batch_shapes.append(value.shape[:-1] if p.kind == "color" else value.shape)
+    shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
+    theta_b, phi_b = np.broadcast_to(theta, shape), np.broadcast_to(phi, shape)
+    params, broadcast = {}, {}
+    for p, batch in zip(model.parameters, batch_shapes, strict=True):
+        value = bound[p.name]
+        tail = (3,) if p.kind == "color" else ()
+        broadcast[p.name] = np.broadcast_to(np.asarray(value, dtype=float), shape + tail)
+        params[p.name] = broadcast[p.name].reshape((-1,) + tail) if batch else value
+    fixed = _directions(theta_b, phi_b).reshape(-1, 3)
+    per_case = frozenset(p.name for p, batch in zip(model.parameters, batch_shapes, strict=True) if batch)
+    return Problem(model, shape, theta_b, phi_b, fixed, params, per_case, broadcast, over)
+
+
+# -- methods ----------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Method:
+    """An albedo method: ``applies(model, over)`` says where it can be used; ``run`` computes it."""
+
+    name: str
+    applies: Callable[[Model, Over], bool]
+    run: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]]
+    description: str = ""
+
+
+def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
+                max_evaluations: int):
+    K = problem.fixed.shape[0]
+    lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+    if lobe is None:
+        poles, widths, supports = estimate_lobe(problem.integrand, K)
+    else:
+        poles = np.broadcast_to(lobe.direction, (K, 3))
+        widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
+    try:
+        result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
+                                      nonfinite=nonfinite, max_evaluations=max_evaluations)
+    except NonFiniteIntegrand as bad:
+        fixed = problem.fixed[bad.case]
+        L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
+        raise EvaluationError(
+            f"BRDF is not finite (value {np.array2string(bad.value, precision=6)}) at "
+            f"L={_fmt(L)}, V={_fmt(V)}; pass nonfinite='zero' (--nonfinite zero) to count such values as 0",
+            where=problem.model.name,
+        ) from None
+    return result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction
+
+
+def _fmt(direction: np.ndarray) -> str:
+    return "(" + ", ".join(f"{c:.9g}" for c in direction) + ")"
+
+
+def _closed_form(problem: Problem, **_: object):
+    K = problem.fixed.shape[0]
+    value = problem.model.closed_form_albedo(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+    value = np.broadcast_to(value, (K, problem.model.channels))
+    if np.any(np.isnan(value)):
+        raise ArgumentError(
+            f"no closed form for {problem.model.name} (over the {problem.over}) at the requested directions; "
+            "closed forms hold at normal incidence (theta 0) — use method 'quadrature'", where="method")
+    error = 4.0 * np.finfo(float).eps * np.abs(value)  # a few roundings in the formula
+    return value, error, np.zeros(K, dtype=np.int64), np.ones(K, dtype=bool), None
+
+
+def _has_closed_form(model: Model, over: Over) -> bool:
+    return type(model).closed_form_albedo is not Model.closed_form_albedo
+
+
+METHODS: dict[str, Method] = {
+    "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
+                         "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
+    "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
+}
+#: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
+AUTO_ORDER: list[str] = ["quadrature"]
+
+
+def register_method(method: Method, *, auto_priority: int | None = None) -> None:
+    """Add an albedo method; with ``auto_priority`` it is also tried by ``method="auto"`` at that position."""
+    METHODS[method.name] = method
+    if auto_priority is not None and method.name not in AUTO_ORDER:
+        AUTO_ORDER.insert(auto_priority, method.name)
+
+
+def resolve_method(model: Model, over: Over, method: str) -> Method:
+    if method == "auto":
+        for name in AUTO_ORDER:
+            if METHODS[name].applies(model, over):
+                return METHODS[name]
+    if method not in METHODS:
+        raise ArgumentError(f"unknown method {method!r} (known: auto, {', '.join(METHODS)})", where="method")
+    chosen = METHODS[method]
+    if not chosen.applies(model, over):
+        raise ArgumentError(f"method {method!r} does not apply to {model.name} over the {over}", where="method")
+    return chosen
+
+
+def albedo(
+    model: Model,
+    theta,
+    phi=0.0,
+    *,
+    over: Over = "light",
+    rtol: float = 1e-10,
+    atol: float = 0.0,
+    method: str = "auto",
+    nonfinite: NonFinitePolicy = "raise",
+    max_evaluations: int = 20_000_000,
+) -> AlbedoResult:
+    """Directional albedo of ``model`` at polar angles ``theta`` and azimuths ``phi`` (radians, broadcast).
+
+    Parameter values bound to the model may be arrays (a sweep); they broadcast with ``theta`` and ``phi``.
+    Returns values of shape (*S, C) with an absolute error estimate; a point that did not reach the
+    tolerance within ``max_evaluations`` has ``converged`` False and triggers a warning.
+    """
+    check_tolerance(rtol, atol)
+    if nonfinite not in ("raise", "zero"):
+        raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {nonfinite!r}", where="nonfinite")
+    problem = make_problem(model, theta, phi, over)
+    chosen = resolve_method(model, over, method)
+    value, error, evaluations, converged, bad = chosen.run(
+        problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    S, C = problem.shape, value.shape[-1]
+    if not np.all(converged):
+        warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
+                      f"reach rtol={rtol:g} within {max_evaluations} evaluations; see the error estimates",
+                      stacklevel=2)
+    if bad is not None and np.any(bad > 0):
+        warnings.warn(f"{model.name}: non-finite BRDF values counted as 0 on up to {100 * bad.max():.3g}% of "
+                      "the hemisphere's solid angle", stacklevel=2)
+    return AlbedoResult(
+        value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
+        converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
+        params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+    )
+
+
+def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model, str | None, np.ndarray]:
+    """Bind a one-parameter sweep to the model as an array of shape (S, 1) (broadcasting against angles)."""
+    if not sweep:
+        return model, None, np.zeros(1)
+    if len(sweep) != 1:
+        raise ArgumentError("sweep one parameter at a time", where="sweep")
+    (name, values), = sweep.items()
+    parameter = model.parameter(name)
+    if parameter.kind != "float":
+        raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
+    values = np.asarray(values, dtype=float).ravel()
+    if values.size == 0:
+        raise ArgumentError(f"the sweep over {name} is empty", where="sweep")
+    return model.with_params(**{name: values[:, None]}), name, values

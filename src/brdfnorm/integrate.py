@@ -1,0 +1,383 @@
+"""Adaptive hemisphere quadrature with honest error estimates, vectorized over many integrals at once.
+
+What it computes
+----------------
+For K cases (a fixed direction and parameter values each) it integrates g_k(ω) over the upper hemisphere
+H = {ω : ω_z > 0}, where g is the cosine-weighted BRDF f(L, V)(N·L) with the other direction fixed — the
+directional albedo of seed 002, E(V) = ∫_H f(L, V)(N·L) dL.
+
+Why this design
+---------------
+Specular lobes are peaked (width ~ 2/√n rad for Blinn-Phong, 0.02 rad at n = 1e4) and, at grazing views,
+clipped by the horizon right next to their peak. Generic 2-D quadrature in (θ, φ) about N sees a narrow bump
+cut by a coordinate line that does not follow it; ``dblquad`` then returns wrong digits with no warning
+(seed 002's integral at n = 1e4, θ_o = 1.5 rad). Here, three changes of variables make the integrand smooth
+and the domain a rectangle, after which adaptive Gauss-Kronrod cubature converges geometrically:
+
+1. **Lobe-aligned polar coordinates.** Around the lobe's peak direction P (a hint from the model, or found by
+   sampling) write ω = cos α P + sin α (cos β T + sin β B), dω = sin α dα dβ, with T the unit vector towards N
+   in the plane of N and P and B = P × T. A radially symmetric lobe becomes a function of α alone.
+2. **Horizon as a coordinate line.** With s = √(1 − P_z²), ω_z = P_z cos α + s cos β sin α vanishes at
+   α_h(β) = atan2(P_z, −s cos β) ∈ (0, π). Integrating α over [0, α_max(β)] with
+   α_max = min(α_h, support) puts the horizon (and a declared support edge, e.g. R·V = 0 for Phong) on the
+   boundary of the domain instead of through its interior, so no kink is ever straddled.
+3. **Width-adapted radial map.** α = w tan(u·A(β)), A = atan(α_max/w), u ∈ [0, 1] — a Cauchy-quantile map
+   that spends about 80 % of the u range on the lobe core |α| ≲ 3w whatever the width w (the model's hint),
+   so the same few panels resolve n = 1 and n = 1e4 and heavy tails (GGX) as well as Gaussian ones.
+
+On the rectangle (β, u) ∈ [0, 2π] × [0, 1] a tensor-product Gauss-Kronrod rule (QUADPACK's G7/K15 pair,
+225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded lower-order estimates (G7 in β or in u);
+their differences are the panel's error estimate in each direction. This is the plain |K − G| estimate of
+the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the error of the reported K15 ⊗ K15
+value with a wide margin, which is what "honest" means here (the tests check estimate ≥ true error on random
+cases). Panels are bisected along their worse direction, largest errors first, until the summed estimate is
+below max(atol, rtol·|E|) for every case and channel, or the evaluation budget runs out (then
+``converged`` is False and the estimate still says how far off the value may be).
+
+Every round evaluates all panels of all unconverged cases in one vectorized call to the integrand; there is
+no Python loop per node or per case. ``scipy.integrate.cubature`` implements the same idea for a single
+integrand; it cannot share rounds across thousands of integrals or use lobe-aligned coordinates, which is
+where the speed comes from (see benchmarks/).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+NonFinitePolicy = Literal["raise", "zero"]
+
+# QUADPACK qk15 (Piessens et al., 1983): Kronrod nodes on [0, 1) mirrored, with the embedded 7-point Gauss rule
+# at every other node.
+_XGK = np.array([
+    0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
+    0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
+    0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
+    0.207784955007898467600689403773245, 0.0,
+])
+_WGK = np.array([
+    0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
+    0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
+    0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
+    0.204432940075298892414161999234649, 0.209482141084727828012999174891714,
+])
+_WG = np.array([0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
+                0.381830050505118944950369775488975, 0.417959183673469387755102040816327])
+
+NODES = np.concatenate([-_XGK[:-1], _XGK[::-1]])  # 15 nodes in [-1, 1], ascending
+KRONROD = np.concatenate([_WGK[:-1], _WGK[::-1]])
+GAUSS = np.zeros(15)
+GAUSS[1:15:2] = np.concatenate([_WG[:-1], _WG[::-1]])
+_EPS = np.finfo(float).eps
+
+#: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
+Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+class NonFiniteIntegrand(ArithmeticError):
+    """The integrand returned NaN or ±Inf at ``direction`` for ``case`` (with nonfinite="raise")."""
+
+    def __init__(self, case: int, direction: np.ndarray, value: np.ndarray) -> None:
+        super().__init__(f"non-finite integrand for case {case} at {direction}")
+        self.case = case
+        self.direction = direction
+        self.value = value
+
+
+@dataclass(frozen=True)
+class HemisphereResult:
+    """Result of :func:`integrate_hemisphere`, one row per case (scipy.integrate style)."""
+
+    value: np.ndarray  # (K, C)
+    error: np.ndarray  # (K, C) error estimate
+    evaluations: np.ndarray  # (K,) integrand evaluations
+    converged: np.ndarray  # (K,) bool
+    nonfinite_fraction: np.ndarray  # (K,) share of the hemisphere's solid angle zeroed (nonfinite="zero")
+
+
+@dataclass
+class _Panels:
+    """Panels: case index, (β, u) bounds, and — once evaluated — their estimates."""
+
+    case: np.ndarray
+    b0: np.ndarray
+    b1: np.ndarray
+    u0: np.ndarray
+    u1: np.ndarray
+    value: np.ndarray | None = None  # (R, C)
+    err_b: np.ndarray | None = None  # (R, C)
+    err_u: np.ndarray | None = None  # (R, C)
+    bad: np.ndarray | None = None  # (R,) solid angle where the integrand was non-finite
+
+    def take(self, index) -> _Panels:
+        pick = [None if a is None else a[index] for a in (self.value, self.err_b, self.err_u, self.bad)]
+        return _Panels(self.case[index], self.b0[index], self.b1[index], self.u0[index], self.u1[index], *pick)
+
+    @staticmethod
+    def join(a: _Panels, b: _Panels) -> _Panels:
+        fields = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad")
+        return _Panels(*(np.concatenate([getattr(a, f), getattr(b, f)]) for f in fields))
+
+
+def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Orthonormal (P, T, B) with T pointing from P towards N in their common plane, B = P × T."""
+    P = np.array(poles, dtype=float, copy=True)
+    # The pole must lie strictly above the horizon for α_h(β) to be positive everywhere.
+    P[:, 2] = np.maximum(P[:, 2], 1e-9)
+    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    up = np.zeros_like(P)
+    up[:, 2] = 1.0
+    T = up - P[:, 2:3] * P
+    norm = np.linalg.norm(T, axis=1, keepdims=True)
+    at_pole = norm[:, 0] < 1e-12
+    T = np.where(at_pole[:, None], np.array([1.0, 0.0, 0.0]), T / np.where(at_pole[:, None], 1.0, norm))
+    B = np.cross(P, T)
+    return P, T, B
+
+
+def _map_nodes(panels: _Panels, frame, widths, supports):
+    """Directions and weights (sin α dα dβ including the rule's Kronrod weights) at every node: (R, 15, 15)."""
+    P, T, B = frame
+    k = panels.case
+    beta_mid, beta_half = (panels.b0 + panels.b1) / 2, (panels.b1 - panels.b0) / 2
+    u_mid, u_half = (panels.u0 + panels.u1) / 2, (panels.u1 - panels.u0) / 2
+    beta = beta_mid[:, None] + beta_half[:, None] * NODES  # (R, 15)
+    u = u_mid[:, None] + u_half[:, None] * NODES  # (R, 15)
+    cos_b, sin_b = np.cos(beta), np.sin(beta)
+    pz = P[k, 2][:, None]
+    s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
+    alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[k][:, None])  # (R, 15) over β
+    w = widths[k][:, None]
+    A = np.arctan(alpha_max / w)  # (R, 15β)
+    t = np.tan(u[:, None, :] * A[:, :, None])  # (R, 15β, 15u)
+    alpha = w[:, :, None] * t
+    dalpha_du = w[:, :, None] * A[:, :, None] * (1.0 + t * t)
+    sin_a, cos_a = np.sin(alpha), np.cos(alpha)
+    radial = cos_b[:, :, None, None] * T[k][:, None, None, :] + sin_b[:, :, None, None] * B[k][:, None, None, :]
+    omega = cos_a[..., None] * P[k][:, None, None, :] + sin_a[..., None] * radial
+    jacobian = sin_a * dalpha_du * (beta_half * u_half)[:, None, None]
+    return omega, jacobian
+
+
+def _estimate(values: np.ndarray, jacobian: np.ndarray):
+    """K15⊗K15 value and the directional errors |KK − GK| (β) and |KK − KG| (u) per panel and channel."""
+    weighted = values * jacobian[..., None]  # (R, 15, 15, C)
+    over_u_k = np.einsum("rbuc,u->rbc", weighted, KRONROD)
+    over_u_g = np.einsum("rbuc,u->rbc", weighted, GAUSS)
+    kk = np.einsum("rbc,b->rc", over_u_k, KRONROD)
+    gk = np.einsum("rbc,b->rc", over_u_k, GAUSS)
+    kg = np.einsum("rbc,b->rc", over_u_g, KRONROD)
+    magnitude = np.einsum("rbuc,b,u->rc", np.abs(weighted), KRONROD, KRONROD)
+    floor = 50.0 * _EPS * magnitude  # rounding noise: QUADPACK's floor on |K − G|
+    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor)
+
+
+def integrate_hemisphere(
+    integrand: Integrand,
+    poles: np.ndarray,
+    widths: np.ndarray,
+    supports: np.ndarray,
+    *,
+    rtol: float = 1e-10,
+    atol: float = 0.0,
+    max_evaluations: int = 20_000_000,
+    nonfinite: NonFinitePolicy = "raise",
+    initial_panels: tuple[int, int] = (4, 2),
+    max_nodes_per_call: int = 1_500_000,
+) -> HemisphereResult:
+    """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
+
+    Parameters
+    ----------
+    integrand
+        ``integrand(omega, case)`` with ω of shape (M, 3) and the case index (M,) of each node; returns (M, C).
+    poles, widths, supports
+        Per case (K, 3), (K,), (K,): the lobe hint (:class:`brdfnorm.models.Lobe`).
+    rtol, atol
+        Stop when the summed error estimate ≤ max(atol, rtol·|value|) for every channel.
+    max_evaluations
+        Budget per case; a case that exhausts it is returned with ``converged=False``.
+    nonfinite
+        "raise": raise :class:`NonFiniteIntegrand` at the first NaN/Inf; "zero": count them as 0 and report
+        the share of solid angle affected.
+    """
+    poles = np.atleast_2d(np.asarray(poles, dtype=float))
+    K = poles.shape[0]
+    widths = np.broadcast_to(np.clip(np.asarray(widths, dtype=float), 1e-6, 4.0), (K,)).copy()
+    supports = np.broadcast_to(np.clip(np.asarray(supports, dtype=float), 1e-6, np.pi), (K,)).copy()
+    frame = lobe_frame(poles)
+
+    nb, nu = initial_panels
+    edges_b = np.linspace(0.0, 2.0 * np.pi, nb + 1)
+    edges_u = np.linspace(0.0, 1.0, nu + 1)
+    grid_b0, grid_u0 = np.meshgrid(edges_b[:-1], edges_u[:-1], indexing="ij")
+    grid_b1, grid_u1 = np.meshgrid(edges_b[1:], edges_u[1:], indexing="ij")
+    per_case = nb * nu
+    panels = _Panels(
+        np.repeat(np.arange(K), per_case),
+        np.tile(grid_b0.ravel(), K), np.tile(grid_b1.ravel(), K),
+        np.tile(grid_u0.ravel(), K), np.tile(grid_u1.ravel(), K),
+    )
+
+    value = np.zeros((K, 0))
+    error = np.zeros((K, 0))
+    bad_total = np.zeros(K)
+    evaluations = np.zeros(K, dtype=np.int64)
+    converged = np.zeros(K, dtype=bool)
+    nodes_per_panel = NODES.size**2
+    pool = None  # evaluated panels of unfinished cases
+    fresh = panels  # panels still to evaluate
+
+    while fresh.case.size:
+        _evaluate(fresh, integrand, frame, widths, supports, nonfinite, max_nodes_per_call)
+        np.add.at(evaluations, fresh.case, nodes_per_panel)
+        pool = fresh if pool is None else _Panels.join(pool, fresh)
+        panel_error = pool.err_b + pool.err_u
+        if value.shape[1] != pool.value.shape[1]:
+            value = np.zeros((K, pool.value.shape[1]))
+            error = np.zeros_like(value)
+
+        # Totals per unfinished case over all its panels.
+        total_value = np.zeros_like(value)
+        total_error = np.zeros_like(value)
+        np.add.at(total_value, pool.case, pool.value)
+        np.add.at(total_error, pool.case, panel_error)
+        tolerance = np.maximum(atol, rtol * np.abs(total_value))
+        ratio = _normalized(total_error, tolerance)
+        present = np.zeros(K, dtype=bool)
+        present[pool.case] = True
+        case_ok = present & np.all(ratio <= 1.0, axis=1)
+        out_of_budget = evaluations + 2 * nodes_per_panel > max_evaluations
+        converged |= case_ok
+        active = present & ~(case_ok | out_of_budget)
+
+        # Within an active case, split the panels carrying the largest (tolerance-normalized) errors: all but
+        # the smallest ones whose errors together stay under half the tolerance.
+        share = _normalized(panel_error, tolerance[pool.case]).max(axis=1)
+        order = np.lexsort((share, pool.case))
+        sorted_case = pool.case[order]
+        cumulative = np.cumsum(share[order])
+        case_start = np.searchsorted(sorted_case, sorted_case, side="left")
+        before_case = np.where(case_start > 0, cumulative[np.maximum(case_start - 1, 0)], 0.0)
+        split = np.zeros(pool.case.size, dtype=bool)
+        split[order] = (cumulative - before_case > 0.5) & active[sorted_case]
+        # Panels too thin to split further stay as they are (their error stays in the estimate).
+        split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
+
+        finished = ~active[pool.case]
+        np.add.at(value, pool.case[finished], pool.value[finished])
+        np.add.at(error, pool.case[finished], panel_error[finished])
+        np.add.at(bad_total, pool.case[finished], pool.bad[finished])
+        parents = pool.take(split)
+        pool = pool.take(~split & ~finished)
+        along_beta = parents.err_b.max(axis=1) >= parents.err_u.max(axis=1)
+        b_mid = (parents.b0 + parents.b1) / 2
+        u_mid = (parents.u0 + parents.u1) / 2
+        fresh = _Panels(
+            np.concatenate([parents.case, parents.case]),
+            np.concatenate([parents.b0, np.where(along_beta, b_mid, parents.b0)]),
+            np.concatenate([np.where(along_beta, b_mid, parents.b1), parents.b1]),
+            np.concatenate([parents.u0, np.where(along_beta, parents.u0, u_mid)]),
+            np.concatenate([np.where(along_beta, parents.u1, u_mid), parents.u1]),
+        )
+        if not fresh.case.size and pool.case.size:
+            # Active cases whose every panel is too thin to split: finish them unconverged.
+            np.add.at(value, pool.case, pool.value)
+            np.add.at(error, pool.case, pool.err_b + pool.err_u)
+            np.add.at(bad_total, pool.case, pool.bad)
+
+    if value.shape[1] == 0:
+        value = np.zeros((K, 1))
+        error = np.zeros((K, 1))
+    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi))
+
+
+def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
+    """error / tolerance, with 0/0 = 0 and x/0 = inf (a zero tolerance accepts only a zero error)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(tolerance > 0, error / tolerance, np.where(error > 0, np.inf, 0.0))
+
+
+def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
+    """Fill in the estimates of ``panels``, calling the integrand on bounded chunks of nodes."""
+    chunk = max(1, max_nodes_per_call // NODES.size**2)
+    parts = []
+    for start in range(0, panels.case.size, chunk):
+        part = panels.take(slice(start, start + chunk))
+        omega, jacobian = _map_nodes(part, frame, widths, supports)
+        case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
+        values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
+        values = values.reshape(jacobian.shape + (-1,))
+        finite = np.isfinite(values).all(axis=-1)
+        bad = np.zeros(part.case.size)
+        if not finite.all():
+            if nonfinite == "raise":
+                r, b, u = np.argwhere(~finite)[0]
+                raise NonFiniteIntegrand(int(part.case[r]), omega[r, b, u], values[r, b, u])
+            values = np.where(finite[..., None], values, 0.0)
+            bad = np.einsum("rbu,b,u->r", jacobian * ~finite, KRONROD, KRONROD)
+        parts.append((*_estimate(values, jacobian), bad))
+    panels.value, panels.err_b, panels.err_u, panels.bad = (np.concatenate(p) for p in zip(*parts, strict=True))
+
+
+def fibonacci_hemisphere(count: int) -> np.ndarray:
+    """``count`` nearly uniform directions on the upper hemisphere (equal-area Fibonacci lattice)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - i / count  # equal-area: z uniform in (0, 1)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024,
+                  max_nodes_per_call: int = 1_500_000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Find the peak direction and angular width of each case's integrand by sampling (no model hint).
+
+    A Fibonacci lattice of ``samples`` directions locates the maximum of |g| to within the lattice spacing
+    h ≈ √(2π/samples); a second lattice on a cap of radius 3h around it refines the peak, and the |g|-weighted
+    RMS angle about the peak estimates the width. Only the efficiency of :func:`integrate_hemisphere`
+    depends on these numbers — its adaptivity and error estimate do not.
+    """
+    spacing = np.sqrt(2.0 * np.pi / samples)
+    grid = fibonacci_hemisphere(samples)
+
+    def sample(directions_of_case: Callable[[np.ndarray], np.ndarray], count: int) -> tuple:
+        per_call = max(1, max_nodes_per_call // count)
+        peaks, widths = [], []
+        for start in range(0, cases, per_call):
+            case = np.arange(start, min(cases, start + per_call))
+            omega = directions_of_case(case)  # (k, count, 3)
+            index = np.broadcast_to(case[:, None], omega.shape[:2])
+            with np.errstate(all="ignore"):
+                g = np.abs(np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float))
+            g = np.where(np.isfinite(g), g, 0.0).max(axis=-1).reshape(omega.shape[:2])
+            best = omega[np.arange(case.size), np.argmax(g, axis=1)]
+            angle = np.arccos(np.clip(np.einsum("kmi,ki->km", omega, best), -1.0, 1.0))
+            total = g.sum(axis=1)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rms = np.sqrt((g * angle**2).sum(axis=1) / total)
+            peaks.append(best)
+            widths.append(np.where(total > 0, rms, 1.0))
+        return np.concatenate(peaks), np.concatenate(widths)
+
+    coarse_peak, coarse_width = sample(lambda case: np.broadcast_to(grid, (case.size,) + grid.shape), samples)
+    # Refine on a cap of radius 3h around the coarse peak: rotate a small polar lattice onto each peak.
+    cap_count = 256
+    cap = fibonacci_hemisphere(cap_count)
+    cap_angle = np.arccos(cap[:, 2]) / (np.pi / 2) * 3.0 * spacing
+    cap_phi = np.arctan2(cap[:, 1], cap[:, 0])
+    P, T, B = lobe_frame(coarse_peak)
+
+    def around_peak(case: np.ndarray) -> np.ndarray:
+        radial = np.cos(cap_phi)[None, :, None] * T[case][:, None] + np.sin(cap_phi)[None, :, None] * B[case][:, None]
+        omega = np.cos(cap_angle)[None, :, None] * P[case][:, None] + np.sin(cap_angle)[None, :, None] * radial
+        omega[..., 2] = np.maximum(omega[..., 2], 1e-9)
+        return omega / np.linalg.norm(omega, axis=-1, keepdims=True)
+
+    fine_peak, fine_width = sample(around_peak, cap_count)
+    # A lobe narrower than the coarse lattice shows up as a tiny coarse RMS; the cap's RMS then measures it.
+    width = np.where(coarse_width < 2.0 * spacing, np.maximum(fine_width, 1e-4), coarse_width)
+    return fine_peak, np.clip(width, 1e-4, 1.0), np.full(cases, np.pi)
