@@ -1,0 +1,445 @@
+"""BRDF Explorer ``.brdf`` files: reading them, and the model that evaluates their GLSL in float64.
+
+Disney's BRDF Explorer (Burley 2012) stores an analytic lobe as a small text file; seed 003 prints one (its
+Gaussian Blinn-Phong lobe, on a single line). The format, as BRDF Explorer reads it::
+
+    analytic
+    # a comment: lines whose first word starts with '#', outside the GLSL sections
+    ::begin parameters
+    float NAME MIN MAX DEFAULT     # uniform float in the shader; MIN/MAX are the UI slider's range
+    bool NAME DEFAULT              # uniform bool, DEFAULT is 0 or 1
+    color NAME R G B               # uniform vec3
+    ::end parameters
+    ::begin shader
+    ... GLSL defining vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y), helpers and const globals ...
+    ::end shader
+    ::begin isFunc                 # optional importance-sampling code: kept, never required or compiled
+    ...
+    ::end isFunc
+
+The reader works on whitespace-separated tokens, so the one-line form of seed 003 (every token on one line,
+the shader starting mid-line) reads the same as the multi-line form; a parameter declaration must lie on one
+line. Every problem is a :class:`~brdfnorm.errors.BrdfFileError` at ``FILE:LINE:COL`` in the file's own
+numbering (1-based, columns in characters). Parsing is a single linear scan, so megabytes of comments cost
+milliseconds. The shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy
+operations; nothing from the file is ever executed as Python.
+"""
+
+from __future__ import annotations
+
+import bisect
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import BrdfFileError, ModelNotFoundError
+from .models.base import Model
+from .parameters import Parameter
+
+#: Refuse files larger than this before reading them whole (a .brdf is a few kilobytes).
+MAX_BYTES = 64 * 1024 * 1024
+
+SECTIONS = ("parameters", "shader", "isFunc")
+#: Parameter kind -> (number of values after NAME, GLSL uniform type, what the values are).
+KINDS = {
+    "float": (3, "float", "MIN MAX DEFAULT"),
+    "bool": (1, "bool", "DEFAULT (0 or 1)"),
+    "color": (3, "vec3", "R G B"),
+}
+#: The fixed local frame BRDF(L, V, N, X, Y) is evaluated in (see brdfnorm.models.base).
+FRAME_N = np.array([0.0, 0.0, 1.0])
+FRAME_X = np.array([1.0, 0.0, 0.0])
+FRAME_Y = np.array([0.0, 1.0, 0.0])
+
+_TOKEN = re.compile(r"\S+")
+_DIRECTIVE = re.compile(r"(?<!\S)::(?:begin|end)(?!\S)")
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+# A plain decimal number, as C's strtod reads BRDF Explorer's values (no nan/inf, no Python underscores).
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
+# Control characters other than tab/newline/vertical tab/form feed/carriage return: a binary file.
+_BINARY = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
+
+
+@dataclass(frozen=True)
+class SourceText:
+    """The text of a GLSL section and where its first character lies in the file (1-based)."""
+
+    text: str
+    line: int
+    column: int
+
+
+@dataclass(frozen=True)
+class BrdfFile:
+    """A parsed ``.brdf`` file: declared parameters and the text of its sections."""
+
+    path: str
+    parameters: tuple[Parameter, ...]
+    shader: SourceText
+    is_func: SourceText | None = None
+
+    @property
+    def uniforms(self) -> dict[str, str]:
+        """Parameter name -> GLSL uniform type ("float", "bool" or "vec3")."""
+        return {p.name: KINDS[p.kind][1] for p in self.parameters}
+
+
+@dataclass(frozen=True)
+class _Token:
+    text: str
+    start: int
+    end: int
+
+
+class _Scanner:
+    """Tokens of the file in order, with comment lines skipped and offsets mapped to (line, column)."""
+
+    def __init__(self, text: str, path: str) -> None:
+        self.text = text
+        self.path = path
+        self.pos = 0
+        self._newlines = [m.start() for m in re.finditer("\n", text)]
+
+    def where(self, offset: int) -> tuple[int, int]:
+        index = bisect.bisect_left(self._newlines, offset)  # newlines strictly before offset
+        line_start = self._newlines[index - 1] + 1 if index else 0
+        return index + 1, offset - line_start + 1
+
+    def line_of(self, offset: int) -> int:
+        return bisect.bisect_left(self._newlines, offset) + 1
+
+    def error(self, message: str, offset: int) -> BrdfFileError:
+        return BrdfFileError(message, self.path, *self.where(offset))
+
+    def next(self) -> _Token | None:
+        while True:
+            match = _TOKEN.search(self.text, self.pos)
+            if match is None:
+                self.pos = len(self.text)
+                return None
+            # First on its line: a newline precedes it since the last token, or the scan resumed at a line
+            # start (the file's start, or just after a skipped comment line).
+            gap_has_newline = "\n" in self.text[self.pos : match.start()]
+            first = gap_has_newline or self.pos == 0 or self.text[self.pos - 1] == "\n"
+            if first and match.group().startswith("#"):
+                newline = self.text.find("\n", match.start())
+                self.pos = len(self.text) if newline < 0 else newline + 1
+                continue
+            self.pos = match.end()
+            return _Token(match.group(), match.start(), match.end())
+
+
+def _decode(data: bytes, path: str) -> str:
+    """UTF-8 text, refusing binary data and invalid bytes at the line and column where they occur."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        line_start = data.rfind(b"\n", 0, exc.start) + 1
+        column = len(data[line_start : exc.start].decode("utf-8", errors="replace")) + 1
+        raise BrdfFileError(
+            f"not UTF-8 text: invalid byte 0x{data[exc.start]:02x} (a .brdf file is UTF-8 text)",
+            path,
+            line,
+            column,
+        ) from None
+    if text.startswith("\ufeff"):  # a byte-order mark some editors write; not part of the text
+        text = text[1:]
+    text = text.replace("\r\n", "\n")
+    binary = _BINARY.search(text)
+    if binary is not None:
+        scanner = _Scanner(text[: binary.start() + 1], path)
+        name = "NUL byte" if binary.group() == "\0" else f"control character U+{ord(binary.group()):04X}"
+        raise scanner.error(f"{name}: this looks like binary data, not a .brdf text file", binary.start())
+    return text
+
+
+def _read_bytes(path: str) -> bytes:
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(MAX_BYTES + 1)
+    except FileNotFoundError:
+        raise ModelNotFoundError("no such file (and not a built-in model name)", where=path) from None
+    except IsADirectoryError:
+        raise BrdfFileError("is a directory, not a .brdf file", path) from None
+    except OSError as exc:
+        raise BrdfFileError(f"cannot read file: {exc.strerror or exc}", path) from None
+    if len(data) > MAX_BYTES:
+        raise BrdfFileError(f"file larger than {MAX_BYTES // (1024 * 1024)} MiB; not a .brdf file", path)
+    return data
+
+
+def _number(scanner: _Scanner, token: _Token, what: str) -> float:
+    if not _NUMBER.match(token.text):
+        raise scanner.error(f"{what} must be a number, got {token.text!r}", token.start)
+    value = float(token.text)
+    if not np.isfinite(value):
+        raise scanner.error(f"{what} must be finite, got {token.text!r}", token.start)
+    return value
+
+
+def _parse_parameter(scanner: _Scanner, kind: _Token, name: _Token, values: list[_Token]) -> Parameter:
+    """One declaration ``KIND NAME VALUES...`` (values already counted)."""
+    label = f"parameter {name.text!r}"
+    if kind.text == "bool":
+        if values[0].text not in ("0", "1"):
+            raise scanner.error(f"bool {label}: DEFAULT must be 0 or 1, got {values[0].text!r}", values[0].start)
+        return Parameter(name.text, "bool", values[0].text == "1", strict=False)
+    if kind.text == "color":
+        rgb = tuple(_number(scanner, v, f"color {label}: {c}") for v, c in zip(values, "RGB", strict=True))
+        return Parameter(name.text, "color", rgb, strict=False)
+    low, high, default = (
+        _number(scanner, v, f"float {label}: {w}") for v, w in zip(values, ("MIN", "MAX", "DEFAULT"), strict=True)
+    )
+    if low > high:
+        raise scanner.error(f"float {label}: MIN {low:g} is greater than MAX {high:g}", values[0].start)
+    if not low <= default <= high:
+        line, column = scanner.where(values[2].start)
+        warnings.warn(
+            f"{scanner.path}:{line}:{column}: float {label}: DEFAULT {default:g} outside the slider range "
+            f"[{low:g}, {high:g}]",
+            stacklevel=2,
+        )
+    return Parameter(name.text, "float", default, low, high, strict=False)
+
+
+def _parse_parameters(scanner: _Scanner, begin: _Token) -> list[Parameter]:
+    """The declarations up to ``::end parameters``; each lies on one line, several may share one."""
+    parameters: list[Parameter] = []
+    declared: dict[str, int] = {}  # name -> line
+    previous: str | None = None  # name declared just before on the same line
+    token = scanner.next()
+    while True:
+        if token is None:
+            raise scanner.error("section 'parameters' is never closed (missing '::end parameters')", begin.start)
+        if token.text == "::end":
+            closing = scanner.next()
+            if closing is None or closing.text != "parameters":
+                got = "end of file" if closing is None else repr(closing.text)
+                raise scanner.error(f"expected '::end parameters', got '::end' followed by {got}", token.start)
+            return parameters
+        if token.text == "::begin":
+            raise scanner.error("missing '::end parameters' before this '::begin'", token.start)
+        if token.text not in KINDS:
+            if previous is not None:
+                message = f"unexpected {token.text!r} after the declaration of {previous!r}"
+            else:
+                message = f"expected a parameter declaration (float, bool or color), got {token.text!r}"
+            raise scanner.error(message, token.start)
+        kind = token
+        count, _, shape = KINDS[kind.text]
+        line = scanner.line_of(kind.start)
+        fields: list[_Token] = []
+        token = scanner.next()
+        while token is not None and len(fields) < count + 1 and scanner.line_of(token.start) == line:
+            if token.text in ("::end", "::begin"):
+                break
+            fields.append(token)
+            token = scanner.next()
+        if len(fields) < count + 1:
+            raise scanner.error(
+                f"{kind.text} parameter needs NAME {shape}, got {len(fields)} value(s) on this line",
+                kind.start,
+            )
+        name = fields[0]
+        if not _IDENTIFIER.match(name.text) or name.text.startswith("gl_"):
+            raise scanner.error(f"parameter name {name.text!r} is not a GLSL identifier", name.start)
+        if name.text in declared:
+            raise scanner.error(
+                f"duplicate parameter {name.text!r} (first declared on line {declared[name.text]})",
+                name.start,
+            )
+        parameters.append(_parse_parameter(scanner, kind, name, fields[1:]))
+        declared[name.text] = line
+        previous = name.text
+        if token is not None and scanner.line_of(token.start) != line:
+            previous = None
+
+
+def _parse_code(scanner: _Scanner, begin: _Token, name: _Token) -> SourceText:
+    """A GLSL section: the raw text up to its ``::end NAME`` (a '::' token is never GLSL)."""
+    text = scanner.text
+    start = name.end
+    rest_of_line = text.find("\n", start)
+    if rest_of_line >= 0 and not text[start:rest_of_line].strip():
+        start = rest_of_line + 1  # multi-line form: the code starts on the next line, column 1
+    directive = _DIRECTIVE.search(text, start)
+    if directive is None:
+        raise scanner.error(f"section {name.text!r} is never closed (missing '::end {name.text}')", begin.start)
+    if directive.group() == "::begin":
+        raise scanner.error(f"missing '::end {name.text}' before this '::begin'", directive.start())
+    scanner.pos = directive.end()
+    closing = scanner.next()
+    if closing is None or closing.text != name.text:
+        got = "end of file" if closing is None else repr(closing.text)
+        raise scanner.error(f"expected '::end {name.text}', got '::end' followed by {got}", directive.start())
+    line, column = scanner.where(start)
+    return SourceText(text[start : directive.start()], line, column)
+
+
+def parse_brdf(text: str, path: str = "<string>") -> BrdfFile:
+    """Parse the text of a ``.brdf`` file (already decoded); see the module docstring for the format."""
+    scanner = _Scanner(text, path)
+    first = scanner.next()
+    if first is None:
+        raise BrdfFileError("empty file: expected 'analytic' and a shader section", path, 1, 1)
+    if first.text != "analytic":
+        raise scanner.error(
+            f"not a BRDF Explorer analytic file: expected 'analytic' first, got {first.text[:40]!r}",
+            first.start,
+        )
+    parameters: list[Parameter] = []
+    sections: dict[str, SourceText | None] = {}
+    opened: dict[str, int] = {}
+    while (token := scanner.next()) is not None:
+        if token.text != "::begin":
+            if token.text == "::end":
+                raise scanner.error("'::end' without a matching '::begin'", token.start)
+            raise scanner.error(
+                f"unexpected {token.text[:40]!r} outside a section (comments start with '#')", token.start
+            )
+        name = scanner.next()
+        if name is None:
+            raise scanner.error("'::begin' needs a section name (parameters, shader or isFunc)", token.start)
+        if name.text not in SECTIONS:
+            raise scanner.error(f"unknown section {name.text[:40]!r} (known: {', '.join(SECTIONS)})", name.start)
+        if name.text in opened:
+            raise scanner.error(
+                f"duplicate section {name.text!r} (first opened on line {opened[name.text]})", token.start
+            )
+        opened[name.text] = scanner.line_of(token.start)
+        if name.text == "parameters":
+            parameters = _parse_parameters(scanner, token)
+            sections["parameters"] = None
+        else:
+            sections[name.text] = _parse_code(scanner, token, name)
+    shader = sections.get("shader")
+    if shader is None:
+        raise BrdfFileError(
+            "no '::begin shader' section: nothing defines BRDF(L, V, N, X, Y)",
+            path,
+            *scanner.where(len(text)),
+        )
+    return BrdfFile(path, tuple(parameters), shader, sections.get("isFunc"))
+
+
+def read_brdf(path: str | Path) -> BrdfFile:
+    """Read and parse a ``.brdf`` file.
+
+    Raises :class:`~brdfnorm.errors.ModelNotFoundError` for a missing file and
+    :class:`~brdfnorm.errors.BrdfFileError` (with line and column) for anything wrong inside it.
+    """
+    path = str(path)
+    return parse_brdf(_decode(_read_bytes(path), path), path)
+
+
+class BrdfModel(Model):
+    """A lobe read from a ``.brdf`` file: its GLSL ``BRDF`` compiled to float64 numpy operations.
+
+    RGB (3 channels), anisotropic in general (``X`` and ``Y`` are available to the shader). The integrator
+    estimates the lobe's peak itself; nothing about the shader is assumed.
+    """
+
+    channels = 3
+    isotropic = False
+
+    def __init__(self, brdf: BrdfFile, program: object, **values: object) -> None:
+        self.name = Path(brdf.path).stem
+        self.formula = f"GLSL BRDF(L, V, N, X, Y) from {brdf.path}"
+        self.parameters = brdf.parameters
+        self.brdf_file = brdf
+        self.program = program
+        super().__init__(**values)
+
+    @property
+    def source_path(self) -> str:
+        """The ``.brdf`` file this model was read from."""
+        return self.brdf_file.path
+
+    @property
+    def has_is_func(self) -> bool:
+        """Whether the file carries an ``isFunc`` (importance sampling) section."""
+        return self.brdf_file.is_func is not None
+
+    def evaluate(self, L, V, params):
+        shape = np.shape(L)[:-1]
+        uniforms: dict[str, object] = {}
+        for p in self.parameters:
+            value = params[p.name]
+            if p.kind == "bool":
+                uniforms[p.name] = bool(value)
+                continue
+            value = np.asarray(value, dtype=float)
+            uniforms[p.name] = value
+            shape = np.broadcast_shapes(shape, value.shape[:-1] if p.kind == "color" else value.shape)
+        frame = [np.broadcast_to(axis, np.shape(L)) for axis in (FRAME_N, FRAME_X, FRAME_Y)]
+        result = self.program.brdf(L, V, *frame, uniforms)
+        # A shader whose result does not depend on the directions (e.g. a constant) comes back smaller.
+        return np.ascontiguousarray(np.broadcast_to(result, shape + (3,)), dtype=float)
+
+
+def load_brdf(path: str | Path, **params: object) -> BrdfModel:
+    """Read a ``.brdf`` file, compile its shader, and bind parameter values (defaults for the others).
+
+    Parameter values outside a file's slider range are accepted with a warning; a value of the wrong type
+    raises :class:`~brdfnorm.errors.ParameterError`.
+    """
+    from .glsl import compile_shader
+
+    brdf = read_brdf(path)
+    program = compile_shader(
+        brdf.shader.text,
+        path=brdf.path,
+        first_line=brdf.shader.line,
+        first_column=brdf.shader.column,
+        uniforms=brdf.uniforms,
+    )
+    return BrdfModel(brdf, program, **params)
+
+
+@dataclass(frozen=True)
+class Reciprocity:
+    """Result of :func:`reciprocity_check`: the largest relative asymmetry seen and where."""
+
+    max_relative: float
+    L: np.ndarray
+    V: np.ndarray
+    samples: int
+    nonfinite: int
+    tolerance: float
+
+    @property
+    def reciprocal(self) -> bool:
+        return bool(self.max_relative <= self.tolerance)
+
+
+def random_hemisphere(rng: np.random.Generator, count: int) -> np.ndarray:
+    """Directions uniform in solid angle over the open upper hemisphere (z > 0), shape (count, 3)."""
+    z = 1.0 - rng.random(count)  # (0, 1]
+    phi = 2.0 * np.pi * rng.random(count)
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+def reciprocity_check(model: Model, samples: int = 4096, seed: int = 0, tolerance: float = 1e-9) -> Reciprocity:
+    """Helmholtz reciprocity f(L, V) = f(V, L) on random direction pairs (a sample, not a proof).
+
+    The asymmetry of a pair is max over channels of |f(L,V) − f(V,L)| / max(|f(L,V)|, |f(V,L)|); pairs where
+    either value is not finite are counted separately and skipped.
+    """
+    rng = np.random.default_rng(seed)
+    L = random_hemisphere(rng, samples)
+    V = random_hemisphere(rng, samples)
+    with np.errstate(all="ignore"):
+        forward = model.eval(L, V)
+        backward = model.eval(V, L)
+        finite = np.all(np.isfinite(forward) & np.isfinite(backward), axis=-1)
+        scale = np.maximum(np.abs(forward), np.abs(backward))
+        asymmetry = np.where(scale > 0, np.abs(forward - backward) / np.where(scale > 0, scale, 1.0), 0.0)
+    asymmetry = np.where(finite, np.max(asymmetry, axis=-1), -1.0)
+    worst = int(np.argmax(asymmetry))
+    value = float(max(asymmetry[worst], 0.0)) if finite.any() else float("nan")
+    return Reciprocity(value, L[worst], V[worst], samples, int(samples - finite.sum()), tolerance)
