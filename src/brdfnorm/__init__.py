@@ -30,9 +30,11 @@ def load(name_or_path: str | Path, **params: object) -> Model:
     if key in REGISTRY:
         return REGISTRY[key](**params)
     path = Path(key)
-    if path.suffix == ".brdf" or path.exists():
+    if path.exists():
         from .brdffile import load_brdf  # the GLSL toolchain loads only when a file is asked for
 
         return load_brdf(path, **params)
+    if path.suffix == ".brdf" or "/" in key or "\\" in key:
+        raise ModelNotFoundError("no such file", where=key)
     raise ModelNotFoundError(f"unknown model {key!r}: not a built-in ({', '.join(REGISTRY)}) and no such file",
                              where="model")
