@@ -132,11 +132,21 @@ class _Scanner:
             return _Token(match.group(), match.start(), match.end())
 
 
+def _refuse_binary(text: str, path: str) -> None:
+    """Control characters other than whitespace (NUL first of all) mean a binary file: say where."""
+    binary = _BINARY.search(text)
+    if binary is not None:
+        scanner = _Scanner(text[: binary.start() + 1], path)
+        name = "NUL byte" if binary.group() == "\0" else f"control character U+{ord(binary.group()):04X}"
+        raise scanner.error(f"{name}: this looks like binary data, not a .brdf text file", binary.start())
+
+
 def _decode(data: bytes, path: str) -> str:
-    """UTF-8 text, refusing binary data and invalid bytes at the line and column where they occur."""
+    """UTF-8 text, refusing invalid bytes at the line and column where they occur."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
+        _refuse_binary(data[: exc.start].decode("utf-8"), path)  # binary data before the bad byte says more
         line = data.count(b"\n", 0, exc.start) + 1
         line_start = data.rfind(b"\n", 0, exc.start) + 1
         column = len(data[line_start : exc.start].decode("utf-8", errors="replace")) + 1
@@ -146,14 +156,6 @@ def _decode(data: bytes, path: str) -> str:
             line,
             column,
         ) from None
-    if text.startswith("\ufeff"):  # a byte-order mark some editors write; not part of the text
-        text = text[1:]
-    text = text.replace("\r\n", "\n")
-    binary = _BINARY.search(text)
-    if binary is not None:
-        scanner = _Scanner(text[: binary.start() + 1], path)
-        name = "NUL byte" if binary.group() == "\0" else f"control character U+{ord(binary.group()):04X}"
-        raise scanner.error(f"{name}: this looks like binary data, not a .brdf text file", binary.start())
     return text
 
 
@@ -241,7 +243,8 @@ def _parse_parameters(scanner: _Scanner, begin: _Token) -> list[Parameter]:
             token = scanner.next()
         if len(fields) < count + 1:
             raise scanner.error(
-                f"{kind.text} parameter needs NAME {shape}, got {len(fields)} value(s) on this line",
+                f"malformed {kind.text} parameter: expected '{kind.text} NAME {shape}', "
+                f"got {' '.join(t.text for t in [kind, *fields])[:80]!r}",
                 kind.start,
             )
         name = fields[0]
@@ -282,6 +285,10 @@ def _parse_code(scanner: _Scanner, begin: _Token, name: _Token) -> SourceText:
 
 def parse_brdf(text: str, path: str = "<string>") -> BrdfFile:
     """Parse the text of a ``.brdf`` file (already decoded); see the module docstring for the format."""
+    if text.startswith("\ufeff"):  # a byte-order mark some editors write; not part of the text
+        text = text[1:]
+    text = text.replace("\r\n", "\n")
+    _refuse_binary(text, path)
     scanner = _Scanner(text, path)
     first = scanner.next()
     if first is None:
@@ -387,9 +394,9 @@ def load_brdf(path: str | Path, **params: object) -> BrdfModel:
     Parameter values outside a file's slider range are accepted with a warning; a value of the wrong type
     raises :class:`~brdfnorm.errors.ParameterError`.
     """
-    from .glsl import compile_shader
-
     brdf = read_brdf(path)
+    from .glsl import compile_shader  # the GLSL toolchain (tree-sitter) loads only for a readable file
+
     program = compile_shader(
         brdf.shader.text,
         path=brdf.path,
