@@ -1,0 +1,13 @@
+"""A GLSL evaluator for BRDF Explorer shaders: tree-sitter-glsl syntax trees compiled to numpy closures.
+
+``compile_shader(text, path=..., first_line=..., first_column=..., uniforms={...})`` returns a
+:class:`Program` whose ``brdf(L, V, N, X, Y, uniforms)`` evaluates the shader's
+``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`` in float64 over arrays of direction pairs, with
+the semantics of GLSL 4.10 and Mesa llvmpipe's choices where the specification leaves results undefined.
+Modules: :mod:`.parser` (tree-sitter, positions), :mod:`.types`, :mod:`.builtins`, :mod:`.runtime`
+(lane masks), :mod:`.compiler`.
+"""
+
+from .compiler import MAX_LOOP_ITERATIONS, MAX_TOTAL_ITERATIONS, Program, compile_shader
+
+__all__ = ["MAX_LOOP_ITERATIONS", "MAX_TOTAL_ITERATIONS", "Program", "compile_shader"]

@@ -1,0 +1,106 @@
+"""Parsing GLSL with tree-sitter-glsl, and mapping syntax-tree positions to the ``.brdf`` file.
+
+tree-sitter-glsl extends tree-sitter-c's grammar; two GLSL tokens it lacks are handled by
+length-preserving rewrites of the text before parsing, so every position stays that of the file:
+
+* ``^^`` (logical exclusive or, GLSL 4.10 §5.1) is parsed as ``||``; the positions of the rewritten
+  operators are remembered and the compiler re-associates the ``||`` chains with GLSL precedence
+  (``&&`` > ``^^`` > ``||``).
+* precision qualifiers (``highp``, ``mediump``, ``lowp`` and ``precision ...;`` statements) have no
+  effect in desktop GLSL (§4.7) and are blanked out.
+
+Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+from dataclasses import dataclass
+
+import tree_sitter
+import tree_sitter_glsl
+
+from ..errors import BrdfFileError
+
+with warnings.catch_warnings():
+    # tree-sitter 0.2x warns about the int handle that tree-sitter-glsl's binding returns.
+    warnings.simplefilter("ignore", DeprecationWarning)
+    LANGUAGE = tree_sitter.Language(tree_sitter_glsl.language())
+
+_PRECISION = re.compile(rb"\bprecision\s+(?:lowp|mediump|highp)\s+\w+\s*;|\b(?:lowp|mediump|highp)\b")
+
+
+def _blank(match: re.Match) -> bytes:
+    return re.sub(rb"[^\n]", b" ", match.group(0))
+
+
+@dataclass
+class Source:
+    """A piece of GLSL text placed in a file: ``path``, and the file line/column of its first character."""
+
+    text: bytes
+    path: str
+    first_line: int
+    first_column: int
+    xor_offsets: frozenset[int]
+
+    def position(self, node: tree_sitter.Node) -> tuple[int, int]:
+        """File (line, column), both 1-based, of a node's first character."""
+        row, byte_column = node.start_point
+        start = node.start_byte - byte_column
+        column = len(self.text[start : start + byte_column].decode("utf-8", errors="replace"))
+        if row == 0:
+            return self.first_line, self.first_column + column
+        return self.first_line + row, column + 1
+
+    def error(self, message: str, node: tree_sitter.Node | None) -> BrdfFileError:
+        """A :class:`BrdfFileError` located at ``node`` (at the start of the text when None)."""
+        line, column = self.position(node) if node is not None else (self.first_line, self.first_column)
+        return BrdfFileError(message, self.path, line, column)
+
+    def text_of(self, node: tree_sitter.Node) -> str:
+        return self.text[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
+
+
+def _first_error(node: tree_sitter.Node) -> tree_sitter.Node | None:
+    if not node.has_error:
+        return None
+    for child in node.children:
+        found = _first_error(child)
+        if found is not None:
+            return found
+    if node.is_error or node.is_missing:
+        return node
+    return None
+
+
+def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) -> tuple[tree_sitter.Tree, Source]:
+    """Parse shader text; raise :class:`BrdfFileError` at the first syntax error."""
+    raw = source.encode("utf-8", errors="surrogateescape")
+    xor_offsets = frozenset(m.start() for m in re.finditer(rb"\^\^", raw))
+    text = _PRECISION.sub(_blank, raw.replace(b"^^", b"||"))
+    src = Source(text, path, first_line, first_column, xor_offsets)
+    tree = tree_sitter.Parser(LANGUAGE).parse(text)
+    bad = _first_error(tree.root_node)
+    if bad is not None:
+        if bad.is_missing:
+            raise src.error(f"syntax error: missing '{bad.type}'", bad)
+        leaves = [bad]
+        while leaves[0].child_count:
+            leaves = list(leaves[0].children)
+        near = src.text_of(leaves[0]).strip()[:30]
+        raise src.error(f"syntax error near '{near}'" if near else "syntax error", leaves[0])
+    return tree, src
+
+
+def parse_expression(text: str, source: Source, node: tree_sitter.Node) -> tuple[tree_sitter.Node, Source]:
+    """Parse the body of an object-like ``#define`` as an expression located at ``node`` in the file."""
+    line, column = source.position(node)
+    prefix = "void f(){("
+    # The prefix shifts the first line's columns; the macro body never spans lines (no continuation).
+    tree, src = parse(prefix + text + ");}", source.path, line, column - len(prefix))
+    function = tree.root_node.children[0]
+    body = function.child_by_field_name("body")
+    statement = body.named_children[0]
+    return statement.named_children[0].named_children[0], src
