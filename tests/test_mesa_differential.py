@@ -11,11 +11,14 @@ two must agree to float32 precision. Per pair and channel the tolerance is
 * ``ATOL``·max|ours|, ATOL = 1e-6: an absolute floor relative to the largest value of the batch, for values
   that float32 cannot resolve next to the peak — pow of tiny bases and exp of large negative arguments
   underflow (llvmpipe flushes denormals to zero) while float64 still gives 1e-40.
-* ``sensitivity``: how much our float64 BRDF itself moves when L and V are perturbed by PERTURB = 8 float32
-  ulps (random, 4 tries). It is large only where the lobe is ill-conditioned at float32 scale: pow(N·H, n)
-  with n in the thousands (relative condition number n), a difference of nearly equal numbers, or a pair
-  within a few ulps of a branch edge of a discontinuous lobe (``banded_specular``). Elsewhere it is below
-  RTOL and the test is a plain 1e-4 relative comparison.
+* ``sensitivity``: how much our float64 BRDF itself moves when every component of L, V and of the frame
+  N, X, Y is perturbed by up to PERTURB = 8 float32 ulps (random, 4 tries) — a backward-error model of
+  float32 rounding: the rounding of a dot product or of normalize() scales its result by 1 + O(ulp), as
+  scaling N does, which input directions alone cannot mimic (normalize() removes their scale). It is large
+  only where the lobe is ill-conditioned at float32 scale: pow(N·H, n) with n in the thousands (relative
+  condition number n), differences of nearly equal numbers, or a pair within a few ulps of a branch edge of
+  a discontinuous lobe (``banded_specular``). Elsewhere it is below RTOL and the test is a plain 1e-4
+  relative comparison.
 
 The examples avoid asin/acos: Mesa lowers them to a polynomial with ~4e-4 absolute error (measured), far from
 float32 precision, so a lobe using them could not be compared at this tolerance (atan is good to ~2e-5).
@@ -30,7 +33,7 @@ import numpy as np
 import pytest
 from mesa import MesaBrdf, MesaUnavailable, context, uniform_values
 
-from brdfnorm.brdffile import load_brdf, random_hemisphere
+from brdfnorm.brdffile import FRAME_N, FRAME_X, FRAME_Y, load_brdf, random_hemisphere
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.brdf"))
 PAIRS = 4096
@@ -102,10 +105,10 @@ def test_numpy_evaluation_matches_mesa(gl, directions, path, variant):
     assert np.all(np.isfinite(theirs)), "Mesa gave a non-finite value"
 
     sensitivity = np.zeros_like(ours)
+    frame = [np.broadcast_to(axis, L.shape) for axis in (FRAME_N, FRAME_X, FRAME_Y)]
     for _ in range(4):
-        Lp = L * (1 + PERTURB * rng.uniform(-1, 1, L.shape))
-        Vp = V * (1 + PERTURB * rng.uniform(-1, 1, V.shape))
-        sensitivity = np.maximum(sensitivity, np.abs(model.eval(Lp, Vp) - ours))
+        perturbed = [a * (1 + PERTURB * rng.uniform(-1, 1, L.shape)) for a in (L, V, *frame)]
+        sensitivity = np.maximum(sensitivity, np.abs(model.evaluate_in_frame(*perturbed) - ours))
     scale = np.max(np.abs(ours))
     tolerance = RTOL * np.abs(ours) + ATOL * scale + sensitivity
     difference = np.abs(theirs - ours)

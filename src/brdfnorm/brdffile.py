@@ -30,6 +30,7 @@ from __future__ import annotations
 import bisect
 import re
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -372,7 +373,25 @@ class BrdfModel(Model):
         return self.brdf_file.is_func is not None
 
     def evaluate(self, L, V, params):
-        shape = np.shape(L)[:-1]
+        frame = [np.broadcast_to(axis, np.shape(L)) for axis in (FRAME_N, FRAME_X, FRAME_Y)]
+        return self.evaluate_in_frame(L, V, *frame, params)
+
+    def evaluate_in_frame(
+        self,
+        L: np.ndarray,
+        V: np.ndarray,
+        N: np.ndarray,
+        X: np.ndarray,
+        Y: np.ndarray,
+        params: Mapping[str, object] | None = None,
+    ) -> np.ndarray:
+        """BRDF(L, V, N, X, Y) with an explicit frame (all (..., 3)) at ``params`` (default: the bound ones).
+
+        :meth:`evaluate` is this with N = +z, X = +x, Y = +y; another frame serves, e.g., to check a shader's
+        conditioning under perturbed frame vectors.
+        """
+        params = self._params if params is None else params
+        shape = np.broadcast_shapes(*(np.shape(a)[:-1] for a in (L, V, N, X, Y)))
         uniforms: dict[str, object] = {}
         for p in self.parameters:
             value = params[p.name]
@@ -382,8 +401,7 @@ class BrdfModel(Model):
             value = np.asarray(value, dtype=float)
             uniforms[p.name] = value
             shape = np.broadcast_shapes(shape, value.shape[:-1] if p.kind == "color" else value.shape)
-        frame = [np.broadcast_to(axis, np.shape(L)) for axis in (FRAME_N, FRAME_X, FRAME_Y)]
-        result = self.program.brdf(L, V, *frame, uniforms)
+        result = self.program.brdf(L, V, N, X, Y, uniforms)
         # A shader whose result does not depend on the directions (e.g. a constant) comes back smaller.
         return np.ascontiguousarray(np.broadcast_to(result, shape + (3,)), dtype=float)
 
