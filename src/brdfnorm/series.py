@@ -65,6 +65,7 @@ At θ_o = 0, λ = 1 and G = 1, and (S5) reduces to seed 000's Eq. 3, 8π(2^(−n
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,6 +87,9 @@ _HALF_PI = 0.5 * np.pi
 
 _S_NODES, _S_WEIGHTS = roots_legendre(_INNER_ORDER)
 _P_NODES, _P_WEIGHTS = roots_legendre(_OUTER_ORDER)
+
+#: A batch integrand: (case indices (P,), abscissae (P, N)) -> values (P, N).
+Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -135,16 +139,62 @@ def _integrand(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return power * legendre_ratio(0.5 * n, xi) * np.cos(phi) * np.sin(phi)
 
 
-def _panel_values(n: np.ndarray, theta: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """15-point Gauss–Legendre on each panel [a, b] of (S5) for its case (n, θ); blocks bound memory."""
+def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """15-point Gauss–Legendre of ``func`` on each panel [a, b]; blocks of panels bound the temporaries."""
     out = np.empty(a.shape)
     for start in range(0, a.size, _BLOCK):
         sl = slice(start, start + _BLOCK)
         half = 0.5 * (b[sl] - a[sl])
-        phi = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * _P_NODES
-        f = _integrand(n[sl, None], theta[sl, None], phi)
-        out[sl] = half * (f @ _P_WEIGHTS)
+        x = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * _P_NODES
+        out[sl] = half * (func(case[sl], x) @ _P_WEIGHTS)
     return out
+
+
+def adaptive_gauss_legendre(
+    func: Integrand, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float, atol: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate many one-dimensional integrals at once by adaptive bisection of Gauss–Legendre panels.
+
+    Case ``k`` is the sum of ∫ func over its initial panels [a[i], b[i]] with case[i] = k; ``func(case, x)``
+    takes case indices (P,) and abscissae (P, N) and returns (P, N). A panel's error estimate is the difference
+    between the 15-point rule on it and on its two halves (the finer value is kept); a case is done when its
+    summed estimate is at most max(rtol·|value|, atol). Returns (value, error, evaluations, converged), (cases,).
+    """
+    coarse = _panel_values(func, case, a, b)
+    done_value = np.zeros(cases)
+    done_error = np.zeros(cases)
+    evaluations = np.bincount(case, minlength=cases) * _OUTER_ORDER
+    converged = np.ones(cases, dtype=bool)
+    for round_ in range(_MAX_ROUNDS + 1):
+        mid = 0.5 * (a + b)
+        left = _panel_values(func, case, a, mid)
+        right = _panel_values(func, case, mid, b)
+        count = np.bincount(case, minlength=cases)
+        evaluations += 2 * _OUTER_ORDER * count
+        fine = left + right
+        err = np.abs(fine - coarse)
+        # Current estimate and error per case: accepted panels plus the live ones at their finer value.
+        total = done_value + np.bincount(case, weights=fine, minlength=cases)
+        total_err = done_error + np.bincount(case, weights=err, minlength=cases)
+        target = np.maximum(rtol * np.abs(total), atol)
+        unsettled = total_err > target
+        # Split a live panel only while its case misses the target and the panel carries more than its share
+        # of the error and more than rounding (a panel at rounding level cannot get better by splitting).
+        share = target[case] / np.maximum(count[case], 1)
+        split = unsettled[case] & (err > share) & (err > 64.0 * _EPS * np.abs(fine)) & (b - a > 1e-12)
+        if round_ == _MAX_ROUNDS:
+            converged &= np.bincount(case, weights=split, minlength=cases) == 0
+            split[:] = False
+        keep = ~split
+        done_value += np.bincount(case[keep], weights=fine[keep], minlength=cases)
+        done_error += np.bincount(case[keep], weights=err[keep], minlength=cases)
+        if not split.any():
+            break
+        a = np.concatenate([a[split], mid[split]])
+        b = np.concatenate([mid[split], b[split]])
+        coarse = np.concatenate([left[split], right[split]])
+        case = np.concatenate([case[split], case[split]])
+    return done_value, done_error, evaluations, converged
 
 
 def _initial_panels(n: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -186,48 +236,19 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     shape = np.broadcast_shapes(n_arr.shape, theta_arr.shape)
     nc = np.broadcast_to(n_arr, shape).ravel()
     tc = np.broadcast_to(theta_arr, shape).ravel()
-    cases = nc.size
 
     a, b, case = _initial_panels(nc, tc)
-    coarse = _panel_values(nc[case], tc[case], a, b)
-    done_value = np.zeros(cases)
-    done_error = np.zeros(cases)
-    evaluations = np.bincount(case, minlength=cases) * _OUTER_ORDER
-    converged = np.ones(cases, dtype=bool)
-    for round_ in range(_MAX_ROUNDS + 1):
-        mid = 0.5 * (a + b)
-        left = _panel_values(nc[case], tc[case], a, mid)
-        right = _panel_values(nc[case], tc[case], mid, b)
-        evaluations += 2 * _OUTER_ORDER * np.bincount(case, minlength=cases)
-        fine = left + right
-        err = np.abs(fine - coarse)
-        # Current estimate and error per case: accepted panels plus the live ones at their finer value.
-        total = done_value + np.bincount(case, weights=fine, minlength=cases)
-        total_err = done_error + np.bincount(case, weights=err, minlength=cases)
-        target = np.maximum(rtol * np.abs(total), atol)
-        unsettled = total_err > target
-        # Split a live panel only while its case misses the target and the panel carries more than its share
-        # of the error and more than rounding (a panel at rounding level cannot get better by splitting).
-        count = np.bincount(case, minlength=cases)
-        share = target[case] / np.maximum(count[case], 1)
-        split = unsettled[case] & (err > share) & (err > 64.0 * _EPS * np.abs(fine)) & (b - a > 1e-12)
-        if round_ == _MAX_ROUNDS:
-            converged &= ~np.bincount(case, weights=split, minlength=cases).astype(bool)
-            split[:] = False
-        keep = ~split
-        done_value += np.bincount(case[keep], weights=fine[keep], minlength=cases)
-        done_error += np.bincount(case[keep], weights=err[keep], minlength=cases)
-        if not split.any():
-            break
-        a = np.concatenate([a[split], mid[split]])
-        b = np.concatenate([mid[split], b[split]])
-        coarse = np.concatenate([left[split], right[split]])
-        case = np.concatenate([case[split], case[split]])
 
+    def integrand(index: np.ndarray, phi: np.ndarray) -> np.ndarray:
+        return _integrand(nc[index, None], tc[index, None], phi)
+
+    value, error, evaluations, converged = adaptive_gauss_legendre(
+        integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi)
+    )
     scale = 2.0 * np.pi
     return SeriesResult(
-        value=(scale * done_value).reshape(shape),
-        error=(scale * done_error).reshape(shape),
+        value=(scale * value).reshape(shape),
+        error=(scale * error).reshape(shape),
         evaluations=evaluations.reshape(shape),
         converged=converged.reshape(shape),
     )
