@@ -55,7 +55,15 @@ def pow_runtime(x, y):
     if not np.all(positive):
         result = np.where(positive, result, np.where(x < 0, np.nan, 0.0))
     # exp2(log2(x)·y) is NaN where the product is 0·inf: 1^±inf, 1^NaN, inf^0 (np.power gives 1 there).
-    bad = ((x == 1) & ~np.isfinite(y)) | ((x == np.inf) & (y == 0))
+    if np.ndim(y) == 0:
+        if y == 0:
+            bad = x == np.inf
+        elif not np.isfinite(y):
+            bad = x == 1
+        else:
+            return result
+    else:
+        bad = ((x == 1) & ~np.isfinite(y)) | ((x == np.inf) & (y == 0))
     if np.any(bad):
         result = np.where(bad, np.nan, result)
     return result
@@ -118,8 +126,8 @@ def _mod(x, y):
     return x - y * np.floor(x / y)
 
 
-def _clamp(x, lo, hi):
-    return np.fmin(np.fmax(x, lo), hi)
+def _clamp(x, lo, hi, out=None):
+    return np.fmin(np.fmax(x, lo, out=out), hi, out=out)
 
 
 def _mix(x, y, a):
@@ -208,7 +216,7 @@ def _vector_size(t: Type) -> int | None:
     return t.rows
 
 
-def _resolve_componentwise(name: str, args: Sequence[Type]) -> Resolved | None:
+def _resolve_componentwise(name: str, args: Sequence[Type], reusable: Sequence[bool] = ()) -> Resolved | None:
     for pattern, fn, integer in _COMPONENTWISE[name]:
         if len(pattern) != len(args):
             continue
@@ -232,19 +240,56 @@ def _resolve_componentwise(name: str, args: Sequence[Type]) -> Resolved | None:
             values = [v * e if e else v for v, e in zip(values, expand, strict=False)]
             return tuple(fn(*(v[i] for v in values)) for i in range(n))
 
+        # A temporary argument of full size can receive a ufunc's result (fewer large allocations).
+        buffer = next((k for k, r in enumerate(reusable) if r and sizes[k] == n and pattern[k] == "g"), None)
+        if buffer is not None and (isinstance(fn, np.ufunc) or fn is _clamp):
+
+            def impl(*values, fn=fn, n=n, expand=expand, k=buffer):  # noqa: F811
+                values = [v * e if e else v for v, e in zip(values, expand, strict=False)]
+                out = []
+                for i in range(n):
+                    comps = [v[i] for v in values]
+                    target = comps[k]
+                    if _owned(target, 0.0) and all(_owned(target, c) for j, c in enumerate(comps) if j != k):
+                        out.append(fn(*comps, out=target))
+                    else:
+                        out.append(fn(*comps))
+                return tuple(out)
+
         return Type(base, n), impl
     return None
 
 
+def _owned(buffer, other) -> bool:
+    """True when ``buffer`` (a temporary of ours) can receive ``buffer ∘ other`` in place."""
+    return (
+        isinstance(buffer, np.ndarray)
+        and buffer.ndim > 0
+        and buffer.dtype == np.float64
+        and (np.ndim(other) == 0 or np.shape(other) == buffer.shape)
+    )
+
+
 def _dot(a: Components, b: Components):
+    # Accumulates in place: fresh allocations of large arrays (page faults) dominate the cost otherwise.
     total = a[0] * b[0]
-    for x, y in zip(a[1:], b[1:], strict=False):
-        total = total + x * y
+    buffer = None
+    for x, y in zip(a[1:], b[1:], strict=True):
+        if isinstance(buffer, np.ndarray) and buffer.ndim and np.shape(x) == buffer.shape == np.shape(y):
+            term = np.multiply(x, y, out=buffer)
+        else:
+            term = buffer = x * y
+        total = np.add(total, term, out=total) if _owned(total, term) else total + term
     return total
 
 
 def _normalize(v: Components) -> Components:
-    scale = 1.0 / np.sqrt(_dot(v, v))
+    scale = _dot(v, v)
+    if _owned(scale, 0.0):
+        np.sqrt(scale, out=scale)
+        np.divide(1.0, scale, out=scale)
+    else:
+        scale = 1.0 / np.sqrt(scale)
     return tuple(x * scale for x in v)
 
 
@@ -469,10 +514,22 @@ UNSUPPORTED: dict[str, str] = {
 }
 
 
+#: Built-ins whose result components are always new arrays (never an argument passed through), so the
+#: compiler may reuse them as output buffers.
+FRESH = frozenset(_COMPONENTWISE) - {"pow"} | {
+    "length", "distance", "dot", "cross", "normalize", "faceforward", "reflect", "refract"
+}
+
+
 def is_builtin(name: str) -> bool:
     return name in _RESOLVERS or name == "modf"
 
 
-def resolve(name: str, args: Sequence[Type]) -> Resolved | None:
-    """Result type and implementation of built-in ``name`` for argument types ``args``, or None."""
+def resolve(name: str, args: Sequence[Type], reusable: Sequence[bool] = ()) -> Resolved | None:
+    """Result type and implementation of built-in ``name`` for argument types ``args``, or None.
+
+    ``reusable[k]`` tells that argument k's components are temporaries the result may be written into.
+    """
+    if reusable and _RESOLVERS[name] is _resolve_componentwise:
+        return _resolve_componentwise(name, args, reusable)
     return _RESOLVERS[name](name, args)

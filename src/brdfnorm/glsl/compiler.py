@@ -56,6 +56,7 @@ class Expr:
     ev: Callable[[Frame], tuple]
     const: tuple | None = None
     effects: bool = False
+    fresh: bool = False  # components are new arrays used by nobody else: reusable as output buffers
 
 
 @dataclass
@@ -155,6 +156,25 @@ def _shift(left: bool):
         s = np.asarray(b, dtype=np.int64) & 31
         r = (x << s if left else np.where(x >= 2**31, x - 2**32, x) >> s) & 0xFFFFFFFF
         return np.where(r >= 2**31, r - 2**32, r).astype(np.float64)
+
+    return fn
+
+
+_UFUNCS = {"+": np.add, "-": np.subtract, "*": np.multiply, "/": np.true_divide}
+
+
+def _in_place(ufunc: np.ufunc, side: int) -> Callable:
+    """Componentwise ``ufunc`` writing into operand ``side``'s arrays (temporaries) where shapes allow."""
+
+    def fn(x, y):
+        out = []
+        for p, q in zip(x if len(x) > 1 else x * len(y), y if len(y) > 1 else y * len(x), strict=True):
+            buffer, other = (p, q) if side == 0 else (q, p)
+            if builtins._owned(buffer, other):
+                out.append(ufunc(p, q, out=buffer))
+            else:
+                out.append(ufunc(p, q))
+        return tuple(out)
 
     return fn
 
@@ -324,8 +344,11 @@ class Compiler:
         self.globals_count += 1
         return self.globals_count - 1
 
-    def make(self, t: Type, fn: Callable, args: list[Expr], effects: bool = False) -> Expr:
-        """An expression applying ``fn`` to the arguments' component tuples; folded when all are constant."""
+    def make(self, t: Type, fn: Callable, args: list[Expr], effects: bool = False, fresh: bool = False) -> Expr:
+        """An expression applying ``fn`` to the arguments' component tuples; folded when all are constant.
+
+        ``fresh`` declares that ``fn`` returns new arrays only (see :attr:`Expr.fresh`).
+        """
         effects = effects or any(a.effects for a in args)
         if not effects and all(a.const is not None for a in args):
             with np.errstate(all="ignore"):
@@ -334,14 +357,14 @@ class Compiler:
         evs = [a.ev for a in args]
         if len(evs) == 1:
             (a,) = evs
-            return Expr(t, lambda f: fn(a(f)), effects=effects)
+            return Expr(t, lambda f: fn(a(f)), effects=effects, fresh=fresh)
         if len(evs) == 2:
             a, b = evs
-            return Expr(t, lambda f: fn(a(f), b(f)), effects=effects)
+            return Expr(t, lambda f: fn(a(f), b(f)), effects=effects, fresh=fresh)
         if len(evs) == 3:
             a, b, c = evs
-            return Expr(t, lambda f: fn(a(f), b(f), c(f)), effects=effects)
-        return Expr(t, lambda f: fn(*(e(f) for e in evs)), effects=effects)
+            return Expr(t, lambda f: fn(a(f), b(f), c(f)), effects=effects, fresh=fresh)
+        return Expr(t, lambda f: fn(*(e(f) for e in evs)), effects=effects, fresh=fresh)
 
     def type_of(self, node: Node) -> Type:
         name = self.text(node).strip()
@@ -826,6 +849,12 @@ class Compiler:
 
     def x_number_literal(self, node: Node) -> Expr:
         text = self.text(node)
+        if text[:1] in "+-":  # tree-sitter-glsl folds a unary sign into some literals (e.g. `x * -1.0`)
+            e = self.x_number_text(text[1:].strip(), node)
+            return self.apply_unary(text[0], e, node)
+        return self.x_number_text(text, node)
+
+    def x_number_text(self, text: str, node: Node) -> Expr:
         if re.fullmatch(r"0[xX][0-9a-fA-F]+[uU]?", text):
             value, t = int(text.rstrip("uU"), 16), UINT if text[-1] in "uU" else INT
         elif re.fullmatch(r"[0-9]+[uU]?", text):
@@ -917,7 +946,7 @@ class Compiler:
                 raise self.error(f"unary '{op}' needs a number, vector or matrix, not {t}", node)
             if op == "+":
                 return e
-            return self.make(t, lambda a: tuple(-x for x in a), [e])
+            return self.make(t, lambda a: tuple(-x for x in a), [e], fresh=t.base == "float")
         if op == "~":
             if not t.is_integer:
                 raise self.error(f"'~' needs an integer, not {t}", node)
@@ -976,9 +1005,16 @@ class Compiler:
 
     def arithmetic(self, op: str, left: Expr, right: Expr, node: Node) -> Expr:
         t, fn = self.binary_types(op, left.type, right.type, node)
-        if op == "*" and t.base == "float" and not t.is_matrix and not (left.type.is_matrix or right.type.is_matrix):
+        componentwise = not (op == "*" and (left.type.is_matrix or right.type.is_matrix))
+        if t.base == "float" and componentwise and op in _UFUNCS:
+            # Reuse a temporary operand (not broadcast over the other's components) as the output.
+            if left.fresh and left.type.size == t.size:
+                fn = _in_place(_UFUNCS[op], 0)
+            elif right.fresh and right.type.size == t.size:
+                fn = _in_place(_UFUNCS[op], 1)
+        if op == "*" and t.base == "float" and not t.is_matrix and componentwise:
             fn = self.zero_product(fn, left, right, t)
-        return self.make(t, fn, [left, right])
+        return self.make(t, fn, [left, right], fresh=t.base == "float")
 
     @staticmethod
     def zero_product(fn: Callable, left: Expr, right: Expr, t: Type) -> Callable:
@@ -1352,7 +1388,7 @@ class Compiler:
         types = [a.type for a in args]
         if name == "modf":
             return self.modf(args, arg_nodes, fnode)
-        resolved = builtins.resolve(name, types)
+        resolved = builtins.resolve(name, types, [a.fresh for a in args])
         if resolved is None:
             raise self.error(f"no matching overload for '{name}({', '.join(map(str, types))})'", fnode)
         t, impl = resolved
@@ -1371,7 +1407,7 @@ class Compiler:
                 def impl(a, b, fns=fns):  # noqa: E306
                     return tuple(fn(a[i], b[i]) for i, fn in enumerate(fns))
 
-        return self.make(t, impl, args)
+        return self.make(t, impl, args, fresh=name in builtins.FRESH and t.base == "float")
 
     def modf(self, args: list[Expr], arg_nodes: list[Node], fnode: Node) -> Expr:
         x = args[0]
