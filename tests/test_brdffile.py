@@ -38,7 +38,7 @@ color tint 0.25 .5 1e0
 ::end parameters
 
 ::begin shader
-# define-like lines inside GLSL are the shader's business
+// GLSL comments, and '#' lines (preprocessor directives), are the shader's business
 vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return tint * n; }
 ::end shader
 
@@ -68,6 +68,11 @@ def test_sections_kinds_and_positions():
     assert brdf.is_func is not None
     assert brdf.is_func.text.strip() == lines[16]
     assert brdf.is_func.line == 17
+
+
+def test_hash_lines_inside_the_shader_are_kept_verbatim():
+    text = MULTI_LINE.replace("// GLSL comments", "#define SCALE 2.0\n// GLSL comments")
+    assert parse_brdf(text).shader.text.startswith("#define SCALE 2.0\n")
 
 
 def test_one_line_form_reads_like_the_multi_line_form():
@@ -135,23 +140,31 @@ def test_is_func_is_kept_but_never_compiled(tmp_path):
     np.testing.assert_array_equal(model.eval([0, 0, 1.0], [0, 0, 1.0]), [25.0, 50.0, 100.0])
 
 
+def power_rtol(n: float) -> float:
+    """x^n has relative condition number n: the file and the built-in round N·H differently (≤ 2 ulps)."""
+    return max(1e-12, 4 * n * 2.0**-53)
+
+
 @pytest.mark.parametrize("n", [1.0, 32.0, 512.0, 1e4])
 def test_blinn_phong_file_equals_the_builtin(pairs, n):
     L, V = pairs
     ours = load_brdf(EXAMPLES / "blinn_phong.brdf", n=n).eval(L, V)
     builtin = REGISTRY["blinn-phong"](n=n).eval(L, V)
-    np.testing.assert_allclose(ours, np.repeat(builtin, 3, axis=-1), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(ours, np.repeat(builtin, 3, axis=-1), rtol=power_rtol(n), atol=0)
 
 
 @pytest.mark.parametrize("name", ["blinn_phong_gaussian.brdf", "blinn_phong_gaussian_oneline.brdf"])
 @pytest.mark.parametrize("n", [1.0, 100.0, 512.0])
 def test_seed_003_shader_equals_the_builtin_gaussian(pairs, name, n):
+    # exp(-x²) has relative condition number 2x², in the hundreds where the lobe is below 1e-100 of its
+    # peak: there the comparison is absolute, at 1e-12 of the peak.
     L, V = pairs
     builtin = np.repeat(REGISTRY["blinn-phong-gaussian"](n=n).eval(L, V), 3, axis=-1)
     plain = load_brdf(EXAMPLES / name, n=n, normalized=0).eval(L, V)
-    np.testing.assert_allclose(plain, builtin, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(plain, builtin, rtol=1e-12, atol=1e-12 * builtin.max())
     scaled = load_brdf(EXAMPLES / name, n=n).eval(L, V)  # normalized=1 by default: the seed's linear fit
-    np.testing.assert_allclose(scaled, builtin * (0.17287429 + 0.01388682 * n), rtol=1e-12, atol=1e-300)
+    factor = 0.17287429 + 0.01388682 * n
+    np.testing.assert_allclose(scaled, builtin * factor, rtol=1e-12, atol=1e-12 * builtin.max() * factor)
 
 
 def test_one_line_and_multi_line_files_evaluate_identically(pairs):
@@ -181,7 +194,7 @@ def test_values_outside_the_slider_range_warn_and_still_evaluate(pairs):
     with pytest.warns(UserWarning, match="parameter n: value 20000.0 outside \\[1, 10000\\].*slider range"):
         model = load_brdf(EXAMPLES / "blinn_phong.brdf", n=20000.0)
     builtin = REGISTRY["blinn-phong"](n=20000.0).eval(L, V)
-    np.testing.assert_allclose(model.eval(L, V)[..., :1], builtin, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(model.eval(L, V)[..., :1], builtin, rtol=power_rtol(20000.0), atol=0)
 
 
 @pytest.mark.parametrize(
@@ -266,20 +279,20 @@ def test_every_example_integrates(path):
 def test_blinn_phong_file_albedo_equals_the_builtin_to_1e_12():
     model = load_brdf(EXAMPLES / "blinn_phong.brdf")
     n = model.params["n"]
-    at_normal = bn.albedo(model, 0.0, rtol=1e-14)
+    at_normal = bn.albedo(model, 0.0, rtol=1e-12)
     assert at_normal.method == "quadrature"
     exact = float(closed_forms.blinn_phong_albedo_normal(n))
     np.testing.assert_allclose(at_normal.value[0], exact, rtol=1e-12)
     theta = np.radians([30.0, 60.0])
-    ours = bn.albedo(model, theta, rtol=1e-14).value
-    builtin = bn.albedo(REGISTRY["blinn-phong"](n=n), theta, rtol=1e-14).value
+    ours = bn.albedo(model, theta, rtol=1e-12).value
+    builtin = bn.albedo(REGISTRY["blinn-phong"](n=n), theta, rtol=1e-12).value
     np.testing.assert_allclose(ours, np.repeat(builtin, 3, axis=-1), rtol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["blinn_phong_gaussian.brdf", "blinn_phong_gaussian_oneline.brdf"])
 def test_seed_003_albedo_at_normal_equals_the_builtin_to_1e_12(name):
-    ours = bn.albedo(load_brdf(EXAMPLES / name, n=100, normalized=0), 0.0, rtol=1e-14)
-    builtin = bn.albedo(REGISTRY["blinn-phong-gaussian"](n=100), 0.0, rtol=1e-14)
+    ours = bn.albedo(load_brdf(EXAMPLES / name, n=100, normalized=0), 0.0, rtol=1e-12)
+    builtin = bn.albedo(REGISTRY["blinn-phong-gaussian"](n=100), 0.0, rtol=1e-12)
     np.testing.assert_allclose(ours.value[0], np.repeat(builtin.value[0], 3), rtol=1e-12)
 
 

@@ -222,17 +222,17 @@ def test_no_brdf_function(tmp_path):
 
 def test_wrong_brdf_signature(tmp_path):
     text = brdf_text("vec3 BRDF(vec3 L, vec3 V) { return vec3(1); }")
-    assert_file_error(write(tmp_path, text), *where(text, "vec3 BRDF"), match="BRDF")
+    assert_file_error(write(tmp_path, text), *where(text, "BRDF("), match="wrong signature")
 
 
 def test_brdf_returning_float(tmp_path):
     text = brdf_text("float BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return 1.0; }")
-    assert_file_error(write(tmp_path, text), *where(text, "float BRDF"), match="BRDF")
+    assert_file_error(write(tmp_path, text), *where(text, "BRDF("), match="wrong signature")
 
 
 def test_glsl_syntax_error(tmp_path):
     text = brdf_text(SIGNATURE + "\n{\n    float a = 1.0 +;\n    return vec3(a);\n}")
-    assert_file_error(write(tmp_path, text), where(text, "float a")[0], match="syntax")
+    assert_file_error(write(tmp_path, text), *where(text, "+;"), match="syntax error near '\\+'")
 
 
 def test_unknown_identifier(tmp_path):
@@ -278,17 +278,17 @@ def test_huge_loop_hits_the_budget(tmp_path):
 
 
 def test_per_lane_infinite_loop_hits_the_budget(tmp_path):
-    # Only the lanes with L.x > 0 loop forever; the others finish at once.
+    # Only the lane with L.x > 0 (the second) loops forever; the first finishes at once.
     body = "\n{\n    float s = 0.0;\n    while (L.x > 0.0) { s += 1.0; }\n    return vec3(s);\n}"
     path = write(tmp_path, text := brdf_text(SIGNATURE + body))
     with hang_guard(60), pytest.raises((EvaluationError, BrdfFileError)) as info:
-        load_brdf(path).eval(*DIRECTIONS[::-1])
+        load_brdf(path).eval(*DIRECTIONS)
     assert str(info.value).startswith(f"{path}:{where(text, 'while')[0]}:")
 
 
 def test_recursion_is_refused(tmp_path):
     text = brdf_text("float f(float x) { return x > 1.0 ? f(x - 1.0) : x; }\n" + SIGNATURE + " { return vec3(f(n)); }")
-    assert_file_error(write(tmp_path, text), where(text, "float f")[0], match="recurs")
+    assert_file_error(write(tmp_path, text), *where(text, "f(x - 1.0)"), match="recursion")
 
 
 def test_mutual_recursion_is_refused(tmp_path):
@@ -339,8 +339,16 @@ def test_nan_fails_the_albedo_naming_the_first_pair_unless_zeroed(tmp_path):
     assert "nonfinite" in str(info.value)
     with pytest.warns(UserWarning):
         zeroed = bn.albedo(model, 0.5, nonfinite="zero", rtol=1e-6)
-    assert np.all(np.isfinite(zeroed.value)) and np.all(zeroed.value > 0)
-    assert 0 < zeroed.nonfinite_fraction[0] < 1
+    assert 0 < float(zeroed.nonfinite_fraction) < 1
+    # Independent route: a midpoint rule in (θ, φ) with the NaNs counted as 0 (the integrand has a
+    # square-root edge, so the crude rule is good to ~1e-3 only).
+    t = (np.arange(300) + 0.5) * (np.pi / 2) / 300
+    p = (np.arange(600) + 0.5) * (2 * np.pi) / 600
+    T, P = np.meshgrid(t, p, indexing="ij")
+    L = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], axis=-1)
+    V = np.array([np.sin(0.5), 0.0, np.cos(0.5)])
+    value = np.sqrt(np.maximum(L @ V - 0.5, 0.0)) * np.cos(T) * np.sin(T) * (np.pi / 600) * (np.pi / 300)
+    np.testing.assert_allclose(zeroed.value, value.sum(), rtol=3e-3)
 
 
 def test_division_by_zero_fails_the_albedo(tmp_path):
