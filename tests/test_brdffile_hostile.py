@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import random
+import re
 import signal
 import tempfile
 import warnings
@@ -19,10 +20,10 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from mesa import MesaBrdf, MesaUnavailable
+from mesa import MesaBrdf, MesaCompileError, MesaUnavailable
 
 import brdfnorm as bn
-from brdfnorm.brdffile import load_brdf, random_hemisphere
+from brdfnorm.brdffile import load_brdf, random_hemisphere, read_brdf
 from brdfnorm.errors import BrdfFileError, EvaluationError, ModelNotFoundError
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.brdf"))
@@ -464,3 +465,28 @@ def test_random_directions_are_strictly_in_the_upper_hemisphere():
     directions = random_hemisphere(np.random.default_rng(0), 100_000)
     assert np.all(directions[:, 2] > 0)
     np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        SIGNATURE + "\n{\n    float a = 1.0;\n    return vec3(roughnes * a);\n}",
+        SIGNATURE + "\n{\n    vec3 H = normalize(L + V);\n    return vec3(dot(H));\n}",
+        "float f(float a, float b) { return a * b; }\n\n" + SIGNATURE + "\n{\n    return vec3(f(1.0));\n}",
+    ],
+    ids=["unknown-identifier", "argument-count", "user-function-arguments"],
+)
+def test_error_lines_agree_with_mesa(tmp_path, body):
+    # The real compiler, fed the same file with its lines kept (tests/mesa.py), names the same line.
+    path = write(tmp_path, brdf_text(body))
+    with pytest.raises(BrdfFileError) as info:
+        load_brdf(path)
+    try:
+        MesaBrdf(read_brdf(path))
+    except MesaUnavailable as exc:
+        pytest.skip(str(exc))
+    except MesaCompileError as exc:
+        mesa_lines = {int(line) for line in re.findall(r"0:(\d+)\(\d+\): error", str(exc))}
+        assert info.value.line in mesa_lines, str(exc)
+    else:
+        pytest.fail("Mesa compiled a shader brdfnorm refused")
