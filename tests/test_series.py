@@ -166,3 +166,17 @@ def test_albedo_decreases_toward_grazing_for_a_sharp_lobe():
 def test_bad_input_raises_project_errors(kwargs, error):
     with pytest.raises(error):
         blinn_phong_albedo_series(**kwargs)
+
+
+def test_registered_as_albedo_method_series():
+    albedo = pytest.importorskip("brdfnorm.albedo")
+    from brdfnorm.models import BlinnPhong, PhongModified
+
+    if "series" not in albedo.METHODS:
+        pytest.skip("series not registered in brdfnorm.albedo")
+    theta = np.radians([0.0, 85.9])
+    result = albedo.albedo(BlinnPhong(n=np.array([[1.0], [1e4]])), theta, method="series", rtol=1e-12)
+    assert result.method == "series" and result.value.shape == (2, 2, 1)
+    np.testing.assert_allclose(result.value[..., 0], blinn_phong_albedo_series([[1.0], [1e4]], theta).value, rtol=0)
+    with pytest.raises(ArgumentError):
+        albedo.albedo(PhongModified(n=10.0), 0.3, method="series")
