@@ -31,7 +31,7 @@ MULTI_LINE = """analytic
 
 # A comment line, then parameters of every kind.
 ::begin parameters
-float n 1 512 100
+float n 1 512 100   # a trailing note
   # an indented comment inside the section
 bool normalized 1
 color tint 0.25 .5 1e0

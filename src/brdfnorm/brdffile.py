@@ -4,7 +4,7 @@ Disney's BRDF Explorer (Burley 2012) stores an analytic lobe as a small text fil
 Gaussian Blinn-Phong lobe, on a single line). The format, as BRDF Explorer reads it::
 
     analytic
-    # a comment: lines whose first word starts with '#', outside the GLSL sections
+    # a comment: from a word starting with '#' to the end of the line, outside the GLSL sections
     ::begin parameters
     float NAME MIN MAX DEFAULT     # uniform float in the shader; MIN/MAX are the UI slider's range
     bool NAME DEFAULT              # uniform bool, DEFAULT is 0 or 1
@@ -96,7 +96,7 @@ class _Token:
 
 
 class _Scanner:
-    """Tokens of the file in order, with comment lines skipped and offsets mapped to (line, column)."""
+    """Tokens of the file in order, with comments skipped and offsets mapped to (line, column)."""
 
     def __init__(self, text: str, path: str) -> None:
         self.text = text
@@ -121,11 +121,9 @@ class _Scanner:
             if match is None:
                 self.pos = len(self.text)
                 return None
-            # First on its line: a newline precedes it since the last token, or the scan resumed at a line
-            # start (the file's start, or just after a skipped comment line).
-            gap_has_newline = "\n" in self.text[self.pos : match.start()]
-            first = gap_has_newline or self.pos == 0 or self.text[self.pos - 1] == "\n"
-            if first and match.group().startswith("#"):
+            # '#' starts a comment running to the end of the line: whole comment lines, as BRDF Explorer's
+            # files have, and also trailing notes after a parameter declaration.
+            if match.group().startswith("#"):
                 newline = self.text.find("\n", match.start())
                 self.pos = len(self.text) if newline < 0 else newline + 1
                 continue
