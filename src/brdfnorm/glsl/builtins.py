@@ -517,7 +517,14 @@ UNSUPPORTED: dict[str, str] = {
 #: Built-ins whose result components are always new arrays (never an argument passed through), so the
 #: compiler may reuse them as output buffers.
 FRESH = frozenset(_COMPONENTWISE) - {"pow"} | {
-    "length", "distance", "dot", "cross", "normalize", "faceforward", "reflect", "refract"
+    "length",
+    "distance",
+    "dot",
+    "cross",
+    "normalize",
+    "faceforward",
+    "reflect",
+    "refract",
 }
 
 

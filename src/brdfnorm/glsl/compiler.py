@@ -198,6 +198,14 @@ def _written_names(root: Node, text: Callable[[Node], str]) -> set[str]:
     SSA-based constant propagation does (which matters for pow's constant-exponent rewrites).
     """
     names: set[str] = set()
+    # Only calls of user functions (out/inout parameters) and of modf can write their arguments.
+    writers = {"modf"}
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if node.type == "function_declarator":
+            writers.add(text(node.child_by_field_name("declarator")))
+        stack.extend(node.children)
 
     def root_name(node: Node) -> None:
         while node.type in ("field_expression", "subscript_expression", "parenthesized_expression"):
@@ -212,7 +220,7 @@ def _written_names(root: Node, text: Callable[[Node], str]) -> set[str]:
             root_name(node.child_by_field_name("left"))
         elif node.type == "update_expression":
             root_name(node.child_by_field_name("argument"))
-        elif node.type == "call_expression":
+        elif node.type == "call_expression" and text(node.child_by_field_name("function")) in writers:
             args = node.child_by_field_name("arguments")
             for arg in args.named_children if args is not None else ():
                 root_name(arg)
@@ -379,7 +387,7 @@ class Compiler:
         return t
 
     def array_length(self, declarator: Node) -> int:
-        size = declarator.child_by_field_name("size")
+        size = declarator.child_by_field_name("size") or declarator.child_by_field_name("index")
         if size is None:
             raise self.error("arrays need an explicit constant size", declarator)
         e = self.expr(size)
@@ -1012,22 +1020,32 @@ class Compiler:
                 fn = _in_place(_UFUNCS[op], 0)
             elif right.fresh and right.type.size == t.size:
                 fn = _in_place(_UFUNCS[op], 1)
-        if op == "*" and t.base == "float" and not t.is_matrix and componentwise:
-            fn = self.zero_product(fn, left, right, t)
+        if op in ("*", "/") and t.base == "float" and not t.is_matrix and componentwise:
+            zero = self.constant_zeros(op, left, right, t)
+            if all(zero) and not (left.effects or right.effects):
+                const = (0.0,) * t.size
+                return Expr(t, lambda f: const, const)
+            if any(zero):
+                inner = fn
+                fn = lambda x, y: tuple(0.0 if z else v for z, v in zip(zero, inner(x, y), strict=True))  # noqa: E731
         return self.make(t, fn, [left, right], fresh=t.base == "float")
 
     @staticmethod
-    def zero_product(fn: Callable, left: Expr, right: Expr, t: Type) -> Callable:
-        """Mesa's optimizer folds ``x * 0.0`` to 0 for any x (inf and NaN included): do the same."""
+    def constant_zeros(op: str, left: Expr, right: Expr, t: Type) -> list[bool]:
+        """Components Mesa's optimizer folds to 0 whatever the other operand (inf and NaN included).
+
+        Measured on llvmpipe: ``x * 0.0``, ``0.0 * x``, ``x / 0.0`` and ``0.0 / x`` are all 0 (NIR's
+        inexact algebraic rules; ``x / y`` becomes ``x * rcp(y)``). Both operands constant: folded as usual.
+        """
         zero = [False] * t.size
+        if left.const is not None and right.const is not None:
+            return zero
         for e in (left, right):
-            if e.const is not None and (left.const is None or right.const is None):
+            if e.const is not None:
                 for i in range(t.size):
                     if e.const[0 if len(e.const) == 1 else i] == 0:
                         zero[i] = True
-        if not any(zero):
-            return fn
-        return lambda x, y: tuple(0.0 if z else v for z, v in zip(zero, fn(x, y), strict=False))
+        return zero
 
     def x_binary_expression(self, node: Node) -> Expr:
         op_node = node.child_by_field_name("operator")
@@ -1365,13 +1383,13 @@ class Compiler:
             if t == VOID:
                 raise self.error("cannot construct void", function)
             return self.constructor(t, arg_nodes, node)
-        if unsupported_type_feature(name):
-            raise self.error(f"unsupported feature: {unsupported_type_feature(name)}", function)
         if name in self.functions:
             args = [self.expr(a) for a in arg_nodes]
             return self.user_call(name, args, arg_nodes, node, function)
         if name in builtins.UNSUPPORTED:
             raise self.error(f"unsupported feature: {builtins.UNSUPPORTED[name]} ({name})", function)
+        if unsupported_type_feature(name):
+            raise self.error(f"unsupported feature: {unsupported_type_feature(name)}", function)
         if not builtins.is_builtin(name):
             if self.lookup(name) is not None:
                 raise self.error(f"'{name}' is a variable, not a function", function)
