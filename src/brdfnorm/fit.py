@@ -595,9 +595,7 @@ def _fit_one(form: Form, x, t, y, metric: str, names: tuple[str, str]) -> FitRes
     if form.two_d:
         argmax[names[1]] = float(t[j])
         ranges[names[1]] = [float(t.min()), float(t.max())]
-    warnings = []
-    if _has_pole(form, c, x, t):
-        warnings.append("the denominator changes sign inside the fitted range (a pole)")
+    warnings = _defects(form, c, x, t)
     return FitResult(
         form=form.spec, expression=form.expression(c, *names), coefficients=[float(v) for v in c],
         max_rel_error=float(rel[j]), max_abs_error=float(np.max(np.abs(f - y))), argmax=argmax, metric=metric,
@@ -606,12 +604,18 @@ def _fit_one(form: Form, x, t, y, metric: str, names: tuple[str, str]) -> FitRes
     )
 
 
-def _has_pole(form: Form, c: np.ndarray, x: np.ndarray, t: np.ndarray | None) -> bool:
-    """The denominator on the samples and on a dense grid over the fitted box must keep one sign."""
+#: A denominator this many times its fixed constant term 1 means numerator and denominator nearly cancel: the
+#: normalization q_00 = 1 is then meaningless and float32 shader code would overflow.
+DEGENERATE = 1e12
+
+
+def _defects(form: Form, c: np.ndarray, x: np.ndarray, t: np.ndarray | None) -> list[str]:
+    """A pole (the denominator changes sign on the samples or a dense grid over the fitted box) or a
+    degenerate rational (see :data:`DEGENERATE`)."""
     with np.errstate(all="ignore"):
         q = form.denominator(c, x, t)
         if q is None:
-            return False
+            return []
         grid_x = np.linspace(x.min(), x.max(), 2049)
         if form.two_d:
             grid_x, grid_t = np.meshgrid(grid_x, np.linspace(t.min(), t.max(), 65))
@@ -619,7 +623,11 @@ def _has_pole(form: Form, c: np.ndarray, x: np.ndarray, t: np.ndarray | None) ->
         else:
             dense = form.denominator(c, grid_x)
     q = np.concatenate([q, dense])
-    return not (np.all(q > 0) or np.all(q < 0))
+    if not (np.all(q > 0) or np.all(q < 0)):
+        return ["the denominator changes sign inside the fitted range (a pole)"]
+    if not np.all(np.isfinite(q)) or np.max(np.abs(q)) > DEGENERATE:
+        return [f"degenerate: the denominator exceeds {DEGENERATE:g} (numerator and denominator nearly cancel)"]
+    return []
 
 
 def fit(

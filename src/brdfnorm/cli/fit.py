@@ -1,0 +1,197 @@
+"""``brdfnorm fit``: fit a cheap formula to a model's normalization factor and emit it as shader code (issue 4).
+
+Samples come from :func:`brdfnorm.normalize.normalize` (the factor 1/E over a parameter sweep; with
+``--at view`` also over the polar angles of ``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
+:func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.codegen.emit`. Seed 003's check:
+``brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form linear --metric abs-lsq --at normal --json``.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from ..codegen import LANGUAGES, emit
+from ..errors import ArgumentError, EvaluationError
+from ..fit import METRICS, FitResult, fit
+from ..normalize import normalize
+from . import app
+from .common import (
+    DEBUG_OPTION,
+    PARAM_OPTION,
+    console,
+    guarded,
+    load_model,
+    parse_angles,
+    parse_sweep,
+    print_json,
+    write_output_atomically,
+)
+
+SECOND_VARIABLE = "cos_theta_o"
+
+
+class Metric(str, Enum):
+    abs_lsq = "abs-lsq"
+    rel_lsq = "rel-lsq"
+    minimax_rel = "minimax-rel"
+
+
+class At(str, Enum):
+    normal = "normal"
+    max = "max"
+    view = "view"
+
+
+assert tuple(m.value for m in Metric) == METRICS
+
+
+def _factor_channel(factor: np.ndarray) -> np.ndarray:
+    """Channel 0 of the (S, T, C) factors; several channels only if they are all equal."""
+    if factor.shape[-1] > 1 and not np.allclose(factor, factor[..., :1], rtol=1e-12, atol=0.0):
+        raise ArgumentError(f"the model has {factor.shape[-1]} channels with different factors; fit one "
+                            "channel at a time (e.g. set the color parameters equal)", where="MODEL")
+    return factor[..., 0]
+
+
+def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: np.ndarray, name: str) -> None:
+    """α(x), the fit, and the relative error (one curve per θ for a two-variable fit)."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
+    columns = [slice(None)] if t is None else [np.s_[:, j] for j in range(y.shape[1])]
+    X = x if t is None else np.broadcast_to(x[:, None], y.shape)
+    for j, col in enumerate(columns):
+        xs, ys = X[col], y[col]
+        ts = None if t is None else t[col]
+        fitted = result(xs, ts)
+        label = "" if t is None else f" θ={np.degrees(np.arccos(np.clip(ts[0], -1, 1))):.3g}°"
+        top.plot(xs, ys, ".", ms=3, color=f"C{j % 10}", label=f"α{label}" if j < 8 else None)
+        top.plot(xs, fitted, "-", lw=1, color=f"C{j % 10}", label=f"fit{label}" if j < 8 else None)
+        bottom.plot(xs, fitted / ys - 1.0, "-", lw=1, color=f"C{j % 10}")
+    top.set_ylabel("normalization factor α")
+    top.set_title(f"{result.form} ({result.metric}): max rel. error {result.max_rel_error:.3g}")
+    top.legend(fontsize=7)
+    bottom.set_ylabel("relative error (fit/α − 1)")
+    bottom.set_xlabel(name)
+    bottom.axhline(0.0, color="k", lw=0.5)
+    if x.min() > 0 and x.max() / x.min() > 100:
+        for axis in (top, bottom):
+            axis.set_xscale("log")
+        top.set_yscale("log")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    write_output_atomically(path, buffer.getvalue())
+
+
+@app.command("fit")
+def fit_command(
+    model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name or a .brdf file."),
+    param: list[str] = PARAM_OPTION,
+    sweep: str = typer.Option(..., "--sweep", metavar="NAME=SPEC",
+                              help="The fitted parameter: NAME=START:STOP:COUNT[:log] or NAME=V,V,..."),
+    form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
+                             "rational-sqrt:P/Q | auto; with --at view add @D (degree in cos θ_o) and "
+                             "optionally ~tau, e.g. rational-sqrt:4/2@3~tau."),
+    metric: Metric = typer.Option(Metric.minimax_rel, "--metric", help="What the fit minimizes."),
+    at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
+    theta: str = typer.Option(None, "--theta", metavar="SPEC",
+                              help="Polar angles in degrees for --at view (START:STOP:COUNT or list)."),
+    target: float = typer.Option(1e-3, "--target", help="Max relative error that --form auto aims for."),
+    max_coefficients: int = typer.Option(None, "--max-coefficients",
+                                         help="Largest coefficient count --form auto tries (default 10; 40 "
+                                              "in two variables)."),
+    rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral."),
+    emit_language: str = typer.Option(None, "--emit", metavar="LANG", help="glsl | hlsl | c | python."),
+    output: str = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the emitted code here."),
+    plot: str = typer.Option(None, "--plot", metavar="FILE.png", help="Plot α, the fit and its error."),
+    json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    debug: bool = DEBUG_OPTION,
+) -> None:
+    """Fit a cheap formula (the fewest coefficients for --target with --form auto) to the normalization factor."""
+    with guarded(debug):
+        if emit_language is not None and emit_language not in LANGUAGES:
+            raise ArgumentError(f"unknown language {emit_language!r} (known: {', '.join(LANGUAGES)})",
+                                where="--emit")
+        if output is not None and emit_language is None:
+            raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
+        if at is At.view and theta is None:
+            raise ArgumentError("--at view fits over the view angle: give --theta SPEC", where="--theta")
+        if at is not At.view and theta is not None:
+            raise ArgumentError("--theta applies only with --at view", where="--theta")
+        if max_coefficients is not None and max_coefficients < 2:
+            raise ArgumentError(f"need at least 2, got {max_coefficients}", where="--max-coefficients")
+        if plot is not None and not plot.lower().endswith(".png"):
+            raise ArgumentError(f"the plot is a PNG file: {plot!r}", where="--plot")
+        name, values = parse_sweep(sweep)
+        degrees = parse_angles(theta) if theta is not None else None
+        m = load_model(model, param)
+        m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
+        result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
+                           else np.radians(degrees), rtol=rtol)
+        y = _factor_channel(result.factor)
+        if not np.all(np.isfinite(y)) or np.any(y <= 0):
+            raise EvaluationError("the normalization factor is not finite and positive at every sample "
+                                  "(an albedo of 0?)", where="--sweep")
+        x = result.values
+        t = None
+        if at is At.view:
+            t = np.cos(result.theta)
+            fitted = fit(np.broadcast_to(x[:, None], y.shape), y, t, form=form, metric=metric.value,
+                         target=target, max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
+        else:
+            fitted = fit(x, y[:, 0], form=form, metric=metric.value, target=target,
+                         max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
+        code = emit(fitted, emit_language, m.name, variable=name) if emit_language else None
+        if output is not None:
+            write_output_atomically(output, code)
+        if plot is not None:
+            _plot(plot, fitted, x, t, y if t is not None else y[:, 0], name)
+        if json_output:
+            data = {"model": m.name, "at": at.value, "parameter": name, **fitted.to_dict()}
+            if at is At.view:
+                data["argmax"]["theta_deg"] = float(np.degrees(np.arccos(fitted.argmax[SECOND_VARIABLE])))
+            if code is not None:
+                data["language"] = emit_language
+                data["code"] = code
+            print_json(data)
+            return
+        _summary(fitted, m.name, at.value, code if output is None else None, output)
+
+
+def _summary(result: FitResult, model: str, at: str, code: str | None, output: str | None) -> None:
+    out = console()
+    out.print(f"[bold]{model}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] ({result.metric}, "
+              f"{result.samples} samples)")
+    out.print(f"  α ≈ {result.expression}", highlight=False)
+    where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
+    out.print(f"  max relative error {result.max_rel_error:.4g} at {where}; max absolute error "
+              f"{result.max_abs_error:.4g}")
+    ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
+    out.print("  range: " + "; ".join(f"{k} ∈ [{lo:.6g}, {hi:.6g}]" for k, (lo, hi) in result.range.items())
+              + f"; operations: {ops or 'none'}")
+    for warning in result.warnings:
+        out.print(f"  [yellow]warning:[/yellow] {warning}")
+    if result.tried:
+        table = Table(title="forms tried (auto)")
+        for column in ("form", "coefficients", "max rel. error", "pole/degenerate"):
+            table.add_column(column)
+        for entry in result.tried:
+            table.add_row(entry["form"], str(entry["coefficients"]), f"{entry['max_rel_error']:.3g}",
+                          "yes" if entry["pole"] else "")
+        out.print(table)
+    if output is not None:
+        out.print(f"  code written to {output}")
+    elif code is not None:
+        out.print(code, markup=False, highlight=False)
+
