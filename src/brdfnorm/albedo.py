@@ -262,4 +262,4 @@ from .models.blinn_phong import BlinnPhong  # noqa: E402
 from .series import albedo_method as _series  # noqa: E402
 
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
-                       "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"))
+                       "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
