@@ -9,14 +9,15 @@ Samples come from :func:`brdfnorm.normalize.normalize` (the factor 1/E over a pa
 from __future__ import annotations
 
 from enum import Enum
+from pathlib import Path
 
 import numpy as np
 import typer
 from rich.table import Table
 
 from ..codegen import LANGUAGES, emit
-from ..errors import ArgumentError, EvaluationError
-from ..fit import METRICS, FitResult, fit
+from ..errors import ArgumentError, EvaluationError, OutputError
+from ..fit import METRICS, FitResult, fit, parse_form
 from ..normalize import normalize
 from . import app
 from .common import (
@@ -133,6 +134,10 @@ def fit_command(
             raise ArgumentError(f"need at least 2, got {max_coefficients}", where="--max-coefficients")
         if plot is not None and not plot.lower().endswith(".png"):
             raise ArgumentError(f"the plot is a PNG file: {plot!r}", where="--plot")
+        if form.strip() != "auto":
+            parse_form(form, two_d=at is At.view)  # a bad --form is reported before any integration
+        if output is not None and not Path(output).parent.is_dir():
+            raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
         name, values = parse_sweep(sweep)
         degrees = parse_angles(theta) if theta is not None else None
         m = load_model(model, param)
