@@ -100,7 +100,7 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
         polys.append(("q", [rest[j * k:(j + 1) * k] for j in range(form.Q + 1)]))
     for name, rows in polys:
         if form.D:
-            terms = [_horner(row, v) for row in rows]
+            terms = [f"({_horner(row, v)})" for row in rows]
         else:
             terms = [row[0] for row in rows]
         lines.append(f"{syn.declare}{name} = {_horner(terms, u) if len(terms) > 1 else terms[0]}{syn.end}")
