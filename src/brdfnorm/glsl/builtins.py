@@ -242,7 +242,7 @@ def _resolve_componentwise(name: str, args: Sequence[Type], reusable: Sequence[b
 
         # A temporary argument of full size can receive a ufunc's result (fewer large allocations).
         buffer = next((k for k, r in enumerate(reusable) if r and sizes[k] == n and pattern[k] == "g"), None)
-        if buffer is not None and (isinstance(fn, np.ufunc) or fn is _clamp):
+        if buffer is not None and (isinstance(fn, np.ufunc) or (fn is _clamp and buffer == 0)):
 
             def impl(*values, fn=fn, n=n, expand=expand, k=buffer):  # noqa: F811
                 values = [v * e if e else v for v, e in zip(values, expand, strict=False)]

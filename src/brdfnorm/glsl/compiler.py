@@ -102,7 +102,7 @@ class _Scope(dict):
 
 
 def _zeros(t: Type) -> tuple:
-    return (False,) * t.size if t.base == "bool" else (0.0,) * t.size
+    return (False,) * t.size if t.base == "bool" else (_ZERO,) * t.size
 
 
 def _to_int(x):
@@ -179,7 +179,21 @@ def _in_place(ufunc: np.ufunc, side: int) -> Callable:
     return fn
 
 
-_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv}
+# numpy's divide, not Python's: IEEE results (inf, NaN) for constant operands too, never ZeroDivisionError.
+_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": np.true_divide}
+_ZERO = np.float64(0.0)
+
+
+def _override(impl: Callable, overrides: dict[int, int | None], size: int) -> Callable:
+    def fn(*values):
+        out = list(impl(*values))
+        for i, k in overrides.items():
+            out[i] = _ZERO if k is None else values[k][i if len(values[k]) > 1 else 0]
+        return tuple(out)
+
+    return fn
+
+
 _INT_ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": _int_div, "%": _int_mod}
 _BITWISE = {
     "&": _bitwise(operator.and_),
@@ -884,7 +898,7 @@ class Compiler:
                 raise self.error(f"integer '{text}' is out of range", node)
             if t == INT and value >= 2**31:
                 value -= 2**32  # GLSL: decimal/hex int literals wrap to 32 bits
-        const = (float(value),)
+        const = (np.float64(value),)  # numpy scalars: IEEE arithmetic, no Python ZeroDivisionError
         return Expr(t, lambda f: const, const)
 
     def x_true(self, node: Node) -> Expr:
@@ -1023,11 +1037,11 @@ class Compiler:
         if op in ("*", "/") and t.base == "float" and not t.is_matrix and componentwise:
             zero = self.constant_zeros(op, left, right, t)
             if all(zero) and not (left.effects or right.effects):
-                const = (0.0,) * t.size
+                const = (_ZERO,) * t.size
                 return Expr(t, lambda f: const, const)
             if any(zero):
                 inner = fn
-                fn = lambda x, y: tuple(0.0 if z else v for z, v in zip(zero, inner(x, y), strict=True))  # noqa: E731
+                fn = lambda x, y: tuple(_ZERO if z else v for z, v in zip(zero, inner(x, y), strict=True))  # noqa: E731
         return self.make(t, fn, [left, right], fresh=t.base == "float")
 
     @staticmethod
@@ -1406,10 +1420,13 @@ class Compiler:
         types = [a.type for a in args]
         if name == "modf":
             return self.modf(args, arg_nodes, fnode)
-        resolved = builtins.resolve(name, types, [a.fresh for a in args])
+        overrides = self.constant_overrides(name, args)
+        resolved = builtins.resolve(name, types, [] if overrides else [a.fresh for a in args])
         if resolved is None:
             raise self.error(f"no matching overload for '{name}({', '.join(map(str, types))})'", fnode)
         t, impl = resolved
+        if overrides:
+            impl = _override(impl, overrides, t.size)
         if name == "pow":
             x, y = args
             n = t.size
@@ -1426,6 +1443,32 @@ class Compiler:
                     return tuple(fn(a[i], b[i]) for i, fn in enumerate(fns))
 
         return self.make(t, impl, args, fresh=name in builtins.FRESH and t.base == "float")
+
+    @staticmethod
+    def constant_overrides(name: str, args: list[Expr]) -> dict[int, int | None]:
+        """Result components that Mesa's optimizer fixes from constant arguments (measured on llvmpipe).
+
+        Returns component index -> argument index whose component is the result, or None for 0:
+        ``smoothstep(e, e, x) = 0`` (its (x - e0)/(e1 - e0) divides by a constant 0, folded to 0),
+        ``mod(x, 0.0) = x`` and ``mix(x, y, 0.0) = x`` (products with a constant 0 are folded to 0).
+        """
+        if name not in ("smoothstep", "mod", "mix") or not all(a.type.is_numeric for a in args):
+            return {}
+
+        def const(k: int, i: int):
+            c = args[k].const
+            return None if c is None else c[0 if len(c) == 1 else i]
+
+        size = max(a.type.size for a in args)
+        out: dict[int, int | None] = {}
+        for i in range(size):
+            if name == "smoothstep" and const(0, i) is not None and const(0, i) == const(1, i):
+                out[i] = None
+            elif name == "mod" and const(1, i) == 0:
+                out[i] = 0
+            elif name == "mix" and const(2, i) == 0:
+                out[i] = 0
+        return out
 
     def modf(self, args: list[Expr], arg_nodes: list[Node], fnode: Node) -> Expr:
         x = args[0]
@@ -1638,7 +1681,7 @@ class Program:
         if t.is_integer:
             arr = np.trunc(arr)
         if t.is_scalar:
-            return (float(arr) if arr.ndim == 0 else arr,)
+            return (np.float64(arr) if arr.ndim == 0 else arr,)
         if arr.ndim == 0 or arr.shape[-1] != t.size:
             raise EvaluationError(f"expected {t.size} components for a {t}, got shape {arr.shape}", where)
         return tuple(arr[..., i] for i in range(t.size))
@@ -1666,9 +1709,12 @@ class Program:
             frame.slots[entry.param_slots[k]] = (d[..., 0], d[..., 1], d[..., 2])
         with np.errstate(all="ignore"):
             init_frame = Frame(0, globals_, None, budget)
-            for init in self._inits:
-                init(init_frame)
-            entry.body(frame)
+            try:
+                for init in self._inits:
+                    init(init_frame)
+                entry.body(frame)
+            except RecursionError:  # closures nest like the syntax tree
+                raise EvaluationError("shader is nested too deeply to evaluate", self.path) from None
         result = frame.ret if frame.ret is not None else (0.0, 0.0, 0.0)
         shapes = [d.shape[:-1] for d in directions]
         for value in globals_:
@@ -1698,8 +1744,11 @@ def compile_shader(
     (name → ``"float"``, ``"bool"`` or ``"vec3"``) as BRDF Explorer does. Raises
     :class:`~brdfnorm.errors.BrdfFileError` for any problem in the text.
     """
-    compiler = Compiler(source, path, first_line, first_column, uniforms or {})
-    compiler.compile()
+    try:
+        compiler = Compiler(source, path, first_line, first_column, uniforms or {})
+        compiler.compile()
+    except RecursionError:  # the compiler recurses along the syntax tree
+        raise BrdfFileError("shader is nested too deeply", path, first_line, first_column) from None
     for fn, node, src in compiler.global_calls:
         if fn.body_node is None:
             raise src.error(f"function '{fn.signature()}' is declared but never defined", node)

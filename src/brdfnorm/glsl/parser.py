@@ -63,21 +63,27 @@ class Source:
         return self.text[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
 
 
-def _first_error(node: tree_sitter.Node) -> tree_sitter.Node | None:
-    if not node.has_error:
-        return None
-    for child in node.children:
-        found = _first_error(child)
-        if found is not None:
-            return found
-    if node.is_error or node.is_missing:
-        return node
+def _first_error(root: tree_sitter.Node) -> tree_sitter.Node | None:
+    """The first ERROR or MISSING node in document order (iterative: trees may be deep)."""
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if not node.has_error:
+            continue
+        if node.is_missing or (node.is_error and not any(c.has_error for c in node.children)):
+            return node
+        if node.is_error:
+            # An ERROR node containing errors: report the innermost first one, or the node itself.
+            inner = [c for c in node.children if c.has_error]
+            stack.extend(reversed(inner))
+            continue
+        stack.extend(reversed(node.children))
     return None
 
 
 def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) -> tuple[tree_sitter.Tree, Source]:
     """Parse shader text; raise :class:`BrdfFileError` at the first syntax error."""
-    raw = source.encode("utf-8", errors="surrogateescape")
+    raw = source.encode("utf-8", errors="replace")  # a lone surrogate becomes '?': a syntax error, located
     xor_offsets = frozenset(m.start() for m in re.finditer(rb"\^\^", raw))
     text = _PRECISION.sub(_blank, raw.replace(b"^^", b"||"))
     src = Source(text, path, first_line, first_column, xor_offsets)
