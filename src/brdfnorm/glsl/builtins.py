@@ -48,23 +48,22 @@ def _fix_nan(result, value):
 # --- componentwise scalar functions with Mesa's special cases -------------------------------------------
 
 
-def pow_runtime(x, y):
-    """Mesa's run-time ``pow``: ``exp2(y·log2(x))``, 0 where x is 0 or NaN (see module docstring)."""
-    result = np.power(x, y)
+def pow_runtime(x, y, out=None):
+    """Mesa's run-time ``pow``: ``exp2(y·log2(x))``, 0 where x is 0 or NaN (see module docstring).
+
+    ``out`` may be ``x`` itself (a temporary): the masks are taken before it is overwritten.
+    """
     positive = x > 0
-    if not np.all(positive):
-        result = np.where(positive, result, np.where(x < 0, np.nan, 0.0))
+    special = None if np.all(positive) else np.where(x < 0, np.nan, 0.0)
     # exp2(log2(x)·y) is NaN where the product is 0·inf: 1^±inf, 1^NaN, inf^0 (np.power gives 1 there).
     if np.ndim(y) == 0:
-        if y == 0:
-            bad = x == np.inf
-        elif not np.isfinite(y):
-            bad = x == 1
-        else:
-            return result
+        bad = (x == np.inf) if y == 0 else (x == 1) if not np.isfinite(y) else None
     else:
         bad = ((x == 1) & ~np.isfinite(y)) | ((x == np.inf) & (y == 0))
-    if np.any(bad):
+    result = np.power(x, y, out=out)
+    if special is not None:
+        result = np.where(positive, result, special)
+    if bad is not None and np.any(bad):
         result = np.where(bad, np.nan, result)
     return result
 
@@ -242,7 +241,7 @@ def _resolve_componentwise(name: str, args: Sequence[Type], reusable: Sequence[b
 
         # A temporary argument of full size can receive a ufunc's result (fewer large allocations).
         buffer = next((k for k, r in enumerate(reusable) if r and sizes[k] == n and pattern[k] == "g"), None)
-        if buffer is not None and (isinstance(fn, np.ufunc) or (fn is _clamp and buffer == 0)):
+        if buffer is not None and (isinstance(fn, np.ufunc) or (fn in (_clamp, pow_runtime) and buffer == 0)):
 
             def impl(*values, fn=fn, n=n, expand=expand, k=buffer):  # noqa: F811
                 values = [v * e if e else v for v, e in zip(values, expand, strict=False)]
@@ -316,10 +315,17 @@ def _cross(a: Components, b: Components) -> Components:
     return (a[1] * b[2] - b[1] * a[2], a[2] * b[0] - b[2] * a[0], a[0] * b[1] - b[0] * a[1])
 
 
-def _resolve_geometric(name: str, args: Sequence[Type]) -> Resolved | None:
+def _normalize_in_place(v: Components) -> Components:
+    scale = 1.0 / np.sqrt(_dot(v, v))
+    return tuple(np.multiply(x, scale, out=x) if _owned(x, scale) else x * scale for x in v)
+
+
+def _resolve_geometric(name: str, args: Sequence[Type], reusable: Sequence[bool] = ()) -> Resolved | None:
     sizes = [_vector_size(t) for t in args]
     if None in sizes or not all(t.is_numeric for t in args):
         return None
+    if name == "normalize" and len(args) == 1 and reusable and reusable[0]:
+        return Type("float", sizes[0]), _normalize_in_place
     n = sizes[0]
     same = all(size == n for size in sizes)
     vec = Type("float", n)
@@ -537,6 +543,6 @@ def resolve(name: str, args: Sequence[Type], reusable: Sequence[bool] = ()) -> R
 
     ``reusable[k]`` tells that argument k's components are temporaries the result may be written into.
     """
-    if reusable and _RESOLVERS[name] is _resolve_componentwise:
-        return _resolve_componentwise(name, args, reusable)
+    if reusable and _RESOLVERS[name] in (_resolve_componentwise, _resolve_geometric):
+        return _RESOLVERS[name](name, args, reusable)
     return _RESOLVERS[name](name, args)
