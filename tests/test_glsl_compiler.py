@@ -336,6 +336,57 @@ def test_loops_with_per_lane_trip_counts_break_and_continue():
     check(shader, vec3(halvings, s, k))
 
 
+def test_switch_with_fall_through_default_break_and_continue_per_lane():
+    shader = (
+        SIGNATURE
+        + """{
+        float a = 0.0, s = 0.0;
+        for (int k = 0; k < 3; k++) {
+            int i = int(L.x * 4.0) + k;
+            switch (i) {
+                case 1:
+                case 2: a += 1.0; break;
+                default: { a += 10.0; }        // falls through into case 3
+                case 3:
+                    a += 100.0;
+                    if (L.y > 0.0) continue;   // continues the enclosing loop
+                    s += 1.0;
+            }
+        }
+        return vec3(a, s, 0.0);
+    }"""
+    )
+
+    def reference(lx, ly):
+        a = s = 0.0
+        for k in range(3):
+            i = int(np.trunc(lx * 4)) + k
+            if i in (1, 2):
+                a += 1
+                continue
+            a += 100 + (10 if i != 3 else 0)
+            if ly <= 0:
+                s += 1
+        return a, s, 0.0
+
+    check(shader, np.array([reference(lx, ly) for lx, ly in L[:, :2]]))
+
+
+def test_preprocessor_lines_that_change_nothing_are_accepted():
+    shader = (
+        "#version 410\n#extension GL_ARB_gpu_shader5 : enable\n#pragma optimize(on)\n"
+        + SIGNATURE
+        + """{
+        #define K 3.0
+        precision highp float;
+        highp float x = K * L.x;
+        return vec3(x);
+    }"""
+    )
+    ours = evaluate(shader)
+    np.testing.assert_allclose(ours, 3.0 * L[:, :1] * np.ones(3), rtol=1e-15)
+
+
 def test_user_functions_overloading_out_inout_and_shadowed_builtin():
     shader = (
         """

@@ -8,8 +8,21 @@ tables, so a shader variable named ``__import__`` or ``exec`` is just a slot in 
 Semantics follow the OpenGL Shading Language 4.10 specification: §5.8–5.10 (operators, implicit
 int → float conversion, int division truncating toward zero), §5.4 (constructors), §5.5 (swizzles),
 §6.1 (functions, overloading, in/out/inout copy semantics; built-ins hidden by a user function of the
-same name), §6.3–6.4 (control flow), with Mesa llvmpipe's choices where the specification leaves
-results undefined (see :mod:`.builtins`). Per-lane control flow is executed with masks (:mod:`.runtime`).
+same name), §6.2–6.4 (switch, loops, jumps), with Mesa llvmpipe's choices where the specification leaves
+results undefined (see :mod:`.builtins`). Per-lane control flow is executed with masks (:mod:`.runtime`);
+a condition that is the same in every lane runs only the branch taken.
+
+Mesa's optimizer changes some results the specification leaves undefined; measured on llvmpipe (Mesa
+22.3) and imitated here: ``x * 0.0``, ``0.0 * x``, ``x / 0.0`` and ``0.0 / x`` are 0 for every x (inf and
+NaN included) when one side is a compile-time constant 0; integer ``x / 0`` is 0 and ``%`` is an unsigned
+32-bit remainder (``x % 0`` = -1); constant arguments steer ``pow``, ``smoothstep``, ``mod`` and ``mix``
+(:meth:`Compiler.constant_overrides`). Constant propagation treats a variable initialized with a constant
+and never written anywhere as a constant, as Mesa's SSA form does. Not imitated: folds that need value
+numbering (``x - x`` → 0 for a non-constant x) and float32 overflow/underflow.
+
+Loops are bounded: one execution of a loop may run :data:`MAX_LOOP_ITERATIONS` iterations and all loops
+of one evaluation :data:`MAX_TOTAL_ITERATIONS`; past that, :class:`~brdfnorm.errors.EvaluationError`
+names the loop's ``FILE:LINE:COL``. Recursion is refused at compile time.
 """
 
 from __future__ import annotations
@@ -321,6 +334,7 @@ class Compiler:
         self.function: Function | None = None
         self.nslots = 0
         self.loop_depth = 0
+        self.switch_depth = 0
         self.written = _written_names(self.tree.root_node, self.text)
         self.global_calls: list[tuple[Function, Node, Source]] = []
         self.expanding: list[str] = []
@@ -451,6 +465,8 @@ class Compiler:
         elif node.type == "preproc_function_def":
             name = self.text(node.child_by_field_name("name"))
             raise self.error(f"unsupported feature: function-like macro '{name}'", node)
+        elif node.type == "preproc_extension":
+            return
         elif node.type == "preproc_call":
             directive = self.text(node.child_by_field_name("directive")).strip()
             argument = node.child_by_field_name("argument")
@@ -530,7 +546,7 @@ class Compiler:
 
     def compile_function(self, node: Node) -> None:
         fn = self.find_defined(node)
-        self.function, self.nslots, self.loop_depth = fn, 0, 0
+        self.function, self.nslots, self.loop_depth, self.switch_depth = fn, 0, 0, 0
         self.scopes.append(_Scope())
         fn.param_slots = []
         for index, p in enumerate(fn.params):
@@ -671,15 +687,19 @@ class Compiler:
             return self.loop(node)
         if kind == "return_statement":
             return self.return_statement(node)
-        if kind in ("break_statement", "continue_statement"):
+        if kind == "break_statement":
+            if self.loop_depth == 0 and self.switch_depth == 0:
+                raise self.error("'break' outside a loop or switch", node)
+            return _break
+        if kind == "continue_statement":
             if self.loop_depth == 0:
-                raise self.error(f"'{kind.split('_')[0]}' outside a loop", node)
-            return _break if kind == "break_statement" else _continue
+                raise self.error("'continue' outside a loop", node)
+            return _continue
         if kind.startswith("preproc"):
             self.preprocessor(node)
             return None
         if kind == "switch_statement":
-            raise self.error("unsupported feature: switch statements (use if/else)", node)
+            return self.switch(node)
         if kind in ("goto_statement", "labeled_statement"):
             raise self.error(f"unsupported feature: {kind.split('_')[0]} (not GLSL)", node)
         word = self.text(node).split(None, 1)
@@ -811,6 +831,62 @@ class Compiler:
             finally:
                 f.loops.pop()
             f.mask = mask_or(exited, state.broken)
+
+        return run
+
+    def switch(self, node: Node) -> Callable[[Frame], None]:
+        """``switch`` with fall-through (GLSL 4.10 §6.2): each case label adds its lanes to the running set."""
+        cond_node = node.child_by_field_name("condition")
+        selector = self.expr(cond_node.named_children[0] if cond_node.type == "parenthesized_expression" else cond_node)
+        if not (selector.type.is_integer and selector.type.is_scalar):
+            raise self.error(f"switch needs an int or uint selector, not {selector.type}", cond_node)
+        self.scopes.append(_Scope())
+        self.switch_depth += 1
+        groups: list[tuple[float | None, Callable]] = []  # (case value, None for default; statements)
+        seen: set = set()
+        for case in node.child_by_field_name("body").named_children:
+            if case.type == "comment":
+                continue
+            if case.type != "case_statement":
+                raise self.error("statements in a switch must follow a case label", case)
+            value_node = case.child_by_field_name("value")
+            value = None
+            if value_node is not None:
+                e = self.expr(value_node)
+                if e.const is None or not e.type.is_integer or not e.type.is_scalar:
+                    raise self.error("case label must be a constant integer expression", value_node)
+                value = float(e.const[0])
+            if value in seen:
+                raise self.error("duplicate case label" if value is not None else "duplicate default label", case)
+            seen.add(value)
+            body = [c for c in case.named_children if c != value_node and c.type != "comment"]
+            groups.append((value, _sequence([self.statement(c) for c in body])))
+        self.switch_depth -= 1
+        self.scopes.pop()
+        values = [v for v, _ in groups if v is not None]
+        ev = selector.ev
+
+        def run(f):
+            entry = f.mask
+            sel = ev(f)[0]
+            matched = False
+            for v in values:
+                matched = mask_or(matched, mask_and(entry, sel == v))
+            state = LoopState(switch=True)
+            f.loops.append(state)
+            activated = False
+            f.mask = False
+            try:
+                for value, statements in groups:
+                    new = mask_and(entry, sel == value) if value is not None else _mask_minus(entry, matched)
+                    new = _mask_minus(new, activated)
+                    activated = mask_or(activated, new)
+                    f.mask = mask_or(f.mask, new)
+                    if f.mask is not False:
+                        statements(f)
+            finally:
+                f.loops.pop()
+            f.mask = mask_or(f.mask, state.broken)
 
         return run
 
@@ -1644,9 +1720,18 @@ def _break(f: Frame) -> None:
 
 
 def _continue(f: Frame) -> None:
-    state = f.loops[-1]
+    state = next(s for s in reversed(f.loops) if not s.switch)
     state.continued = mask_or(state.continued, f.mask)
     f.mask = False
+
+
+def _mask_minus(mask, other):
+    """Lanes of ``mask`` not in ``other``."""
+    if other is False or mask is False:
+        return mask
+    if other is None:
+        return False
+    return mask_and_not(mask, other)
 
 
 class Program:

@@ -7,7 +7,7 @@ length-preserving rewrites of the text before parsing, so every position stays t
   operators are remembered and the compiler re-associates the ``||`` chains with GLSL precedence
   (``&&`` > ``^^`` > ``||``).
 * precision qualifiers (``highp``, ``mediump``, ``lowp`` and ``precision ...;`` statements) have no
-  effect in desktop GLSL (§4.7) and are blanked out.
+  effect in desktop GLSL (§4.7), nor ``#pragma`` lines here: they are blanked out.
 
 Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree.
 """
@@ -28,7 +28,11 @@ with warnings.catch_warnings():
     warnings.simplefilter("ignore", DeprecationWarning)
     LANGUAGE = tree_sitter.Language(tree_sitter_glsl.language())
 
-_PRECISION = re.compile(rb"\bprecision\s+(?:lowp|mediump|highp)\s+\w+\s*;|\b(?:lowp|mediump|highp)\b")
+_PRECISION = re.compile(
+    rb"\bprecision\s+(?:lowp|mediump|highp)\s+\w+\s*;|\b(?:lowp|mediump|highp)\b"
+    rb"|^[ \t]*#[ \t]*pragma\b[^\n]*",  # pragmas (no effect here) confuse the grammar
+    re.MULTILINE,
+)
 
 
 def _blank(match: re.Match) -> bytes:

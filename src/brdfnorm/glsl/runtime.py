@@ -82,13 +82,15 @@ def select(index, options: list[tuple], default: tuple) -> tuple:
 
 
 class LoopState:
-    """Lanes that left the current loop by ``break`` or skipped to its next iteration by ``continue``."""
+    """Lanes that left the current loop (or switch) by ``break`` or skipped to its next iteration by
+    ``continue`` (a switch passes ``continue`` on to the enclosing loop)."""
 
-    __slots__ = ("broken", "continued")
+    __slots__ = ("broken", "continued", "switch")
 
-    def __init__(self) -> None:
+    def __init__(self, switch: bool = False) -> None:
         self.broken = False
         self.continued = False
+        self.switch = switch
 
 
 class Frame:
