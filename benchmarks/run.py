@@ -1,0 +1,914 @@
+#!/usr/bin/env python
+"""brdfnorm against what users would otherwise use, side by side in one process and one run.
+
+Usage: ``python benchmarks/run.py [--quick] [--json] [--only NAME[,NAME…]] [--out DIR]`` (``make bench``).
+
+Every workload times brdfnorm and its peers (:mod:`peers`: scipy ``dblquad``, scipy ``cubature``, BRDF
+Explorer-style Hammersley Monte Carlo in float32 and float64) on the same machine in the same run, and measures
+the error each achieved against a reference (mpmath at 30 digits on seed 002's ₂F₁ form, seed 000's closed
+form at θ_o = 0, or brdfnorm at a much tighter tolerance cross-checked against those — each workload's
+``reference`` field says which). Results: ``DIR/latest.json``, ``DIR/latest.md``, ``DIR/cost_vs_n.png``,
+``DIR/work_precision.png``, ``DIR/profile.txt`` (DIR defaults to benchmarks/results, or
+benchmarks/results/quick with ``--quick``). See benchmarks/README.md for how to read them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import cProfile
+import importlib
+import io
+import json
+import math
+import platform
+import pstats
+import subprocess
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+
+import peers as P  # noqa: E402
+
+import brdfnorm as bn  # noqa: E402
+
+ALBEDO = sys.modules["brdfnorm.albedo"]  # the module (``bn.albedo`` is the function)
+with contextlib.suppress(ImportError):  # the series method registers itself where it has landed
+    importlib.import_module("brdfnorm.series")
+
+WORKLOADS = ("single", "table90", "norm-table", "ggx-table", "fit", "eval", "work-precision", "memory", "profile")
+
+
+@dataclass(frozen=True)
+class Config:
+    """What a run measures; ``--quick`` shrinks every size so the whole run takes seconds (a smoke test)."""
+
+    quick: bool
+    rtol: float = 1e-9
+    n: float = 512.0
+    theta_single: float = 60.0  # degrees
+    mc_samples: int = 1_000_000
+    table_angles: np.ndarray = field(default_factory=lambda: np.arange(90.0))
+    mpmath_angles: tuple[float, ...] = (15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0)
+    sweep_n: np.ndarray = field(default_factory=lambda: np.geomspace(1.0, 1e4, 64))
+    # roughness 0.01 (the file's lower bound) is left out: brdfnorm does not converge there within its budget
+    # (README, 'known limits'), and cubature needs ~30 s per point.
+    sweep_roughness: np.ndarray = field(default_factory=lambda: np.geomspace(0.05, 1.0, 64))
+    peer_sweep_fraction: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0)  # positions in the sweep
+    peer_angles: tuple[float, ...] = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 89.0)
+    mpmath_table_points: tuple[tuple[int, float], ...] = ((0, 45.0), (0, 85.0), (32, 45.0), (32, 85.0),
+                                                         (63, 45.0))
+    repeats: int = 5
+    wp_angles: tuple[float, ...] = (60.0, 85.0)
+    wp_rtols: tuple[float, ...] = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+    wp_samples: tuple[int, ...] = (1_000, 10_000, 100_000, 1_000_000, 10_000_000)
+    eval_pairs: int = 1_000_000
+    fit_points: int = 512
+
+    @classmethod
+    def make(cls, quick: bool) -> Config:
+        if not quick:
+            return cls(quick=False)
+        return cls(
+            quick=True, mc_samples=100_000, table_angles=np.array([0.0, 10, 20, 30, 40, 50, 60, 70, 80, 89]),
+            mpmath_angles=(89.0,), sweep_n=np.geomspace(1.0, 1e4, 8), sweep_roughness=np.geomspace(0.3, 1.0, 4),
+            peer_sweep_fraction=(0.0, 1.0), peer_angles=(0.0, 40.0, 89.0), mpmath_table_points=(), repeats=2,
+            wp_angles=(60.0,), wp_rtols=(1e-4, 1e-7, 1e-10), wp_samples=(1_000, 100_000), eval_pairs=100_000,
+            fit_points=32,
+        )
+
+
+# -- measuring -----------------------------------------------------------------------------------------------
+
+def measure(fn: Callable[[], object], repeats: int, budget_s: float = 2.0) -> tuple[float, object, int]:
+    """Best wall time of up to ``repeats`` runs (fewer when one run exceeds ``budget_s``/repeats)."""
+    best, result, runs, spent = math.inf, None, 0, 0.0
+    while runs < max(1, repeats) and (runs == 0 or spent + best <= budget_s):
+        start = time.perf_counter()
+        result = fn()
+        elapsed = time.perf_counter() - start
+        best, runs, spent = min(best, elapsed), runs + 1, spent + elapsed
+    return best, result, runs
+
+
+def rel_errors(values, reference) -> np.ndarray:
+    values, reference = np.asarray(values, dtype=float), np.asarray(reference, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(values - reference) / np.abs(reference)
+
+
+def record(time_s: float, values, reference, *, runs: int = 1, timing: str = "measured", note: str = "",
+           warnings_: int = 0, **extra) -> dict:
+    """One method's line: wall time and the relative error it achieved against the reference."""
+    errors = rel_errors(values, reference)
+    errors = errors[np.isfinite(errors)]
+    out = {
+        "time_s": time_s, "timing": timing, "runs": runs, "points": int(errors.size),
+        "max_rel_error": float(errors.max()) if errors.size else math.nan,
+        "median_rel_error": float(np.median(errors)) if errors.size else math.nan,
+        "warnings": int(warnings_), "note": note,
+    }
+    out.update(extra)
+    return out
+
+
+def add_ratios(workload: dict, baseline: str = "brdfnorm") -> dict:
+    """ratio = peer time / baseline time (how many times faster the baseline is), for every other method."""
+    base = workload["methods"].get(baseline, {}).get("time_s")
+    for name, line in workload["methods"].items():
+        line["speedup_of_brdfnorm"] = (line["time_s"] / base) if base and name != baseline else None
+    return workload
+
+
+def series_available() -> bool:
+    return "series" in ALBEDO.METHODS
+
+
+def brdfnorm_lines(methods: dict, model, theta, reference, cfg: Config) -> None:
+    """"brdfnorm" = what a user gets (method="auto"); "brdfnorm quadrature" too where auto picks another method."""
+    for method in ("auto", "quadrature"):
+        t, (r, w), runs = measure(lambda m=method: quiet_albedo(model, theta, rtol=cfg.rtol, method=m), cfg.repeats)
+        name = "brdfnorm" if method == "auto" else "brdfnorm quadrature"
+        methods[name] = record(t, r.value[..., 0], reference, runs=runs, warnings_=w,
+                               note=f"method='{method}' → {r.method}" if method == "auto" else "method='quadrature'",
+                               evaluations_per_albedo=float(np.mean(r.evaluations)),
+                               max_error_estimate_over_value=float(np.max(r.error[..., 0] / r.value[..., 0])))
+        if r.method == "quadrature":
+            break
+
+
+def quiet_albedo(model, theta, **kwargs):
+    """bn.albedo with its convergence warnings counted, not printed."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = bn.albedo(model, theta, **kwargs)
+    return result, len(caught)
+
+
+class References:
+    """mpmath references, computed once per (n, θ) and shared between workloads."""
+
+    def __init__(self) -> None:
+        self.cache: dict[tuple[float, float], float] = {}
+        self.seconds = 0.0
+
+    def blinn_phong(self, n: float, theta_deg: float) -> float:
+        key = (float(n), float(theta_deg))
+        if key not in self.cache:
+            start = time.perf_counter()
+            self.cache[key] = P.blinn_phong_reference(n, math.radians(theta_deg))
+            self.seconds += time.perf_counter() - start
+        return self.cache[key]
+
+
+def tight_blinn_phong(n: float, angles_deg: np.ndarray) -> np.ndarray:
+    """brdfnorm quadrature at rtol 1e-13 (the fallback reference, cross-checked against mpmath)."""
+    model = bn.load("blinn-phong", n=n)
+    return bn.albedo(model, np.radians(angles_deg), rtol=1e-13, method="quadrature").value[..., 0]
+
+
+# -- workloads ----------------------------------------------------------------------------------------------
+
+def w_single(cfg: Config, refs: References) -> dict:
+    theta = math.radians(cfg.theta_single)
+    model = bn.load("blinn-phong", n=cfg.n)
+    lobe = P.blinn_phong(cfg.n)
+    if cfg.quick:
+        reference = float(tight_blinn_phong(cfg.n, np.array([cfg.theta_single]))[0])
+        ref_text = "brdfnorm rtol 1e-13 (quick mode skips mpmath here)"
+    else:
+        reference = refs.blinn_phong(cfg.n, cfg.theta_single)
+        ref_text = "mpmath 30 digits, seed 002 ₂F₁ form"
+    methods = {}
+    brdfnorm_lines(methods, model, theta, reference, cfg)
+    t, r, runs = measure(lambda: P.dblquad_albedo(lobe, theta, cfg.rtol), cfg.repeats)
+    methods["dblquad"] = record(t, r.value, reference, runs=runs, warnings_=r.warnings)
+    t, r, runs = measure(lambda: P.cubature_albedo(lobe, theta, cfg.rtol), cfg.repeats)
+    methods["cubature"] = record(t, r.value, reference, runs=runs, warnings_=r.warnings)
+    for dtype in (np.float32, np.float64):
+        directions = P.hammersley_cosine(cfg.mc_samples, dtype)
+        t, r, runs = measure(lambda d=directions: P.mc_albedo(lobe, theta, d), cfg.repeats)
+        methods[f"mc {np.dtype(dtype).name}"] = record(t, r.value, reference, runs=runs,
+                                                       note=f"{cfg.mc_samples:.0e} Hammersley samples")
+    return add_ratios({
+        "title": f"one albedo: blinn-phong n={cfg.n:g}, θ_o={cfg.theta_single:g}°, rtol {cfg.rtol:g}",
+        "reference": ref_text, "reference_value": reference, "methods": methods, "status": "ok",
+    })
+
+
+def w_table90(cfg: Config, refs: References) -> dict:
+    angles = cfg.table_angles
+    thetas = np.radians(angles)
+    model = bn.load("blinn-phong", n=cfg.n)
+    lobe = P.blinn_phong(cfg.n)
+    reference = tight_blinn_phong(cfg.n, angles)
+    check = {}
+    for a in cfg.mpmath_angles:
+        i = int(np.argmin(np.abs(angles - a)))
+        exact = refs.blinn_phong(cfg.n, angles[i])
+        check[f"{angles[i]:g}"] = float(rel_errors(reference[i], exact))
+        reference[i] = exact
+    if angles[0] == 0.0:
+        exact = P.blinn_phong_closed_form(cfg.n)
+        check["0"] = float(rel_errors(reference[0], exact))
+        reference[0] = exact
+    methods = {}
+    brdfnorm_lines(methods, model, thetas, reference, cfg)
+
+    def loop(peer):
+        return [peer(th) for th in thetas]
+
+    t, rs, runs = measure(lambda: loop(lambda th: P.dblquad_albedo(lobe, th, cfg.rtol)), 1)
+    methods["dblquad"] = record(t, [x.value for x in rs], reference, warnings_=sum(x.warnings for x in rs),
+                                note="one call per angle")
+    t, rs, runs = measure(lambda: loop(lambda th: P.cubature_albedo(lobe, th, cfg.rtol)), 1)
+    methods["cubature"] = record(t, [x.value for x in rs], reference, warnings_=sum(x.warnings for x in rs),
+                                 note="one call per angle")
+    t, rs, runs = measure(lambda: P.cubature_albedo_batched(lobe, thetas, cfg.rtol), 1)
+    methods["cubature batched"] = record(t, [x.value for x in rs], reference, warnings_=rs[0].warnings,
+                                         note="one call, array-valued integrand")
+    for dtype in (np.float32, np.float64):
+        directions = P.hammersley_cosine(cfg.mc_samples, dtype)
+        t, rs, runs = measure(lambda d=directions: loop(lambda th: P.mc_albedo(lobe, th, d)), 1)
+        methods[f"mc {np.dtype(dtype).name}"] = record(t, [x.value for x in rs], reference,
+                                                       note=f"{cfg.mc_samples:.0e} samples per albedo")
+    return add_ratios({
+        "title": f"{angles.size}-angle table: blinn-phong n={cfg.n:g}, θ_o {angles[0]:g}°…{angles[-1]:g}°, "
+                 f"rtol {cfg.rtol:g}",
+        "reference": "mpmath 30 digits at θ_o ∈ {" + ", ".join(check) + "}° (closed form at 0°), brdfnorm "
+                     "rtol 1e-13 elsewhere; cross_check = |brdfnorm 1e-13 − mpmath|/mpmath there",
+        "cross_check": check, "methods": methods, "status": "ok",
+    })
+
+
+def _extrapolate(per_point: np.ndarray, peer_values: np.ndarray, sweep: np.ndarray,
+                 peer_angles: np.ndarray, table_angles: np.ndarray) -> float:
+    """Whole-table time from per-point times on a (sweep subset × angle subset) grid.
+
+    Stratified in θ (each sampled angle stands for the table angles nearest to it), then log–log interpolated
+    in the swept parameter between the sampled values (constant beyond them).
+    """
+    nearest = np.argmin(np.abs(table_angles[:, None] - peer_angles[None, :]), axis=1)
+    weights = np.bincount(nearest, minlength=peer_angles.size)
+    row = per_point @ weights  # (sampled sweep values,) time of a full row of angles
+    rows = np.exp(np.interp(np.log(sweep), np.log(peer_values), np.log(row)))
+    return float(rows.sum())
+
+
+def _sweep_table(cfg: Config, refs: References, *, model, lobe_of, sweep_name: str, sweep: np.ndarray,
+                 reference_of, reference_text: str, extra_checks: Callable[[np.ndarray], dict] | None,
+                 time_every_row: bool = True) -> dict:
+    """A normalization table (sweep × table angles) for brdfnorm, and its peers on a subset, extrapolated."""
+    angles = cfg.table_angles
+    thetas = np.radians(angles)
+    methods: dict = {}
+    idx = np.unique(np.round(np.array(cfg.peer_sweep_fraction) * (sweep.size - 1)).astype(int))
+    peer_angles = np.array(cfg.peer_angles)
+    peer_values = sweep[idx]
+    col = np.searchsorted(angles, peer_angles)
+    if not np.array_equal(angles[np.minimum(col, angles.size - 1)], peer_angles):
+        raise ValueError(f"peer angles {peer_angles} must be among the table angles")
+    ref = np.array([[reference_of(v, a) for a in peer_angles] for v in peer_values])  # (s, a)
+    # Cost per sweep value (one row of angles per call) for the cost-vs-parameter plot: every row, or only the
+    # rows the peers are measured on where the table is expensive.
+    timed_rows = np.arange(sweep.size) if time_every_row else idx
+    per_row: dict[str, list[float]] = {}
+    for method in ("auto", "quadrature"):
+        name = "brdfnorm" if method == "auto" else "brdfnorm quadrature"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            start = time.perf_counter()
+            table = bn.normalize(model, at="view", sweep={sweep_name: sweep}, theta=thetas, rtol=cfg.rtol,
+                                 method=method)
+            t_table = time.perf_counter() - start
+            per_row[name] = []
+            for value in sweep[timed_rows]:
+                start = time.perf_counter()
+                bn.normalize(model, at="view", sweep={sweep_name: [value]}, theta=thetas, rtol=cfg.rtol,
+                             method=method)
+                per_row[name].append(time.perf_counter() - start)
+        checks = extra_checks(table.albedo[..., 0]) if extra_checks else {}
+        ours = table.albedo[idx][:, col, 0]
+        errors = np.concatenate([rel_errors(ours, ref).ravel()] + [np.atleast_1d(c["errors"]) for c in checks.values()])
+        methods[name] = {
+            "time_s": t_table, "timing": "measured", "runs": 1, "points": int(errors.size),
+            "max_rel_error": float(np.nanmax(errors)), "median_rel_error": float(np.nanmedian(errors)),
+            "warnings": len(caught), "converged": bool(np.all(table.converged)),
+            "note": f"method='{method}' → {table.method}; whole {sweep.size}×{angles.size} table in one call; "
+                    "error on the peer subset" + "".join(f" + {k}" for k in checks),
+        }
+        if table.method == "quadrature":
+            break
+    runners = {
+        "dblquad": lambda lobe, th: P.dblquad_albedo(lobe, th, cfg.rtol),
+        "cubature": lambda lobe, th: P.cubature_albedo(lobe, th, cfg.rtol),
+    }
+    for dtype in (np.float32, np.float64):
+        directions = P.hammersley_cosine(cfg.mc_samples, dtype)
+        runners[f"mc {np.dtype(dtype).name}"] = lambda lobe, th, d=directions: P.mc_albedo(lobe, th, d)
+    peer_rows = {}
+    for name, run in runners.items():
+        times = np.zeros((idx.size, peer_angles.size))
+        values = np.zeros_like(times)
+        bad = 0
+        for i, v in enumerate(peer_values):
+            lobe = lobe_of(v)
+            for j, a in enumerate(peer_angles):
+                start = time.perf_counter()
+                r = run(lobe, math.radians(a))
+                times[i, j] = time.perf_counter() - start
+                values[i, j], bad = r.value, bad + r.warnings
+        estimate = _extrapolate(times, peer_values, sweep, peer_angles, angles)
+        methods[name] = record(
+            estimate, values, ref, timing=f"extrapolated from {idx.size}×{peer_angles.size} points",
+            warnings_=bad, measured_s=float(times.sum()),
+            note=f"measured {times.sum():.3g} s on {times.size} points; error on those points")
+        peer_rows[name] = (times @ np.bincount(np.argmin(np.abs(angles[:, None] - peer_angles[None, :]), axis=1),
+                                               minlength=peer_angles.size)).tolist()
+    result = add_ratios({
+        "title": f"normalization table ({'at=view'}): {sweep_name} ∈ geomspace({sweep[0]:g}, {sweep[-1]:g}, "
+                 f"{sweep.size}) × {angles.size} angles, rtol {cfg.rtol:g}",
+        "reference": reference_text, "methods": methods, "status": "ok",
+        "checks": {k: {kk: vv for kk, vv in c.items() if kk != "errors"} for k, c in checks.items()},
+        "cost": {"parameter": sweep_name, "values": sweep[timed_rows].tolist(), "brdfnorm_row_s": per_row,
+                 "peer_values": peer_values.tolist(), "peer_row_s_estimated": peer_rows},
+    })
+    return result
+
+
+def w_norm_table(cfg: Config, refs: References) -> dict:
+    mp_points = {(float(cfg.sweep_n[i]), a) for i, a in cfg.mpmath_table_points}
+
+    def reference_of(n: float, a: float) -> float:
+        if a == 0.0:
+            return P.blinn_phong_closed_form(n)
+        if (float(n), a) in mp_points:
+            return refs.blinn_phong(n, a)
+        return float(tight_blinn_phong(n, np.array([a]))[0])
+
+    def closed_form_column(albedo: np.ndarray) -> dict:
+        if cfg.table_angles[0] != 0.0:
+            return {}
+        exact = np.array([P.blinn_phong_closed_form(n) for n in cfg.sweep_n])
+        errors = rel_errors(albedo[:, 0], exact)
+        return {"closed form at θ_o=0 (all n)": {"errors": errors, "max_rel_error": float(errors.max())}}
+
+    mp_check = {}
+    for n, a in sorted(mp_points):
+        tight = float(tight_blinn_phong(n, np.array([a]))[0])
+        mp_check[f"n={n:.4g}, θ_o={a:g}°"] = float(rel_errors(tight, refs.blinn_phong(n, a)))
+    result = _sweep_table(
+        cfg, refs, model=bn.load("blinn-phong"), lobe_of=P.blinn_phong, sweep_name="n", sweep=cfg.sweep_n,
+        reference_of=reference_of,
+        reference_text="seed 000 closed form at θ_o=0; mpmath 30 digits at " + (", ".join(mp_check) or "no points")
+                       + "; brdfnorm rtol 1e-13 at the other subset points (cross_check: its error vs mpmath)",
+        extra_checks=closed_form_column)
+    result["cross_check"] = mp_check
+    return result
+
+
+def w_ggx_table(cfg: Config, refs: References) -> dict:
+    path = ROOT / "examples" / "ggx.brdf"
+    try:
+        model = bn.load(str(path))
+    except Exception as error:  # noqa: BLE001 — any failure means the .brdf issue has not landed yet
+        return {"title": "normalization table for examples/ggx.brdf", "status": f"not available yet: {error}"}
+    cache: dict[tuple[float, float], float] = {}
+    cross = {}
+
+    def reference_of(roughness: float, a: float) -> float:
+        """brdfnorm rtol 1e-12 on the .brdf model, cross-checked with dblquad at epsrel 1e-12 (hand-written)."""
+        key = (roughness, a)
+        if key not in cache:
+            value = bn.albedo(model.with_params(roughness=roughness), math.radians(a), rtol=1e-12,
+                              method="quadrature").value[0]
+            cache[key] = float(value)
+            if a in (0.0, 40.0) or (a == 89.0 and roughness >= 0.2):  # dblquad fails on sharp grazing lobes
+                check = P.dblquad_albedo(P.ggx(roughness), math.radians(a), 1e-12)
+                if not check.warnings:
+                    cross[f"roughness={roughness:.3g}, θ_o={a:g}°"] = float(rel_errors(value, check.value))
+        return cache[key]
+
+    result = _sweep_table(
+        cfg, refs, model=model, lobe_of=P.ggx, sweep_name="roughness", sweep=cfg.sweep_roughness,
+        reference_of=reference_of,
+        reference_text="brdfnorm rtol 1e-12 on the .brdf model; cross_check: its difference from dblquad at "
+                       "epsrel 1e-12 on the hand-written GGX (where dblquad raised no warning)",
+        extra_checks=None, time_every_row=cfg.quick)
+    result["cross_check"] = cross
+    result["title"] = "examples/ggx.brdf: " + result["title"]
+    return result
+
+
+def w_fit(cfg: Config, refs: References) -> dict:
+    """Seed 003 end to end: α(n) = 1/E(n) at L = N for n = 1…512, fitted by a line (abs least squares)."""
+    from brdfnorm.cli import app, main
+
+    title = f"seed 003 fit: blinn-phong-gaussian, n = 1…512 ({cfg.fit_points} points), linear, abs-lsq, at normal"
+    names = [c.name or (c.callback.__name__ if c.callback else "") for c in app.registered_commands]
+    if "fit" not in names:
+        return {"title": title, "status": "not available yet: no `brdfnorm fit` command registered"}
+    seed = np.array([0.17287429, 0.01388682])
+    argv = ["fit", "blinn-phong-gaussian", "--sweep", f"n=1:512:{cfg.fit_points}", "--form", "linear",
+            "--metric", "abs-lsq", "--at", "normal", "--json"]
+
+    def ours():
+        buffer = io.StringIO()
+        with contextlib.redirect_stdout(buffer):
+            main(argv)
+        return json.loads(buffer.getvalue())
+
+    methods = {}
+    try:
+        t, out, runs = measure(ours, cfg.repeats, budget_s=10.0)
+    except (SystemExit, Exception) as error:  # noqa: BLE001 — report the failure, keep benchmarking
+        return {"title": title, "status": f"not available yet: `brdfnorm {' '.join(argv)}` failed: {error!r}"}
+    coefficients = np.asarray(out["coefficients"], dtype=float)[:2]
+    # seed 003 prints a + b·n; the fit's coefficient order follows its expression (a first for `linear`).
+    methods["brdfnorm"] = record(t, coefficients, seed, runs=runs, note=f"`brdfnorm {' '.join(argv)}`",
+                                 coefficients=coefficients.tolist())
+
+    n = np.linspace(1.0, 512.0, cfg.fit_points)
+
+    def peer():
+        albedo = np.array([P.dblquad_albedo(P.blinn_phong_gaussian(v), 0.0, cfg.rtol).value for v in n])
+        slope, intercept = np.polyfit(n, 1.0 / albedo, 1)
+        return np.array([intercept, slope])
+
+    t, coefficients, runs = measure(peer, 1)
+    methods["dblquad + polyfit"] = record(t, coefficients, seed, note="dblquad per n at θ_o=0, np.polyfit",
+                                          coefficients=coefficients.tolist())
+    return add_ratios({
+        "title": title, "status": "ok", "methods": methods,
+        "reference": "seed 003's printed coefficients 0.17287429 + 0.01388682·n (8 decimals: rounding alone "
+                     "allows ~3e-8 and ~4e-7 relative)",
+    })
+
+
+def w_eval(cfg: Config, refs: References) -> dict:
+    """``.brdf`` evaluation (GLSL in float64) against the built-in numpy lobe and hand-written numpy GGX."""
+    title = f"evaluation speed: {cfg.eval_pairs:.0e} random (L, V) pairs"
+    rng = np.random.default_rng(7)
+
+    def hemisphere(count):
+        d = rng.normal(size=(count, 3))
+        d[:, 2] = np.abs(d[:, 2])
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+    L, V = hemisphere(cfg.eval_pairs), hemisphere(cfg.eval_pairs)
+    methods, status = {}, "ok"
+    builtin = bn.load("blinn-phong", n=cfg.n)
+    t, base, runs = measure(lambda: builtin.eval(L, V)[:, 0], cfg.repeats)
+    methods["built-in blinn-phong"] = record(t, base, base, runs=runs, note="numpy lobe (the baseline here)")
+    try:
+        from_file = bn.load(str(ROOT / "examples" / "blinn_phong.brdf"), n=cfg.n)
+        t, values, runs = measure(lambda: from_file.eval(L, V)[:, 0], cfg.repeats)
+        methods[".brdf blinn-phong"] = record(t, values, base, runs=runs, note="examples/blinn_phong.brdf")
+    except Exception as error:  # noqa: BLE001 — the .brdf issue has not landed yet
+        status = f"not available yet: {error}"
+    hand = P.ggx(0.3)
+    t, ggx_base, runs = measure(lambda: hand.vector(L, V), cfg.repeats)
+    methods["numpy ggx (by hand)"] = record(t, ggx_base, ggx_base, runs=runs, note="peers.ggx, numpy")
+    try:
+        ggx_file = bn.load(str(ROOT / "examples" / "ggx.brdf"), roughness=0.3)
+        t, values, runs = measure(lambda: ggx_file.eval(L, V)[:, 0], cfg.repeats)
+        methods[".brdf ggx"] = record(t, values, ggx_base, runs=runs, note="examples/ggx.brdf",
+                                      slowdown_vs_numpy=t / methods["numpy ggx (by hand)"]["time_s"])
+    except Exception as error:  # noqa: BLE001
+        status = f"not available yet: {error}"
+    result = add_ratios({"title": title, "status": status, "methods": methods,
+                         "reference": "the built-in numpy lobe (blinn-phong) / hand-written numpy GGX"},
+                        baseline="built-in blinn-phong")
+    for line in result["methods"].values():
+        line["speedup_of_brdfnorm"] = None  # speed-ups are not the point here: the slowdown is
+    if ".brdf blinn-phong" in methods:
+        methods[".brdf blinn-phong"]["slowdown_vs_numpy"] = (methods[".brdf blinn-phong"]["time_s"]
+                                                           / methods["built-in blinn-phong"]["time_s"])
+    return result
+
+
+def _work_precision_panel(cfg: Config, theta: float, reference: float) -> dict[str, list]:
+    """Time and error of every method at each tolerance / sample count, for one albedo at view angle θ."""
+    model = bn.load("blinn-phong", n=cfg.n)
+    lobe = P.blinn_phong(cfg.n)
+    lines: dict[str, list] = {}
+
+    def point(name, setting, fn):
+        t, value, _ = measure(fn, cfg.repeats, budget_s=1.0)
+        lines.setdefault(name, []).append({"setting": setting, "time_s": t,
+                                           "rel_error": float(rel_errors(value, reference))})
+
+    methods = ["quadrature"] + (["series"] if series_available() else [])
+    for rtol in cfg.wp_rtols:
+        for method in methods:
+            point(f"brdfnorm {method}", rtol,
+                  lambda r=rtol, m=method: quiet_albedo(model, theta, rtol=r, method=m)[0].value[0])
+        if rtol >= 1e-11:  # below this QUADPACK and cubature only spend time against rounding noise
+            point("dblquad", rtol, lambda r=rtol: P.dblquad_albedo(lobe, theta, r).value)
+            point("cubature", rtol, lambda r=rtol: P.cubature_albedo(lobe, theta, r).value)
+    for samples in cfg.wp_samples:
+        for dtype in (np.float32, np.float64):
+            directions = P.hammersley_cosine(samples, dtype)
+            point(f"mc {np.dtype(dtype).name}", samples, lambda d=directions: P.mc_albedo(lobe, theta, d).value)
+    return lines
+
+
+def w_work_precision(cfg: Config, refs: References) -> dict:
+    """Error against time for every method across tolerances / sample counts, one albedo at a time."""
+    panels = {}
+    for angle in cfg.wp_angles:
+        if cfg.quick:
+            reference = float(tight_blinn_phong(cfg.n, np.array([angle]))[0])
+        else:
+            reference = refs.blinn_phong(cfg.n, angle)
+        lines = _work_precision_panel(cfg, math.radians(angle), reference)
+        panels[f"{angle:g}"] = {"reference": reference, "lines": lines}
+    return {"title": f"work–precision: blinn-phong n={cfg.n:g}, one albedo at θ_o ∈ {list(cfg.wp_angles)}°",
+            "status": "ok", "panels": panels,
+            "reference": "quick: brdfnorm rtol 1e-13" if cfg.quick else "mpmath 30 digits, seed 002 ₂F₁ form"}
+
+
+_MEMORY_SNIPPET = """
+import json, sys, time, tracemalloc
+import numpy as np
+import brdfnorm as bn
+
+
+def high_water_kib():
+    # VmHWM: this process's peak resident set (ru_maxrss would carry the parent's peak across fork/exec).
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+
+
+mode, count, angles = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+model = bn.load("blinn-phong")
+theta = np.radians(np.arange(float(angles)))
+base = high_water_kib()
+if mode == "tracemalloc":
+    tracemalloc.start()
+start = time.perf_counter()
+bn.normalize(model, at="view", sweep={"n": np.geomspace(1, 1e4, count)}, theta=theta, rtol=1e-9)
+elapsed = time.perf_counter() - start
+peak = tracemalloc.get_traced_memory()[1] if mode == "tracemalloc" else None
+print(json.dumps({"baseline_rss_kib": base, "peak_rss_kib": high_water_kib(), "tracemalloc_peak_bytes": peak,
+                  "seconds": elapsed}))
+"""
+
+
+def w_memory(cfg: Config, refs: References) -> dict:
+    """Peak RSS of the whole normalization table in a fresh subprocess (ru_maxrss), and tracemalloc's peak."""
+    count, angles = cfg.sweep_n.size, cfg.table_angles.size
+    out = {"title": f"peak memory of the {count}×{angles} blinn-phong normalization table (rtol 1e-9)",
+           "status": "ok"}
+    for mode in ("rss",) + (() if cfg.quick else ("tracemalloc",)):
+        done = subprocess.run([sys.executable, "-c", _MEMORY_SNIPPET, mode, str(count), str(angles)],
+                              capture_output=True, text=True, check=True, cwd=ROOT)
+        out[mode] = json.loads(done.stdout)
+    rss = out["rss"]
+    out["peak_rss_mib"] = rss["peak_rss_kib"] / 1024
+    out["baseline_rss_mib"] = rss["baseline_rss_kib"] / 1024
+    if "tracemalloc" in out:
+        out["tracemalloc_peak_mib"] = out["tracemalloc"]["tracemalloc_peak_bytes"] / 2**20
+    out["method"] = ("peak RSS (VmHWM in /proc/self/status) of a fresh `python -c` subprocess that imports "
+                     "brdfnorm and computes the table; baseline = its VmHWM after the imports; tracemalloc peak = "
+                     "Python/numpy allocations during the call only (a second subprocess)")
+    return out
+
+
+def w_profile(cfg: Config, refs: References, out_dir: Path) -> dict:
+    """cProfile of brdfnorm's 90-angle table, and where dblquad spends its evaluations for comparison."""
+    model = bn.load("blinn-phong", n=cfg.n)
+    thetas = np.radians(cfg.table_angles)
+    quiet_albedo(model, thetas, rtol=cfg.rtol, method="quadrature")  # warm caches
+    profiler = cProfile.Profile()
+    profiler.enable()
+    result, _ = quiet_albedo(model, thetas, rtol=cfg.rtol, method="quadrature")
+    profiler.disable()
+    text = io.StringIO()
+    stats = pstats.Stats(profiler, stream=text)
+    stats.sort_stats("tottime").print_stats(15)
+    stats.sort_stats("cumulative").print_stats(15)
+    (out_dir / "profile.txt").write_text(text.getvalue())
+    total = sum(v[2] for v in stats.stats.values())
+    rows = sorted(stats.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:15]
+    top = [{"function": f"{Path(f).name}:{line}({name})", "ncalls": int(nc), "tottime_s": tt, "cumtime_s": ct}
+           for (f, line, name), (cc, nc, tt, ct, _) in rows]
+
+    def cumulative(fragment: str) -> float:
+        return float(sum(v[3] for (f, _, name), v in stats.stats.items() if name == fragment))
+
+    evaluations = int(result.evaluations.sum())
+    counter = [0]
+    lobe = P.blinn_phong(cfg.n)
+    counting = P.PeerLobe(lobe.name, lambda *a: (counter.__setitem__(0, counter[0] + 1), lobe.scalar(*a))[1],
+                          lobe.vector)
+    for th in thetas:
+        P.dblquad_albedo(counting, th, cfg.rtol)
+    value, ref = result.value[:, 0], tight_blinn_phong(cfg.n, cfg.table_angles)
+    return {
+        "title": f"where brdfnorm's time goes: {thetas.size}-angle table, blinn-phong n={cfg.n:g}, rtol {cfg.rtol:g}",
+        "status": "ok", "total_s": total, "top_tottime": top,
+        "breakdown_cumulative_s": {name: cumulative(name) for name in (
+            "integrate_hemisphere", "_evaluate", "_map_nodes", "integrand", "evaluate", "_estimate", "lobe")},
+        "brdfnorm_evaluations": evaluations,
+        "brdfnorm_evaluations_per_albedo": evaluations / thetas.size,
+        "brdfnorm_ns_per_evaluation": 1e9 * total / evaluations,
+        "dblquad_evaluations": counter[0], "dblquad_evaluations_per_albedo": counter[0] / thetas.size,
+        "requested_rtol": cfg.rtol,
+        "achieved_max_rel_error": float(rel_errors(value, ref).max()),
+        "estimated_max_rel_error": float((result.error[:, 0] / value).max()),
+    }
+
+
+# -- targets, report ----------------------------------------------------------------------------------------
+
+def targets(results: dict, cfg: Config) -> list[dict]:
+    out = []
+    t90 = results.get("table90", {}).get("methods", {})
+    size = f"{cfg.table_angles.size}-angle table"
+    for ours_name in ("brdfnorm", "brdfnorm quadrature"):
+        ours = t90.get(ours_name)
+        if ours is None:
+            continue
+        label = ours_name + (" (" + ours["note"].split("→ ")[-1] + ")" if ours_name == "brdfnorm" else "")
+        dq = t90.get("dblquad")
+        if dq:
+            ratio = dq["time_s"] / ours["time_s"]
+            out.append({"target": f"{size}, {label}: ≥ 100× faster than dblquad at equal or better accuracy",
+                        "measured": f"{ratio:.1f}× faster; max rel error {ours['max_rel_error']:.2g} vs dblquad "
+                                    f"{dq['max_rel_error']:.2g}",
+                        "met": bool(ratio >= 100 and ours["max_rel_error"] <= dq["max_rel_error"])})
+        for dtype in ("float32", "float64"):
+            mc = t90.get(f"mc {dtype}")
+            if mc:
+                ratio = mc["time_s"] / ours["time_s"]
+                out.append({"target": f"{size}, {label}: more accurate than MC {dtype} ({cfg.mc_samples:.0e} "
+                                      "samples) in ≥ 10× less time",
+                            "measured": f"{ratio:.1f}× less time; max rel error {ours['max_rel_error']:.2g} vs "
+                                        f"{mc['max_rel_error']:.2g}",
+                            "met": bool(ratio >= 10 and ours["max_rel_error"] < mc["max_rel_error"])})
+    ev = results.get("eval", {}).get("methods", {})
+    for name in (".brdf blinn-phong", ".brdf ggx"):
+        if name in ev:
+            slow = ev[name]["slowdown_vs_numpy"]
+            out.append({"target": f"{name} evaluation within 3× of the numpy lobe",
+                        "measured": f"{slow:.2f}× the numpy time", "met": bool(slow <= 3.0)})
+    if "eval" in results and not any(t["target"].startswith(".brdf") for t in out):
+        out.append({"target": ".brdf evaluation within 3× of the built-in numpy lobe",
+                    "measured": results["eval"]["status"], "met": None})
+    mem = results.get("memory", {})
+    if "peak_rss_mib" in mem:
+        out.append({"target": f"peak RSS of the {cfg.sweep_n.size}×{cfg.table_angles.size} table < 1 GB",
+                    "measured": f"{mem['peak_rss_mib']:.0f} MiB peak RSS (baseline after imports "
+                                f"{mem['baseline_rss_mib']:.0f} MiB)",
+                    "met": bool(mem["peak_rss_mib"] < 1000)})
+    return out
+
+
+def fmt_time(t) -> str:
+    if t is None or not np.isfinite(t):
+        return "—"
+    return f"{t * 1e3:.3g} ms" if t < 1 else f"{t:.3g} s"
+
+
+def fmt(x, spec=".2g") -> str:
+    return "—" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
+
+
+def markdown(results: dict) -> str:
+    meta = results["meta"]
+    lines = [f"# brdfnorm benchmarks ({'quick' if meta['quick'] else 'full'} run)", "",
+             f"{meta['date']} · {meta['machine']} · Python {meta['python']} · numpy {meta['numpy']} · "
+             f"scipy {meta['scipy']} · {meta['seconds']:.0f} s total, of which mpmath references "
+             f"{meta['reference_seconds']:.0f} s", "",
+             "Speed-up = peer time ÷ brdfnorm time (how many times faster brdfnorm is). Errors are relative, "
+             "against each workload's reference. Extrapolated times are labelled.", ""]
+    for name, w in results["workloads"].items():
+        if name in ("work-precision", "memory", "profile"):
+            continue
+        lines += [f"## {name}: {w.get('title', '')}", ""]
+        if w.get("status") != "ok" and "methods" not in w:
+            lines += [f"**{w['status']}**", ""]
+            continue
+        if w.get("status") != "ok":
+            lines += [f"Partly {w['status']}", ""]
+        lines += [f"Reference: {w.get('reference', '')}", ""]
+        if w.get("cross_check"):
+            lines += ["Cross-check: " + ", ".join(f"{k}: {v:.1e}" for k, v in w["cross_check"].items()), ""]
+        lines += ["| method | time | timing | speed-up of brdfnorm | max rel error | median rel error | points | "
+                  "warnings | note |", "|---|---|---|---|---|---|---|---|---|"]
+        for m, line in w["methods"].items():
+            speed = line.get("speedup_of_brdfnorm")
+            if "slowdown_vs_numpy" in line:
+                speed_text = f"{line['slowdown_vs_numpy']:.2f}× slower than numpy"
+            else:
+                speed_text = "baseline" if speed is None else f"{speed:.3g}×"
+            lines.append(f"| {m} | {fmt_time(line['time_s'])} | {line['timing']} | {speed_text} | "
+                         f"{fmt(line['max_rel_error'])} | {fmt(line['median_rel_error'])} | {line['points']} | "
+                         f"{line['warnings']} | {line['note']} |")
+        lines.append("")
+    mem = results["workloads"].get("memory")
+    if mem:
+        lines += [f"## memory: {mem['title']}", "", f"- peak RSS: **{mem['peak_rss_mib']:.0f} MiB** "
+                  f"(baseline after imports {mem['baseline_rss_mib']:.0f} MiB)"]
+        if "tracemalloc_peak_mib" in mem:
+            lines.append(f"- tracemalloc peak during the call: {mem['tracemalloc_peak_mib']:.0f} MiB")
+        lines += [f"- how: {mem['method']}", ""]
+    prof = results["workloads"].get("profile")
+    if prof:
+        lines += [f"## profile: {prof['title']}", "",
+                  f"- {prof['brdfnorm_evaluations_per_albedo']:.0f} integrand evaluations per albedo "
+                  f"({prof['brdfnorm_ns_per_evaluation']:.0f} ns each, all overheads included); dblquad: "
+                  f"{prof['dblquad_evaluations_per_albedo']:.0f} per albedo",
+                  f"- requested rtol {prof['requested_rtol']:g}; brdfnorm's own estimate "
+                  f"{prof['estimated_max_rel_error']:.2g}; achieved {prof['achieved_max_rel_error']:.2g}",
+                  "- cumulative seconds: "
+                  + ", ".join(f"{k} {v:.3f}" for k, v in prof["breakdown_cumulative_s"].items()),
+                  "", "| function | calls | tottime | cumtime |", "|---|---|---|---|"]
+        lines += [f"| `{r['function']}` | {r['ncalls']} | {r['tottime_s']:.4f} | {r['cumtime_s']:.4f} |"
+                  for r in prof["top_tottime"]]
+        lines.append("")
+    lines += ["## targets", "", "| target | measured | met |", "|---|---|---|"]
+    for t in results["targets"]:
+        met = {True: "yes", False: "**no**", None: "n/a"}[t["met"]]
+        lines.append(f"| {t['target']} | {t['measured']} | {met} |")
+    lines += ["", "Plots: `cost_vs_n.png` (cost per 90-angle row against the swept parameter), "
+              "`work_precision.png` (error against time). Profile: `profile.txt`.", ""]
+    return "\n".join(lines)
+
+
+def plots(results: dict, out_dir: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    tables = [(k, w) for k, w in results["workloads"].items() if "cost" in w]
+    if tables:
+        fig, axes = plt.subplots(1, len(tables), figsize=(6.5 * len(tables), 4.5), squeeze=False)
+        for ax, (name, w) in zip(axes[0], tables, strict=True):
+            cost = w["cost"]
+            for method, rows in cost["brdfnorm_row_s"].items():
+                ax.loglog(cost["values"], rows, "o-", ms=3, label=f"{method} (measured)")
+            for peer, rows in cost["peer_row_s_estimated"].items():
+                ax.loglog(cost["peer_values"], rows, "s--", label=f"{peer} (subset, stratified estimate)")
+            ax.set_xlabel(cost["parameter"])
+            ax.set_ylabel(f"seconds per row of {len(results['meta']['table_angles'])} angles")
+            ax.set_title(name)
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(out_dir / "cost_vs_n.png", dpi=120)
+        plt.close(fig)
+        written.append("cost_vs_n.png")
+    wp = results["workloads"].get("work-precision")
+    if wp and wp.get("status") == "ok":
+        panels = wp["panels"]
+        fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 4.5), squeeze=False)
+        for ax, (angle, panel) in zip(axes[0], panels.items(), strict=True):
+            for method, points in panel["lines"].items():
+                t = [p["time_s"] for p in points]
+                e = [max(p["rel_error"], 1e-17) for p in points]
+                ax.loglog(t, e, "o-", ms=3, label=method)
+            ax.set_xlabel("wall time per albedo [s]")
+            ax.set_ylabel("relative error vs reference (floored at 1e-17)")
+            ax.set_title(f"blinn-phong n={results['meta']['n']:g}, θ_o = {angle}°")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(out_dir / "work_precision.png", dpi=120)
+        plt.close(fig)
+        written.append("work_precision.png")
+    return written
+
+
+def print_tables(results: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console()
+    for name, w in results["workloads"].items():
+        if "methods" not in w:
+            if name not in ("work-precision", "memory", "profile"):
+                console.print(f"[bold]{name}[/]: {w.get('status')}")
+            continue
+        table = Table(title=f"{name}: {w['title']}", title_justify="left")
+        for column in ("method", "time", "timing", "speed-up of brdfnorm", "max rel err", "points", "warn"):
+            table.add_column(column, justify="left" if column in ("method", "timing") else "right")
+        for m, line in w["methods"].items():
+            speed = line.get("speedup_of_brdfnorm")
+            if "slowdown_vs_numpy" in line:
+                speed_text = f"{line['slowdown_vs_numpy']:.2f}× slower"
+            else:
+                speed_text = "—" if speed is None else f"{speed:.3g}×"
+            table.add_row(m, fmt_time(line["time_s"]), line["timing"], speed_text, fmt(line["max_rel_error"]),
+                          str(line["points"]), str(line["warnings"]))
+        console.print(table)
+    mem = results["workloads"].get("memory")
+    if mem:
+        console.print(f"peak RSS of the table: {mem['peak_rss_mib']:.0f} MiB "
+                      f"(baseline after imports {mem['baseline_rss_mib']:.0f} MiB)")
+    table = Table(title="targets", title_justify="left")
+    for column in ("target", "measured", "met"):
+        table.add_column(column)
+    for t in results["targets"]:
+        table.add_row(t["target"], t["measured"], {True: "yes", False: "NO", None: "n/a"}[t["met"]])
+    console.print(table)
+
+
+def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None = None) -> dict:
+    """Run the benchmarks; returns the results dictionary (also written to ``out_dir``)."""
+    cfg = Config.make(quick)
+    out_dir = out_dir or (HERE / "results" / ("quick" if quick else ""))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    chosen = list(WORKLOADS) if not only else only
+    unknown = [w for w in chosen if w not in WORKLOADS]
+    if unknown:
+        raise SystemExit(f"error: unknown workload(s) {', '.join(unknown)} (known: {', '.join(WORKLOADS)})")
+    refs = References()
+    start = time.perf_counter()
+    functions = {"single": w_single, "table90": w_table90, "norm-table": w_norm_table, "ggx-table": w_ggx_table,
+                 "fit": w_fit, "eval": w_eval, "work-precision": w_work_precision, "memory": w_memory,
+                 "profile": lambda c, r: w_profile(c, r, out_dir)}
+    workloads = {}
+    for name in chosen:
+        began = time.perf_counter()
+        print(f"[bench] {name} …", file=sys.stderr, flush=True)
+        workloads[name] = functions[name](cfg, refs)
+        workloads[name]["wall_s"] = time.perf_counter() - began
+    if series_available():
+        note = ("available: method='auto' picks it for blinn-phong (lines 'brdfnorm' in single, table90, norm-table; "
+                "'brdfnorm series' in work-precision); 'brdfnorm quadrature' is the generic engine")
+    else:
+        note = "not available yet: brdfnorm.albedo.METHODS has no 'series'"
+    workloads.setdefault("series", {"title": "blinn-phong `series` method (seed 002's ₂F₁ form)", "status": note})
+    results = {
+        "meta": {
+            "date": datetime.now(UTC).isoformat(timespec="seconds"), "quick": quick,
+            "machine": f"{platform.machine()} {platform.processor() or ''} ({_cpu_count()} CPUs), "
+                       f"{platform.system()} {platform.release()}",
+            "python": platform.python_version(), "numpy": np.__version__,
+            "scipy": importlib.import_module("scipy").__version__,
+            "mpmath": importlib.import_module("mpmath").__version__, "brdfnorm": bn.__version__,
+            "rtol": cfg.rtol, "n": cfg.n, "mc_samples": cfg.mc_samples, "table_angles": cfg.table_angles.tolist(),
+            "git": _git_commit(), "seconds": time.perf_counter() - start, "reference_seconds": refs.seconds,
+        },
+        "workloads": workloads,
+    }
+    results["targets"] = targets(workloads, cfg)
+    results["plots"] = plots(results, out_dir)
+    (out_dir / "latest.json").write_text(json.dumps(results, indent=1, default=_jsonable) + "\n")
+    (out_dir / "latest.md").write_text(markdown(results))
+    return results
+
+
+def _jsonable(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(type(x))
+
+
+def _cpu_count() -> int:
+    import os
+
+    return os.cpu_count() or 1
+
+
+def _git_commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes: a smoke test that runs in seconds")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON instead of tables")
+    parser.add_argument("--only", help=f"comma-separated workloads ({', '.join(WORKLOADS)})")
+    parser.add_argument("--out", type=Path, help="output folder (default benchmarks/results[/quick])")
+    args = parser.parse_args(argv)
+    only = [w.strip() for w in args.only.split(",")] if args.only else None
+    results = run(args.quick, only, args.out)
+    if args.json:
+        print(json.dumps(results, indent=1, default=_jsonable))
+    else:
+        print_tables(results)
+
+
+if __name__ == "__main__":
+    main()
