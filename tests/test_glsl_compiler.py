@@ -570,11 +570,12 @@ def test_uniform_branch_runs_only_the_taken_side():
 
 
 def test_shader_declared_uniforms_and_scalar_directions():
-    shader = "uniform float k;\nuniform vec3 tint;\n" + SIGNATURE + "{ return tint * k * dot(L, N); }"
+    shader = "uniform float k;\nuniform vec3 tint;\nuniform float g = 0.5;\n" + SIGNATURE
+    shader += "{ return tint * k * dot(L, N) + g - 0.5; }"
     program = compile_shader(shader, uniforms={"k": "float"})
     out = program.brdf(L, V, [0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0], {"k": 2.0, "tint": (1.0, 2.0, 3.0)})
     np.testing.assert_allclose(out, 2.0 * L[:, 2:3] * np.array([1.0, 2.0, 3.0]), rtol=1e-15)
-    assert program.uniforms == {"k": "float", "tint": "vec3"}
+    assert program.uniforms == {"k": "float", "tint": "vec3", "g": "float"}
     assert {"k", "tint", "dot"} <= program.uses
     single = program.brdf([0, 0, 1.0], [0, 0, 1.0], [0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0], {"k": 1.0})
     assert single.shape == (3,) and np.all(single == 0)  # an undeclared-by-caller uniform defaults to 0

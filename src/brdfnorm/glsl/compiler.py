@@ -327,7 +327,8 @@ class Compiler:
         self.scopes: list[_Scope] = [_Scope()]  # scopes[0]: globals
         self.globals_count = 0
         self.global_inits: list[Callable[[Frame], None]] = []
-        self.uniforms: dict[str, tuple[Type, int, bool]] = {}  # name -> (type, slot, declared by caller)
+        # name -> (type, slot, declared by the caller, value when none is given)
+        self.uniforms: dict[str, tuple[Type, int, bool, tuple]] = {}
         self.functions: dict[str, list[Function]] = {}
         self.macros: dict[str, tuple[str, Node, Source] | None] = {}
         self.uses: set[str] = set()
@@ -366,14 +367,16 @@ class Compiler:
                 return scope[name]
         return None
 
-    def declare_uniform(self, name: str, t: Type, node: Node | None, caller: bool = False) -> None:
+    def declare_uniform(
+        self, name: str, t: Type, node: Node | None, caller: bool = False, default: tuple | None = None
+    ) -> None:
         if name in self.uniforms:
             previous = self.uniforms[name][0]
             if previous != t:
                 raise self.error(f"uniform '{name}' declared as {t}, but the parameter is {previous}", node)
             return
         slot = self.new_global()
-        self.uniforms[name] = (t, slot, caller)
+        self.uniforms[name] = (t, slot, caller, default if default is not None else _zeros(t))
         self.scopes[0][name] = Var(name, t, slot, True, readonly="uniform")
 
     def new_global(self) -> int:
@@ -625,11 +628,14 @@ class Compiler:
             name = self.text(name_node)
             t = Type(base.base, base.rows, base.cols, length)
             if "uniform" in quals:
-                if value is not None:
-                    raise self.error(f"uniform '{name}' cannot be initialized here", value)
                 if t.length is not None:
                     raise self.error("unsupported feature: uniform arrays", name_node)
-                self.declare_uniform(name, t, name_node)
+                default = None
+                if value is not None:  # GLSL 1.20+: the value a uniform has until one is set
+                    default = self.convert(self.expr(value), t, value).const
+                    if default is None:
+                        raise self.error(f"uniform '{name}' needs a constant initializer", value)
+                self.declare_uniform(name, t, name_node, default=default)
                 continue
             if name in self.scopes[0]:
                 raise self.error(f"'{name}' is already declared", name_node)
@@ -1746,7 +1752,7 @@ class Program:
         self._inits = compiler.global_inits
         self._nglobals = compiler.globals_count
         self._uniforms = dict(compiler.uniforms)
-        self.uniforms: dict[str, str] = {name: str(t) for name, (t, _, _) in compiler.uniforms.items()}
+        self.uniforms: dict[str, str] = {name: str(t) for name, (t, *_) in compiler.uniforms.items()}
         self.uses: frozenset[str] = frozenset(compiler.uses)
         self.path = compiler.path
         self._used_params = sorted(entry.used_params)
@@ -1779,13 +1785,13 @@ class Program:
             if d.ndim == 0 or d.shape[-1] != 3:
                 raise EvaluationError(f"{name} must have shape (..., 3), got {d.shape}", self.path)
         globals_ = [None] * self._nglobals
-        for name, (t, slot, caller) in self._uniforms.items():
+        for name, (t, slot, caller, default) in self._uniforms.items():
             if name in uniforms:
                 globals_[slot] = self._uniform_value(name, t, uniforms[name])
             elif caller:
                 raise EvaluationError(f"no value given for uniform '{name}'", self.path)
             else:
-                globals_[slot] = _zeros(t)  # OpenGL initializes uniforms to zero
+                globals_[slot] = default  # its initializer, else zero as OpenGL does
         budget = [0]
         entry = self._entry
         frame = Frame(entry.nslots, globals_, None, budget)
