@@ -757,6 +757,8 @@ def test_missing_semicolon_is_a_syntax_error():
         ("L.x = 1.0; return vec3(dot(L, L) * undefinedThing);", "undefinedThing", "unknown identifier"),
         ("return vec3(foo(1.0));", "foo", "unknown function 'foo'"),
         ("break; return vec3(1);", "break", "outside a loop"),
+        ("float a[100000000]; return vec3(a[0]);", "100000000", "exceeds the supported maximum"),
+        ("float a[2]; return vec3(a[2]);", "2]);", "index 2 is out of range"),
         ("if (1.0) return vec3(0); return vec3(1);", "1.0)", "condition must be a bool"),
     ],
 )

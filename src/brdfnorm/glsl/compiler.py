@@ -56,6 +56,8 @@ Node = tree_sitter.Node
 MAX_LOOP_ITERATIONS = 10_000
 #: Loop iterations all loops together may take in one evaluation of the shader.
 MAX_TOTAL_ITERATIONS = 100_000
+#: Longest array a shader may declare (each element is held as its own component arrays).
+MAX_ARRAY_LENGTH = 1024
 
 _SWIZZLE_SETS = ("xyzw", "rgba", "stpq")
 _INT_MIN = -(2.0**31)
@@ -297,11 +299,11 @@ class LValue:
         root = self.load(f)
         if self.path.static is not None:
             return tuple(root[i] for i in self.path.static)
-        out = None
+        out = _zeros(self.type)  # an out-of-range index reads 0, as in x_subscript_expression
         for cond, idx in self.path.resolve(f):
             value = tuple(root[i] for i in idx)
-            out = value if out is None or cond is None else tuple(map(np.where, [cond] * len(value), value, out))
-        return out if out is not None else _zeros(self.type)
+            out = value if cond is None else tuple(map(np.where, [cond] * len(value), value, out))
+        return out
 
     def set(self, f: Frame, value: tuple) -> None:
         root = self.load(f)
@@ -427,6 +429,8 @@ class Compiler:
         n = int(e.const[0])
         if n <= 0:
             raise self.error("array size must be positive", size)
+        if n > MAX_ARRAY_LENGTH:
+            raise self.error(f"array size {n} exceeds the supported maximum of {MAX_ARRAY_LENGTH}", size)
         return n
 
     # --- translation unit -----------------------------------------------------------------------------
