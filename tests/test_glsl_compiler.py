@@ -842,3 +842,22 @@ def test_deep_nesting_is_a_file_error_not_a_crash():
         SIGNATURE + "{ float x = 0.0; " + "if (L.x > 0.0) {" * 2000 + "x = 1.0;" + "}" * 2000 + " return vec3(x); }"
     )
     assert "nested too deeply" in _error(source).message
+
+
+def test_temporaries_reused_in_place_never_clobber_variables_or_inputs():
+    shader = SIGNATURE + """{
+        float x = L.x * 3.0;
+        float y = mod(x, 0.0) * 2.0;            // mod(x, 0.0) passes x through: not a temporary
+        vec3 H = L + V;
+        vec3 h = normalize(H) * 2.0;             // normalize of a variable: H must stay unnormalized
+        float p = pow(max(0.0, x), 2.5) + 1.0;   // max/pow reuse their temporary argument
+        float m = mix(x, 5.0, 0.0) * 0.5;        // mix(x, y, 0.0) passes x through
+        return vec3(x + y + m, H.y + h.z, p) + L * 0.0;
+    }"""
+    before = [d.copy() for d in DIRS]
+    x = L[:, 0] * 3.0
+    H = L + V
+    expected = vec3(x + 2 * x + 0.5 * x, H[:, 1] + 2 * _unit(H)[:, 2], np.maximum(0, x) ** 2.5 + 1.0)
+    check(shader, expected, rtol=1e-12)
+    for d, b in zip(DIRS, before, strict=True):
+        np.testing.assert_array_equal(d, b)

@@ -1528,7 +1528,9 @@ class Compiler:
                 def impl(a, b, fns=fns):  # noqa: E306
                     return tuple(fn(a[i], b[i]) for i, fn in enumerate(fns))
 
-        return self.make(t, impl, args, fresh=name in builtins.FRESH and t.base == "float")
+        # an override may pass an argument through: the result is then no temporary of ours
+        fresh = name in builtins.FRESH and t.base == "float" and not overrides
+        return self.make(t, impl, args, fresh=fresh)
 
     @staticmethod
     def constant_overrides(name: str, args: list[Expr]) -> dict[int, int | None]:
