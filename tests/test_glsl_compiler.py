@@ -845,7 +845,9 @@ def test_deep_nesting_is_a_file_error_not_a_crash():
 
 
 def test_temporaries_reused_in_place_never_clobber_variables_or_inputs():
-    shader = SIGNATURE + """{
+    shader = (
+        SIGNATURE
+        + """{
         float x = L.x * 3.0;
         float y = mod(x, 0.0) * 2.0;            // mod(x, 0.0) passes x through: not a temporary
         vec3 H = L + V;
@@ -854,6 +856,7 @@ def test_temporaries_reused_in_place_never_clobber_variables_or_inputs():
         float m = mix(x, 5.0, 0.0) * 0.5;        // mix(x, y, 0.0) passes x through
         return vec3(x + y + m, H.y + h.z, p) + L * 0.0;
     }"""
+    )
     before = [d.copy() for d in DIRS]
     x = L[:, 0] * 3.0
     H = L + V
