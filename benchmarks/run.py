@@ -387,10 +387,14 @@ def w_ggx_table(cfg: Config, refs: References) -> dict:
     cross = {}
 
     def reference_of(roughness: float, a: float) -> float:
-        """brdfnorm rtol 1e-12 on the .brdf model, cross-checked with dblquad at epsrel 1e-12 (hand-written)."""
+        """brdfnorm rtol 1e-11 on the .brdf model, cross-checked with dblquad at epsrel 1e-12 (hand-written).
+
+        1e-11, not tighter: at roughness 0.05 the quadrature's summed rounding floor (~3e-12 relative) stays
+        above a 1e-12 request, and it then spends its whole evaluation budget (~20 s) before giving up.
+        """
         key = (roughness, a)
         if key not in cache:
-            value = bn.albedo(model.with_params(roughness=roughness), math.radians(a), rtol=1e-12,
+            value = bn.albedo(model.with_params(roughness=roughness), math.radians(a), rtol=1e-11,
                               method="quadrature").value[0]
             cache[key] = float(value)
             if a in (0.0, 40.0) or (a == 89.0 and roughness >= 0.2):  # dblquad fails on sharp grazing lobes
@@ -402,7 +406,7 @@ def w_ggx_table(cfg: Config, refs: References) -> dict:
     result = _sweep_table(
         cfg, refs, model=model, lobe_of=P.ggx, sweep_name="roughness", sweep=cfg.sweep_roughness,
         reference_of=reference_of,
-        reference_text="brdfnorm rtol 1e-12 on the .brdf model; cross_check: its difference from dblquad at "
+        reference_text="brdfnorm rtol 1e-11 on the .brdf model; cross_check: its difference from dblquad at "
                        "epsrel 1e-12 on the hand-written GGX (where dblquad raised no warning)",
         extra_checks=None, time_every_row=cfg.quick)
     result["cross_check"] = cross
@@ -847,6 +851,7 @@ def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None
         print(f"[bench] {name} …", file=sys.stderr, flush=True)
         workloads[name] = functions[name](cfg, refs)
         workloads[name]["wall_s"] = time.perf_counter() - began
+        print(f"[bench] {name} done in {workloads[name]['wall_s']:.1f} s", file=sys.stderr, flush=True)
     if series_available():
         note = ("available: method='auto' picks it for blinn-phong (lines 'brdfnorm' in single, table90, norm-table; "
                 "'brdfnorm series' in work-precision); 'brdfnorm quadrature' is the generic engine")
