@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import numpy as np
@@ -182,6 +183,42 @@ def test_auto_on_the_seed003_sweep_meets_the_target(seed003_alpha):
     # Independently re-evaluated on the samples, and every cheaper candidate tried missed the target.
     assert np.max(np.abs(result(n) / alpha - 1)) == pytest.approx(result.max_rel_error)
     assert all(e["max_rel_error"] > 1e-3 for e in result.tried if e["coefficients"] < len(result.coefficients))
+
+
+# -- two variables: seed 002's view-dependent Blinn-Phong --------------------------------------------------
+
+#: The shader-sized 2-D form that reaches the issue's goal: a rational of type (5, 2) in u = √n whose coefficients
+#: are quartics in τ = cos θ_o·√n (44 coefficients, 43 FMAs + sqrt + mul + div).
+VIEW_FORM = "rational-sqrt:5/2@4~tau"
+
+
+def test_blinn_phong_view_fit_meets_the_goal_on_a_different_denser_grid(tmp_path):
+    from brdfnorm.codegen import emit
+
+    model = brdfnorm.load("blinn-phong")
+    n = np.geomspace(1.0, 1e4, 49)
+    theta = np.radians(np.linspace(0.0, 89.0, 46))
+    samples = normalize(model, at="view", sweep={"n": n}, theta=theta, rtol=1e-10)
+    x = np.broadcast_to(n[:, None], samples.factor.shape[:2])
+    result = fit(x, samples.factor[..., 0], np.cos(samples.theta), form=VIEW_FORM, metric="minimax-rel",
+                 names=("n", "cos_theta_o"))
+    assert result.max_rel_error <= 1e-3 and not result.warnings
+    assert result.operations == {"fma": 43, "mul": 1, "div": 1, "sqrt": 1}
+    # The emitted Python, imported from a file, on n and θ between the fitted ones (and up to 89°).
+    path = tmp_path / "view_norm.py"
+    path.write_text(emit(result, "python", "blinn-phong"))
+    spec = importlib.util.spec_from_file_location("view_norm", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    formula = module.brdfnorm_blinn_phong_norm
+    n_dense = np.geomspace(1.0, 1e4, 97)[1::2]
+    theta_dense = np.radians(np.append(np.linspace(0.0, 89.0, 91)[1::2], [88.5, 89.0]))
+    reference = normalize(model, at="view", sweep={"n": n_dense}, theta=theta_dense, rtol=1e-10)
+    error = formula(n_dense[:, None], np.cos(reference.theta)) / reference.factor[..., 0] - 1.0
+    assert np.max(np.abs(error)) <= 1e-3
+    # At θ = 0 against seed 000's closed form, on yet another grid.
+    n_fine = np.geomspace(1.0, 1e4, 301)
+    assert np.max(np.abs(formula(n_fine, 1.0) * blinn_phong_albedo_normal(n_fine) - 1.0)) <= 1e-3
 
 
 # -- command line ---------------------------------------------------------------------------------------------

@@ -504,12 +504,13 @@ def auto_candidates(two_d: bool, max_coefficients: int) -> list[Form]:
             if P:
                 forms.append(RationalForm(P, 0, sqrt=True))
     else:
-        for D in range(4):
-            for P in range(max_coefficients):
-                for Q in range(max_coefficients):
-                    for sqrt in (True, False):
-                        for tau in (False, True):
-                            forms.append(RationalForm(P, Q, sqrt=sqrt, D=D, two_d=True, tau=tau))
+        # Two variables: rationals in √x whose coefficients are polynomials in t, or in τ = t·√x (the
+        # boundary-layer variable of a narrow lobe near the horizon); both with D ≥ 1.
+        for D in range(1, 4):
+            for P in range(1, 7):
+                for Q in range(0, 5):
+                    for tau in (False, True):
+                        forms.append(RationalForm(P, Q, sqrt=True, D=D, two_d=True, tau=tau))
     forms = [f for f in forms if 2 <= f.n_coefficients <= max_coefficients]
     return sorted(forms, key=lambda f: (f.n_coefficients, sum(f.operations().values())))
 

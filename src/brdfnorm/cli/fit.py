@@ -165,7 +165,8 @@ def fit_command(
         if json_output:
             data = {"model": m.name, "at": at.value, "parameter": name, **fitted.to_dict()}
             if at is At.view:
-                data["argmax"]["theta_deg"] = float(np.degrees(np.arccos(fitted.argmax[SECOND_VARIABLE])))
+                data["argmax"] = {**data["argmax"],
+                                  "theta_deg": float(np.degrees(np.arccos(fitted.argmax[SECOND_VARIABLE])))}
             if code is not None:
                 data["language"] = emit_language
                 data["code"] = code
