@@ -64,6 +64,10 @@ void main() {
 """
 
 
+#: What the output buffer holds where llvmpipe wrote nothing (see :func:`mesa`).
+MESA_SENTINEL = 1234.5
+
+
 @functools.cache
 def _mesa_context():
     try:
@@ -88,7 +92,10 @@ def mesa(shader: str, uniforms: dict | None = None, types: dict | None = None, d
     stacked = np.stack(np.broadcast_arrays(*dirs), axis=-2).astype(np.float32)  # (count, 5, 3)
     count = stacked.shape[0]
     program["bn_count"].value = count
-    source, target = ctx.buffer(stacked.tobytes()), ctx.buffer(reserve=count * 12)
+    # The output starts as a sentinel: llvmpipe writes nothing for some shaders (e.g. dividing by a constant
+    # 0.0), which must not pass for a result of 0.
+    sentinel = np.full((count, 3), MESA_SENTINEL, dtype=np.float32)
+    source, target = ctx.buffer(stacked.tobytes()), ctx.buffer(sentinel.tobytes())
     try:
         source.bind_to_storage_buffer(0)
         target.bind_to_storage_buffer(1)
@@ -662,8 +669,15 @@ def test_pow_rewrites_of_constant_arguments_follow_mesa():
     np.testing.assert_allclose(ours, mesa(shader, dirs=GRID), rtol=1e-6, equal_nan=True)
 
 
-def test_multiplication_and_division_by_constant_zero_are_zero_even_for_inf_and_nan():
-    shader = SIGNATURE + "{ float a = L.x, b = L.y; return vec3(a * 0.0 + 0.0 * a, a / 0.0 + 0.0 / a, b / (a * 0.0)); }"
+def test_calls_with_only_constant_arguments_fold_with_ieee_arithmetic():
+    shader = SIGNATURE + "{ return vec3(smoothstep(0.25, 0.25, 0.5), mod(0.5, 0.0), 0.5 / 0.0); }"
+    ours = evaluate(shader, dirs=GRID)
+    np.testing.assert_array_equal(ours, np.broadcast_to([1.0, np.nan, np.inf], ours.shape))
+    np.testing.assert_array_equal(ours, mesa(shader, dirs=GRID))
+
+
+def test_products_with_and_quotients_of_constant_zero_are_zero_even_for_inf_and_nan():
+    shader = SIGNATURE + "{ float a = L.x, b = L.y; return vec3(a * 0.0 + 0.0 * a, 0.0 / a, (a * 0.0) / b); }"
     ours = evaluate(shader, dirs=GRID)
     np.testing.assert_array_equal(ours, 0.0)
     np.testing.assert_allclose(ours, mesa(shader, dirs=GRID), equal_nan=True)

@@ -13,12 +13,14 @@ results undefined (see :mod:`.builtins`). Per-lane control flow is executed with
 a condition that is the same in every lane runs only the branch taken.
 
 Mesa's optimizer changes some results the specification leaves undefined; measured on llvmpipe (Mesa
-22.3) and imitated here: ``x * 0.0``, ``0.0 * x``, ``x / 0.0`` and ``0.0 / x`` are 0 for every x (inf and
-NaN included) when one side is a compile-time constant 0; integer ``x / 0`` is 0 and ``%`` is an unsigned
-32-bit remainder (``x % 0`` = -1); constant arguments steer ``pow``, ``smoothstep``, ``mod`` and ``mix``
-(:meth:`Compiler.constant_overrides`). Constant propagation treats a variable initialized with a constant
-and never written anywhere as a constant, as Mesa's SSA form does. Not imitated: folds that need value
-numbering (``x - x`` → 0 for a non-constant x) and float32 overflow/underflow.
+22.3) and imitated here: ``x * 0.0``, ``0.0 * x`` and ``0.0 / x`` are 0 for every x (inf and NaN
+included) when that side is a compile-time constant 0; integer ``x / 0`` is 0 and ``%`` is an unsigned
+32-bit remainder (``x % 0`` = -1); constant arguments steer ``pow``, ``mod`` and ``mix``
+(:meth:`Compiler.constant_overrides`). A float division by a constant 0 keeps IEEE semantics (±inf,
+NaN): llvmpipe writes no result at all for a shader doing it, so there is nothing to match. Constant
+propagation treats a variable initialized with a constant and never written anywhere as a constant, as
+Mesa's SSA form does. Not imitated: folds that need value numbering (``x - x`` → 0 for a non-constant x)
+and float32 overflow/underflow.
 
 Loops are bounded: one execution of a loop may run :data:`MAX_LOOP_ITERATIONS` iterations and all loops
 of one evaluation :data:`MAX_TOTAL_ITERATIONS`; past that, :class:`~brdfnorm.errors.EvaluationError`
@@ -199,11 +201,11 @@ _ARITH = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": np.true_
 _ZERO = np.float64(0.0)
 
 
-def _override(impl: Callable, overrides: dict[int, int | None], size: int) -> Callable:
+def _override(impl: Callable, overrides: dict[int, int], size: int) -> Callable:
     def fn(*values):
         out = list(impl(*values))
         for i, k in overrides.items():
-            out[i] = _ZERO if k is None else values[k][i if len(values[k]) > 1 else 0]
+            out[i] = values[k][i if len(values[k]) > 1 else 0]
         return tuple(out)
 
     return fn
@@ -1134,13 +1136,14 @@ class Compiler:
     def constant_zeros(op: str, left: Expr, right: Expr, t: Type) -> list[bool]:
         """Components Mesa's optimizer folds to 0 whatever the other operand (inf and NaN included).
 
-        Measured on llvmpipe: ``x * 0.0``, ``0.0 * x``, ``x / 0.0`` and ``0.0 / x`` are all 0 (NIR's
-        inexact algebraic rules; ``x / y`` becomes ``x * rcp(y)``). Both operands constant: folded as usual.
+        Measured on llvmpipe: ``x * 0.0``, ``0.0 * x`` and ``0.0 / x`` are 0 for every x (NIR's inexact
+        algebraic rules; ``x / y`` becomes ``x * rcp(y)``). ``x / 0.0`` is left to IEEE arithmetic: llvmpipe
+        writes no result at all for it. Both operands constant: folded as usual.
         """
         zero = [False] * t.size
         if left.const is not None and right.const is not None:
             return zero
-        for e in (left, right):
+        for e in (left, right) if op == "*" else (left,):
             if e.const is not None:
                 for i in range(t.size):
                     if e.const[0 if len(e.const) == 1 else i] == 0:
@@ -1533,26 +1536,25 @@ class Compiler:
         return self.make(t, impl, args, fresh=fresh)
 
     @staticmethod
-    def constant_overrides(name: str, args: list[Expr]) -> dict[int, int | None]:
+    def constant_overrides(name: str, args: list[Expr]) -> dict[int, int]:
         """Result components that Mesa's optimizer fixes from constant arguments (measured on llvmpipe).
 
-        Returns component index -> argument index whose component is the result, or None for 0:
-        ``smoothstep(e, e, x) = 0`` (its (x - e0)/(e1 - e0) divides by a constant 0, folded to 0),
-        ``mod(x, 0.0) = x`` and ``mix(x, y, 0.0) = x`` (products with a constant 0 are folded to 0).
+        Returns component index -> argument index whose component is the result: ``mod(x, 0.0) = x`` and
+        ``mix(x, y, 0.0) = x`` (products with a constant 0 are folded to 0, whatever the other factor).
         """
-        if name not in ("smoothstep", "mod", "mix") or not all(a.type.is_numeric for a in args):
+        if name not in ("mod", "mix") or not all(a.type.is_numeric for a in args):
             return {}
+        if all(a.const is not None for a in args):
+            return {}  # a call with constant arguments only is folded with IEEE arithmetic (measured)
 
         def const(k: int, i: int):
             c = args[k].const
             return None if c is None else c[0 if len(c) == 1 else i]
 
         size = max(a.type.size for a in args)
-        out: dict[int, int | None] = {}
+        out: dict[int, int] = {}
         for i in range(size):
-            if name == "smoothstep" and const(0, i) is not None and const(0, i) == const(1, i):
-                out[i] = None
-            elif name == "mod" and const(1, i) == 0:
+            if name == "mod" and const(1, i) == 0:
                 out[i] = 0
             elif name == "mix" and const(2, i) == 0:
                 out[i] = 0
