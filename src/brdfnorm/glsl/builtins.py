@@ -16,7 +16,8 @@ context can be created):
 * ``min``/``max``/``clamp`` return the other operand when one is NaN (``clamp(NaN, 0, 1) = 0``),
   ``step(e, NaN) = 0``, ``mix(x, y, a) = x + a·(y − x)``, ``mod(x, y) = x − y·floor(x/y)``,
   ``fract(x) = x − floor(x)``, ``inversesqrt(x) = 1/sqrt(x)``, ``normalize(0) = NaN``,
-  ``smoothstep(e, e, x) = 0``, round = roundEven.
+  ``smoothstep(e, e, x)`` is 1 above the edge and 0 at or below it (clamp of ±inf and NaN),
+  round = roundEven.
 
 Everything else is IEEE float64 arithmetic; float32 overflow and underflow are not imitated.
 """
