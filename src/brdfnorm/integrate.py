@@ -139,26 +139,39 @@ def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _map_nodes(panels: _Panels, frame, widths, supports):
-    """Directions and weights (sin α dα dβ including the rule's Kronrod weights) at every node: (R, 15, 15)."""
+    """Directions (R, 15, 15, 3) and Jacobians sin α dα/du (R, 15, 15) at every node of every panel.
+
+    This is the integrator's hot path: the transcendental functions run on (R, 15, 15) arrays once each, and
+    the directions are assembled component by component in place.
+    """
     P, T, B = frame
     k = panels.case
-    beta_mid, beta_half = (panels.b0 + panels.b1) / 2, (panels.b1 - panels.b0) / 2
-    u_mid, u_half = (panels.u0 + panels.u1) / 2, (panels.u1 - panels.u0) / 2
-    beta = beta_mid[:, None] + beta_half[:, None] * NODES  # (R, 15)
-    u = u_mid[:, None] + u_half[:, None] * NODES  # (R, 15)
+    beta_half = (panels.b1 - panels.b0) / 2
+    u_half = (panels.u1 - panels.u0) / 2
+    beta = ((panels.b0 + panels.b1) / 2)[:, None] + beta_half[:, None] * NODES  # (R, 15)
+    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * NODES  # (R, 15)
     cos_b, sin_b = np.cos(beta), np.sin(beta)
     pz = P[k, 2][:, None]
     s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
     alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[k][:, None])  # (R, 15) over β
     w = widths[k][:, None]
-    A = np.arctan(alpha_max / w)  # (R, 15β)
-    t = np.tan(u[:, None, :] * A[:, :, None])  # (R, 15β, 15u)
-    alpha = w[:, :, None] * t
-    dalpha_du = w[:, :, None] * A[:, :, None] * (1.0 + t * t)
-    sin_a, cos_a = np.sin(alpha), np.cos(alpha)
-    radial = cos_b[:, :, None, None] * T[k][:, None, None, :] + sin_b[:, :, None, None] * B[k][:, None, None, :]
-    omega = cos_a[..., None] * P[k][:, None, None, :] + sin_a[..., None] * radial
-    jacobian = sin_a * dalpha_du * (beta_half * u_half)[:, None, None]
+    A = np.arctan(alpha_max / w)[:, :, None]  # (R, 15β, 1)
+    t = u[:, None, :] * A  # (R, 15β, 15u), becomes tan(uA)
+    np.tan(t, out=t)
+    alpha = t * w[:, :, None]
+    sin_a = np.sin(alpha)
+    cos_a = np.cos(alpha, out=alpha)
+    # dα/du = wA(1 + t²); the Jacobian also carries the panel's half-widths.
+    jacobian = t
+    np.multiply(t, t, out=jacobian)
+    jacobian += 1.0
+    jacobian *= A * (w * (beta_half * u_half)[:, None])[:, :, None]
+    jacobian *= sin_a
+    omega = np.empty(sin_a.shape + (3,))
+    for i in range(3):
+        radial = cos_b * T[k, i][:, None] + sin_b * B[k, i][:, None]  # (R, 15β)
+        np.multiply(sin_a, radial[:, :, None], out=omega[..., i])
+        omega[..., i] += cos_a * P[k, i][:, None, None]
     return omega, jacobian
 
 
