@@ -401,7 +401,7 @@ def test_user_functions_overloading_out_inout_and_shadowed_builtin():
     vec3 twice(vec3 v) { return 3.0 * v; }            // overload chosen by argument type
     vec3 reflect(vec3 i, vec3 n) { return n; }         // hides the built-in reflect
     void split(in vec3 v, out float a, out vec2 b, inout float c) { a = v.x; b = v.yz; c += 1.0; }
-    float early(float x) { if (x > 0.0) return 1.0; return -1.0; }
+    float early(const in float x) { if (x > 0.0) return 1.0; return -1.0; }
     """
         + SIGNATURE
         + """{
@@ -878,3 +878,11 @@ def test_temporaries_reused_in_place_never_clobber_variables_or_inputs():
     check(shader, expected, rtol=1e-12)
     for d, b in zip(DIRS, before, strict=True):
         np.testing.assert_array_equal(d, b)
+
+
+def test_assigning_a_const_parameter_or_a_uniform_is_refused():
+    source = "float f(const in float a) { a = 1.0; return a; }\n" + SIGNATURE + "{ return vec3(f(L.x)); }"
+    error = _error(source)
+    assert "cannot assign to const parameter 'a'" in error.message and (error.line, error.column) == (1, 29)
+    error = _error(SIGNATURE + "{ n += 1.0; return vec3(n); }", uniforms={"n": "float"})
+    assert "cannot assign to uniform 'n'" in error.message

@@ -94,6 +94,7 @@ class Param:
     name: str | None
     type: Type
     qualifier: str  # "in", "out" or "inout"
+    const: bool = False
 
 
 @dataclass(eq=False)
@@ -520,7 +521,7 @@ class Compiler:
                 if len(plist.named_children) == 1 and name is None:
                     return []
                 raise self.error("parameters cannot be void", p)
-            params.append(Param(name, t, qualifier))
+            params.append(Param(name, t, qualifier, "const" in quals))
         return params
 
     def declare_function(self, node: Node, declarator: Node, defined: bool) -> None:
@@ -562,7 +563,8 @@ class Compiler:
             slot = self.new_slot()
             fn.param_slots.append(slot)
             if p.name is not None:
-                self.scopes[-1][p.name] = Var(p.name, p.type, slot, False, param_index=index)
+                readonly = "const parameter" if p.const else None
+                self.scopes[-1][p.name] = Var(p.name, p.type, slot, False, readonly=readonly, param_index=index)
         body = self.block(fn.body_node, new_scope=False)
         self.scopes.pop()
         fn.body = body

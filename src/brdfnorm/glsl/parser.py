@@ -8,6 +8,7 @@ length-preserving rewrites of the text before parsing, so every position stays t
   (``&&`` > ``^^`` > ``||``).
 * precision qualifiers (``highp``, ``mediump``, ``lowp`` and ``precision ...;`` statements) have no
   effect in desktop GLSL (§4.7), nor ``#pragma`` lines here: they are blanked out.
+* the parameter qualifiers ``const in`` are swapped to ``in const``, the order the grammar knows.
 
 Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree.
 """
@@ -33,6 +34,10 @@ _PRECISION = re.compile(
     rb"|^[ \t]*#[ \t]*pragma\b[^\n]*",  # pragmas (no effect here) confuse the grammar
     re.MULTILINE,
 )
+
+
+# The grammar accepts `in const float a` but not the equally valid `const in float a`: swap the two words.
+_CONST_IN = re.compile(rb"\bconst(\s+)in\b")
 
 
 def _blank(match: re.Match) -> bytes:
@@ -90,6 +95,7 @@ def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) ->
     raw = source.encode("utf-8", errors="replace")  # a lone surrogate becomes '?': a syntax error, located
     xor_offsets = frozenset(m.start() for m in re.finditer(rb"\^\^", raw))
     text = _PRECISION.sub(_blank, raw.replace(b"^^", b"||"))
+    text = _CONST_IN.sub(lambda m: b"in" + m.group(1) + b"const", text)
     src = Source(text, path, first_line, first_column, xor_offsets)
     tree = tree_sitter.Parser(LANGUAGE).parse(text)
     bad = _first_error(tree.root_node)
