@@ -440,11 +440,12 @@ def test_ternaries_logic_and_short_circuit_side_effects():
         if (q || (count++ > -1)) {}          // increments only where !q
         bool x = p ^^ q;                     // '^^' binds tighter than '||'
         bool y = false || p ^^ true;
+        if (q ^^ p || (count++ > -1)) {}     // ... and '||' after '^^' still short-circuits
         return vec3(float(count), x ? 1.0 : 0.0, (y ? L.z : -L.z) + (!p ? 10.0 : 0.0));
     }"""
     )
     p, q = L[:, 0] > 0, L[:, 1] > 0
-    count = p.astype(float) + (~q).astype(float)
+    count = p.astype(float) + (~q).astype(float) + (~(p ^ q)).astype(float)
     expected = vec3(count, (p ^ q).astype(float), np.where(~p, L[:, 2], -L[:, 2]) + np.where(~p, 10.0, 0.0))
     check(shader, expected)
 

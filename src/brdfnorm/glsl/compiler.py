@@ -1195,6 +1195,11 @@ class Compiler:
         for e, n in ((left, left_node), (right, right_node)):
             if e.type != BOOL:
                 raise self.error(f"operator '{op}' needs bools, not {e.type}", n)
+        return self.short_circuit(op, left, right)
+
+    @staticmethod
+    def short_circuit(op: str, left: Expr, right: Expr) -> Expr:
+        """``&&`` / ``||``: the right side runs only in the lanes where the left does not decide."""
         conj = op == "&&"
         if left.const is not None and right.const is not None:
             value = (
@@ -1258,7 +1263,7 @@ class Compiler:
         for e in exprs[1:]:
             if result.type != BOOL or e.type != BOOL:
                 raise self.error("operator '||' needs bools", node)
-            result = self.make(BOOL, lambda x, y: (np.logical_or(x[0], y[0]),), [result, e])
+            result = self.short_circuit("||", result, e)
         return result
 
     def x_conditional_expression(self, node: Node) -> Expr:
