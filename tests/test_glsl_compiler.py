@@ -797,6 +797,8 @@ def test_type_and_arity_errors_are_located(body, needle, match):
         ("#ifdef FOO\n#endif\n" + SIGNATURE + "{ return vec3(0); }", "#ifdef"),
         (SIGNATURE + "{ return vec3(dFdx(L.x)); }", "derivatives"),
         (SIGNATURE + "{ double d = 1.0; return vec3(d); }", "double"),
+        (SIGNATURE + "{ if (L.x < 0.0) discard; return L; }", "discard"),
+        (SIGNATURE + "{ return gl_FragCoord.xyz; }", "gl_FragCoord"),
     ],
 )
 def test_unsupported_features_are_named(source, feature):

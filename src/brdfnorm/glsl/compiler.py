@@ -1005,6 +1005,10 @@ class Compiler:
         if var is None:
             if name in self.functions or builtins.is_builtin(name) or parse_type_name(name):
                 raise self.error(f"'{name}' is a function or type, not a variable", node)
+            if name == "discard":
+                raise self.error("unsupported feature: discard (fragment shaders only)", node)
+            if name.startswith("gl_"):
+                raise self.error(f"unsupported feature: built-in shader variable '{name}'", node)
             raise self.error(f"unknown identifier '{name}'", node)
         if var.readonly == "uniform":
             self.uses.add(name)
