@@ -716,9 +716,6 @@ class Compiler:
             return self.switch(node)
         if kind in ("goto_statement", "labeled_statement"):
             raise self.error(f"unsupported feature: {kind.split('_')[0]} (not GLSL)", node)
-        word = self.text(node).split(None, 1)
-        if word and word[0].rstrip(";") == "discard":
-            raise self.error("unsupported feature: discard (fragment shaders only)", node)
         raise self.error(f"unsupported statement ({kind.replace('_', ' ')})", node)
 
     def local_declaration(self, node: Node) -> Callable[[Frame], None] | None:
