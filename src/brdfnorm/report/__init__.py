@@ -65,16 +65,16 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
             ("albedo curves E(θ_o)", sections.albedo_section),
             ("Blinn-Phong α(n) vs (n+8)/8π", sections.folklore_section),
         ]
-        fit = _optional("brdfnorm.fit")
+        fit = _optional("brdfnorm.fit") if config.extras else None
         if fit is not None:
             steps.append(("seed 003: fits of the Gaussian Blinn-Phong factor", sections.fit_section(fit.fit)))
-        else:
+        elif config.extras:
             notes.append("Seed 003's fits are left out: brdfnorm.fit is not installed.")
         steps.append(("polar plots of the lobes", sections.polar_section))
-        verify = _optional("brdfnorm.verify")
+        verify = _optional("brdfnorm.verify") if config.extras else None
         if verify is not None:
             steps.append(("verifying the seeds' claims", sections.verify_section(verify.verify)))
-        else:
+        elif config.extras:
             notes.append("The verify table is left out: brdfnorm.verify is not installed.")
         return config, steps, notes
     steps = []

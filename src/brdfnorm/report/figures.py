@@ -19,9 +19,10 @@ from matplotlib.ticker import MaxNLocator
 
 from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 
-#: Pixels per inch of the PNG files; pages show them at half that per CSS inch (72 CSS px), sharp on HiDPI screens.
+#: Pixels per inch of the PNG files; the page shows them at 96 CSS px per inch (1.5 image pixels per CSS
+#: pixel, sharp on HiDPI screens).
 DPI = 144
-CSS_PER_INCH = 72
+CSS_PER_INCH = 96
 STYLE = {"font.size": 9.0, "axes.titlesize": 10.0, "legend.fontsize": 8.0, "axes.grid": True,
          "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white"}
 CHANNEL_NAMES = ("R", "G", "B")
@@ -63,6 +64,7 @@ def channels(values: np.ndarray) -> list[tuple[str, np.ndarray]]:
 
 
 _LINESTYLES = ("-", "--", ":")
+_FIT_STYLES = ("-", "--", ":", "-.")
 
 
 def albedo_figure(curves: AlbedoCurves, name: str) -> Image:
@@ -129,10 +131,13 @@ def fit_figure(data: Seed003Fits, name: str) -> Image:
     def draw() -> Figure:
         figure = _new(10.0, 3.8)
         left, right = figure.subplots(1, 2)
-        left.plot(data.n, data.factor, color="k", linewidth=2.4, alpha=0.35, label="quadrature factor")
+        left.loglog(data.n, data.factor, color="k", linewidth=3.0, alpha=0.25, label="quadrature factor")
         for k, fit in enumerate(data.fits):
-            left.plot(data.n, fit.prediction, ("--", "-.", ":")[k % 3], color=f"C{k}", label=fit.label)
-            right.semilogy(data.n, np.abs(data.relative_error(fit)), color=f"C{k}", label=fit.label)
+            # The least-squares refit reproduces the seed's line: drawn dashed over it, so both stay visible.
+            style = dict(linestyle=_FIT_STYLES[k % 4], color=f"C{k}", linewidth=2.6 if k == 0 else 1.4,
+                         alpha=0.6 if k == 0 else 1.0, label=fit.label)
+            left.loglog(data.n, fit.prediction, **style)
+            right.loglog(data.n, np.abs(data.relative_error(fit)), **style)
         left.set_xlabel("exponent n")
         left.set_ylabel("factor 1 / E(L = N)")
         left.set_title("Gaussian Blinn-Phong (seed 003): factor and fits")

@@ -13,7 +13,7 @@ from html import escape
 from .figures import Image
 
 CSS = """
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0 auto; max-width: 1100px;
+body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0 auto; max-width: 1240px;
        padding: 1.5em 2em 4em; color: #1d1d1f; line-height: 1.45; }
 h1 { font-size: 1.7em; margin-bottom: 0.2em; }
 h2 { margin-top: 2.2em; border-bottom: 1px solid #ddd; padding-bottom: 0.2em; }
@@ -55,13 +55,17 @@ def number(value: float, digits: int = 12, css: str = "num") -> Cell:
 def relative(value: float, tolerance: float | None = None) -> Cell:
     """A relative difference in scientific notation, flagged when larger than ``tolerance``."""
     value = float(value)
+    if not math.isfinite(value):
+        return Cell("—", None, "num")
     css = "num" if tolerance is None else ("num good" if abs(value) <= tolerance else "num bad")
     return Cell(f"{value:+.2e}".replace("-", "−"), value, css)
 
 
-def percent(value: float, digits: int = 2) -> Cell:
+def percent(value: float, digits: int = 2, signed: bool = True) -> Cell:
     value = float(value)
-    return Cell(f"{100 * value:+.{digits}f} %".replace("-", "−"), value, "num")
+    if not math.isfinite(value):
+        return Cell("—", None, "num")
+    return Cell(f"{100 * value:{'+' if signed else ''}.{digits}f} %".replace("-", "−"), value, "num")
 
 
 def text(value: str, css: str = "") -> Cell:

@@ -172,8 +172,8 @@ def fit_section(fit: Callable) -> Callable[[Context], Section]:
         rows = []
         for f in data.fits:
             error = np.abs(data.relative_error(f))
-            rows.append([text(f.label), Cell(f.expression, css="num"), percent(error.max()),
-                         percent(error[steep].max()) if np.any(steep) else text("—")])
+            rows.append([text(f.label), Cell(f.expression, css="num"), percent(error.max(), signed=False),
+                         percent(error[steep].max(), signed=False) if np.any(steep) else text("—")])
         seed, best = data.fits[0], min(data.fits[1:], key=lambda f: np.abs(data.relative_error(f)).max())
         seed_error = np.abs(data.relative_error(seed))
         ctx.findings.append(

@@ -62,12 +62,14 @@ class StudyConfig:
     model_rtol: float = 1e-9
     model_search_rtol: float = 1e-7
     model_search_points: int = 12
+    #: Include seed 003's fits and the verify table (about 10 s; the quick configuration leaves them out).
+    extras: bool = True
 
     @classmethod
     def quick(cls) -> StudyConfig:
         return cls(table_n=(1, 8, 64, 512, 4096), curve_n=(1, 100), theta_count=12, alpha_count=21,
                    fit_count=48, fit_samples=12, polar_views=(0.0, 60.0), polar_points=61, sweep_count=4,
-                   curve_count=2)
+                   curve_count=2, extras=False)
 
     @property
     def theta(self) -> np.ndarray:
@@ -117,7 +119,8 @@ class AlbedoCurves:
     def normalized(self, key: str) -> np.ndarray:
         """E(θ)·factor at L = N; the grid starts at θ = 0, so the factor is 1/E(0) of the same integrals."""
         curves = self.albedo[key]
-        return curves / curves[:, :1, :]
+        with np.errstate(divide="ignore", invalid="ignore"):  # a lobe with zero albedo has no factor: NaN/∞
+            return curves / curves[:, :1, :]
 
 
 def albedo_curves(config: StudyConfig) -> AlbedoCurves:
@@ -212,7 +215,8 @@ def polar_panel(model: Model, title: str, views_deg, points: int, factor: np.nda
         # The original Phong lobe divides by N·L; its product with N·L is what the plot shows, so use the
         # model's own (cancelled) product rather than f·cos, which is 0/0 at the horizon.
         value = model.projected(*np.broadcast_arrays(L, V), model.params)
-    value = np.where(np.isfinite(value), value, np.nan) * np.asarray(factor, dtype=float)
+    with np.errstate(invalid="ignore"):  # 0·∞ where a lobe has zero albedo: NaN, not drawn
+        value = np.where(np.isfinite(value), value, np.nan) * np.asarray(factor, dtype=float)
     return PolarPanel(title, t, views, value)
 
 
