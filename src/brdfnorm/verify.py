@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 
 import mpmath as mp
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.special import gammaln, roots_legendre
 
 from . import closed_forms
@@ -595,30 +594,11 @@ def _gaussian_data() -> tuple[np.ndarray, np.ndarray]:
     return n, gaussian_factor(n)
 
 
-@dataclass(frozen=True)
-class _LeastSquares:
-    coefficients: np.ndarray
-    max_rel_error: float
-
-
 def _fit(x: np.ndarray, y: np.ndarray, form: str):
-    """Least-squares fit (absolute residuals) by brdfnorm.fit where it is installed, else by scipy directly.
+    """Least-squares fit on absolute residuals, as seed 003's author did (brdfnorm.fit; the hyperbola is
+    a + c·√((n − n0)² + b²), the commenter's scaled √(x² + 1) with its asymptote a line)."""
+    from .fit import fit
 
-    Forms: "linear" a + b·n; "hyperbola" a + b·√(n² + c²) (the commenter's scaled √(x²+1), asymptote a line).
-    """
-    try:
-        from .fit import fit
-    except ImportError:  # brdfnorm.fit is written in parallel (issue 4); scipy gives the same least squares
-        if form == "linear":
-            design = np.stack([np.ones_like(x), x], axis=1)
-            coefficients = np.linalg.lstsq(design, y, rcond=None)[0]
-            model = design @ coefficients
-        else:
-            start = np.array([*np.polynomial.polynomial.polyfit(x, y, 1), 1.0])
-            shape = lambda p: p[0] + p[1] * np.sqrt(x**2 + p[2] ** 2)  # noqa: E731
-            coefficients = least_squares(lambda p: shape(p) - y, start, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
-            model = shape(coefficients)
-        return _LeastSquares(coefficients, float(np.max(np.abs(model / y - 1.0))))
     return fit(x, y, form=form, metric="abs-lsq")
 
 
