@@ -289,7 +289,8 @@ def test_model_study_of_a_builtin_over_a_sweep(tmp_path):
         # columns: n, E, factor at N, closed-form factor, relative difference, θmax, φmax, factor at max, excess
         assert float(abs(row[2][1] / reference - 1)) < 1e-8
         assert float(abs(row[3][1] / reference - 1)) < 1e-14
-        assert row[5][1] == 0.0 and row[7][1] == pytest.approx(row[2][1], rel=1e-6)
+        assert row[5][1] == 0.0 and row[6][0] == "—" and row[8][0] == "at L = N"
+        assert row[7][1] == pytest.approx(row[2][1], rel=1e-6)
     assert [image["src"] for image in page.images] == ["model1-factors.png", "model1-albedo.png",
                                                        "model1-polar.png"]
 

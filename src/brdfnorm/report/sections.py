@@ -86,7 +86,8 @@ def factor_section(ctx: Context) -> Section:
                   if t > 0]
     if off_normal:
         where = ", ".join(f"{lobe} at n = {n:g}" for lobe, n in off_normal)
-        verdict = f"The albedo peaks away from normal incidence for {where}: the L = N factor is not conservative there."
+        verdict = (f"The albedo peaks away from normal incidence for {where}: the L = N factor is not "
+                   "conservative there.")
     else:
         verdict = ("For every lobe and every n in the table, the largest albedo over θ ∈ [0°, 89.9°] is at normal "
                    "incidence: the seeds' assumption holds, and the L = N factor is the energy-conserving one.")
@@ -274,8 +275,11 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
                 closed = 1.0 / data.closed_albedo[s]
                 row += [_channel_cell(closed), relative(float(np.max(np.abs(normal_factor[s] / closed - 1.0))),
                                                         AGREEMENT * ctx.config.model_rtol)]
-            row += [number(np.degrees(data.max_theta[s]), 4), number(np.degrees(data.max_phi[s]), 4),
-                    _channel_cell(max_factor[s]), percent(excess[s], 3)]
+            if data.max_theta[s] > 0:
+                row += [number(np.degrees(data.max_theta[s]), 4), number(np.degrees(data.max_phi[s]), 4),
+                        _channel_cell(max_factor[s]), percent(excess[s], 3)]
+            else:  # the maximum is the L = N integral itself (φ is meaningless at the pole)
+                row += [number(0.0), text("—"), _channel_cell(max_factor[s]), text("at L = N")]
             rows.append(row)
         off = data.max_theta > 0
         what = f"{escape(label)}" + (f" over {escape(name)}" if data.parameter else "")
@@ -287,6 +291,10 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
                 f"receives (at θ = {np.degrees(data.max_theta[worst]):.3g}°).")
         else:
             ctx.findings.append(f"{what}: the albedo is largest at L = N for every value studied.")
+        finite = normal_factor[np.isfinite(normal_factor)]
+        if data.parameter and finite.size:
+            ctx.findings.append(f"{what}: the factor at L = N ranges from {finite.min():.4g} to {finite.max():.4g} "
+                                "(1 would mean the lobe is already normalized).")
         sweep_text = (f"the sweep over <code>{escape(name)}</code> ({data.values.size} values from "
                       f"{data.values.min():.4g} to {data.values.max():.4g})" if data.parameter else
                       "its bound parameters (no float parameter to sweep)")
