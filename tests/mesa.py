@@ -18,6 +18,7 @@ import numpy as np
 from brdfnorm.brdffile import BrdfFile
 
 LOCAL_SIZE = 64
+UNWRITTEN = np.float32(-12345.0)  # the shader writes w = 0
 
 _HEADER = """#version 430
 layout(local_size_x = {local_size}) in;
@@ -104,16 +105,20 @@ class MesaBrdf:
                 self.program[name].value = value
         self.program["brdfnorm_count"].value = count
         source = ctx.buffer(pairs.tobytes())
-        target = ctx.buffer(reserve=count * 16)
+        # Pre-fill with a sentinel: llvmpipe writes nothing for some shaders (a division by a constant 0.0),
+        # and an unwritten zero must not pass for a result.
+        target = ctx.buffer(np.full((count, 4), UNWRITTEN, dtype=np.float32).tobytes())
         try:
             source.bind_to_storage_buffer(0)
             target.bind_to_storage_buffer(1)
             self.program.run(group_x=(count + LOCAL_SIZE - 1) // LOCAL_SIZE)
-            values = np.frombuffer(target.read(), dtype=np.float32).reshape(count, 4)[:, :3]
+            written = np.frombuffer(target.read(), dtype=np.float32).reshape(count, 4)
         finally:
             source.release()
             target.release()
-        return values.astype(np.float64)
+        if np.any(written[:, 3] == UNWRITTEN):
+            raise RuntimeError("Mesa wrote no result for some direction pairs (undefined shader behaviour)")
+        return written[:, :3].astype(np.float64)
 
 
 def uniform_values(parameters, values: Mapping[str, object]) -> dict[str, object]:

@@ -401,7 +401,8 @@ class BrdfModel(Model):
             shape = np.broadcast_shapes(shape, value.shape[:-1] if p.kind == "color" else value.shape)
         result = self.program.brdf(L, V, N, X, Y, uniforms)
         # A shader whose result does not depend on the directions (e.g. a constant) comes back smaller.
-        return np.ascontiguousarray(np.broadcast_to(result, shape + (3,)), dtype=float)
+        # A writable array the caller owns (broadcast_to alone would give a read-only view).
+        return np.require(np.broadcast_to(result, shape + (3,)), dtype=float, requirements=["C", "W"])
 
 
 def load_brdf(path: str | Path, **params: object) -> BrdfModel:
