@@ -287,8 +287,9 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
             worst = int(np.argmax(excess))
             ctx.findings.append(
                 f"{what}: the albedo peaks away from L = N for {np.count_nonzero(off)} of {off.size} values; "
-                f"the L = N factor then lets the lobe reflect up to {100 * excess[worst]:.3g} % more than it "
-                f"receives (at θ = {np.degrees(data.max_theta[worst]):.3g}°).")
+                f"normalized at L = N, the lobe then reflects up to {1 + excess[worst]:.4g} times the energy it "
+                f"receives (at θ = {np.degrees(data.max_theta[worst]):.3g}°, {name} = {data.values[worst]:.4g}); "
+                "the factor at the maximum is the energy-conserving one.")
         else:
             ctx.findings.append(f"{what}: the albedo is largest at L = N for every value studied.")
         finite = normal_factor[np.isfinite(normal_factor)]

@@ -9,7 +9,8 @@ Default study (the seed lobes phong, modified-phong, blinn-phong, blinn-phong-ga
   energy a normalized lobe loses towards grazing views).
 * :func:`folklore` — Blinn-Phong's α(n) = 1/E(L = N) beside the folklore (n+8)/8π (seed 000 refutes it).
 * :func:`seed003_fits` — seed 003's linear fit 0.17287429 + 0.01388682·n of the Gaussian Blinn-Phong factor over
-  n ∈ [1, 512], against a least-squares refit and :func:`brdfnorm.fit.fit`'s automatic choice.
+  n ∈ [1, 512], against refits by :func:`brdfnorm.fit.fit`: the seed's own least-squares line, the commenter's
+  hyperbola and the automatic choice of form.
 * :func:`polar_lobes` — f(L, V)(N·L)·factor over L in the plane of N and V at a few view angles.
 
 For any other model (a built-in name or a ``.brdf`` file), :func:`model_study` does the same over one float
