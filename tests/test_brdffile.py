@@ -123,7 +123,7 @@ def test_model_facts():
     model = load_brdf(EXAMPLES / "cook_torrance.brdf")
     assert isinstance(model, BrdfModel) and isinstance(model, bn.Model)
     assert model.name == "cook_torrance"
-    assert model.channels == 3 and model.isotropic is False
+    assert model.channels == 3 and model.isotropic is True  # Cook-Torrance ignores X and Y
     assert [p.name for p in model.parameters] == ["m", "f0", "include_F", "include_G"]
     assert model.params == {"m": 0.3, "f0": 0.04, "include_F": True, "include_G": True}
     assert model.source_path == str(EXAMPLES / "cook_torrance.brdf")
@@ -347,3 +347,14 @@ def test_info_with_warnings_for_out_of_range_values():
     result = runner.invoke(app, ["info", str(EXAMPLES / "blinn_phong.brdf"), "-p", "n=1e5"])
     assert result.exit_code == 0, result.output
     assert "warning: parameter n: value 100000.0 outside [1, 10000]" in result.stderr
+
+
+def test_isotropy_is_detected_from_the_shader_at_the_bound_parameters():
+    ward = bn.load(str(EXAMPLES / "ward_anisotropic.brdf"))
+    assert not ward.isotropic
+    assert ward.with_params(alpha_x=0.3, alpha_y=0.3).isotropic
+    assert bn.load(str(EXAMPLES / "ggx.brdf")).isotropic
+    # An isotropic file's albedo really is independent of φ (so the max search may skip φ).
+    ggx = bn.load(str(EXAMPLES / "ggx.brdf"))
+    values = bn.albedo(ggx, np.radians(50.0), np.radians([0.0, 77.0, 200.0]), rtol=1e-10).value[:, 0]
+    np.testing.assert_allclose(values, values[0], rtol=1e-9)
