@@ -14,12 +14,8 @@ app = typer.Typer(
     add_completion=False,
 )
 
-# Command modules register themselves on `app` when imported (one line each).
-from . import core  # noqa: E402,F401
-from . import report  # noqa: E402,F401
-from . import info  # noqa: E402,F401
-from . import verify  # noqa: E402,F401
-from . import fit  # noqa: E402,F401
+# Command modules register themselves on `app` when imported.
+from . import core, fit, info, report, verify  # noqa: E402,F401
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -6,7 +6,6 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..report import build_report
 from . import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
 
@@ -26,6 +25,8 @@ def report(
 ) -> None:
     """Write an HTML report (index.html + PNG figures) studying the normalization of the seed lobes or models."""
     with guarded(debug):
+        from ..report import build_report  # matplotlib loads only when a report is asked for
+
         loaded = [(name, load_model(name, param)) for name in models or []]
         if param and not loaded:
             typer.echo("warning: -p/--param applies to given models only; ignored for the default study",
