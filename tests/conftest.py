@@ -39,6 +39,19 @@ def phong_like_reference(n: float, theta: float, *, original: bool) -> float:
     return total
 
 
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    """Run the brdfnorm command line in-process: (exit code, stdout, stderr)."""
+    from brdfnorm.cli import main
+
+    try:
+        main(list(argv))
+        code = 0
+    except SystemExit as done:
+        code = done.code or 0
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261121)

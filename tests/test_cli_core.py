@@ -6,19 +6,9 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 
 from brdfnorm import closed_forms
-from brdfnorm.cli import main
-
-
-def run(capsys, *argv):
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as done:
-        code = done.code or 0
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_albedo_json_matches_the_closed_form(capsys):

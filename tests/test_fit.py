@@ -7,26 +7,15 @@ import json
 
 import numpy as np
 import pytest
+from conftest import run_cli as run
 from scipy import integrate
 from scipy.optimize import linprog
 
 import brdfnorm
-from brdfnorm.cli import main
 from brdfnorm.closed_forms import blinn_phong_albedo_normal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.fit import METRICS, fit, parse_form
 from brdfnorm.normalize import normalize
-
-
-def run(capsys, *argv):
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as done:
-        code = done.code or 0
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 # -- exact recovery ------------------------------------------------------------------------------------------
 

@@ -14,6 +14,7 @@ import sys
 import tempfile
 import warnings
 from collections.abc import Iterator
+from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,21 @@ from ..models.base import Model
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
                             help="Set a model parameter (repeatable), e.g. -p n=512 or -p baseColor=0.5,0.5,0.5.")
+
+
+class At(str, Enum):
+    """Normalization conventions (brdfnorm.normalize), as ``--at`` choices."""
+
+    normal = "normal"
+    max = "max"
+    view = "view"
+
+
+class Over(str, Enum):
+    """Which direction the albedo integrates over, as ``--over`` choices."""
+
+    light = "light"
+    view = "view"
 
 
 #: API argument names as the command line spells them, for error messages.

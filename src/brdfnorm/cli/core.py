@@ -20,6 +20,8 @@ from . import app
 from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
+    At,
+    Over,
     channel_value,
     console,
     guarded,
@@ -32,17 +34,6 @@ from .common import (
     to_json,
     write_output_atomically,
 )
-
-
-class Over(str, Enum):
-    light = "light"
-    view = "view"
-
-
-class At(str, Enum):
-    normal = "normal"
-    max = "max"
-    view = "view"
 
 
 class NonFinite(str, Enum):

@@ -23,6 +23,7 @@ from . import app
 from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
+    At,
     console,
     guarded,
     load_model,
@@ -39,12 +40,6 @@ class Metric(str, Enum):
     abs_lsq = "abs-lsq"
     rel_lsq = "rel-lsq"
     minimax_rel = "minimax-rel"
-
-
-class At(str, Enum):
-    normal = "normal"
-    max = "max"
-    view = "view"
 
 
 assert tuple(m.value for m in Metric) == METRICS
