@@ -111,15 +111,31 @@ class _Panels:
     err_b: np.ndarray | None = None  # (R, C)
     err_u: np.ndarray | None = None  # (R, C)
     bad: np.ndarray | None = None  # (R,) solid angle where the integrand was non-finite
+    inherited: np.ndarray | None = None  # (R, C) share of |parent − children| from the split that made it
+
+    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "inherited")
 
     def take(self, index) -> _Panels:
-        pick = [None if a is None else a[index] for a in (self.value, self.err_b, self.err_u, self.bad)]
-        return _Panels(self.case[index], self.b0[index], self.b1[index], self.u0[index], self.u1[index], *pick)
+        return _Panels(*(None if (a := getattr(self, f)) is None else a[index] for f in self.FIELDS))
 
     @staticmethod
     def join(a: _Panels, b: _Panels) -> _Panels:
-        fields = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad")
-        return _Panels(*(np.concatenate([getattr(a, f), getattr(b, f)]) for f in fields))
+        return _Panels(*(np.concatenate([getattr(a, f), getattr(b, f)]) for f in _Panels.FIELDS))
+
+    def error(self) -> np.ndarray:
+        return self.err_b + self.err_u + self.inherited
+
+    def halves(self, along_beta: np.ndarray) -> _Panels:
+        """The two halves of every panel (first halves, then second halves), split along β or u."""
+        b_mid = (self.b0 + self.b1) / 2
+        u_mid = (self.u0 + self.u1) / 2
+        return _Panels(
+            np.concatenate([self.case, self.case]),
+            np.concatenate([self.b0, np.where(along_beta, b_mid, self.b0)]),
+            np.concatenate([np.where(along_beta, b_mid, self.b1), self.b1]),
+            np.concatenate([self.u0, np.where(along_beta, self.u0, u_mid)]),
+            np.concatenate([np.where(along_beta, self.u1, u_mid), self.u1]),
+        )
 
 
 def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -155,17 +171,22 @@ def _map_nodes(panels: _Panels, frame, widths, supports):
     s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
     alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[k][:, None])  # (R, 15) over β
     w = widths[k][:, None]
+    # v = 1 − (1 − u)² clusters nodes at the horizon end (dv/du → 0 there), where boundary layers live
+    # (Smith G, Fresnel); then the Cauchy map α = w tan(v·A), A = atan(α_max/w), for the lobe.
+    one_minus_u = 1.0 - u
+    v = 1.0 - one_minus_u * one_minus_u
     A = np.arctan(alpha_max / w)[:, :, None]  # (R, 15β, 1)
-    t = u[:, None, :] * A  # (R, 15β, 15u), becomes tan(uA)
+    t = v[:, None, :] * A  # (R, 15β, 15u), becomes tan(vA)
     np.tan(t, out=t)
     alpha = t * w[:, :, None]
     sin_a = np.sin(alpha)
     cos_a = np.cos(alpha, out=alpha)
-    # dα/du = wA(1 + t²); the Jacobian also carries the panel's half-widths.
+    # dα/du = wA(1 + t²)·2(1 − u); the Jacobian also carries the panel's half-widths.
     jacobian = t
     np.multiply(t, t, out=jacobian)
     jacobian += 1.0
     jacobian *= A * (w * (beta_half * u_half)[:, None])[:, :, None]
+    jacobian *= 2.0 * one_minus_u[:, None, :]
     jacobian *= sin_a
     omega = np.empty(sin_a.shape + (3,))
     for i in range(3):
@@ -240,15 +261,28 @@ def integrate_hemisphere(
     bad_total = np.zeros(K)
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
+    confirmed = np.zeros(K, dtype=bool)
     nodes_per_panel = NODES.size**2
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
+    parent_value = None  # values of the panels whose halves ``fresh`` holds
 
     while fresh.case.size:
         _evaluate(fresh, integrand, frame, widths, supports, nonfinite, max_nodes_per_call)
         np.add.at(evaluations, fresh.case, nodes_per_panel)
+        if parent_value is None:
+            fresh.inherited = np.zeros_like(fresh.value)
+        else:
+            # What one more level of refinement changed: a check that both embedded rules can pass together
+            # when a feature falls between all their nodes.
+            half = parent_value.shape[0]
+            first, second = fresh.value[:half], fresh.value[half:]
+            # Differences at rounding level are noise, already covered by each panel's own floor.
+            noise = 8.0 * _EPS * (np.abs(parent_value) + np.abs(first) + np.abs(second))
+            change = np.maximum(np.abs(parent_value - first - second) - noise, 0.0) / 2
+            fresh.inherited = np.concatenate([change, change])
         pool = fresh if pool is None else _Panels.join(pool, fresh)
-        panel_error = pool.err_b + pool.err_u
+        panel_error = pool.error()
         if value.shape[1] != pool.value.shape[1]:
             value = np.zeros((K, pool.value.shape[1]))
             error = np.zeros_like(value)
@@ -262,7 +296,12 @@ def integrate_hemisphere(
         ratio = _normalized(total_error, tolerance)
         present = np.zeros(K, dtype=bool)
         present[pool.case] = True
-        case_ok = present & np.all(ratio <= 1.0, axis=1)
+        within = present & np.all(ratio <= 1.0, axis=1)
+        # A case within tolerance for the first time is confirmed by halving all of its panels once: its
+        # estimate then also carries the change that the extra level made (``inherited``).
+        confirming = within & ~confirmed
+        case_ok = within & confirmed
+        confirmed |= confirming
         out_of_budget = evaluations + 2 * nodes_per_panel > max_evaluations
         converged |= case_ok
         active = present & ~(case_ok | out_of_budget)
@@ -277,6 +316,7 @@ def integrate_hemisphere(
         before_case = np.where(case_start > 0, cumulative[np.maximum(case_start - 1, 0)], 0.0)
         split = np.zeros(pool.case.size, dtype=bool)
         split[order] = (cumulative - before_case > 0.5) & active[sorted_case]
+        split |= confirming[pool.case] & active[pool.case]
         # Panels too thin to split further stay as they are (their error stays in the estimate).
         split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
 
@@ -286,20 +326,12 @@ def integrate_hemisphere(
         np.add.at(bad_total, pool.case[finished], pool.bad[finished])
         parents = pool.take(split)
         pool = pool.take(~split & ~finished)
-        along_beta = parents.err_b.max(axis=1) >= parents.err_u.max(axis=1)
-        b_mid = (parents.b0 + parents.b1) / 2
-        u_mid = (parents.u0 + parents.u1) / 2
-        fresh = _Panels(
-            np.concatenate([parents.case, parents.case]),
-            np.concatenate([parents.b0, np.where(along_beta, b_mid, parents.b0)]),
-            np.concatenate([np.where(along_beta, b_mid, parents.b1), parents.b1]),
-            np.concatenate([parents.u0, np.where(along_beta, parents.u0, u_mid)]),
-            np.concatenate([np.where(along_beta, parents.u1, u_mid), parents.u1]),
-        )
+        fresh = parents.halves(parents.err_b.max(axis=1) >= parents.err_u.max(axis=1))
+        parent_value = parents.value
         if not fresh.case.size and pool.case.size:
             # Active cases whose every panel is too thin to split: finish them unconverged.
             np.add.at(value, pool.case, pool.value)
-            np.add.at(error, pool.case, pool.err_b + pool.err_u)
+            np.add.at(error, pool.case, pool.error())
             np.add.at(bad_total, pool.case, pool.bad)
 
     if value.shape[1] == 0:
