@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import mpmath
 import numpy as np
 import pytest
@@ -10,6 +12,8 @@ from conftest import phong_like_reference
 import brdfnorm as bn
 from brdfnorm import closed_forms
 from brdfnorm.integrate import fibonacci_hemisphere, integrate_hemisphere, lobe_frame
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 EXPONENTS = [0.0, 1.0, 3.5, 100.0, 512.0, 1e4]
 
@@ -178,3 +182,46 @@ def test_lobe_is_estimated_when_the_model_gives_no_hint():
     result = bn.albedo(HintlessModifiedPhong(), theta, rtol=1e-10)
     reference = phong_like_reference(2000.0, theta, original=False)
     assert abs(result.value[0] / reference - 1) < 1e-9
+
+
+# scipy.integrate.nquad in spherical coordinates about N (φ breakpoint at the mirror azimuth, θ breakpoints at
+# the mirror angle), epsrel 1e-12: the GGX example at roughness 0.05, θ_o = 20°.
+GGX_20_DEGREES = 0.04000054102038473
+
+
+@pytest.mark.parametrize("rtol", [1e-5, 1e-7, 1e-9])
+def test_error_estimate_covers_the_smith_horizon_layer(rtol):
+    # Smith G1 rises within α = 0.0025 of the horizon: a layer that must not fall between all the nodes.
+    ggx = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=0.05)
+    result = bn.albedo(ggx, np.radians(20.0), rtol=rtol)
+    assert result.error[0] >= abs(result.value[0] - GGX_20_DEGREES)
+
+
+@pytest.mark.slow
+def test_ggx_reference_by_nquad():
+    from scipy import integrate
+
+    ggx = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=0.05)
+    theta_o = np.radians(20.0)
+    V = np.array([np.sin(theta_o), 0.0, np.cos(theta_o)])
+
+    def g(phi, theta):
+        L = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+        return ggx.eval(L, V)[0] * L[2] * np.sin(theta)
+
+    value, _ = integrate.nquad(g, [[0, 2 * np.pi], [0, np.pi / 2]],
+                               opts=[{"epsabs": 0, "epsrel": 1e-12, "points": [np.pi], "limit": 400},
+                                     {"epsabs": 0, "epsrel": 1e-12, "points": [theta_o - 0.01, theta_o, theta_o + 0.01],
+                                      "limit": 400}])
+    assert abs(value / GGX_20_DEGREES - 1) < 1e-12
+
+
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-9])
+@pytest.mark.parametrize("n", [512.0, 1e4])
+def test_error_estimate_covers_the_grazing_sliver(n, rtol):
+    # At θ_o = 89.9° the Blinn-Phong lobe is a sliver 2c/(s√n) wide sideways; seed 002's series is exact.
+    model = bn.load("blinn-phong", n=n)
+    exact = bn.albedo(model, np.radians(89.9), method="series", rtol=1e-13).value[0]
+    result = bn.albedo(model, np.radians(89.9), method="quadrature", rtol=rtol)
+    assert result.error[0] >= abs(result.value[0] - exact)
+    assert abs(result.value[0] - exact) <= rtol * exact
