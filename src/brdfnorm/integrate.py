@@ -69,6 +69,9 @@ _WG = np.array([0.129484966168869693270611432679082, 0.2797053914892766679014677
 
 NODES = np.concatenate([-_XGK[:-1], _XGK[::-1]])  # 15 nodes in [-1, 1], ascending
 KRONROD = np.concatenate([_WGK[:-1], _WGK[::-1]])
+GAUSS_NODES = _XGK[1::2]
+GAUSS_NODES = np.concatenate([-GAUSS_NODES[:-1], GAUSS_NODES[::-1]])  # the 7 Gauss nodes, ascending
+GAUSS_WEIGHTS = np.concatenate([_WG[:-1], _WG[::-1]])
 GAUSS = np.zeros(15)
 GAUSS[1:15:2] = np.concatenate([_WG[:-1], _WG[::-1]])
 _EPS = np.finfo(float).eps
@@ -154,7 +157,7 @@ def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return P, T, B
 
 
-def _map_nodes(panels: _Panels, frame, widths, supports):
+def _map_nodes(panels: _Panels, frame, widths, supports, nodes: np.ndarray = NODES):
     """Directions (R, 15, 15, 3) and Jacobians sin α dα/du (R, 15, 15) at every node of every panel.
 
     This is the integrator's hot path: the transcendental functions run on (R, 15, 15) arrays once each, and
@@ -164,8 +167,8 @@ def _map_nodes(panels: _Panels, frame, widths, supports):
     k = panels.case
     beta_half = (panels.b1 - panels.b0) / 2
     u_half = (panels.u1 - panels.u0) / 2
-    beta = ((panels.b0 + panels.b1) / 2)[:, None] + beta_half[:, None] * NODES  # (R, 15)
-    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * NODES  # (R, 15)
+    beta = ((panels.b0 + panels.b1) / 2)[:, None] + beta_half[:, None] * nodes  # (R, 15)
+    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * nodes  # (R, 15)
     cos_b, sin_b = np.cos(beta), np.sin(beta)
     pz = P[k, 2][:, None]
     s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
@@ -297,11 +300,23 @@ def integrate_hemisphere(
         present = np.zeros(K, dtype=bool)
         present[pool.case] = True
         within = present & np.all(ratio <= 1.0, axis=1)
-        # A case within tolerance for the first time is confirmed by halving all of its panels once: its
-        # estimate then also carries the change that the extra level made (``inherited``).
+        # A case within tolerance for the first time is confirmed: every panel is recomputed as two halves
+        # by the G7⊗G7 rule (new nodes, a quarter of the cost of K15 halves), and the difference joins its
+        # error — a check that the embedded rules cannot pass together when a feature falls between all
+        # their nodes.
         confirming = within & ~confirmed
-        case_ok = within & confirmed
+        if confirming.any():
+            checked = confirming[pool.case]
+            change = _check_by_halves(pool.take(checked), integrand, frame, widths, supports, max_nodes_per_call)
+            np.add.at(evaluations, pool.case[checked], 2 * GAUSS_NODES.size**2)
+            pool.inherited[checked] = np.maximum(pool.inherited[checked], change)
+            panel_error = pool.error()
+            total_error = np.zeros_like(value)
+            np.add.at(total_error, pool.case, panel_error)
+            ratio = _normalized(total_error, tolerance)
+            within = present & np.all(ratio <= 1.0, axis=1)
         confirmed |= confirming
+        case_ok = within & confirmed
         out_of_budget = evaluations + 2 * nodes_per_panel > max_evaluations
         converged |= case_ok
         active = present & ~(case_ok | out_of_budget)
@@ -316,7 +331,6 @@ def integrate_hemisphere(
         before_case = np.where(case_start > 0, cumulative[np.maximum(case_start - 1, 0)], 0.0)
         split = np.zeros(pool.case.size, dtype=bool)
         split[order] = (cumulative - before_case > 0.5) & active[sorted_case]
-        split |= confirming[pool.case] & active[pool.case]
         # Panels too thin to split further stay as they are (their error stays in the estimate).
         split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
 
@@ -338,6 +352,25 @@ def integrate_hemisphere(
         value = np.zeros((K, 1))
         error = np.zeros((K, 1))
     return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi))
+
+
+def _check_by_halves(panels: _Panels, integrand, frame, widths, supports, max_nodes_per_call) -> np.ndarray:
+    """|K15⊗K15 of each panel − the sum of G7⊗G7 over its two halves (split along its worse direction)|."""
+    halves = panels.halves(panels.err_b.max(axis=1) >= panels.err_u.max(axis=1))
+    chunk = max(1, max_nodes_per_call // GAUSS_NODES.size**2)
+    sums = []
+    for start in range(0, halves.case.size, chunk):
+        part = halves.take(slice(start, start + chunk))
+        omega, jacobian = _map_nodes(part, frame, widths, supports, GAUSS_NODES)
+        case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
+        with np.errstate(all="ignore"):
+            values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
+        values = np.where(np.isfinite(values), values, 0.0).reshape(jacobian.shape + (-1,))
+        sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, GAUSS_WEIGHTS, GAUSS_WEIGHTS))
+    total = np.concatenate(sums)
+    half = panels.case.size
+    noise = 8.0 * _EPS * (np.abs(panels.value) + np.abs(total[:half]) + np.abs(total[half:]))
+    return np.maximum(np.abs(panels.value - total[:half] - total[half:]) - noise, 0.0)
 
 
 def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
