@@ -21,16 +21,22 @@ and the domain a rectangle, after which adaptive Gauss-Kronrod cubature converge
    α_h(β) = atan2(P_z, −s cos β) ∈ (0, π). Integrating α over [0, α_max(β)] with
    α_max = min(α_h, support) puts the horizon (and a declared support edge, e.g. R·V = 0 for Phong) on the
    boundary of the domain instead of through its interior, so no kink is ever straddled.
-3. **Width-adapted radial map.** α = w tan(u·A(β)), A = atan(α_max/w), u ∈ [0, 1] — a Cauchy-quantile map
-   that spends about 80 % of the u range on the lobe core |α| ≲ 3w whatever the width w (the model's hint),
-   so the same few panels resolve n = 1 and n = 1e4 and heavy tails (GGX) as well as Gaussian ones.
+3. **Width-adapted radial map.** α = w tan(v·A(β)), A = atan(α_max/w) — a Cauchy-quantile map that spends
+   most of the range on the lobe core |α| ≲ 3w whatever the width w (the model's hint), so the same few panels
+   resolve n = 1 and n = 1e4 and heavy tails (GGX) as well as Gaussian ones — composed with
+   v = 1 − (1 − u)², u ∈ [0, 1], which grades the nodes towards the horizon, where the map alone would
+   leave boundary layers (Smith G within α of the horizon, Fresnel) between all nodes.
 
 On the rectangle (β, u) ∈ [0, 2π] × [0, 1] a tensor-product Gauss-Kronrod rule (QUADPACK's G7/K15 pair,
 225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded lower-order estimates (G7 in β or in u);
 their differences are the panel's error estimate in each direction. This is the plain |K − G| estimate of
 the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the error of the reported K15 ⊗ K15
 value with a wide margin, which is what "honest" means here (the tests check estimate ≥ true error on random
-cases). Panels are bisected along their worse direction, largest errors first, until the summed estimate is
+cases). Both embedded rules can still agree on a feature that lies between all their nodes (the sliver a
+Blinn-Phong lobe becomes at grazing views, 2 cos θ_o/√n wide sideways). So when a case first meets its
+tolerance, each of its panels is recomputed as two halves with the G7 ⊗ G7 rule — new nodes, a quarter of
+the cost of K15 halves — and the difference joins the panel's error before the case may stop. Panels are
+bisected along their worse direction, largest errors first, until the summed estimate is
 below max(atol, rtol·|E|) for every case and channel, or the evaluation budget runs out (then
 ``converged`` is False and the estimate still says how far off the value may be).
 
