@@ -48,6 +48,21 @@ def phong_like_reference(n: float, theta: float, *, original: bool) -> float:
     return total
 
 
+def nquad_albedo(model, theta_o: float, theta_points, *, epsabs: float = 0.0, limit: int = 400) -> float:
+    """E(θ_o) (view in the xz-plane) by scipy nquad in spherical coordinates about N — not lobe-aligned —
+    with breakpoints at the mirror azimuth (φ = π) and at ``theta_points``, epsrel 1e-12."""
+    V = np.array([np.sin(theta_o), 0.0, np.cos(theta_o)])
+
+    def g(phi, theta):
+        L = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+        return model.eval(L, V)[0] * L[2] * np.sin(theta)
+
+    options = {"epsabs": epsabs, "epsrel": 1e-12, "limit": limit}
+    value, _ = integrate.nquad(g, [[0, 2 * np.pi], [0, np.pi / 2]],
+                               opts=[{**options, "points": [np.pi]}, {**options, "points": list(theta_points)}])
+    return value
+
+
 def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
     """Run the brdfnorm command line in-process: (exit code, stdout, stderr)."""
     from brdfnorm.cli import main

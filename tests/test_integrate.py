@@ -7,7 +7,7 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from conftest import phong_like_reference
+from conftest import nquad_albedo, phong_like_reference
 
 import brdfnorm as bn
 from brdfnorm import closed_forms
@@ -86,20 +86,9 @@ def test_seed_002_grazing_case_where_dblquad_fails():
 
 
 def test_blinn_phong_gaussian_against_a_second_parametrization():
-    # Spherical coordinates about N (not lobe-aligned), scipy nquad with the peak as a breakpoint.
-    from scipy import integrate
-
     model = bn.load("blinn-phong-gaussian", n=10.0)
     theta_o = np.radians(40.0)
-    V = np.array([np.sin(theta_o), 0.0, np.cos(theta_o)])
-
-    def g(phi, theta):
-        L = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
-        return model.eval(L, V)[0] * L[2] * np.sin(theta)
-
-    value, _ = integrate.nquad(g, [[0, 2 * np.pi], [0, np.pi / 2]],
-                               opts=[{"epsabs": 1e-13, "epsrel": 1e-12, "points": [np.pi], "limit": 200},
-                                     {"epsabs": 1e-13, "epsrel": 1e-12, "points": [theta_o], "limit": 200}])
+    value = nquad_albedo(model, theta_o, [theta_o], epsabs=1e-13, limit=200)
     result = bn.albedo(model, theta_o, method="quadrature", rtol=1e-12)
     assert abs(result.value[0] / value - 1) <= 1e-9
 
@@ -199,20 +188,9 @@ def test_error_estimate_covers_the_smith_horizon_layer(rtol):
 
 @pytest.mark.slow
 def test_ggx_reference_by_nquad():
-    from scipy import integrate
-
     ggx = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=0.05)
     theta_o = np.radians(20.0)
-    V = np.array([np.sin(theta_o), 0.0, np.cos(theta_o)])
-
-    def g(phi, theta):
-        L = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
-        return ggx.eval(L, V)[0] * L[2] * np.sin(theta)
-
-    value, _ = integrate.nquad(g, [[0, 2 * np.pi], [0, np.pi / 2]],
-                               opts=[{"epsabs": 0, "epsrel": 1e-12, "points": [np.pi], "limit": 400},
-                                     {"epsabs": 0, "epsrel": 1e-12, "points": [theta_o - 0.01, theta_o, theta_o + 0.01],
-                                      "limit": 400}])
+    value = nquad_albedo(ggx, theta_o, [theta_o - 0.01, theta_o, theta_o + 0.01])
     assert abs(value / GGX_20_DEGREES - 1) < 1e-12
 
 
