@@ -285,10 +285,7 @@ def integrate_hemisphere(
             # What one more level of refinement changed: a check that both embedded rules can pass together
             # when a feature falls between all their nodes.
             half = parent_value.shape[0]
-            first, second = fresh.value[:half], fresh.value[half:]
-            # Differences at rounding level are noise, already covered by each panel's own floor.
-            noise = 8.0 * _EPS * (np.abs(parent_value) + np.abs(first) + np.abs(second))
-            change = np.maximum(np.abs(parent_value - first - second) - noise, 0.0) / 2
+            change = _refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
             fresh.inherited = np.concatenate([change, change])
         pool = fresh if pool is None else _Panels.join(pool, fresh)
         panel_error = pool.error()
@@ -360,23 +357,36 @@ def integrate_hemisphere(
     return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi))
 
 
+def _refinement_change(whole: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """|whole − (first + second)| for a panel and its two halves, less rounding-level noise (which each
+    panel's own floor already covers)."""
+    noise = 8.0 * _EPS * (np.abs(whole) + np.abs(first) + np.abs(second))
+    return np.maximum(np.abs(whole - first - second) - noise, 0.0)
+
+
+def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int):
+    """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, n, C))."""
+    chunk = max(1, max_nodes_per_call // nodes.size**2)
+    for start in range(0, panels.case.size, chunk):
+        part = panels.take(slice(start, start + chunk))
+        omega, jacobian = _map_nodes(part, frame, widths, supports, nodes)
+        case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
+        values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
+        yield part, omega, jacobian, values.reshape(jacobian.shape + (-1,))
+
+
 def _check_by_halves(panels: _Panels, integrand, frame, widths, supports, max_nodes_per_call) -> np.ndarray:
     """|K15⊗K15 of each panel − the sum of G7⊗G7 over its two halves (split along its worse direction)|."""
     halves = panels.halves(panels.err_b.max(axis=1) >= panels.err_u.max(axis=1))
-    chunk = max(1, max_nodes_per_call // GAUSS_NODES.size**2)
     sums = []
-    for start in range(0, halves.case.size, chunk):
-        part = halves.take(slice(start, start + chunk))
-        omega, jacobian = _map_nodes(part, frame, widths, supports, GAUSS_NODES)
-        case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
-        with np.errstate(all="ignore"):
-            values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
-        values = np.where(np.isfinite(values), values, 0.0).reshape(jacobian.shape + (-1,))
-        sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, GAUSS_WEIGHTS, GAUSS_WEIGHTS))
+    with np.errstate(all="ignore"):
+        for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, GAUSS_NODES,
+                                                   max_nodes_per_call):
+            values = np.where(np.isfinite(values), values, 0.0)
+            sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, GAUSS_WEIGHTS, GAUSS_WEIGHTS))
     total = np.concatenate(sums)
     half = panels.case.size
-    noise = 8.0 * _EPS * (np.abs(panels.value) + np.abs(total[:half]) + np.abs(total[half:]))
-    return np.maximum(np.abs(panels.value - total[:half] - total[half:]) - noise, 0.0)
+    return _refinement_change(panels.value, total[:half], total[half:])
 
 
 def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
@@ -387,14 +397,9 @@ def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
 
 def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
     """Fill in the estimates of ``panels``, calling the integrand on bounded chunks of nodes."""
-    chunk = max(1, max_nodes_per_call // NODES.size**2)
     parts = []
-    for start in range(0, panels.case.size, chunk):
-        part = panels.take(slice(start, start + chunk))
-        omega, jacobian = _map_nodes(part, frame, widths, supports)
-        case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
-        values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
-        values = values.reshape(jacobian.shape + (-1,))
+    for part, omega, jacobian, values in _node_values(panels, integrand, frame, widths, supports, NODES,
+                                                      max_nodes_per_call):
         finite = np.isfinite(values).all(axis=-1)
         bad = np.zeros(part.case.size)
         if not finite.all():
