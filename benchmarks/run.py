@@ -693,6 +693,14 @@ def fmt(x, spec=".2g") -> str:
     return "—" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
 
 
+
+def _speed_text(line: dict, *, baseline: str, slower: str) -> str:
+    """A method's speed column: its slowdown against numpy, or how many times faster brdfnorm is."""
+    if "slowdown_vs_numpy" in line:
+        return f"{line['slowdown_vs_numpy']:.2f}{slower}"
+    speed = line.get("speedup_of_brdfnorm")
+    return baseline if speed is None else f"{speed:.3g}×"
+
 def markdown(results: dict) -> str:
     meta = results["meta"]
     lines = [f"# brdfnorm benchmarks ({'quick' if meta['quick'] else 'full'} run)", "",
@@ -716,11 +724,7 @@ def markdown(results: dict) -> str:
         lines += ["| method | time | timing | speed-up of brdfnorm | max rel error | median rel error | points | "
                   "warnings | note |", "|---|---|---|---|---|---|---|---|---|"]
         for m, line in w["methods"].items():
-            speed = line.get("speedup_of_brdfnorm")
-            if "slowdown_vs_numpy" in line:
-                speed_text = f"{line['slowdown_vs_numpy']:.2f}× slower than numpy"
-            else:
-                speed_text = "baseline" if speed is None else f"{speed:.3g}×"
+            speed_text = _speed_text(line, baseline="baseline", slower="× slower than numpy")
             lines.append(f"| {m} | {fmt_time(line['time_s'])} | {line['timing']} | {speed_text} | "
                          f"{fmt(line['max_rel_error'])} | {fmt(line['median_rel_error'])} | {line['points']} | "
                          f"{line['warnings']} | {line['note']} |")
@@ -816,11 +820,7 @@ def print_tables(results: dict) -> None:
         for column in ("method", "time", "timing", "speed-up of brdfnorm", "max rel err", "points", "warn"):
             table.add_column(column, justify="left" if column in ("method", "timing") else "right")
         for m, line in w["methods"].items():
-            speed = line.get("speedup_of_brdfnorm")
-            if "slowdown_vs_numpy" in line:
-                speed_text = f"{line['slowdown_vs_numpy']:.2f}× slower"
-            else:
-                speed_text = "—" if speed is None else f"{speed:.3g}×"
+            speed_text = _speed_text(line, baseline="—", slower="× slower")
             table.add_row(m, fmt_time(line["time_s"]), line["timing"], speed_text, fmt(line["max_rel_error"]),
                           str(line["points"]), str(line["warnings"]))
         console.print(table)
