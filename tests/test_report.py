@@ -22,8 +22,8 @@ import pytest
 from conftest import phong_like_reference
 
 from brdfnorm.errors import OutputError
+from brdfnorm.output.directories import MARKER
 from brdfnorm.report import StudyConfig, build_report, sections, study
-from brdfnorm.report.output import MARKER
 
 BRDFNORM = Path(sys.executable).parent / "brdfnorm"
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

@@ -9,19 +9,16 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import os
 import sys
-import tempfile
 import warnings
 from collections.abc import Iterator
 from enum import Enum
-from pathlib import Path
 
 import numpy as np
 import typer
 from rich.console import Console
 
-from ..errors import ArgumentError, BrdfnormError, OutputError
+from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
 
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
@@ -204,27 +201,6 @@ def channel_value(values: np.ndarray):
     """A number for single-channel models, a list for multi-channel ones."""
     values = np.asarray(values)
     return float(values[0]) if values.size == 1 else [float(v) for v in values]
-
-
-def write_output_atomically(path: str | Path, data: str | bytes) -> None:
-    """Write a file via a temporary sibling and rename: a failure leaves the previous file as it was."""
-    path = Path(path)
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise OutputError(f"directory {str(directory)!r} does not exist", where=str(path))
-    mode = "wb" if isinstance(data, bytes) else "w"
-    try:
-        fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    except OSError as error:
-        raise OutputError(f"cannot write here: {error.strerror}", where=str(path)) from None
-    try:
-        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8"})) as handle:
-            handle.write(data)
-        os.replace(temporary, path)
-    except OSError as error:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise OutputError(f"cannot write: {error.strerror}", where=str(path)) from None
 
 
 def stdout_is_terminal() -> bool:

@@ -16,6 +16,7 @@ from ..albedo import albedo as compute_albedo
 from ..models import REGISTRY, Model
 from ..normalize import NormalizationResult
 from ..normalize import normalize as compute_normalize
+from ..output import write_file
 from . import app
 from .common import (
     DEBUG_OPTION,
@@ -32,7 +33,6 @@ from .common import (
     print_json,
     stdout_is_terminal,
     to_json,
-    write_output_atomically,
 )
 
 
@@ -142,7 +142,7 @@ def normalize_command(
             text = None
         if text is not None:
             if output:
-                write_output_atomically(output, text + "\n")
+                write_file(output, text + "\n")
             else:
                 typer.echo(text)
             return
@@ -160,7 +160,7 @@ def normalize_command(
         if output:
             buffer = Console(file=io.StringIO(), width=160)
             buffer.print(table)
-            write_output_atomically(output, buffer.file.getvalue())
+            write_file(output, buffer.file.getvalue())
         else:
             console().print(table)
 

@@ -19,6 +19,7 @@ from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
 from ..normalize import normalize
+from ..output import write_file
 from . import app
 from .common import (
     DEBUG_OPTION,
@@ -30,7 +31,6 @@ from .common import (
     parse_angles,
     parse_sweep,
     print_json,
-    write_output_atomically,
 )
 
 SECOND_VARIABLE = "cos_theta_o"
@@ -87,7 +87,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
     plt.close(fig)
-    write_output_atomically(path, buffer.getvalue())
+    write_file(path, buffer.getvalue())
 
 
 @app.command("fit")
@@ -154,7 +154,7 @@ def fit_command(
                          max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
         code = emit(fitted, emit_language, m.name, variable=name) if emit_language else None
         if output is not None:
-            write_output_atomically(output, code)
+            write_file(output, code)
         if plot is not None:
             _plot(plot, fitted, x, t, y if t is not None else y[:, 0], name)
         if json_output:

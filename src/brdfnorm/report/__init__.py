@@ -8,8 +8,8 @@ claims checked by :mod:`brdfnorm.verify` (when installed). Given models (built-i
 get the same study over one float parameter each.
 
 The report is a directory: ``index.html`` and PNG figures beside it. It is built in a temporary sibling
-directory and renamed into place only when complete (:mod:`.output`), and it is deterministic: the same
-inputs give byte-identical files.
+directory and renamed into place only when complete (:mod:`brdfnorm.output.directories`), and it is
+deterministic: the same inputs give byte-identical files.
 
 >>> from brdfnorm.report import build_report, StudyConfig
 >>> build_report("report", config=StudyConfig.quick())  # doctest: +SKIP
@@ -29,9 +29,9 @@ import numpy as np
 from .. import __version__, load
 from ..errors import ArgumentError
 from ..models.base import Model
+from ..output.directories import check_target, staged
 from . import sections
 from .html import page
-from .output import check_target, staged
 from .study import StudyConfig
 
 __all__ = ["StudyConfig", "build_report", "plan"]

@@ -12,10 +12,10 @@ from html import escape
 import numpy as np
 
 from .. import closed_forms
+from ..output.directories import Stage
 from . import figures, study
 from .figures import Image
 from .html import Cell, Section, figure, number, percent, relative, table, text
-from .output import Stage
 
 #: Quadrature against a closed form is flagged when the relative difference exceeds this many × rtol.
 AGREEMENT = 10.0
