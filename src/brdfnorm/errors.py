@@ -27,6 +27,11 @@ class ArgumentError(BrdfnormError, ValueError):
     """A command-line or API argument is malformed (``where`` names the argument, e.g. ``--theta``)."""
 
 
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An API argument of the wrong type (a list where a name goes, a complex angle): both a ValueError and a
+    TypeError, so callers may catch either."""
+
+
 class ModelNotFoundError(BrdfnormError, LookupError):
     """Neither a built-in model name nor a readable file."""
 

@@ -452,14 +452,14 @@ _SECOND = re.compile(r"^(?P<base>[^@]*)@(?P<degree>[^~]*)(?P<tau>~tau)?$")
 
 def _linear(arg: str | None, spec: str) -> dict:
     if arg is not None:
-        raise ArgumentError(f"form 'linear' takes no argument, got {spec!r}", where="--form")
+        raise ArgumentError(f"form 'linear' takes no argument, got {spec!r}", where="form")
     return {"P": 1, "Q": 0, "family": "linear"}
 
 
 def _poly(arg: str | None, spec: str) -> dict:
     if arg is None or not _DEGREE.match(arg):
         raise ArgumentError(f"bad form {spec!r}: expected poly:D with D a whole number, e.g. poly:3",
-                            where="--form")
+                            where="form")
     return {"P": int(arg), "Q": 0, "family": "poly"}
 
 
@@ -469,7 +469,7 @@ def _rational(sqrt: bool) -> Callable[[str | None, str], dict]:
         name = "rational-sqrt" if sqrt else "rational"
         if not match:
             raise ArgumentError(f"bad form {spec!r}: expected {name}:P/Q with whole numbers, e.g. {name}:2/1",
-                                where="--form")
+                                where="form")
         return {"P": int(match[1]), "Q": int(match[2]), "sqrt": sqrt}
 
     return parse
@@ -477,7 +477,7 @@ def _rational(sqrt: bool) -> Callable[[str | None, str], dict]:
 
 def _hyperbola(arg: str | None, spec: str) -> dict:
     if arg is not None:
-        raise ArgumentError(f"form 'hyperbola' takes no argument, got {spec!r}", where="--form")
+        raise ArgumentError(f"form 'hyperbola' takes no argument, got {spec!r}", where="form")
     return {}
 
 
@@ -497,25 +497,26 @@ def parse_form(spec: str, two_d: bool = False) -> Form:
     text = spec.strip()
     second = _SECOND.match(text)
     if second and not two_d:
-        raise ArgumentError(f"form {spec!r}: '@D' applies only to two-variable fits (--at view)", where="--form")
+        raise ArgumentError(f"form {spec!r}: '@D' applies only to two-variable fits (samples with t, e.g. "
+                            "at='view')", where="form")
     D, tau = 0, False
     if second:
         text = second["base"]
         if not _DEGREE.match(second["degree"]):
             raise ArgumentError(f"form {spec!r}: bad degree {second['degree']!r} after '@' (a whole number)",
-                                where="--form")
+                                where="form")
         D, tau = int(second["degree"]), bool(second["tau"])
     name, sep, arg = text.partition(":")
     if name not in FORMS:
-        raise ArgumentError(f"unknown form {spec!r} (known: {', '.join([*FORMS, 'auto'])})", where="--form")
+        raise ArgumentError(f"unknown form {spec!r} (known: {', '.join([*FORMS, 'auto'])})", where="form")
     fields = FORMS[name](arg if sep else None, spec)
     if name == "hyperbola":
         if two_d:
-            raise ArgumentError("form 'hyperbola' fits one variable only", where="--form")
+            raise ArgumentError("form 'hyperbola' fits one variable only", where="form")
         return HyperbolaForm()
     if two_d and not second:
         raise ArgumentError(f"form {spec!r} needs '@D' (the degree in the second variable) in a two-variable "
-                            "fit, e.g. rational-sqrt:3/2@2", where="--form")
+                            "fit, e.g. rational-sqrt:3/2@2", where="form")
     return RationalForm(D=D, two_d=two_d, tau=tau, **fields)
 
 
@@ -608,10 +609,10 @@ def _check_samples(x, y, t) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
 
 def _fit_one(form: Form, x, t, y, metric: str, names: tuple[str, str]) -> FitResult:
     if isinstance(form, RationalForm) and form.sqrt and np.any(x < 0):
-        raise ArgumentError(f"form {form.spec!r} needs x ≥ 0 (it uses √x)", where="--form")
+        raise ArgumentError(f"form {form.spec!r} needs x ≥ 0 (it uses √x)", where="form")
     if x.size < form.n_coefficients:
         raise ArgumentError(f"form {form.spec!r} has {form.n_coefficients} coefficients but there are only "
-                            f"{x.size} samples", where="--form")
+                            f"{x.size} samples", where="form")
     with np.errstate(all="ignore"):
         c = np.asarray(form.fit(x, t, y, metric), dtype=float)
         f = form.evaluate(c, x, t)
@@ -678,16 +679,16 @@ def fit(
     does, with a warning); ``tried`` lists every candidate with its error.
     """
     if metric not in METRICS:
-        raise ArgumentError(f"unknown metric {metric!r} (known: {', '.join(METRICS)})", where="--metric")
+        raise ArgumentError(f"unknown metric {metric!r} (known: {', '.join(METRICS)})", where="metric")
     if not (np.isfinite(target) and target > 0):
-        raise ArgumentError(f"target must be a positive number, got {target!r}", where="--target")
+        raise ArgumentError(f"target must be a positive number, got {target!r}", where="target")
     x, t, y = _check_samples(x, y, t)
     two_d = t is not None
     if not (isinstance(form, str) and form.strip() == "auto"):
         chosen = form if isinstance(form, Form) else parse_form(form, two_d)
         if chosen.two_d != two_d:
             raise ArgumentError(f"form {chosen.spec!r} is for {'two variables' if chosen.two_d else 'one variable'}",
-                                where="--form")
+                                where="form")
         return _fit_one(chosen, x, t, y, metric, names)
     limit = max_coefficients or (40 if two_d else AUTO_MAX_COEFFICIENTS)
     tried: list[dict] = []
@@ -708,7 +709,7 @@ def fit(
         if level is not None and level.max_rel_error <= target:
             break
     if best is None:
-        raise EvaluationError("no candidate form could be fitted without a pole", where="--form")
+        raise EvaluationError("no candidate form could be fitted without a pole", where="form")
     if best.max_rel_error > target:
         best.warnings.append(f"no form with ≤ {limit} coefficients reached the target {target:g}; "
                              "this is the best one tried")

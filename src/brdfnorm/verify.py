@@ -668,9 +668,9 @@ CHECKS: dict[str, Callable[[np.ndarray], Claim]] = {
 def check_exponents(exponents: Sequence[float]) -> np.ndarray:
     n = np.asarray(exponents, dtype=float).ravel()
     if n.size == 0:
-        raise ArgumentError("give at least one exponent", where="--n")
+        raise ArgumentError("give at least one exponent", where="n")
     if not np.all(np.isfinite(n)) or np.any(n <= 0) or np.any(n > 1e5):
-        raise ArgumentError("exponents must be numbers in (0, 1e5]", where="--n")
+        raise ArgumentError("exponents must be numbers in (0, 1e5]", where="n")
     return n
 
 

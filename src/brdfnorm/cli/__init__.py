@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 import typer
@@ -24,8 +25,14 @@ def main(argv: list[str] | None = None) -> None:
     try:
         code = command.main(args=argv if argv is not None else sys.argv[1:], prog_name="brdfnorm",
                             standalone_mode=False)
+        sys.stdout.flush()
     except typer.Exit as done:
+        if done.exit_code == 0:
+            _quiet_broken_pipe()
         raise SystemExit(done.exit_code) from None
+    except BrokenPipeError:
+        _quiet_broken_pipe()
+        raise SystemExit(0) from None
     except typer.Abort:
         typer.echo("error: aborted", err=True)
         raise SystemExit(130) from None
@@ -38,3 +45,15 @@ def main(argv: list[str] | None = None) -> None:
         raise SystemExit(getattr(error, "exit_code", 2)) from None
     if isinstance(code, int) and code:
         raise SystemExit(code)
+
+
+def _quiet_broken_pipe() -> None:
+    """After the reader of stdout went away, point stdout at /dev/null so the interpreter's final flush of
+    what is still buffered cannot fail again (the recipe of Python's documentation on SIGPIPE)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        with open(os.devnull, "wb") as devnull:  # noqa: PTH123 — a raw descriptor for dup2
+            os.dup2(devnull.fileno(), sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout is not a real file (captured in tests): nothing to flush
+        pass

@@ -43,12 +43,22 @@ class Over(str, Enum):
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
-             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL"}
+             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
+             "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
+             "output": "--output", "n": "--n", "claim": "--claim"}
 
 
-def console() -> Console:
-    """A rich console that never truncates numbers (wide when stdout is not a terminal)."""
-    return Console() if sys.stdout.isatty() else Console(width=160)
+class _Console(Console):
+    def on_broken_pipe(self) -> None:
+        """rich exits 1 when stdout's reader goes away; a closed pipe is the reader's choice, not an error,
+        so it goes the way of every other write (:func:`guarded`: exit 0)."""
+        raise BrokenPipeError
+
+
+def console(*, stderr: bool = False) -> Console:
+    """A rich console on stdout (or stderr) that never truncates numbers (wide when not a terminal)."""
+    stream = sys.stderr if stderr else sys.stdout
+    return _Console(stderr=stderr) if stream.isatty() else _Console(stderr=stderr, width=160)
 
 
 def fail(message: str, code: int = 2) -> typer.Exit:
@@ -69,6 +79,8 @@ def guarded(debug: bool = False) -> Iterator[None]:
         yield
     except typer.Exit:
         raise
+    except BrokenPipeError:  # the reader went away (`brdfnorm info F | head -1`): done, nothing to report
+        raise typer.Exit(0) from None
     except BrdfnormError as error:
         if debug:
             raise

@@ -19,7 +19,7 @@ from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
 from ..normalize import normalize
-from ..output import write_file
+from ..output import STDOUT, write_file
 from . import app
 from .common import (
     DEBUG_OPTION,
@@ -116,9 +116,8 @@ def fit_command(
 ) -> None:
     """Fit a cheap formula (the fewest coefficients for --target with --form auto) to the normalization factor."""
     with guarded(debug):
-        if emit_language is not None and emit_language not in LANGUAGES:
-            raise ArgumentError(f"unknown language {emit_language!r} (known: {', '.join(LANGUAGES)})",
-                                where="--emit")
+        if emit_language is not None:
+            LANGUAGES.validate(emit_language)
         if output is not None and emit_language is None:
             raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
         if at is At.view and theta is None:
@@ -167,11 +166,13 @@ def fit_command(
                 data["code"] = code
             print_json(data)
             return
-        _summary(fitted, m.name, at.value, code if output is None else None, output)
+        if code is not None and output is None:
+            write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
+        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output is None)
 
 
-def _summary(result: FitResult, model: str, at: str, code: str | None, output: str | None) -> None:
-    out = console()
+def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:
+    out = console(stderr=to_stderr)
     out.print(f"[bold]{model}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] ({result.metric}, "
               f"{result.samples} samples)")
     out.print(f"  α ≈ {result.expression}", highlight=False)
@@ -192,7 +193,5 @@ def _summary(result: FitResult, model: str, at: str, code: str | None, output: s
                           "yes" if entry["pole"] else "")
         out.print(table)
     if output is not None:
-        out.print(f"  code written to {output}")
-    elif code is not None:
-        out.print(code, markup=False, highlight=False)
+        console(stderr=True).print(f"code written to {output}", markup=False, highlight=False)
 

@@ -41,4 +41,4 @@ def report(
                 progress.update(task, description=description, completed=index, total=total)
 
             index = build_report(output, loaded, sweep=swept, on_step=on_step)
-        typer.echo(f"wrote {index}")
+        typer.echo(f"wrote {index}", err=True)

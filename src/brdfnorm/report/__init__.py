@@ -56,9 +56,9 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
         if sweep is not None:
             name, values = sweep
             if name != "n":
-                raise ArgumentError(f"the default study sweeps the exponent n, not {name!r}", where="--sweep")
+                raise ArgumentError(f"the default study sweeps the exponent n, not {name!r}", where="sweep")
             if np.any(np.asarray(values) <= 0):
-                raise ArgumentError("the default study needs exponents n > 0", where="--sweep")
+                raise ArgumentError("the default study needs exponents n > 0", where="sweep")
             config = dataclasses.replace(config, table_n=tuple(float(v) for v in values))
         steps: list[sections.Step] = [
             ("factors at L = N: closed form vs quadrature; search for the maximum", sections.factor_section),

@@ -275,7 +275,7 @@ def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, 
         name, values = sweep
         parameter = model.parameter(name)
         if parameter.kind != "float":
-            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="--sweep")
+            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
         values = np.asarray(values, dtype=float)
     else:
         name = first_float(model)
