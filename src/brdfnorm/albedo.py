@@ -19,9 +19,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ArgumentError, EvaluationError
+from . import validate
+from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
 from .models.base import Model, Over
+from .registry import Registry
 
 
 @dataclass(frozen=True)
@@ -73,37 +75,29 @@ def _directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
 
 
-def check_angles(theta, phi) -> tuple[np.ndarray, np.ndarray]:
-    """Validate polar angles in [0, π/2) and any finite azimuth (radians)."""
-    theta = np.asarray(theta, dtype=float)
-    phi = np.asarray(phi, dtype=float)
-    if not np.all(np.isfinite(theta)) or np.any(theta < 0) or np.any(theta >= np.pi / 2):
-        raise ArgumentError("polar angles must lie in [0°, 90°) (radians [0, π/2) in the API)", where="theta")
-    if not np.all(np.isfinite(phi)):
-        raise ArgumentError("azimuths must be finite", where="phi")
-    return theta, phi
-
-
-def check_tolerance(rtol: float, atol: float) -> None:
-    if not (np.isfinite(rtol) and np.isfinite(atol)) or rtol < 0 or atol < 0 or (rtol == 0 and atol == 0):
-        raise ArgumentError("tolerances must be finite, ≥ 0 and not both 0", where="rtol")
-    if rtol and rtol < 1e-14:
-        raise ArgumentError(f"rtol {rtol:g} is below what float64 quadrature can honour (≥ 1e-14)", where="rtol")
-    if rtol >= 1:
-        raise ArgumentError(f"rtol {rtol:g} is absurd (must be < 1)", where="rtol")
+def check_model(model: object) -> Model:
+    """``model`` if it is a :class:`Model` (what :func:`brdfnorm.load` returns)."""
+    if not isinstance(model, Model):
+        raise ArgumentTypeError(f"expected a model (brdfnorm.load(...)), got {type(model).__name__}", where="model")
+    return model
 
 
 def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     """Broadcast angles and (possibly array-valued) parameters into a flat batch of cases."""
-    if over not in ("light", "view"):
-        raise ArgumentError(f"over must be 'light' or 'view', got {over!r}", where="over")
-    theta, phi = check_angles(theta, phi)
+    check_model(model)
+    validate.choice(over, ("light", "view"), "over")
+    theta, phi = validate.angles(theta, phi)
     bound = model.params
     batch_shapes = []
     for p in model.parameters:
         value = np.asarray(bound[p.name])
         batch_shapes.append(value.shape[:-1] if p.kind == "color" else value.shape)
-    shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
+    try:
+        shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
+    except ValueError:
+        raise ArgumentError(f"shapes do not broadcast: theta {theta.shape}, phi {phi.shape}, parameters "
+                            f"{', '.join(str(b) for b in batch_shapes)}", where="theta") from None
+    validate.batch_size(shape)
     theta_b, phi_b = np.broadcast_to(theta, shape), np.broadcast_to(phi, shape)
     params, broadcast = {}, {}
     for p, batch in zip(model.parameters, batch_shapes, strict=True):
@@ -171,29 +165,29 @@ def _has_closed_form(model: Model, over: Over) -> bool:
     return type(model).closed_form_albedo is not Model.closed_form_albedo
 
 
-METHODS: dict[str, Method] = {
+METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
     "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
-}
+})
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
 AUTO_ORDER: list[str] = ["quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:
     """Add an albedo method; with ``auto_priority`` it is also tried by ``method="auto"`` at that position."""
-    METHODS[method.name] = method
+    METHODS.register(method.name, method)
     if auto_priority is not None and method.name not in AUTO_ORDER:
         AUTO_ORDER.insert(auto_priority, method.name)
 
 
 def resolve_method(model: Model, over: Over, method: str) -> Method:
+    """The method named (``"auto"``: the first applicable of :data:`AUTO_ORDER`), refused where it does not apply."""
+    METHODS.validate(method, extra=("auto",))
     if method == "auto":
         for name in AUTO_ORDER:
             if METHODS[name].applies(model, over):
                 return METHODS[name]
-    if method not in METHODS:
-        raise ArgumentError(f"unknown method {method!r} (known: auto, {', '.join(METHODS)})", where="method")
     chosen = METHODS[method]
     if not chosen.applies(model, over):
         raise ArgumentError(f"method {method!r} does not apply to {model.name} over the {over}", where="method")
@@ -218,9 +212,9 @@ def albedo(
     Returns values of shape (*S, C) with an absolute error estimate; a point that did not reach the
     tolerance within ``max_evaluations`` has ``converged`` False and triggers a warning.
     """
-    check_tolerance(rtol, atol)
-    if nonfinite not in ("raise", "zero"):
-        raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {nonfinite!r}", where="nonfinite")
+    rtol, atol = validate.tolerances(rtol, atol)
+    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
+    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
     chosen = resolve_method(model, over, method)
     value, error, evaluations, converged, bad = chosen.run(
@@ -242,15 +236,22 @@ def albedo(
 
 def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model, str | None, np.ndarray]:
     """Bind a one-parameter sweep to the model as an array of shape (S, 1) (broadcasting against angles)."""
+    check_model(model)
+    if sweep is None:
+        return model, None, np.zeros(1)
+    if not isinstance(sweep, Mapping):
+        raise ArgumentTypeError(f"expected a mapping {{name: values}}, got {type(sweep).__name__}", where="sweep")
     if not sweep:
         return model, None, np.zeros(1)
     if len(sweep) != 1:
         raise ArgumentError("sweep one parameter at a time", where="sweep")
     (name, values), = sweep.items()
+    if not isinstance(name, str):
+        raise ArgumentTypeError(f"a parameter name is text, got {type(name).__name__}", where="sweep")
     parameter = model.parameter(name)
     if parameter.kind != "float":
         raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
-    values = np.asarray(values, dtype=float).ravel()
+    values = validate.real_array(values, "sweep").ravel()
     if values.size == 0:
         raise ArgumentError(f"the sweep over {name} is empty", where="sweep")
     return model.with_params(**{name: values[:, None]}), name, values

@@ -55,7 +55,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares, minimize
 
-from .errors import ArgumentError, EvaluationError
+from . import validate
+from .errors import ArgumentError, ArgumentTypeError, EvaluationError
+from .registry import Registry
 
 METRICS = ("abs-lsq", "rel-lsq", "minimax-rel")
 #: Lawson iterations for minimax (each one weighted least-squares solve; the polish finishes the job).
@@ -482,18 +484,21 @@ def _hyperbola(arg: str | None, spec: str) -> dict:
 
 
 #: Form families by name: ``name`` or ``name:ARG`` → the family's parameters (``auto`` is handled by :func:`fit`).
-FORMS: dict[str, Callable[[str | None, str], dict]] = {
+FORMS: Registry[Callable[[str | None, str], dict]] = Registry("form", "form", {
     "linear": _linear,
     "hyperbola": _hyperbola,
     "poly": _poly,
     "rational": _rational(False),
     "rational-sqrt": _rational(True),
-}
+})
 
 
 def parse_form(spec: str, two_d: bool = False) -> Form:
     """``linear``, ``hyperbola``, ``poly:D``, ``rational:P/Q``, ``rational-sqrt:P/Q``; in two variables with
     ``@D`` (degree in t of every coefficient) and optionally ``~tau`` (second variable τ = t·u)."""
+    if not isinstance(spec, str):
+        raise ArgumentTypeError(f"expected a form name such as 'rational:2/1', got {type(spec).__name__}",
+                                where="form")
     text = spec.strip()
     second = _SECOND.match(text)
     if second and not two_d:
@@ -507,8 +512,9 @@ def parse_form(spec: str, two_d: bool = False) -> Form:
                                 where="form")
         D, tau = int(second["degree"]), bool(second["tau"])
     name, sep, arg = text.partition(":")
-    if name not in FORMS:
-        raise ArgumentError(f"unknown form {spec!r} (known: {', '.join([*FORMS, 'auto'])})", where="form")
+    FORMS.validate(name, extra=("auto",))
+    if name == "auto":
+        raise ArgumentError("'auto' is not one form: pass it to fit(), which tries several", where="form")
     fields = FORMS[name](arg if sep else None, spec)
     if name == "hyperbola":
         if two_d:
@@ -592,16 +598,14 @@ class FitResult:
 
 
 def _check_samples(x, y, t) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-    x = np.asarray(x, dtype=float).ravel()
-    y = np.asarray(y, dtype=float).ravel()
-    tt = None if t is None else np.asarray(t, dtype=float).ravel()
+    x = validate.real_array(x, "x", error=EvaluationError).ravel()
+    y = validate.real_array(y, "y", error=EvaluationError).ravel()
+    tt = None if t is None else validate.real_array(t, "t", error=EvaluationError).ravel()
     if x.size != y.size or (tt is not None and tt.size != x.size):
         raise ArgumentError(f"sample arrays differ in size ({x.size} x, {y.size} y"
                             + ("" if tt is None else f", {tt.size} t") + ")", where="samples")
     if x.size == 0:
         raise ArgumentError("no samples", where="samples")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and (tt is None or np.all(np.isfinite(tt)))):
-        raise EvaluationError("non-finite sample values", where="samples")
     if np.any(y == 0):
         raise ArgumentError("a sample value is 0: relative errors are undefined", where="samples")
     return x, tt, y
@@ -678,10 +682,13 @@ def fit(
     fit of the first count where one reaches max relative error ≤ ``target`` (or the best fit overall if none
     does, with a warning); ``tried`` lists every candidate with its error.
     """
-    if metric not in METRICS:
-        raise ArgumentError(f"unknown metric {metric!r} (known: {', '.join(METRICS)})", where="metric")
-    if not (np.isfinite(target) and target > 0):
+    validate.choice(metric, METRICS, "metric")
+    if not validate.real_number(target, "target") > 0:
         raise ArgumentError(f"target must be a positive number, got {target!r}", where="target")
+    if max_coefficients is not None:
+        validate.count(max_coefficients, "max_coefficients", minimum=2, maximum=1000)
+    if not (isinstance(names, (tuple, list)) and len(names) == 2 and all(isinstance(n, str) for n in names)):
+        raise ArgumentTypeError("expected two variable names (x, t) as text", where="names")
     x, t, y = _check_samples(x, y, t)
     two_d = t is not None
     if not (isinstance(form, str) and form.strip() == "auto"):

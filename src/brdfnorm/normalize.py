@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import validate
 from .albedo import albedo, sweep_model
 from .errors import ArgumentError
 from .models.base import Model, Over
@@ -57,8 +58,8 @@ def normalize(
     search_points: int = 46,
 ) -> NormalizationResult:
     """Normalization factor(s) of ``model``; see the module docstring for the conventions."""
-    if at not in AT:
-        raise ArgumentError(f"unknown convention {at!r} (known: {', '.join(AT)})", where="at")
+    validate.choice(at, AT, "at")
+    validate.count(search_points, "search_points", minimum=2, maximum=10_000)
     swept, name, values = sweep_model(model, sweep)
     kwargs = dict(over=over, rtol=rtol, method=method)
     if at == "normal":
@@ -66,8 +67,8 @@ def normalize(
     elif at == "view":
         if theta is None:
             raise ArgumentError("at='view' needs the polar angles (theta)", where="theta")
-        theta = np.atleast_1d(np.asarray(theta, dtype=float)).ravel()
-        result = albedo(swept, theta[None, :], np.asarray(phi, dtype=float), **kwargs)
+        theta = np.atleast_1d(validate.polar_angles(theta)).ravel()
+        result = albedo(swept, theta[None, :], validate.real_array(phi, "phi"), **kwargs)
     else:
         theta_best, phi_best = _search_max(swept, values.size, search_points, kwargs)
         result = albedo(swept, theta_best[:, None], phi_best[:, None], **kwargs)

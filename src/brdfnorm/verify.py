@@ -23,8 +23,9 @@ import mpmath as mp
 import numpy as np
 from scipy.special import gammaln, roots_legendre
 
-from . import closed_forms
+from . import closed_forms, validate
 from .errors import ArgumentError
+from .registry import Registry
 from .series import adaptive_gauss_legendre, blinn_phong_albedo_series
 
 SOURCES = {
@@ -644,7 +645,7 @@ def gaussian_hyperbola(_: np.ndarray) -> Claim:
 
 
 #: The checks in display order: id -> function of the exponents (parametric checks use them).
-CHECKS: dict[str, Callable[[np.ndarray], Claim]] = {
+CHECKS: Registry[Callable[[np.ndarray], Claim]] = Registry("claim", "claim", {
     "phong-original": phong_original,
     "phong-modified": phong_modified,
     "blinn-phong-normal": blinn_phong_normal,
@@ -662,14 +663,15 @@ CHECKS: dict[str, Callable[[np.ndarray], Claim]] = {
     "gaussian-fit": gaussian_fit,
     "gaussian-fit-small-n-error": gaussian_small_n,
     "gaussian-hyperbola-beats-line": gaussian_hyperbola,
-}
+})
 
 
 def check_exponents(exponents: Sequence[float]) -> np.ndarray:
-    n = np.asarray(exponents, dtype=float).ravel()
+    """The exponents of the parametric claims: at least one, each in (0, 1e5]."""
+    n = validate.real_array(exponents, "n").ravel()
     if n.size == 0:
         raise ArgumentError("give at least one exponent", where="n")
-    if not np.all(np.isfinite(n)) or np.any(n <= 0) or np.any(n > 1e5):
+    if np.any(n <= 0) or np.any(n > 1e5):
         raise ArgumentError("exponents must be numbers in (0, 1e5]", where="n")
     return n
 
@@ -677,8 +679,7 @@ def check_exponents(exponents: Sequence[float]) -> np.ndarray:
 def verify(exponents: Sequence[float] = DEFAULT_EXPONENTS, only: Sequence[str] | None = None) -> list[Claim]:
     """Run the checks (all, or the ids in ``only``) at the given exponents for the parametric claims."""
     n = check_exponents(exponents)
-    ids = list(CHECKS) if only is None else list(only)
-    unknown = [i for i in ids if i not in CHECKS]
-    if unknown:
-        raise ArgumentError(f"unknown claim id(s) {', '.join(unknown)} (known: {', '.join(CHECKS)})", where="claim")
+    if isinstance(only, str):
+        only = [only]
+    ids = list(CHECKS) if only is None else [CHECKS.validate(i) for i in only]
     return [CHECKS[i](n) for i in ids]

@@ -18,6 +18,7 @@ import numpy as np
 import typer
 from rich.console import Console
 
+from .. import validate
 from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
 
@@ -103,9 +104,9 @@ def _number(text: str, option: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise ArgumentError(f"not a number: {text!r}", where=option) from None
+        raise ArgumentError(f"not a number: {validate.short_repr(text)}", where=option) from None
     if not math.isfinite(value):
-        raise ArgumentError(f"not a finite number: {text!r}", where=option)
+        raise ArgumentError(f"not a finite number: {validate.short_repr(text)}", where=option)
     return value
 
 
@@ -121,12 +122,7 @@ def parse_range(spec: str, option: str, *, allow_log: bool) -> np.ndarray:
             form = "START:STOP:COUNT[:log]" if allow_log else "START:STOP:COUNT"
             raise ArgumentError(f"expected {form}, got {spec!r}", where=option)
         start, stop = _number(parts[0], option), _number(parts[1], option)
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise ArgumentError(f"COUNT must be a whole number, got {parts[2]!r}", where=option) from None
-        if count < 1:
-            raise ArgumentError(f"empty range: COUNT is {count}", where=option)
+        count = validate.count(parts[2].strip(), option)
         if stop < start:
             raise ArgumentError(f"reversed range: STOP {stop:g} < START {start:g}", where=option)
         if count == 1 and stop != start:
@@ -140,18 +136,15 @@ def parse_range(spec: str, option: str, *, allow_log: bool) -> np.ndarray:
 
 
 def parse_angles(spec: str, option: str = "--theta") -> np.ndarray:
-    """Polar angles in degrees, each in [0, 90)."""
+    """Polar angles in degrees, each in [0, 90) (checked in radians by the API's own validator)."""
     degrees = parse_range(spec, option, allow_log=False)
-    bad = degrees[(degrees < 0) | (degrees >= 90)]
-    if bad.size:
-        raise ArgumentError(f"angle {bad[0]:g}° outside [0°, 90°)", where=option)
+    validate.polar_angles(np.radians(degrees), where=option)
     return degrees
 
 
 def parse_azimuth(value: float, option: str = "--phi") -> float:
-    if not math.isfinite(value):
-        raise ArgumentError("azimuth must be finite", where=option)
-    return value
+    """An azimuth in degrees (any finite value)."""
+    return validate.real_number(value, option)
 
 
 def parse_sweep(spec: str, option: str = "--sweep") -> tuple[str, np.ndarray]:

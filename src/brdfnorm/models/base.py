@@ -16,7 +16,9 @@ from typing import Literal
 
 import numpy as np
 
+from ..errors import ArgumentError, ParameterError
 from ..parameters import Parameter, resolve
+from ..validate import directions, short_repr
 
 Over = Literal["light", "view"]
 
@@ -84,12 +86,11 @@ class Model(ABC):
         return clone
 
     def parameter(self, name: str) -> Parameter:
+        """The declared parameter called ``name``."""
         for p in self.parameters:
             if p.name == name:
                 return p
-        from ..errors import ParameterError
-
-        raise ParameterError(f"unknown parameter {name!r}", where=self.name)
+        raise ParameterError(f"unknown parameter {short_repr(name)}", where=self.name)
 
     # -- evaluation -------------------------------------------------------------------------------
     @abstractmethod
@@ -102,9 +103,11 @@ class Model(ABC):
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
         """f(L, V) at the bound parameters; L and V broadcast against each other: (..., C)."""
-        L = np.asarray(L, dtype=float)
-        V = np.asarray(V, dtype=float)
-        L, V = np.broadcast_arrays(L, V)
+        L, V = directions(L, "L"), directions(V, "V")
+        try:
+            L, V = np.broadcast_arrays(L, V)
+        except ValueError:
+            raise ArgumentError(f"L {L.shape} and V {V.shape} do not broadcast", where="V") from None
         return self.evaluate(L, V, self._params)
 
     # -- facts for the integrator -------------------------------------------------------------------
