@@ -126,23 +126,33 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
                 max_evaluations: int):
     K = problem.fixed.shape[0]
     lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
-    if lobe is None:
-        poles, widths, supports = estimate_lobe(problem.integrand, K)
-    else:
-        poles = np.broadcast_to(lobe.direction, (K, 3))
-        widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
     try:
-        result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
-                                      nonfinite=nonfinite, max_evaluations=max_evaluations)
+        # Overflow in the lobe search or the sums is reported as an EvaluationError, never as numpy's warning.
+        with np.errstate(all="ignore"):
+            if lobe is None:
+                poles, widths, supports = estimate_lobe(problem.integrand, K)
+            else:
+                poles = np.broadcast_to(lobe.direction, (K, 3))
+                widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
+            result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
+                                          nonfinite=nonfinite, max_evaluations=max_evaluations)
     except NonFiniteIntegrand as bad:
-        fixed = problem.fixed[bad.case]
-        L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
-        raise EvaluationError(
-            f"BRDF is not finite (value {np.array2string(bad.value, precision=6)}) at "
-            f"L={_fmt(L)}, V={_fmt(V)}; pass nonfinite='zero' (--nonfinite zero) to count such values as 0",
-            where=problem.model.name,
-        ) from None
+        where = problem.model.source_path or problem.model.name
+        raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
     return result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction
+
+
+def _nonfinite_message(problem: Problem, bad: NonFiniteIntegrand) -> str:
+    """Where the BRDF was not finite — or, when the direction itself is not (the lobe search summed values
+    beyond float64's range), that the values are too large to integrate."""
+    fixed = problem.fixed[bad.case]
+    hint = "pass nonfinite='zero' (--nonfinite zero) to count such values as 0"
+    if not np.all(np.isfinite(bad.direction)):
+        return (f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow); "
+                "scale the BRDF down")
+    L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
+    value = np.array2string(bad.value, precision=6)
+    return f"BRDF is not finite (value {value}) at L={_fmt(L)}, V={_fmt(V)}; {hint}"
 
 
 def _fmt(direction: np.ndarray) -> str:

@@ -68,6 +68,8 @@ class Model(ABC):
     channels: int = 1
     #: True when the albedo depends only on θ (not φ) of the fixed direction.
     isotropic: bool = True
+    #: The file the model was read from, as the user gave it (None for built-in lobes); errors name it.
+    source_path: str | None = None
 
     def __init__(self, **values: object) -> None:
         self._params = resolve(self.parameters, values, where=self.name)

@@ -1,0 +1,124 @@
+"""Hostile command lines outside the GLSL compiler (issue 14, classes 2, 6, 7, 10): clear limits instead of
+MemoryError, non-finite reports that name the real (L, V) pair and the file as given, no numpy warning on the
+terminal, FIFOs neither read (hang) nor replaced, and output paths that are never clobbered."""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import run_cli
+
+import brdfnorm as bn
+from brdfnorm.errors import EvaluationError
+from brdfnorm.models.base import Model
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+DIVISION_BY_ZERO = ("analytic\n::begin parameters\nfloat n 1 100 10\n::end parameters\n::begin shader\n"
+                    "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return vec3(1.0 / (dot(N, L) - dot(N, L))); }"
+                    "\n::end shader\n")
+
+
+def _one_line_error(code: int, err: str, *needles: str) -> None:
+    assert code == 2, err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    for needle in needles:
+        assert needle in err, err
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["albedo", "lambert", "--theta", "0:89:10000000000000"], "--theta"),
+    (["normalize", "blinn-phong", "--sweep", "n=1:1e4:100000000"], "--sweep"),
+    (["normalize", "blinn-phong", "--at", "view", "--theta", "0:80:2000000"], "--theta"),
+    (["fit", "blinn-phong", "--sweep", "n=1:1e4:100000000"], "--sweep"),
+    (["albedo", "lambert", "--theta", "0:80:1e4"], "whole number"),
+    (["albedo", "lambert", "--theta", "0:80:-5"], "at least 1"),
+    (["albedo", "lambert", "--rtol", "nan"], "--rtol"),
+    (["albedo", "lambert", "--phi", "inf"], "--phi"),
+    (["normalize", "blinn-phong", "--at", "view", "--theta", "0:89:5000", "--sweep", "n=1:10:5000"], "limit"),
+])
+def test_huge_or_bad_counts_are_a_clear_limit_error(capsys, argv, needle):
+    code, out, err = run_cli(capsys, *argv)
+    _one_line_error(code, err, needle)
+    assert out == ""
+
+
+def test_nonfinite_report_names_the_file_as_given_and_a_real_pair(tmp_path):
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "division_by_zero.brdf").write_text(DIVISION_BY_ZERO)
+    done = subprocess.run([sys.executable, "-m", "brdfnorm", "albedo", "sub/division_by_zero.brdf", "--theta", "0"],
+                          cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=120)
+    _one_line_error(done.returncode, done.stderr, "error: sub/division_by_zero.brdf: ", "L=(", "V=(0, 0, 1)")
+    assert "nan, nan" not in done.stderr and "Warning" not in done.stderr
+
+
+class _Huge(Model):
+    """A BRDF of 2e307 everywhere: finite, but its sums overflow float64."""
+
+    name = "huge"
+
+    def evaluate(self, L, V, params):
+        return np.full(np.broadcast_shapes(L.shape[:-1], V.shape[:-1]) + (1,), 2e307)
+
+
+def test_huge_finite_values_are_not_called_non_finite_and_numpy_stays_quiet(recwarn):
+    with np.errstate(all="warn"):
+        try:
+            result = bn.albedo(_Huge(), 0.3)
+        except EvaluationError as error:
+            assert "not finite" not in str(error) and "nan" not in str(error), str(error)
+        else:  # an engine that scales its sums computes the honest value, 2e307·π
+            np.testing.assert_allclose(result.value, 2e307 * np.pi, rtol=1e-8)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.parametrize("command", ["albedo", "info"])
+def test_a_fifo_as_model_file_is_refused_without_reading_it(tmp_path, command):
+    fifo = tmp_path / "model.brdf"
+    os.mkfifo(fifo)
+    done = subprocess.run([sys.executable, "-m", "brdfnorm", command, str(fifo)], env=ENV, capture_output=True,
+                          text=True, timeout=60)
+    _one_line_error(done.returncode, done.stderr, str(fifo), "not a regular file")
+
+
+def test_output_to_dev_null_and_to_a_fifo_keeps_them(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "normalize", "lambert", "--json", "-o", "/dev/null")
+    assert code == 0, err
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    code, _, err = run_cli(capsys, "normalize", "lambert", "--json", "-o", str(fifo))
+    _one_line_error(code, err, str(fifo), "no reader")
+    assert stat.S_ISFIFO(fifo.stat().st_mode)
+
+
+def test_output_keeps_an_existing_files_mode_and_a_symlink(tmp_path, capsys):
+    real = tmp_path / "real.json"
+    real.write_text("{}")
+    real.chmod(0o640)
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    code, _, err = run_cli(capsys, "normalize", "lambert", "--json", "-o", str(link))
+    assert code == 0, err
+    assert link.is_symlink() and '"factor"' in real.read_text() and stat.S_IMODE(real.stat().st_mode) == 0o640
+
+
+@pytest.mark.parametrize("target", ["", "."])
+def test_report_refuses_dangerous_output_directories(tmp_path, target):
+    (tmp_path / "keep.txt").write_text("precious")
+    done = subprocess.run([sys.executable, "-m", "brdfnorm", "report", "lambert", "-o", target], cwd=tmp_path,
+                          env=ENV, capture_output=True, text=True, timeout=120)
+    _one_line_error(done.returncode, done.stderr)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.txt"]
+
+
+def test_error_messages_quote_at_most_40_characters_of_a_value(capsys):
+    code, _, err = run_cli(capsys, "albedo", "lambert", "--theta", "x" * 500)
+    _one_line_error(code, err, "--theta")
+    assert "x" * 41 not in err
