@@ -122,3 +122,13 @@ def test_error_messages_quote_at_most_40_characters_of_a_value(capsys):
     code, _, err = run_cli(capsys, "albedo", "lambert", "--theta", "x" * 500)
     _one_line_error(code, err, "--theta")
     assert "x" * 41 not in err
+
+
+def test_report_draws_a_mathtext_unsafe_file_name_as_text(tmp_path):
+    name = "a$\\foo{$b.brdf"
+    (tmp_path / name).write_text((ROOT / "examples" / "lambert.brdf").read_text())
+    done = subprocess.run([sys.executable, "-m", "brdfnorm", "report", name, "--sweep", "reflectance=0.5,1", "-o",
+                           "out"], cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out" / "index.html").is_file()
+    assert "a$\\foo{$b" in (tmp_path / "out" / "index.html").read_text(encoding="utf-8")

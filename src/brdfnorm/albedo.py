@@ -23,6 +23,7 @@ from . import validate
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
 from .models.base import Model, Over
+from .output.formats import Column, Records, channel_value, degrees, format_value
 from .registry import Registry
 
 
@@ -40,6 +41,27 @@ class AlbedoResult:
     over: Over
     params: dict = field(default_factory=dict)  # parameter values broadcast to S (colors: (*S, 3))
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
+    model: str = ""  # the model's name
+    bound: dict = field(default_factory=dict)  # the model's parameter values as bound (before broadcasting)
+    rtol: float = 0.0
+
+    def records(self) -> Records:
+        """One row per direction (θ, φ in degrees), for :mod:`brdfnorm.output.formats`."""
+        rows = [
+            {"theta_deg": degrees(self.theta[i]), "phi_deg": degrees(self.phi[i]),
+             "albedo": channel_value(self.value[i]), "error_estimate": channel_value(self.error[i]),
+             "method": self.method, "evaluations": int(self.evaluations[i]), "converged": bool(self.converged[i])}
+            for i in np.ndindex(self.converged.shape)
+        ]
+        params = ", ".join(f"{k}={format_value(v, 6)}" for k, v in self.bound.items())
+        return Records(
+            title=f"{self.model} albedo over the {self.over} ({params})",
+            meta={"model": self.model, "params": self.bound, "over": self.over, "rtol": self.rtol},
+            columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"),
+                     Column("error_estimate", "error estimate", 3), Column("method", "method", None),
+                     Column("evaluations", "evaluations", None), Column("converged", "converged", None)),
+            rows=rows,
+        )
 
 
 @dataclass(frozen=True)
@@ -241,6 +263,7 @@ def albedo(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+        model=model.name, bound=model.params, rtol=rtol,
     )
 
 

@@ -7,16 +7,16 @@ an internal error (with a hint to report it); ``--debug`` shows the traceback in
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import sys
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from enum import Enum
 
 import numpy as np
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .. import validate
 from ..errors import ArgumentError, BrdfnormError
@@ -25,6 +25,10 @@ from ..models.base import Model
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
                             help="Set a model parameter (repeatable), e.g. -p n=512 or -p baseColor=0.5,0.5,0.5.")
+JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
+CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).")
+OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
+                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).")
 
 
 class At(str, Enum):
@@ -176,37 +180,26 @@ def load_model(name_or_path: str, params: list[str]) -> Model:
     return model.with_params(**parsed) if parsed else model
 
 
-def jsonable(value):
-    """numpy scalars/arrays to plain Python; non-finite floats to None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    return value
+def result_format(json_output: bool, csv_output: bool) -> str:
+    """The result format (:data:`brdfnorm.output.formats.FORMATS`) that ``--json``/``--csv`` choose."""
+    if json_output and csv_output:
+        raise ArgumentError("choose one of --json and --csv", where="--csv")
+    return "json" if json_output else "csv" if csv_output else "table"
 
 
-def to_json(obj) -> str:
-    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
+@contextlib.contextmanager
+def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable[[int, int], None] | None]:
+    """An ``on_progress(done, total)`` callback drawing a rich bar on stderr — None (no chunking, no bar)
+    unless ``enabled`` and stderr is a terminal."""
+    stderr = Console(stderr=True)
+    if not (enabled and stderr.is_terminal):
+        yield None
+        return
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=stderr, transient=True) as progress:
+        task = progress.add_task(description, total=None)
 
+        def on_progress(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
 
-def print_json(obj) -> None:
-    typer.echo(to_json(obj))
-
-
-def channel_value(values: np.ndarray):
-    """A number for single-channel models, a list for multi-channel ones."""
-    values = np.asarray(values)
-    return float(values[0]) if values.size == 1 else [float(v) for v in values]
-
-
-def stdout_is_terminal() -> bool:
-    return sys.stdout.isatty()
+        yield on_progress

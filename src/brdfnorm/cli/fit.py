@@ -20,6 +20,7 @@ from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
 from ..normalize import normalize
 from ..output import STDOUT, write_file
+from ..output.formats import to_json
 from . import app
 from .common import (
     DEBUG_OPTION,
@@ -30,7 +31,6 @@ from .common import (
     load_model,
     parse_angles,
     parse_sweep,
-    print_json,
 )
 
 SECOND_VARIABLE = "cos_theta_o"
@@ -164,7 +164,7 @@ def fit_command(
             if code is not None:
                 data["language"] = emit_language
                 data["code"] = code
-            print_json(data)
+            write_file(STDOUT, to_json(data) + "\n")
             return
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr

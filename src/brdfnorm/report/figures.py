@@ -23,8 +23,10 @@ from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 #: pixel, sharp on HiDPI screens).
 DPI = 144
 CSS_PER_INCH = 96
+#: ``text.parse_math`` off: model names and file names are drawn as text — a name such as ``a$\foo{$b`` is not
+#: mathtext (the figures spell their symbols in Unicode).
 STYLE = {"font.size": 9.0, "axes.titlesize": 10.0, "legend.fontsize": 8.0, "axes.grid": True,
-         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white"}
+         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white", "text.parse_math": False}
 CHANNEL_NAMES = ("R", "G", "B")
 
 

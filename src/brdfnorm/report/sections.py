@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import closed_forms
 from ..output.directories import Stage
+from ..output.formats import format_value
 from . import figures, study
 from .figures import Image
 from .html import Cell, Section, figure, number, percent, relative, table, text
@@ -41,10 +42,6 @@ class Context:
 
 
 Step = tuple[str, Callable[[Context], Section]]
-
-
-def _degrees(value: float) -> str:
-    return f"{value:.4g}°"
 
 
 # -- default study -----------------------------------------------------------------------------------------
@@ -300,7 +297,7 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
                       f"{data.values.min():.4g} to {data.values.max():.4g})" if data.parameter else
                       "its bound parameters (no float parameter to sweep)")
         formula = f"<p><code>{escape(model.formula)}</code></p>" if getattr(model, "formula", "") else ""
-        params = ", ".join(f"{k} = {_param_text(v)}" for k, v in model.params.items()) or "none"
+        params = ", ".join(f"{k} = {format_value(v, 6)}" for k, v in model.params.items()) or "none"
         body = (
             f"{formula}<p>{escape(model.name)} ({escape(label)}; parameters {escape(params)}) over {sweep_text}. "
             "Factors 1/E at L = N and at the maximum of E over directions (<code>normalize(at=\"max\")</code>: the "
@@ -324,9 +321,3 @@ def _channel_cell(values: np.ndarray) -> Cell:
     return Cell(", ".join(number(v).text for v in values), None, "num")
 
 
-def _param_text(value) -> str:
-    if isinstance(value, bool):
-        return str(int(value))
-    if isinstance(value, tuple):
-        return ",".join(f"{v:g}" for v in value)
-    return f"{value:g}"
