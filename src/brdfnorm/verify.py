@@ -37,8 +37,6 @@ DEFAULT_EXPONENTS = (1.0, 10.0, 100.0, 512.0)
 #: Exponent range of the peak premises (issue 5: n ∈ [0.01, 1e4]).
 PREMISE_EXPONENTS = np.geomspace(0.01, 1e4, 29)
 PREMISE_THETA = np.radians(np.linspace(0.0, 89.9, 180))
-#: Seed 003's fitted factor 0.17287429 + 0.01388682·n, fitted "over range [1;512]".
-SEED_003_LINE = (0.17287429, 0.01388682)
 GAUSSIAN_RANGE = (1.0, 512.0)
 
 TWO_PI = 2.0 * np.pi
@@ -607,11 +605,11 @@ def gaussian_fit(_: np.ndarray) -> Claim:
     n, factor = _gaussian_data()
     result = _fit(n, factor, "linear")
     refit = np.asarray(result.coefficients, dtype=float)
-    seed = np.array(SEED_003_LINE)
+    seed = np.array(closed_forms.SEED_003_LINE)
     errors = _rel(seed, refit)
     return Claim(
         "gaussian-fit", SOURCES["003"], "least-squares line through the exact factor on n ∈ [1, 512]: "
-        "0.17287429 + 0.01388682·n",
+        + closed_forms.SEED_003_TEXT,
         float(seed[1]), float(refit[1]), float(errors.max()), bool(np.all(np.abs(refit - seed) <= 5e-9)),
         f"least-squares re-fit of the exact factor at n = 1, 2, …, 512 gives {refit[0]:.10f} + {refit[1]:.10f}·n: "
         f"the seed's 8 printed decimals (ok when within half a unit of the 8th); relative differences "
@@ -622,7 +620,7 @@ def gaussian_fit(_: np.ndarray) -> Claim:
 def gaussian_small_n(_: np.ndarray) -> Claim:
     n = np.array([1.0])
     exact = float(gaussian_factor(n)[0])
-    seed = SEED_003_LINE[0] + SEED_003_LINE[1] * 1.0
+    seed = closed_forms.SEED_003_LINE[0] + closed_forms.SEED_003_LINE[1] * 1.0
     error = float(_rel(seed, exact))
     return Claim(
         "gaussian-fit-small-n-error", SOURCES["003"], "the fitted factor is inaccurate at small n: ≈42 % at n = 1",

@@ -175,12 +175,12 @@ def fit_section(fit: Callable) -> Callable[[Context], Section]:
         seed, best = data.fits[0], min(data.fits[1:], key=lambda f: np.abs(data.relative_error(f)).max())
         seed_error = np.abs(data.relative_error(seed))
         ctx.findings.append(
-            f"Seed 003's line 0.17287429 + 0.01388682·n misses the Gaussian Blinn-Phong factor by up to "
+            f"Seed 003's line {closed_forms.SEED_003_TEXT} misses the Gaussian Blinn-Phong factor by up to "
             f"{100 * seed_error.max():.1f} % over n ∈ [1, 512] ({100 * seed_error[steep].max():.2f} % for "
             f"n ≥ 16); the {best.label} <code>{escape(best.expression)}</code> stays within "
             f"{100 * np.abs(data.relative_error(best)).max():.2g} %.")
         body = (
-            "<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by 0.17287429 + 0.01388682·n, a line "
+            f"<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by {closed_forms.SEED_003_TEXT}, a line "
             "fitted numerically over n ∈ [1, 512] (\"not accurate for small specular power values\"); a "
             "commenter suggests a scaled hyperbola √(x² + 1) instead. Here the factor 1/E(L = N) is computed "
             f"by quadrature at {data.n.size} values of n in that range (rtol {ctx.config.table_rtol:g}) and "
