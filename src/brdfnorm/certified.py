@@ -1,0 +1,352 @@
+"""Certified albedo: guaranteed enclosures [lower, upper] of E by ball arithmetic (Arb, through python-flint).
+
+``method="certified"`` reduces the albedo of a lobe to one-dimensional integrals of functions that are analytic
+on every piece of the path, and integrates each with Arb's rigorous adaptive Gauss–Legendre
+(``acb.integral``, Johansson 2018, "Numerical integration in arbitrary-precision ball arithmetic"), whose error
+bounds come from bounds of the integrand on complex ellipses — not from comparing two estimates. Every
+elementary and special function is Arb's own, evaluated with its ``analytic`` check where it has a branch cut,
+so a piece of the path that touches a non-analytic point is bisected instead of being trusted. The parameters
+are the float64 values the user gave, taken exactly. The result is a ball: ``value`` its midpoint, ``error`` its
+radius (plus the rounding of the midpoint to float64), and ``lower``/``upper`` decimal strings rounded outward.
+
+Reductions (derivations; V in the xz-plane at polar angle θ_o, c_o = cos θ_o, s_o = sin θ_o)
+-------------------------------------------------------------------------------------------------
+**lambert** — f = ρ/π and ∫ cos dω = π over the hemisphere: E = ρ exactly (no integral is needed).
+
+**phong, modified-phong** (seed 000's lobes, any view angle). R·V = L·mirror(V), so in polar coordinates
+(α, β) about P = mirror(V) the lobe is cos^n α (n > 0: zero for α > π/2) and N·L = a + b cos β with
+a = c_o cos α, b = s_o sin α. With u = cos α the β-integral is elementary: the whole circle lies above the
+horizon for u ≥ s_o, and for u < s_o only |β| < β₀ = arccos(−a/b). Hence, for the modified lobe (f·(N·L)),
+
+    E = 2π c_o (1 − s_o^{n+2})/(n+2) + ∫₀^{s_o} u^n · 2(c_o u β₀ + √(s_o² − u²)) du,
+
+and for the original lobe (f·(N·L) = cos^n α on N·L > 0) E = 2π(1 − s_o^{n+1})/(n+1) + ∫₀^{s_o} u^n · 2β₀ du.
+Substituting u = s_o sin φ removes the square root at u = s_o, and with x = c_o sin φ/√(1 − s_o² sin² φ),
+1 − x² = cos² φ/(1 − s_o² sin² φ), so β₀ = π − arccos x = π − atan(cot φ/c_o) = π/2 + atan(c_o tan φ): two
+forms of one analytic function, used on [π/4, π/2] and [0, π/4] so that neither tan nor cot meets its pole.
+At θ_o = 0 the formulas give seed 000's 2π/(n+1) and 2π/(n+2). The original lobe over the view is the
+modified one divided by cos θ_L; n = 0 is the constant lobe (π for the modified lobe, 2π for the original).
+
+**blinn-phong, blinn-phong-gaussian** (any lobe h(N·H), any view angle). Integrate over the half vector H
+(polar angles θ_h, φ_h about N): L = 2(V·H)H − V, dL = 4(V·H) dH, and with c = cos θ_h, s = sin θ_h,
+X = V·H = p + q cos φ_h (p = c_o c, q = s_o s), N·L = 2cX − c_o, the integrand is 4 h(c) (2cX² − c_o X) s.
+The horizon N·L > 0 is cos φ_h > κ = −c_o cos 2θ_h/(s_o sin 2θ_h): the whole circle for θ_h ≤ θ₁ =
+(π/2 − θ_o)/2, nothing for θ_h ≥ θ₂ = (π/2 + θ_o)/2, and |φ_h| < φ₁ = arccos κ between, where the φ_h
+integrals of X and X² are elementary:
+
+    ∫X = 2(pφ₁ + q sin φ₁),    ∫X² = 2(p²φ₁ + 2pq sin φ₁ + q²(φ₁ + sin φ₁ cos φ₁)/2)    (φ₁ = π on [0, θ₁]).
+
+On [θ₁, θ₂] the substitution θ_h = θ₁ + θ_o sin²(ψ/2), ψ ∈ [0, π], makes φ₁ analytic: 1 ± κ =
+sin(2(θ_h − θ₁)) / (s_o sin 2θ_h) and sin(2(θ₂ − θ_h)) / (s_o sin 2θ_h) respectively, so with
+S₁ = sinc(2θ_o sin²(ψ/2)), S₂ = sinc(2θ_o cos²(ψ/2)) (both positive),
+tan(φ₁/2) = cot(ψ/2)√(S₂/S₁) and sin φ₁ = θ_o sin ψ √(S₁S₂)/(s_o sin 2θ_h): no square root of anything that
+vanishes. This is the double integral of seed 002 (E = ∫(N·H)^n (N·L) dL) with its inner integral done in
+closed form by the half-vector change of variables instead of the hypergeometric ₂F₁, which Arb evaluates
+poorly at the large parameters n/4 (≈ 8 digits at n = 10⁴). h = c^n for Blinn-Phong and
+exp(−((c − 1)/(k − 1))²), k = 0.04^(1/n), for seed 003's lobe. Both lobes are reciprocal: over the view alike.
+
+Models with no reduction here (``.brdf`` files, the microfacet models away from their own reductions) raise
+:class:`~brdfnorm.errors.ArgumentError` naming the model and the reason — never a silent fallback.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from decimal import ROUND_CEILING, ROUND_FLOOR, Context, Decimal
+
+import numpy as np
+
+from .errors import ArgumentError, EvaluationError
+
+#: Default number of significant decimal digits asked of an enclosure.
+DEFAULT_DIGITS = 30
+#: Digits the CLI and the API accept (Arb works at any precision; beyond this the cost is rarely wanted).
+MAX_DIGITS = 1000
+INSTALL_HINT = "python-flint is not installed; install it with: pip install 'brdfnorm[certified]'"
+
+
+def _flint():
+    try:
+        import flint
+    except ImportError:  # an optional extra: say how to get it instead of failing deep inside
+        raise ArgumentError(INSTALL_HINT, where="method") from None
+    return flint
+
+
+@dataclass(frozen=True)
+class Enclosure:
+    """A rigorous enclosure of one albedo value: Arb's ball and what is reported of it.
+
+    ``lower``/``upper`` are decimals with ``digits`` significant digits rounded outward; ``value`` is the
+    midpoint rounded to float64 and ``error`` an upper bound of |true albedo − value| (the radius plus that
+    rounding, rounded up).
+    """
+
+    ball: object  # flint.arb
+    digits: int
+    evaluations: int
+    lower: str
+    upper: str
+    value: float
+    error: float
+
+    @classmethod
+    def of(cls, ball, digits: int, evaluations: int) -> Enclosure:
+        """Report ``ball``; call at the working precision (the endpoints are exact there)."""
+        arb = type(ball)
+        value = float(ball.mid())
+        bound = (arb(ball.rad()) + abs(ball.mid() - arb(value))).upper()
+        return cls(ball, digits, evaluations, _decimal(ball.lower(), digits, ROUND_FLOOR),
+                   _decimal(ball.upper(), digits, ROUND_CEILING), value,
+                   float(np.nextafter(float(bound), np.inf)))
+
+
+def _decimal(endpoint, digits: int, rounding: str) -> str:
+    """An exact dyadic endpoint (an exact arb) as a decimal string rounded in the given direction."""
+    mantissa, exponent = (int(part) for part in endpoint.mid().man_exp())
+    # m·2^e written exactly in decimal: m·2^e for e ≥ 0, m·5^(−e)·10^e for e < 0 (string construction is exact).
+    exact = Decimal(mantissa << exponent) if exponent >= 0 else Decimal(f"{mantissa * 5 ** -exponent}E{exponent}")
+    return str(Context(prec=digits, rounding=rounding).plus(exact))
+
+
+class _Integrator:
+    """Arb integrals at a working precision, counting integrand evaluations."""
+
+    def __init__(self, digits: int) -> None:
+        flint = _flint()
+        self.arb, self.acb = flint.arb, flint.acb
+        self.digits = digits
+        self.bits = int(math.ceil(digits * math.log2(10))) + 40
+        self.evaluations = 0
+
+    def integral(self, f: Callable, a, b):
+        def counted(x, analytic):
+            self.evaluations += 1
+            return f(x, analytic)
+
+        tol = self.arb(2) ** (-(self.bits - 20))
+        result = self.acb.integral(counted, a, b, rel_tol=tol, abs_tol=tol * self.arb(2) ** -4000,
+                                   eval_limit=200_000, depth_limit=4 * self.bits)
+        return result.real
+
+
+def _nan(acb):
+    return acb("nan")
+
+
+def _power(x, n, analytic: bool, acb, arb):
+    """x^n (n ≥ 0 real) on a ball around a piece of the path, where x ≥ 0.
+
+    Off the cut (−∞, 0] of the power this is Arb's power. A ball that reaches the cut is non-analytic there: under
+    the analytic check that is said with a non-finite ball (Arb then bisects), and for a plain enclosure on the
+    path the disk |x^n| ≤ max|x|^n is returned, which holds for every x ≥ 0 of the ball.
+    """
+    if x.real.lower() > 0:
+        return x.pow(n, analytic=analytic)
+    if analytic:
+        return _nan(acb)
+    bound = arb(x.abs_upper()) ** n
+    return acb(arb(0, bound), arb(0, bound))
+
+
+# -- reductions ------------------------------------------------------------------------------------------------
+
+def _phong(work: _Integrator, theta, n, original: bool):
+    arb, acb = work.arb, work.acb
+    if n == 0:  # max(0, x)^0 = 1 everywhere: the constant lobe
+        return arb.pi() * (2 if original else 1)
+    c, s = theta.cos(), theta.sin()
+    pi = arb.pi()
+    if original:
+        head = 2 * pi * (1 - s ** (n + 1)) / (n + 1)
+    else:
+        head = 2 * pi * c * (1 - s ** (n + 2)) / (n + 2)
+    if theta == 0:
+        return head
+
+    def tail(beta0: Callable):
+        def f(phi, analytic):
+            sin_phi, cos_phi = phi.sin(), phi.cos()
+            u = s * sin_phi
+            weight = _power(u, n, analytic, acb, arb) * s * cos_phi
+            b0 = beta0(phi)
+            if original:
+                return weight * 2 * b0
+            return weight * 2 * (c * u * b0 + s * cos_phi)
+        return f
+
+    near = tail(lambda phi: pi / 2 + (c * phi.tan()).atan())   # β₀ for φ ∈ [0, π/4]
+    far = tail(lambda phi: pi - (phi.cot() / c).atan())         # the same function for φ ∈ [π/4, π/2]
+    return head + work.integral(near, arb(0), pi / 4) + work.integral(far, pi / 4, pi / 2)
+
+
+def _half_vector_lobe(work: _Integrator, theta, h: Callable):
+    """E for a lobe h(N·H) at view angle θ_o (the half-vector reduction in the module docstring)."""
+    arb, acb = work.arb, work.acb
+    pi = arb.pi()
+    co, so = theta.cos(), theta.sin()
+    theta1 = (pi / 2 - theta) / 2
+
+    def full_circle(t, analytic):
+        c, s = t.cos(), t.sin()
+        p, q = co * c, so * s
+        value = h(c, analytic)
+        return 4 * value * s * (2 * c * 2 * pi * (p * p + q * q / 2) - co * 2 * pi * p)
+
+    pieces = [(full_circle, arb(0), theta1)]
+    if theta != 0:
+        def partial(upper_half: bool):
+            def f(psi, analytic):
+                half = psi / 2
+                sh, ch = half.sin(), half.cos()
+                t = theta1 + theta * sh * sh
+                c, s = t.cos(), t.sin()
+                s1 = (2 * theta * sh * sh).sinc()
+                s2 = (2 * theta * ch * ch).sinc()
+                if analytic and not (s1.real.lower() > 0 and s2.real.lower() > 0):
+                    return _nan(acb)
+                if upper_half:   # ψ ∈ [π/2, π]: tan(ψ/2) ≥ 1
+                    phi1 = 2 * ((half.cot()) * (s2 / s1).sqrt(analytic=analytic)).atan()
+                else:
+                    phi1 = pi - 2 * (half.tan() * (s1 / s2).sqrt(analytic=analytic)).atan()
+                sin_phi1 = theta * psi.sin() * (s1 * s2).sqrt(analytic=analytic) / (so * (2 * t).sin())
+                cos_phi1 = -co * (2 * t).cos() / (so * (2 * t).sin())
+                p, q = co * c, so * s
+                i1 = 2 * (p * phi1 + q * sin_phi1)
+                i2 = 2 * (p * p * phi1 + 2 * p * q * sin_phi1 + q * q * (phi1 + sin_phi1 * cos_phi1) / 2)
+                jacobian = theta / 2 * psi.sin()
+                return 4 * h(c, analytic) * s * (2 * c * i2 - co * i1) * jacobian
+            return f
+
+        pieces += [(partial(False), arb(0), pi / 2), (partial(True), pi / 2, pi)]
+    total = arb(0)
+    for f, a, b in pieces:
+        total += work.integral(f, a, b)
+    return total
+
+
+def _blinn_phong(work: _Integrator, theta, n):
+    acb, arb = work.acb, work.arb
+
+    def h(c, analytic):
+        return _power(c, n, analytic, acb, arb)
+
+    return _half_vector_lobe(work, theta, h)
+
+
+def _blinn_phong_gaussian(work: _Integrator, theta, n):
+    arb = work.arb
+    # c = 0.04^(1/n) with seed 003's threshold as the decimal 0.04 it is written as; c = 0 at n = 0.
+    k = arb("0.04") ** (1 / n) if n > 0 else arb(0)
+
+    def h(c, analytic):
+        x = (c - 1) / (k - 1)
+        return (-(x * x)).exp()
+
+    return _half_vector_lobe(work, theta, h)
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """A certified route for one built-in model: ``compute(work, theta, params, over) -> [arb per channel]``."""
+
+    compute: Callable
+    description: str
+
+
+def _scalar(params: dict, name: str, arb):
+    value = float(params[name])
+    return arb(value)
+
+
+def _reflectance(work, theta, params, over):
+    return [_scalar(params, "reflectance", work.arb)]
+
+
+def _phong_route(original: bool):
+    def compute(work, theta, params, over):
+        n = _scalar(params, "n", work.arb)
+        if original and over == "view":  # ∫(R·V)^n (N·V) dV / (N·L): the modified integral over cos θ_L
+            return [_phong(work, theta, n, original=False) / theta.cos()]
+        return [_phong(work, theta, n, original)]
+    return compute
+
+
+REDUCTIONS: dict[str, Reduction] = {
+    "lambert": Reduction(_reflectance, "exact: ∫ρ/π cos dω = ρ"),
+    "phong": Reduction(_phong_route(True), "1-D in cos α about the mirror direction (seed 000's form)"),
+    "modified-phong": Reduction(_phong_route(False), "1-D in cos α about the mirror direction"),
+    "blinn-phong": Reduction(
+        lambda work, theta, params, over: [_blinn_phong(work, theta, _scalar(params, "n", work.arb))],
+        "1-D in the half-vector angle (seed 002's double integral, inner integral in closed form)"),
+    "blinn-phong-gaussian": Reduction(
+        lambda work, theta, params, over: [_blinn_phong_gaussian(work, theta, _scalar(params, "n", work.arb))],
+        "1-D in the half-vector angle (any lobe of N·H)"),
+}
+
+
+def validate_digits(digits: object) -> int:
+    """The number of significant digits asked of an enclosure (an integer in [1, MAX_DIGITS])."""
+    if isinstance(digits, bool) or not isinstance(digits, (int, np.integer)):
+        raise ArgumentError(f"digits must be an integer, got {digits!r}", where="digits")
+    if not 1 <= digits <= MAX_DIGITS:
+        raise ArgumentError(f"digits must lie in [1, {MAX_DIGITS}], got {digits}", where="digits")
+    return int(digits)
+
+
+def route(model) -> Reduction:
+    """The certified reduction for ``model``, or an ArgumentError naming the model and why there is none."""
+    reduction = REDUCTIONS.get(getattr(model, "name", ""))
+    if reduction is None or type(model).__module__.startswith("brdfnorm.brdffile"):
+        known = ", ".join(REDUCTIONS)
+        raise ArgumentError(
+            f"no certified route for {model.name}: its albedo has no reduction to one-dimensional integrals of "
+            f"analytic functions here (certified: {known}); use method 'quadrature'", where="method")
+    return reduction
+
+
+def enclose(model, theta: float, params: dict, over: str = "light", digits: int = DEFAULT_DIGITS,
+            phi: float = 0.0) -> list[Enclosure]:
+    """Enclosures (one per channel) of the albedo of ``model`` at polar angle ``theta`` (radians)."""
+    digits = validate_digits(digits)
+    reduction = route(model)
+    flint = _flint()
+    work = _Integrator(digits)
+    old = flint.ctx.prec
+    flint.ctx.prec = work.bits
+    try:
+        balls = reduction.compute(work, flint.arb(float(theta)), params, over)
+        for ball in balls:
+            if not ball.is_finite():
+                raise EvaluationError(f"Arb could not enclose the albedo at theta={float(theta)!r} with {digits} "
+                                      "digits", where=model.name)
+        return [Enclosure.of(ball, digits, work.evaluations) for ball in balls]
+    finally:
+        flint.ctx.prec = old
+
+
+def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
+    """The ``certified`` albedo method: per case, Arb enclosures; returns the albedo module's tuple + bounds."""
+    route(problem.model)  # the model's reason for having no certified route, before any work
+    K = problem.fixed.shape[0]
+    C = problem.model.channels
+    value, error = np.empty((K, C)), np.empty((K, C))
+    lower, upper = np.empty((K, C), dtype=object), np.empty((K, C), dtype=object)
+    evaluations = np.zeros(K, dtype=np.int64)
+    theta = np.asarray(problem.theta, dtype=float).reshape(-1)
+    for k in range(K):
+        params = {name: np.asarray(v)[k] if name in problem.per_case else v
+                  for name, v in problem.params.items()}
+        enclosures = enclose(problem.model, theta[k], params, problem.over, digits)
+        channels = enclosures if len(enclosures) == C else enclosures * C
+        for c, e in enumerate(channels):
+            value[k, c], error[k, c], lower[k, c], upper[k, c] = e.value, e.error, e.lower, e.upper
+        evaluations[k] = enclosures[0].evaluations
+    return value, error, evaluations, np.ones(K, dtype=bool), None, {"lower": lower, "upper": upper}
+
+
+def applies(model, over) -> bool:
+    """Always: asked for by name, the method itself says why a model has no certified route."""
+    return True
