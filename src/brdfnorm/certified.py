@@ -98,9 +98,11 @@ class Enclosure:
         arb = type(ball)
         value = float(ball.mid())
         bound = (arb(ball.rad()) + abs(ball.mid() - arb(value))).upper()
+        error = float(bound)
+        if arb(error) < bound:  # round the bound up, never down
+            error = float(np.nextafter(error, np.inf))
         return cls(ball, digits, evaluations, _decimal(ball.lower(), digits, ROUND_FLOOR),
-                   _decimal(ball.upper(), digits, ROUND_CEILING), value,
-                   float(np.nextafter(float(bound), np.inf)))
+                   _decimal(ball.upper(), digits, ROUND_CEILING), value, error)
 
 
 def _decimal(endpoint, digits: int, rounding: str) -> str:
@@ -127,13 +129,41 @@ class _Integrator:
             return f(x, analytic)
 
         tol = self.arb(2) ** (-(self.bits - 20))
-        result = self.acb.integral(counted, a, b, rel_tol=tol, abs_tol=tol * self.arb(2) ** -4000,
-                                   eval_limit=200_000, depth_limit=4 * self.bits)
-        return result.real
+        return self.acb.integral(counted, a, b, rel_tol=tol, eval_limit=200_000).real
+
+    def integral_of_power(self, base: Callable, n, rest: Callable, a, b, slope):
+        """∫_a^b base(x)^n · rest(x) dx, base ≥ 0 on [a, b]; if base(a) = 0, base(x) ≤ slope·(x − a) is required.
+
+        Arb converges slowly into an endpoint branch point of the power, so [a, a + ε] is enclosed directly:
+        |∫| ≤ slope^n ε^(n+1)/(n+1) · sup|rest|, with ε chosen to make that 2^−(bits+30) of the scale, and the
+        rest, where the power is analytic, is integrated.
+        """
+        arb, acb = self.arb, self.acb
+
+        def integrand(x, analytic):
+            return _power(base(x), n, analytic, acb, arb) * rest(x, analytic)
+
+        exponent = float(n.mid())
+        if exponent.is_integer() or not base(acb(a)).is_zero():  # no branch point at a: Arb alone suffices
+            return self.integral(integrand, a, b)
+        eps = arb(2) ** -math.ceil((self.bits + 30) / (exponent + 1))
+        if eps > (b - a) / 2:
+            eps = (b - a) / 2
+        cover = acb(a + eps / 2 + arb(0, float((eps / 2).upper())))
+        bound = slope ** n * eps ** (n + 1) / (n + 1) * arb(abs(rest(cover, False)).upper())
+        return arb(0, float(bound.upper())) + self.integral(integrand, a + eps, b)
 
 
 def _nan(acb):
     return acb("nan")
+
+
+def _atan(z, analytic: bool, acb):
+    """atan z, analytic off its cuts i·[1, ∞) and −i·[1, ∞): under the analytic check a ball whose imaginary part
+    may reach ±1 is refused (a non-finite ball), so Arb bisects instead of integrating across a cut."""
+    if analytic and not abs(z.imag).upper() < 1:
+        return _nan(acb)
+    return z.atan()
 
 
 def _power(x, n, analytic: bool, acb, arb):
@@ -159,27 +189,31 @@ def _phong(work: _Integrator, theta, n, original: bool):
         return arb.pi() * (2 if original else 1)
     c, s = theta.cos(), theta.sin()
     pi = arb.pi()
-    if original:
-        head = 2 * pi * (1 - s ** (n + 1)) / (n + 1)
-    else:
-        head = 2 * pi * c * (1 - s ** (n + 2)) / (n + 2)
+
+    # Integrated, not taken from its antiderivative, so that seed 000's closed forms (the θ_o = 0 case) are
+    # checked against an integral rather than restated. u = cos α ∈ [s_o, 1]: the β-circle lies above the horizon.
+    head = work.integral_of_power(lambda u: u, n, lambda u, analytic: 2 * pi * (1 if original else c * u),
+                                  s, arb(1), arb(1))
     if theta == 0:
         return head
 
-    def tail(beta0: Callable):
+    def rest(beta0: Callable):  # all but (s_o sin φ)^n of the tail's integrand
         def f(phi, analytic):
-            sin_phi, cos_phi = phi.sin(), phi.cos()
-            u = s * sin_phi
-            weight = _power(u, n, analytic, acb, arb) * s * cos_phi
-            b0 = beta0(phi)
+            cos_phi = phi.cos()
+            b0 = beta0(phi, analytic)
             if original:
-                return weight * 2 * b0
-            return weight * 2 * (c * u * b0 + s * cos_phi)
+                return s * cos_phi * 2 * b0
+            return s * cos_phi * 2 * (c * s * phi.sin() * b0 + s * cos_phi)
         return f
 
-    near = tail(lambda phi: pi / 2 + (c * phi.tan()).atan())   # β₀ for φ ∈ [0, π/4]
-    far = tail(lambda phi: pi - (phi.cot() / c).atan())         # the same function for φ ∈ [π/4, π/2]
-    return head + work.integral(near, arb(0), pi / 4) + work.integral(far, pi / 4, pi / 2)
+    def base(phi):
+        return s * phi.sin()
+
+    near = rest(lambda phi, analytic: pi / 2 + _atan(c * phi.tan(), analytic, acb))  # β₀ for φ ∈ [0, π/4]
+    far = rest(lambda phi, analytic: pi - _atan(phi.cot() / c, analytic, acb))  # the same for φ ∈ [π/4, π/2]
+    return (head + work.integral_of_power(base, n, near, arb(0), pi / 4, s)
+            + work.integral(lambda phi, analytic: _power(base(phi), n, analytic, acb, arb) * far(phi, analytic),
+                            pi / 4, pi / 2))
 
 
 def _half_vector_lobe(work: _Integrator, theta, h: Callable):
@@ -208,9 +242,9 @@ def _half_vector_lobe(work: _Integrator, theta, h: Callable):
                 if analytic and not (s1.real.lower() > 0 and s2.real.lower() > 0):
                     return _nan(acb)
                 if upper_half:   # ψ ∈ [π/2, π]: tan(ψ/2) ≥ 1
-                    phi1 = 2 * ((half.cot()) * (s2 / s1).sqrt(analytic=analytic)).atan()
+                    phi1 = 2 * _atan(half.cot() * (s2 / s1).sqrt(analytic=analytic), analytic, acb)
                 else:
-                    phi1 = pi - 2 * (half.tan() * (s1 / s2).sqrt(analytic=analytic)).atan()
+                    phi1 = pi - 2 * _atan(half.tan() * (s1 / s2).sqrt(analytic=analytic), analytic, acb)
                 sin_phi1 = theta * psi.sin() * (s1 * s2).sqrt(analytic=analytic) / (so * (2 * t).sin())
                 cos_phi1 = -co * (2 * t).cos() / (so * (2 * t).sin())
                 p, q = co * c, so * s
