@@ -125,7 +125,8 @@ def test_lambert_is_its_reflectance_exactly():
     result = bn.albedo(bn.load("lambert", reflectance=0.3), np.radians([0.0, 45.0, 89.0]), method="certified")
     assert np.all(result.value[:, 0] == 0.3) and np.all(result.error == 0.0)
     from decimal import Decimal  # the float 0.3 exactly, between the outward-rounded 30-digit decimals
-    assert all(Decimal(lo) <= Decimal(0.3) <= Decimal(hi) for lo, hi in zip(result.lower[:, 0], result.upper[:, 0]))
+    bounds = zip(result.lower[:, 0], result.upper[:, 0], strict=True)
+    assert all(Decimal(lo) <= Decimal(0.3) <= Decimal(hi) for lo, hi in bounds)
 
 
 # -- the float64 engine judged against enclosures ----------------------------------------------------------------
@@ -207,3 +208,61 @@ def test_cli_errors_map_to_flags(capsys):
     assert code == 2 and "--digits" in err and "Traceback" not in err
     code, _, err = run_cli(capsys, "albedo", "examples/ggx.brdf", "--theta", "0", "--method", "certified")
     assert code == 2 and "--method" in err and "no certified route" in err
+
+
+# -- verify --certified and the report -----------------------------------------------------------------------------
+
+def test_verify_certified_checks_every_albedo_claim(capsys):
+    from brdfnorm import verify
+
+    ids = list(verify.CERTIFIABLE)
+    claims = verify.verify([0.5, 8.86, 512.0], only=ids, certified=True)
+    for claim in claims:
+        assert claim.certified is not None and claim.certified["ok"], claim.id
+        assert len(claim.certified["cases"]) == 3
+        assert all(c["lower"] < c["upper"] for c in claim.certified["cases"])
+    code, out, err = run_cli(capsys, "verify", "--certified", "--claim", "blinn-phong-normal", "--n", "8.86,1e4",
+                             "--json")
+    assert code == 0, err
+    (claim,) = json.loads(out)["claims"]
+    assert claim["certified"]["exact_formula"] and all(c["inside"] for c in claim["certified"]["cases"])
+
+
+def test_verify_certified_fails_a_closed_form_that_is_off_by_1e_minus_25(monkeypatch):
+    from brdfnorm import certified, verify
+
+    exact = certified.NORMAL_INCIDENCE_CLOSED_FORMS["phong"]
+    monkeypatch.setitem(certified.NORMAL_INCIDENCE_CLOSED_FORMS, "phong",
+                        lambda n, pi, arb: exact(n, pi, arb) * (1 + arb("1e-25")))
+    (claim,) = verify.verify([8.86], only=["phong-original"], certified=True)
+    assert not claim.ok and not claim.certified["cases"][0]["inside"]
+
+
+def test_report_factor_table_is_certified():
+    from brdfnorm.report import sections, study
+
+    n = np.array([1.0, 64.0, 4096.0])
+    quadrature, error = {}, {}
+    for lobe in study.SEED_LOBES:
+        r = bn.normalize(bn.load(lobe), "normal", sweep={"n": n}, rtol=1e-10, method="quadrature")
+        quadrature[lobe], error[lobe] = r.factor[:, 0, 0], r.error[:, 0, 0] / r.albedo[:, 0, 0]
+    cert = study.certified_factors(n, quadrature, error)
+    assert all(np.all(v) for v in cert.closed_inside.values())
+    assert all(np.all(v) for v in cert.quadrature_covered.values())
+    assert max(float(np.max(r)) for r in cert.radius.values()) < 1e-28
+    table = study.FactorTable(n, {}, quadrature, error, {}, {}, cert)
+    line = sections._certified_line(table)
+    assert line.startswith("Certified to 30 digits") and "inside" in line and "DO NOT" not in line
+
+
+def test_converged_says_whether_the_digits_were_reached(monkeypatch):
+    from brdfnorm import certified
+
+    m = bn.load("modified-phong", n=3.0)
+    exact = bn.albedo(m, 0.7, method="certified", digits=30)
+    assert exact.converged.all()
+    monkeypatch.setattr(certified, "EVAL_LIMIT", 40)  # Arb stops early and returns the wider ball it has
+    with pytest.warns(UserWarning, match="did not reach"):
+        wide = bn.albedo(m, 0.7, method="certified", digits=30)
+    assert not wide.converged.all()  # still a valid enclosure, only wider than 30 digits
+    assert float(wide.lower[0]) <= exact.value[0] <= float(wide.upper[0])

@@ -64,13 +64,16 @@ from .errors import ArgumentError, EvaluationError
 DEFAULT_DIGITS = 30
 #: Digits the CLI and the API accept (Arb works at any precision; beyond this the cost is rarely wanted).
 MAX_DIGITS = 1000
+#: Integrand evaluations Arb may spend on one integral before it returns the (wider) enclosure it has.
+EVAL_LIMIT = 200_000
 INSTALL_HINT = "python-flint is not installed; install it with: pip install 'brdfnorm[certified]'"
 
 
-def _flint():
+def require_flint():
+    """The python-flint module, or an ArgumentError saying how to install it (it is an optional extra)."""
     try:
         import flint
-    except ImportError:  # an optional extra: say how to get it instead of failing deep inside
+    except ImportError:
         raise ArgumentError(INSTALL_HINT, where="method") from None
     return flint
 
@@ -87,6 +90,7 @@ class Enclosure:
     ball: object  # flint.arb
     digits: int
     evaluations: int
+    reached: bool  # the relative radius is within the digits asked for
     lower: str
     upper: str
     value: float
@@ -101,7 +105,8 @@ class Enclosure:
         error = float(bound)
         if arb(error) < bound:  # round the bound up, never down
             error = float(np.nextafter(error, np.inf))
-        return cls(ball, digits, evaluations, _decimal(ball.lower(), digits, ROUND_FLOOR),
+        reached = bool(arb(ball.rad()) <= arb(10) ** -digits * abs(ball.mid()))
+        return cls(ball, digits, evaluations, reached, _decimal(ball.lower(), digits, ROUND_FLOOR),
                    _decimal(ball.upper(), digits, ROUND_CEILING), value, error)
 
 
@@ -117,7 +122,7 @@ class _Integrator:
     """Arb integrals at a working precision, counting integrand evaluations."""
 
     def __init__(self, digits: int) -> None:
-        flint = _flint()
+        flint = require_flint()
         self.arb, self.acb = flint.arb, flint.acb
         self.digits = digits
         self.bits = int(math.ceil(digits * math.log2(10))) + 40
@@ -129,7 +134,7 @@ class _Integrator:
             return f(x, analytic)
 
         tol = self.arb(2) ** (-(self.bits - 20))
-        return self.acb.integral(counted, a, b, rel_tol=tol, eval_limit=200_000).real
+        return self.acb.integral(counted, a, b, rel_tol=tol, eval_limit=EVAL_LIMIT).real
 
     def integral_of_power(self, base: Callable, n, rest: Callable, a, b, slope):
         """∫_a^b base(x)^n · rest(x) dx, base ≥ 0 on [a, b]; if base(a) = 0, base(x) ≤ slope·(x − a) is required.
@@ -321,6 +326,27 @@ REDUCTIONS: dict[str, Reduction] = {
 }
 
 
+#: Seed 000's closed forms of the albedo at normal incidence (over the light), as functions of n in Arb ball
+#: arithmetic (``(n, pi, arb) -> arb``): what a certified enclosure is checked against.
+NORMAL_INCIDENCE_CLOSED_FORMS: dict[str, Callable] = {
+    "phong": lambda n, pi, arb: 2 * pi / (n + 1),
+    "modified-phong": lambda n, pi, arb: 2 * pi / (n + 2),
+    "blinn-phong": lambda n, pi, arb: 8 * pi * (arb(2) ** (-n / 2) + n) / ((n + 2) * (n + 4)),
+}
+
+
+def closed_form_inside(model_name: str, n: float, enclosure: Enclosure) -> bool:
+    """Whether seed 000's closed form for ``model_name`` at exponent ``n``, evaluated in ball arithmetic, lies inside
+    ``enclosure`` (both balls: the closed form's whole ball must be inside the reported [lower, upper])."""
+    flint = require_flint()
+    old, flint.ctx.prec = flint.ctx.prec, int(4 * enclosure.digits) + 64
+    try:
+        exact = NORMAL_INCIDENCE_CLOSED_FORMS[model_name](flint.arb(float(n)), flint.arb.pi(), flint.arb)
+        return bool(flint.arb(enclosure.lower) <= exact.lower() and exact.upper() <= flint.arb(enclosure.upper))
+    finally:
+        flint.ctx.prec = old
+
+
 def validate_digits(digits: object) -> int:
     """The number of significant digits asked of an enclosure (an integer in [1, MAX_DIGITS])."""
     if isinstance(digits, bool) or not isinstance(digits, (int, np.integer)):
@@ -346,7 +372,7 @@ def enclose(model, theta: float, params: dict, over: str = "light", digits: int 
     """Enclosures (one per channel) of the albedo of ``model`` at polar angle ``theta`` (radians)."""
     digits = validate_digits(digits)
     reduction = route(model)
-    flint = _flint()
+    flint = require_flint()
     work = _Integrator(digits)
     old = flint.ctx.prec
     flint.ctx.prec = work.bits
@@ -369,6 +395,7 @@ def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
     value, error = np.empty((K, C)), np.empty((K, C))
     lower, upper = np.empty((K, C), dtype=object), np.empty((K, C), dtype=object)
     evaluations = np.zeros(K, dtype=np.int64)
+    reached = np.ones(K, dtype=bool)
     theta = np.asarray(problem.theta, dtype=float).reshape(-1)
     for k in range(K):
         params = {name: np.asarray(v)[k] if name in problem.per_case else v
@@ -378,7 +405,9 @@ def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
         for c, e in enumerate(channels):
             value[k, c], error[k, c], lower[k, c], upper[k, c] = e.value, e.error, e.lower, e.upper
         evaluations[k] = enclosures[0].evaluations
-    return value, error, evaluations, np.ones(K, dtype=bool), None, {"lower": lower, "upper": upper}
+        reached[k] = all(e.reached for e in enclosures)
+    # An enclosure is always valid; "converged" says whether it is as narrow as the digits asked for.
+    return value, error, evaluations, reached, None, {"lower": lower, "upper": upper}
 
 
 def applies(model, over) -> bool:
