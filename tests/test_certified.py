@@ -266,3 +266,71 @@ def test_converged_says_whether_the_digits_were_reached(monkeypatch):
         wide = bn.albedo(m, 0.7, method="certified", digits=30)
     assert not wide.converged.all()  # still a valid enclosure, only wider than 30 digits
     assert float(wide.lower[0]) <= exact.value[0] <= float(wide.upper[0])
+
+
+# -- microfacet lobes at normal incidence (the reduction itself; the models route through it) -------------------
+
+def _microfacet_reference(alpha: float, distribution: str, eta: float | None) -> float:
+    """E at V = N by mpmath in the half-vector polar angle θ_h (D, Smith Λ and Fresnel as published, not the CDF
+    form), split at the lobe's widths and at the critical angle."""
+    import mpmath as mp
+
+    with mp.workdps(30):
+        a = mp.mpf(alpha)
+
+        def integrand(th):
+            t2, c = mp.tan(th) ** 2, mp.cos(th)
+            if distribution == "ggx":
+                d = a**2 / (mp.pi * c**4 * (a**2 + t2) ** 2)
+                lam = (-1 + mp.sqrt(1 + a**2 * mp.tan(2 * th) ** 2)) / 2
+            else:
+                d = mp.exp(-t2 / a**2) / (mp.pi * a**2 * c**4)
+                x = 1 / (a * mp.tan(2 * th))
+                lam = (mp.erf(x) - 1) / 2 + mp.exp(-x * x) / (2 * x * mp.sqrt(mp.pi))
+            f = 1
+            if eta is not None and eta**2 - 1 + c * c >= 0:
+                g = mp.sqrt(eta**2 - 1 + c * c)
+                r = (c * (g + c) - 1) / (c * (g - c) + 1)
+                f = (g - c) ** 2 / (2 * (g + c) ** 2) * (1 + r * r)
+            return d * c / (1 + lam) * f * 2 * mp.pi * mp.sin(th)
+
+        points = {mp.mpf(0), mp.pi / 4, *(w * alpha for w in (0.1, 0.3, 1, 3) if w * alpha < 0.78)}
+        if eta is not None and eta < 1:
+            points.add(mp.acos(mp.sqrt(1 - mp.mpf(eta) ** 2)))
+        return float(mp.quad(integrand, sorted(points)))
+
+
+@pytest.mark.parametrize(("distribution", "alpha", "eta"), [
+    ("ggx", 0.3, None), ("ggx", 1.0, None), ("beckmann", 0.3, None), ("beckmann", 1.0, None),
+    ("ggx", 0.5, 1.5), ("ggx", 0.5, 0.6), ("beckmann", 0.7, 0.5),
+])
+def test_microfacet_normal_incidence_against_mpmath(distribution, alpha, eta):
+    from brdfnorm import certified
+
+    params = {"alpha": alpha, "fresnel": "none" if eta is None else "dielectric", "eta": eta}
+    work = certified._Integrator(25)
+    with _precision(work.bits):
+        (ball,) = certified.REDUCTIONS[distribution].compute(work, arb(0), params, "light")
+        reference = _microfacet_reference(alpha, distribution, eta)
+        assert float(ball.rad()) < 1e-24
+        assert abs(float(ball.mid()) - reference) <= 1e-14 * reference
+
+
+def test_ggx_at_unit_alpha_encloses_one_minus_ln_2():
+    from brdfnorm import certified
+
+    work = certified._Integrator(30)
+    with _precision(work.bits):
+        (ball,) = certified.REDUCTIONS["ggx"].compute(work, arb(0), {"alpha": 1.0}, "light")
+        exact = 1 - arb(2).log()
+        assert ball.contains(exact) and float(ball.rad()) < 1e-28
+
+
+def test_mirror_like_microfacet_lobes_reflect_everything():
+    from brdfnorm import certified
+
+    for distribution in ("ggx", "beckmann"):
+        work = certified._Integrator(25)
+        with _precision(work.bits):
+            (ball,) = certified.REDUCTIONS[distribution].compute(work, arb(0), {"alpha": 1e-8}, "light")
+            assert abs(float(ball.mid()) - 1.0) < 1e-15 and float(ball.rad()) < 1e-24

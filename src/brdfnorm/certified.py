@@ -287,6 +287,98 @@ def _blinn_phong_gaussian(work: _Integrator, theta, n):
     return _half_vector_lobe(work, theta, h)
 
 
+def _microfacet(work: _Integrator, alpha, distribution: str, fresnel: Callable, critical_cos=None):
+    """E at normal incidence of a microfacet lobe D·G2·F/(4 N·L N·V) (Walter et al. 2007; Heitz 2014's Smith Λ).
+
+    With V = N the half vector's polar angle is θ_h = θ_L/2, dω_L = 4 cos θ_h dω_h and Λ(V) = 0, so both the
+    height-correlated and the separable G2 are G1(L) = 1/(1 + Λ(θ_L)), and
+    E = ∫ D(θ_h) cos θ_h G1(2θ_h) F(cos θ_h) dω_h over θ_h ∈ [0, π/4]. The distribution's own CDF P (the share of
+    projected microfacet area with a smaller θ_h) is the variable, so the lobe is smooth whatever α is:
+    GGX P = t²/(α² + t²), t = tan θ_h, and E = ∫₀^{P(π/4)} G1 F dP; Beckmann P = 1 − exp(−q), q = t²/α², taken
+    as E = ∫₀^{1/α²} e^{−q} G1 F dq (P itself would crowd the range to within e^{−1/α²} of 1 for small α).
+    G1 is written without poles: GGX G1 = 2 cos θ_L/(cos θ_L + √(cos² θ_L + α² sin² θ_L)); Beckmann, with
+    a = cos θ_L/(α sin θ_L), G1 = 2a/(a(1 + erf a) + e^{−a²}/√π) (Λ with erf, not the rational approximation).
+    ``fresnel(cos θ_h, analytic, beyond)`` is F, ``beyond`` telling the pieces apart where F stops being analytic
+    at ``critical_cos`` (total internal reflection); the path is split there.
+    """
+    arb = work.arb
+    a2 = alpha * alpha
+    ggx = distribution == "ggx"
+
+    def variable(t2):  # the integration variable at tan² θ_h = t2
+        return t2 / (a2 + t2) if ggx else t2 / a2
+
+    def integrand(beyond: bool):
+        def f(x, analytic):
+            t2 = a2 * x / (1 - x) if ggx else a2 * x
+            weight = 1 if ggx else (-x).exp()
+            cos_l = (1 - t2) / (1 + t2)
+            if ggx:
+                root = (cos_l * cos_l + a2 * 4 * t2 / ((1 + t2) * (1 + t2))).sqrt(analytic=analytic)
+                g1 = 2 * cos_l / (cos_l + root)
+            else:
+                a = cos_l * (1 + t2) / (2 * alpha * t2.sqrt(analytic=analytic))
+                g1 = 2 * a / (a * (1 + a.erf()) + (-(a * a)).exp() / arb.pi().sqrt())
+            return weight * g1 * fresnel((1 / (1 + t2)).sqrt(analytic=analytic), analytic, beyond)
+        return f
+
+    upper = variable(arb(1))  # θ_h = π/4
+    breaks = [arb(0), upper]
+    if critical_cos is not None:
+        split = variable(1 / (critical_cos * critical_cos) - 1)
+        if split < upper:
+            breaks.insert(1, split)
+    total = arb(0)
+    for index, (lo, hi) in enumerate(zip(breaks[:-1], breaks[1:], strict=True)):
+        f = integrand(beyond=index > 0)
+        if not ggx and index == 0:
+            # G1 → 1 like 1 − e^(−1/(4α⁴q)) at q = 0: smooth but not analytic, so [0, δ] is enclosed directly
+            # (0 ≤ e^(−q) G1 ≤ 1 and |F| ≤ 1 there: F(cos θ_h = 1) with θ_h → 0).
+            delta = arb(2) ** -(work.bits + 30)
+            total += arb(0, float(delta.upper()))
+            lo = delta
+        total += work.integral(f, lo, hi)
+    return total
+
+
+def _microfacet_route(distribution: str):
+    def compute(work, theta, params, over):
+        arb = work.arb
+        if theta != 0:
+            raise ArgumentError(f"{distribution}: the certified route is at normal incidence only (theta 0), where "
+                                "the lobe is axisymmetric", where="theta")
+        alpha = params.get("alpha")
+        if alpha is None or float(np.max(params.get("alpha_x", alpha))) != float(np.min(params.get("alpha_y", alpha))):
+            raise ArgumentError(f"{distribution}: the certified route needs an isotropic alpha", where="method")
+        if params.get("ms", "none") != "none":
+            raise ArgumentError(f"{distribution}: ms={params['ms']} uses interpolated tables; no certified route",
+                                where="method")
+        alpha = arb(float(alpha))
+        kind = params.get("fresnel", "none")
+        if kind == "none":
+            return [_microfacet(work, alpha, distribution, lambda c, analytic, beyond: 1)]
+        if kind == "schlick":  # F = f0 + (f90 − f0)(1 − cos θ_d)⁵ is linear in (f0, f90): two integrals
+            weight = _microfacet(work, alpha, distribution, lambda c, analytic, beyond: (1 - c) ** 5)
+            whole = _microfacet(work, alpha, distribution, lambda c, analytic, beyond: 1)
+            f0, f90 = (np.broadcast_to(np.asarray(params[name], dtype=float), (3,)) for name in ("f0", "f90"))
+            return [arb(float(a)) * (whole - weight) + arb(float(b)) * weight for a, b in zip(f0, f90, strict=True)]
+        if kind == "dielectric":
+            eta = arb(float(params["eta"]))
+            critical = (1 - eta * eta).sqrt() if eta < 1 else None
+
+            def exact(c, analytic, beyond):  # Walter et al. 2007, Eq. 22; beyond the critical angle F = 1
+                if beyond:
+                    return 1
+                g = (eta * eta - 1 + c * c).sqrt(analytic=analytic)
+                ratio = (c * (g + c) - 1) / (c * (g - c) + 1)
+                return (g - c) ** 2 / (2 * (g + c) ** 2) * (1 + ratio * ratio)
+
+            return [_microfacet(work, alpha, distribution, exact, critical)]
+        raise ArgumentError(f"{distribution}: fresnel={kind} has no certified route (the conductor's complex "
+                            "square root is not enclosed here)", where="method")
+    return compute
+
+
 @dataclass(frozen=True)
 class Reduction:
     """A certified route for one built-in model: ``compute(work, theta, params, over) -> [arb per channel]``."""
@@ -323,6 +415,8 @@ REDUCTIONS: dict[str, Reduction] = {
     "blinn-phong-gaussian": Reduction(
         lambda work, theta, params, over: [_blinn_phong_gaussian(work, theta, _scalar(params, "n", work.arb))],
         "1-D in the half-vector angle (any lobe of N·H)"),
+    "ggx": Reduction(_microfacet_route("ggx"), "normal incidence: 1-D in the distribution's CDF"),
+    "beckmann": Reduction(_microfacet_route("beckmann"), "normal incidence: 1-D in the distribution's CDF"),
 }
 
 
