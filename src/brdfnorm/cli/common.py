@@ -50,7 +50,7 @@ class Over(str, Enum):
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
              "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
              "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
-             "output": "--output", "n": "--n", "claim": "--claim"}
+             "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits"}
 
 
 class _Console(Console):

@@ -40,7 +40,8 @@ class NonFinite(str, Enum):
 
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
-METHOD_OPTION = typer.Option("auto", "--method", help="auto | quadrature | closed-form | series (where it applies).")
+METHOD_OPTION = typer.Option("auto", "--method",
+                             help="auto | quadrature | closed-form | series | certified (where it applies).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
@@ -71,19 +72,25 @@ def albedo(
     rtol: float = RTOL_OPTION,
     nonfinite: NonFinite = typer.Option(NonFinite.raise_, "--nonfinite",
                                         help="raise: fail at the first NaN/Inf; zero: count them as 0 (warns)."),
+    digits: int = typer.Option(None, "--digits", min=1,
+                               help="With --method certified: significant digits of the enclosure (default 30)."),
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
-    """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view)."""
+    """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
+
+    With --method certified the albedo is a guaranteed enclosure [lower, upper] (Arb ball arithmetic), printed
+    as decimals rounded outward; JSON carries them as strings so that no digit is lost to float parsing.
+    """
     with guarded(debug):
         chosen = result_format(json_output, csv_output)
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
         result = compute_albedo(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol,
-                                method=method, nonfinite=nonfinite.value)
+                                method=method, nonfinite=nonfinite.value, digits=digits)
         write_file(output or STDOUT, render(result.records(), chosen))
 
 
