@@ -7,16 +7,9 @@ import sys
 
 import typer
 
-app = typer.Typer(
-    name="brdfnorm",
-    help="Exact energy normalization of analytic BRDFs: albedo, normalization factors, fits, shader code.",
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-    add_completion=False,
-)
-
-# Command modules register themselves on `app` when imported.
-from . import core, fit, info, report, verify  # noqa: E402,F401
+# Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
+from . import core, fit, info, report, verify  # noqa: F401
+from .application import app
 
 
 def main(argv: list[str] | None = None) -> None:

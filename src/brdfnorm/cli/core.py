@@ -13,7 +13,7 @@ from ..models import REGISTRY, Model
 from ..normalize import normalize as compute_normalize
 from ..output import STDOUT, write_file
 from ..output.formats import render
-from . import app
+from .application import app
 from .common import (
     CSV_OPTION,
     DEBUG_OPTION,

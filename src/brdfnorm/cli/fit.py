@@ -21,7 +21,7 @@ from ..fit import METRICS, FitResult, fit, parse_form
 from ..normalize import normalize
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
-from . import app
+from .application import app
 from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,

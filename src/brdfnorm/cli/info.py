@@ -14,7 +14,7 @@ from ..brdffile import BrdfModel, reciprocity_check
 from ..errors import ArgumentError
 from ..output import STDOUT, write_file
 from ..output.formats import format_value, to_json
-from . import app
+from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, console, guarded, load_model
 
 

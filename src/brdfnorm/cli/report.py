@@ -6,7 +6,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import app
+from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
 
 

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
-from . import app
+from .application import app
 from .common import DEBUG_OPTION, console, guarded, parse_range
 
 
