@@ -22,7 +22,8 @@ import keyword
 import re
 from dataclasses import dataclass
 
-from .fit import FitResult, HyperbolaForm, RationalForm
+from .fit import FitResult
+from .forms import HyperbolaForm, RationalForm
 from .registry import Registry
 
 #: Words no emitted identifier may be, in any target: the keywords and reserved words of C11/C23, GLSL 4.6 and
