@@ -15,10 +15,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .albedo import AlbedoResult, albedo
+from .directional import AlbedoResult, albedo
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
-from .normalize import NormalizationResult, normalize
+from .normalization import NormalizationResult, normalize
 from .validate import short_repr
 
 __version__ = "0.1.0"

@@ -4,7 +4,7 @@ Seed 003 integrated the Gaussian Blinn-Phong normalization numerically and fitte
 0.01388682·n over n ∈ [1, 512] by ordinary least squares ("not accurate for small specular power values"); its
 commenter suggested a scaled, shifted hyperbola √(x² + 1). Seed 002 leaves the view-dependent Blinn-Phong
 normalization open. This module fits such formulas to samples (x, y) or, in two variables, (x, t, y) — it does
-not care how the samples were computed (:mod:`brdfnorm.normalize` in the command line).
+not care how the samples were computed (:mod:`brdfnorm.normalization` in the command line).
 
 Forms (:data:`FORMS`, selected by name as colour-science selects a ``method=``)
 --------------------------------------------------------------------------------

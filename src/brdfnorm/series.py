@@ -252,7 +252,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
 
 
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
-    """``brdfnorm.albedo`` method adapter: the batch of a :class:`brdfnorm.albedo.Problem` for ``blinn-phong``.
+    """``brdfnorm.directional`` method adapter: a :class:`brdfnorm.directional.Problem` batch for ``blinn-phong``.
 
     The lobe is reciprocal, so the light and view integrals coincide and both are (S5) at the fixed direction's
     polar angle. Returns (value (K, 1), error (K, 1), evaluations (K,), converged (K,), None).

@@ -1,20 +1,7 @@
-"""Every numerical claim of the three seed articles, re-checked: formula against independent numerics.
+"""Run the seed articles' numerical claims (:mod:`brdfnorm.claims`), each a formula against independent numerics.
 
-Seed 000 ("Phong Normalization Factor derivation"), seed 002 ("Energy-Normalizing Blinn–Phong Specular") and
-seed 003 (the Gaussian Blinn-Phong BRDF Explorer shader and its fitted factor) state formulas and say
-"validated numerically" or "I have no proof … experimental evidence". Each :class:`Claim` here recomputes one
-statement by its formula and by a route that shares nothing with the formula's derivation — brdfnorm's adaptive
-hemisphere cubature of the BRDF itself, mpmath at 30 digits, or a direct numerical integral of the seed's
-own intermediate form — and its verdict ``ok`` is computed from the two, never written down. Where a seed shows
-a step failing (Stokes's theorem with G = (0, 0, z³)), the claim is the failure, and ``ok`` says whether the
-failure is reproduced.
-
-The claims live in :mod:`brdfnorm.claims` (one module per seed); this module names them (:data:`CHECKS`) and runs
-them (:func:`verify`), optionally against guaranteed enclosures (:func:`certify`).
-
-Conventions: albedo E(V) = ∫ f(L, V)(N·L) dL with the view V fixed; the factor is 1/E. For the Phong lobes
-the seed's "reflected energy for light L", ∫ (R·V)^n dV, is the same function of the fixed direction's polar
-angle as E (R·V = L·mirror(V)), so the peak premises are checked on E.
+:data:`CHECKS` names the claims (one module per seed in :mod:`brdfnorm.claims`); :func:`verify` runs them and
+:func:`certify` also checks the albedo-valued ones against guaranteed enclosures (:mod:`brdfnorm.certified`).
 """
 
 from __future__ import annotations

@@ -3,7 +3,6 @@
 This package holds :class:`Claim` and its helpers; the claims themselves live in :mod:`.seed000`, :mod:`.seed002`
 and :mod:`.seed003`, and :mod:`brdfnorm.verify` runs them.
 
-
 Seed 000 ("Phong Normalization Factor derivation"), seed 002 ("Energy-Normalizing Blinn–Phong Specular") and
 seed 003 (the Gaussian Blinn-Phong BRDF Explorer shader and its fitted factor) state formulas and say
 "validated numerically" or "I have no proof … experimental evidence". Each :class:`Claim` here recomputes one
@@ -99,7 +98,7 @@ def parametric(claim_id: str, source: str, statement: str, n, formula, numeric, 
 
 def quadrature_albedo(model_name: str, n: np.ndarray, theta: float = 0.0) -> np.ndarray:
     """brdfnorm's adaptive hemisphere cubature of the BRDF itself (no reduction to one dimension)."""
-    from ..albedo import albedo
+    from ..directional import albedo
     from ..models import REGISTRY
 
     model = REGISTRY[model_name](n=np.asarray(n, dtype=float)[:, None])

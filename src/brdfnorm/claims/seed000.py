@@ -9,42 +9,28 @@ import numpy as np
 
 from .. import closed_forms
 from ..series import adaptive_gauss_legendre, blinn_phong_albedo_series
-from . import (
-    PREMISE_EXPONENTS,
-    PREMISE_THETA,
-    SOURCES,
-    TWO_PI,
-    Claim,
-    parametric,
-    quadrature_albedo,
-    rel_error,
-)
+from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
-# -- seed 000 -------------------------------------------------------------------------------------------------
+
+def _at_normal(claim_id: str, statement: str, albedo_formula, model_name: str, n: np.ndarray) -> Claim:
+    """A closed-form factor at normal incidence against adaptive hemisphere cubature of the BRDF at V = N."""
+    return parametric(claim_id, "000", statement, n, 1.0 / albedo_formula(n), 1.0 / quadrature_albedo(model_name, n),
+                      1e-10, "numeric: adaptive hemisphere cubature at V = N")
 
 
 def phong_original(n: np.ndarray) -> Claim:
-    return parametric(
-        "phong-original", "000", "original Phong max(0,R·V)^n/(N·L): factor (n+1)/2π (∫cos^n dω = 2π/(n+1))", n,
-        1.0 / closed_forms.phong_original_albedo_normal(n), 1.0 / quadrature_albedo("phong", n), 1e-10,
-        "numeric: adaptive hemisphere cubature at V = N",
-    )  # fmt: skip
+    return _at_normal("phong-original", "original Phong max(0,R·V)^n/(N·L): factor (n+1)/2π (∫cos^n dω = 2π/(n+1))",
+                      closed_forms.phong_original_albedo_normal, "phong", n)
 
 
 def phong_modified(n: np.ndarray) -> Claim:
-    return parametric(
-        "phong-modified", "000", "modified Phong max(0,R·V)^n: factor (n+2)/2π", n,
-        1.0 / closed_forms.phong_modified_albedo_normal(n), 1.0 / quadrature_albedo("modified-phong", n), 1e-10,
-        "numeric: adaptive hemisphere cubature at V = N",
-    )  # fmt: skip
+    return _at_normal("phong-modified", "modified Phong max(0,R·V)^n: factor (n+2)/2π",
+                      closed_forms.phong_modified_albedo_normal, "modified-phong", n)
 
 
 def blinn_phong_normal(n: np.ndarray) -> Claim:
-    return parametric(
-        "blinn-phong-normal", "000", "Blinn-Phong at L = N: factor (n+2)(n+4)/(8π(2^(−n/2)+n))", n,
-        1.0 / closed_forms.blinn_phong_albedo_normal(n), 1.0 / quadrature_albedo("blinn-phong", n), 1e-10,
-        "numeric: adaptive hemisphere cubature at V = N",
-    )  # fmt: skip
+    return _at_normal("blinn-phong-normal", "Blinn-Phong at L = N: factor (n+2)(n+4)/(8π(2^(−n/2)+n))",
+                      closed_forms.blinn_phong_albedo_normal, "blinn-phong", n)
 
 
 def blinn_phong_folklore(n: np.ndarray) -> Claim:

@@ -10,16 +10,7 @@ import numpy as np
 from scipy.special import gammaln, roots_legendre
 
 from ..series import adaptive_gauss_legendre
-from . import (
-    SOURCES,
-    TWO_PI,
-    Claim,
-    parametric,
-    quadrature_albedo,
-    rel_error,
-)
-
-# -- seed 002 -------------------------------------------------------------------------------------------------
+from . import SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
 
 def half_vector_length(_: np.ndarray) -> Claim:

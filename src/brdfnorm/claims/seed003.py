@@ -7,15 +7,7 @@ import numpy as np
 
 from .. import closed_forms
 from ..series import adaptive_gauss_legendre
-from . import (
-    GAUSSIAN_RANGE,
-    SOURCES,
-    TWO_PI,
-    Claim,
-    rel_error,
-)
-
-# -- seed 003 -------------------------------------------------------------------------------------------------
+from . import GAUSSIAN_RANGE, SOURCES, TWO_PI, Claim, rel_error
 
 
 def gaussian_factor(n: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
 
 
 class At(str, Enum):
-    """Normalization conventions (brdfnorm.normalize), as ``--at`` choices."""
+    """Normalization conventions (brdfnorm.normalization), as ``--at`` choices."""
 
     normal = "normal"
     max = "max"

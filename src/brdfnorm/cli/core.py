@@ -8,9 +8,9 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..albedo import albedo as compute_albedo
+from ..directional import albedo as compute_albedo
 from ..models import REGISTRY, Model
-from ..normalize import normalize as compute_normalize
+from ..normalization import normalize as compute_normalize
 from ..output import STDOUT, write_file
 from ..output.formats import render
 from .application import app

@@ -1,6 +1,6 @@
 """``brdfnorm fit``: fit a cheap formula to a model's normalization factor and emit it as shader code (issue 4).
 
-Samples come from :func:`brdfnorm.normalize.normalize` (the factor 1/E over a parameter sweep; with
+Samples come from :func:`brdfnorm.normalization.normalize` (the factor 1/E over a parameter sweep; with
 ``--at view`` also over the polar angles of ``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
 :func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.codegen.emit`. Seed 003's check:
 ``brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form linear --metric abs-lsq --at normal --json``.
@@ -18,7 +18,7 @@ from rich.table import Table
 from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
-from ..normalize import normalize
+from ..normalization import normalize
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
 from .application import app

@@ -26,10 +26,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import closed_forms, load
-from ..albedo import METHODS, albedo
+from ..directional import METHODS, albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..normalize import normalize
+from ..normalization import normalize
 
 #: The seed lobes of the default study, in page order.
 SEED_LOBES = ("phong", "modified-phong", "blinn-phong", "blinn-phong-gaussian")
