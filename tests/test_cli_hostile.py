@@ -132,3 +132,18 @@ def test_report_draws_a_mathtext_unsafe_file_name_as_text(tmp_path):
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "out" / "index.html").is_file()
     assert "a$\\foo{$b" in (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("argv", [
+    ["albedo", "lambert", "--theta", "0:89:10000000000000"],
+    ["normalize", "blinn-phong", "--sweep", "n=1:1e4:100000000"],
+    ["normalize", "blinn-phong", "--at", "view", "--theta", "0:89:999999", "--sweep", "n=1:10:999999"],
+])
+def test_huge_counts_end_in_exit_2_under_a_2_gb_address_space_limit(argv):
+    limit = 2 * 1024**3
+    code = (f"import resource, sys; resource.setrlimit(resource.RLIMIT_AS, ({limit}, {limit})); "
+            "from brdfnorm.cli import main; main(sys.argv[1:])")
+    env = {**ENV, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "-c", code, *argv], env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr  # a clean exit, not a signal (negative) or MemoryError (1)
+    assert done.stderr.startswith("error: ") and "limit" in done.stderr
