@@ -31,6 +31,7 @@ from .common import (
     load_model,
     parse_angles,
     parse_sweep,
+    progress_bar,
 )
 
 SECOND_VARIABLE = "cos_theta_o"
@@ -136,8 +137,9 @@ def fit_command(
         degrees = parse_angles(theta) if theta is not None else None
         m = load_model(model, param)
         m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
-        result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
-                           else np.radians(degrees), rtol=rtol)
+        with progress_bar(f"{m.name}: sampling the factor over {name}", enabled=values.size >= 8) as step:
+            result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
+                               else np.radians(degrees), rtol=rtol, on_progress=step)
         y = _factor_channel(result.factor)
         if not np.all(np.isfinite(y)) or np.any(y <= 0):
             raise EvaluationError("the normalization factor is not finite and positive at every sample "
