@@ -47,6 +47,16 @@ def test_existing_file_keeps_its_mode_and_is_replaced_whole(tmp_path):
     assert stat.S_IMODE(target.stat().st_mode) == 0o604
 
 
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write read-only files")
+def test_read_only_file_is_refused_not_replaced(tmp_path):
+    target = tmp_path / "out.txt"
+    target.write_text("keep")
+    target.chmod(0o444)
+    with pytest.raises(OutputError, match="read-only"):
+        write_file(target, "new")
+    assert target.read_text() == "keep" and _listing(tmp_path) == ["out.txt"]
+
+
 def test_symlink_stays_a_link_and_its_target_is_replaced(tmp_path):
     real = tmp_path / "real.txt"
     real.write_text("old")

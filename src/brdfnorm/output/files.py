@@ -7,6 +7,7 @@
   target (POSIX ``rename`` is atomic within a filesystem): a reader sees the old content or the new, never a
   half-written file, and a failure leaves the old file as it was. The existing file's permission bits are kept;
   a new file gets ``0o666`` less the umask, as ``open()`` would give it (``mkstemp`` alone would make it 0600).
+  A read-only file is refused, as ``open()`` would refuse it.
 * A symlink is followed: the file it points to is replaced as above and the link stays a link. A dangling link
   is refused.
 * A FIFO or a character device (``/dev/null``, a terminal) is written to directly — never replaced by a
@@ -55,6 +56,8 @@ def write_file(path: str | os.PathLike[str], data: str | bytes) -> None:
     except OSError as error:
         raise OutputError(f"cannot inspect the target: {error.strerror}", where=where) from None
     if stat.S_ISREG(mode):
+        if not os.access(target, os.W_OK):  # rename could replace it, but its owner made it read-only
+            raise OutputError("the file is read-only; refusing to replace it", where=where)
         _replace(target, payload, where, keep_mode=stat.S_IMODE(mode))
     elif stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
         _write_in_place(target, payload, where)
