@@ -21,7 +21,7 @@ import numpy as np
 
 from . import validate
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
-from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
+from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
 from .models.base import Model, Over
 from .output.formats import Column, Records, channel_value, degrees, format_value
 from .registry import Registry
@@ -156,34 +156,80 @@ class Method:
     options: tuple[str, ...] = ()
 
 
+#: An integrand whose sampled values exceed this is integrated divided by a power of two (the sums of values near
+#: float64's limit, such as a BRDF of 2e307, overflow although the albedo itself is finite).
+LARGE_VALUE = 1e150
+#: Directions per case sampled to find that power of two (only after an overflow).
+SCALE_SAMPLES = 256
+
+
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
                 max_evaluations: int):
+    options = dict(rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    where = problem.model.source_path or problem.model.name
+    # Overflow in the lobe search or the sums is handled here, never shown as numpy's warning.
+    with np.errstate(all="ignore"):
+        try:
+            outcome = _integrate(problem, None, **options)
+            overflowed = not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1])))
+        except NonFiniteIntegrand as bad:
+            if np.all(np.isfinite(bad.direction)):  # the BRDF itself is NaN or infinite there
+                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
+            overflowed = True
+        if overflowed:
+            scale = _scales(problem)
+            try:
+                outcome = _integrate(problem, scale, **options)
+            except NonFiniteIntegrand as bad:
+                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
+            if not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1]))):
+                raise EvaluationError("the albedo or its error estimate exceeds float64's range", where=where)
+    return outcome
+
+
+def _integrate(problem: Problem, scale: np.ndarray | None, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
+               max_evaluations: int):
+    """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case."""
     K = problem.fixed.shape[0]
+    if scale is None:
+        integrand, scale = problem.integrand, np.ones(K)
+    else:
+        def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+            return problem.integrand(omega, case) / scale[case, None]
     lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
-    try:
-        # Overflow in the lobe search or the sums is reported as an EvaluationError, never as numpy's warning.
-        with np.errstate(all="ignore"):
-            if lobe is None:
-                poles, widths, supports = estimate_lobe(problem.integrand, K)
-            else:
-                poles = np.broadcast_to(lobe.direction, (K, 3))
-                widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-            result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
-                                          nonfinite=nonfinite, max_evaluations=max_evaluations)
-    except NonFiniteIntegrand as bad:
-        where = problem.model.source_path or problem.model.name
-        raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
-    return result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction
+    if lobe is None:
+        poles, widths, supports = estimate_lobe(integrand, K)
+    else:
+        poles = np.broadcast_to(lobe.direction, (K, 3))
+        widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
+    result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
+                                  nonfinite=nonfinite, max_evaluations=max_evaluations)
+    return (result.value * scale[:, None], result.error * scale[:, None], result.evaluations, result.converged,
+            result.nonfinite_fraction)
+
+
+def _scales(problem: Problem) -> np.ndarray:
+    """Per case, 2^k ≥ the largest |integrand| on a Fibonacci lattice where that exceeds :data:`LARGE_VALUE`,
+    else 1 (a power of two: dividing by it is exact)."""
+    K = problem.fixed.shape[0]
+    probe = fibonacci_hemisphere(SCALE_SAMPLES)
+    peak = np.zeros(K)
+    step = max(1, 1_000_000 // SCALE_SAMPLES)  # bounded memory whatever the number of cases
+    for start in range(0, K, step):
+        cases = np.arange(start, min(K, start + step))
+        values = np.abs(problem.integrand(np.tile(probe, (cases.size, 1)), np.repeat(cases, SCALE_SAMPLES)))
+        values = np.where(np.isfinite(values), values, 0.0).reshape(cases.size, -1)
+        peak[cases] = values.max(axis=1)
+    return np.where(peak > LARGE_VALUE, np.exp2(np.ceil(np.log2(np.maximum(peak, 1.0)))), 1.0)
 
 
 def _nonfinite_message(problem: Problem, bad: NonFiniteIntegrand) -> str:
-    """Where the BRDF was not finite — or, when the direction itself is not (the lobe search summed values
-    beyond float64's range), that the values are too large to integrate."""
+    """Where the BRDF was not finite: its value and the (L, V) pair — or, where the direction itself is not (the
+    lobe search's sums overflowed even after scaling), that the values are too large to integrate."""
     fixed = problem.fixed[bad.case]
     hint = "pass nonfinite='zero' (--nonfinite zero) to count such values as 0"
     if not np.all(np.isfinite(bad.direction)):
-        return (f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow); "
-                "scale the BRDF down")
+        return f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow)"
     L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
     value = np.array2string(bad.value, precision=6)
     return f"BRDF is not finite (value {value}) at L={_fmt(L)}, V={_fmt(V)}; {hint}"
