@@ -44,6 +44,7 @@ import brdfnorm as bn  # noqa: E402
 from brdfnorm import closed_forms  # noqa: E402
 from brdfnorm.errors import BrdfnormError  # noqa: E402
 from brdfnorm.output import write_file  # noqa: E402
+from brdfnorm.output.formats import jsonable  # noqa: E402
 from brdfnorm.registry import Registry  # noqa: E402
 
 
@@ -862,17 +863,9 @@ def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None
     }
     results["targets"] = targets(workloads, cfg)
     results["plots"] = plots(results, out_dir)
-    write_file(out_dir / "latest.json", json.dumps(results, indent=1, default=_jsonable) + "\n")
+    write_file(out_dir / "latest.json", json.dumps(jsonable(results), indent=1) + "\n")
     write_file(out_dir / "latest.md", markdown(results))
     return results
-
-
-def _jsonable(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(type(x))
 
 
 def _cpu_count() -> int:
@@ -902,7 +895,7 @@ def main(argv: list[str] | None = None) -> None:
     except BrdfnormError as error:  # an unknown workload, an output folder that cannot be written
         raise SystemExit(f"error: {error}") from None
     if args.json:
-        print(json.dumps(results, indent=1, default=_jsonable))
+        print(json.dumps(jsonable(results), indent=1))
     else:
         print_tables(results)
 
