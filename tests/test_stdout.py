@@ -125,19 +125,37 @@ def test_stdout_python_imports_and_evaluates(tmp_path, emitted):
     assert np.all(np.isfinite(value)) and np.all(value > 0)
 
 
-@needs_glslang
-def test_issue_done_when_command_redirected_to_a_file_compiles(tmp_path):
-    """`brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form auto --emit glsl > f.glsl` compiles."""
+@pytest.mark.parametrize("language", ["glsl", "hlsl", "c", "python"])
+def test_issue_done_when_command_redirected_to_a_file_compiles(tmp_path, language):
+    """`brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form auto --emit LANG > f.LANG` compiles as it
+    stands (GLSL, HLSL: glslangValidator; C: cc -c) or imports (Python)."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    suffix = {"glsl": "glsl", "hlsl": "hlsl", "c": "c", "python": "py"}[language]
     command = (f"{sys.executable} -m brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form auto "
-               "--emit glsl > f.glsl")
+               f"--emit {language} > f.{suffix}")
     done = subprocess.run(command, shell=True, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    source = (tmp_path / "f.glsl").read_text()
-    assert "brdfnorm_blinn_phong_gaussian_norm(float n)" in source and "forms tried" in done.stderr
-    compiled = subprocess.run([GLSLANG, "-d", "-S", "frag", str(tmp_path / "f.glsl")], capture_output=True,
-                              text=True)
-    assert compiled.returncode == 0, compiled.stdout
+    path = tmp_path / f"f.{suffix}"
+    assert "brdfnorm_blinn_phong_gaussian_norm(" in path.read_text() and "forms tried" in done.stderr
+    if language == "python":
+        spec = importlib.util.spec_from_file_location("f", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        assert 0 < module.brdfnorm_blinn_phong_gaussian_norm(1.0) < 1.0
+        return
+    if language == "c":
+        if CC is None:
+            pytest.skip("no C compiler (cc)")
+        argv = [CC, "-std=c99", "-Wall", "-Werror", "-c", str(path), "-o", str(tmp_path / "f.o")]
+    else:
+        if GLSLANG is None:
+            pytest.skip("glslangValidator not installed (glslang-tools)")
+        # A lone function is a valid translation unit; HLSL goes through glslang's HLSL front end (no DXC here).
+        argv = [GLSLANG, "-d", "-S", "frag", str(path)] if language == "glsl" else [
+            GLSLANG, "-D", "-V", "-S", "frag", "-e", "brdfnorm_blinn_phong_gaussian_norm", "-o",
+            str(tmp_path / "f.spv"), str(path)]
+    compiled = subprocess.run(argv, capture_output=True, text=True)
+    assert compiled.returncode == 0, compiled.stdout + compiled.stderr
 
 
 def test_report_prints_nothing_on_stdout(tmp_path):
