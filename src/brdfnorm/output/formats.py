@@ -23,8 +23,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from rich.console import Console
-from rich.table import Table
 
 from ..registry import Registry
 
@@ -119,6 +117,9 @@ def _csv(records: Records) -> str:
 
 
 def _table(records: Records) -> str:
+    from rich.console import Console  # rich loads only when a table is drawn, not with the library
+    from rich.table import Table
+
     table = Table(title=records.title)
     shown = [c for c in records.columns if c.in_table]
     for column in shown:
