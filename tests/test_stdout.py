@@ -70,6 +70,13 @@ def test_emitted_code_alone_on_stdout_and_the_summary_on_stderr(capsys, language
     assert "α ≈" not in out and "α ≈" in err
 
 
+def test_dash_output_is_stdout_with_the_summary_on_stderr(capsys):
+    out, err = _ok(capsys, *FIT, "--emit", "c", "-o", "-")
+    assert out.startswith("#include <math.h>") and "α ≈" in err and "code written" not in err
+    code, out, err = run_cli(capsys, *FIT, "--emit", "c", "-o", "-", "--json")
+    assert code == 2 and out == "" and "--output" in err
+
+
 @pytest.fixture(scope="module")
 def emitted() -> dict[str, str]:
     """Each language's stdout of the same fit, from the real command line."""

@@ -119,6 +119,8 @@ def fit_command(
     with guarded(debug):
         if emit_language is not None:
             LANGUAGES.validate(emit_language)
+        if output == STDOUT and json_output:
+            raise ArgumentError("--json prints to stdout: '-o -' would put the code before it", where="--output")
         if output is not None and emit_language is None:
             raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
         if at is At.view and theta is None:
@@ -170,7 +172,7 @@ def fit_command(
             return
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
-        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output is None)
+        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT))
 
 
 def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:
@@ -194,6 +196,6 @@ def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_s
             table.add_row(entry["form"], str(entry["coefficients"]), f"{entry['max_rel_error']:.3g}",
                           "yes" if entry["pole"] else "")
         out.print(table)
-    if output is not None:
+    if output not in (None, STDOUT):
         console(stderr=True).print(f"code written to {output}", markup=False, highlight=False)
 
