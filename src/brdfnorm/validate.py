@@ -45,7 +45,7 @@ def real_array(value: object, where: str, *, error: type[BrdfnormError] = Argume
         array = np.asarray(value)
     except (TypeError, ValueError, OverflowError):
         raise type_error(f"expected a number or an array of numbers, got {short_repr(value)}",
-                                where=where) from None
+                         where=where) from None
     if array.dtype.kind == "O":
         flat = array.ravel()
         if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in flat):
