@@ -76,6 +76,18 @@ def test_huge_finite_values_integrate_and_numpy_stays_quiet(recwarn):
     assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
 
 
+def test_a_brdf_nan_everywhere_is_reported_at_a_real_pair():
+    """The lobe search finds no peak in NaN values; the report still names a real (L, V) pair, never NaN."""
+
+    class AllNaN(_Huge):
+        def evaluate(self, L, V, params):
+            return super().evaluate(L, V, params) * np.nan
+
+    with pytest.raises(EvaluationError, match=r"not finite \(value \[nan\]\) at L=\(") as caught:
+        bn.albedo(AllNaN(), 0.3)
+    assert "nan," not in str(caught.value) and "V=(0.295520207, 0, 0.955336489)" in str(caught.value)
+
+
 def test_an_albedo_beyond_float64_is_an_evaluation_error():
     class Beyond(_Huge):
         def evaluate(self, L, V, params):

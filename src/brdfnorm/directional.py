@@ -159,8 +159,8 @@ class Method:
 #: An integrand whose sampled values exceed this is integrated divided by a power of two (the sums of values near
 #: float64's limit, such as a BRDF of 2e307, overflow although the albedo itself is finite).
 LARGE_VALUE = 1e150
-#: Directions per case sampled to find that power of two (only after an overflow).
-SCALE_SAMPLES = 256
+#: Directions per case sampled to find that power of two (only after an overflow), as many as the lobe search.
+SCALE_SAMPLES = 1024
 
 
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
@@ -177,8 +177,11 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
                 raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
             overflowed = True
         if overflowed:
-            scale = _scales(problem)
             try:
+                scale = _scales(problem, nonfinite)  # raises at a real (L, V) pair where the BRDF is not finite
+                if not np.any(scale > 1.0):
+                    raise EvaluationError("the integration overflowed, yet no sampled BRDF value is large",
+                                          where=where)
                 outcome = _integrate(problem, scale, **options)
             except NonFiniteIntegrand as bad:
                 raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
@@ -208,18 +211,24 @@ def _integrate(problem: Problem, scale: np.ndarray | None, *, rtol: float, atol:
             result.nonfinite_fraction)
 
 
-def _scales(problem: Problem) -> np.ndarray:
+def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:
     """Per case, 2^k ≥ the largest |integrand| on a Fibonacci lattice where that exceeds :data:`LARGE_VALUE`,
-    else 1 (a power of two: dividing by it is exact)."""
+    else 1 (a power of two: dividing by it is exact). With ``nonfinite="raise"``, a lattice direction where the
+    integrand is not finite raises :class:`NonFiniteIntegrand` there."""
     K = problem.fixed.shape[0]
     probe = fibonacci_hemisphere(SCALE_SAMPLES)
     peak = np.zeros(K)
     step = max(1, 1_000_000 // SCALE_SAMPLES)  # bounded memory whatever the number of cases
     for start in range(0, K, step):
-        cases = np.arange(start, min(K, start + step))
-        values = np.abs(problem.integrand(np.tile(probe, (cases.size, 1)), np.repeat(cases, SCALE_SAMPLES)))
-        values = np.where(np.isfinite(values), values, 0.0).reshape(cases.size, -1)
-        peak[cases] = values.max(axis=1)
+        cases = np.repeat(np.arange(start, min(K, start + step)), SCALE_SAMPLES)
+        omega = np.tile(probe, (cases.size // SCALE_SAMPLES, 1))
+        values = problem.integrand(omega, cases)
+        finite = np.all(np.isfinite(values), axis=-1)
+        if nonfinite == "raise" and not finite.all():
+            first = int(np.argmin(finite))
+            raise NonFiniteIntegrand(int(cases[first]), omega[first], values[first])
+        magnitude = np.where(finite, np.abs(values).max(axis=-1), 0.0).reshape(-1, SCALE_SAMPLES)
+        peak[start:start + magnitude.shape[0]] = magnitude.max(axis=1)
     return np.where(peak > LARGE_VALUE, np.exp2(np.ceil(np.log2(np.maximum(peak, 1.0)))), 1.0)
 
 
