@@ -56,7 +56,7 @@ def write_file(path: str | os.PathLike[str], data: str | bytes) -> None:
     except OSError as error:
         raise OutputError(f"cannot inspect the target: {error.strerror}", where=where) from None
     if stat.S_ISREG(mode):
-        if not os.access(target, os.W_OK):  # rename could replace it, but its owner made it read-only
+        if not (mode & 0o222 and os.access(target, os.W_OK)):  # rename could replace it: its owner made it read-only
             raise OutputError("the file is read-only; refusing to replace it", where=where)
         _replace(target, payload, where, keep_mode=stat.S_IMODE(mode))
     elif stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
