@@ -166,3 +166,21 @@ def test_huge_counts_end_in_exit_2_under_a_2_gb_address_space_limit(argv):
     done = subprocess.run([sys.executable, "-c", code, *argv], env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2, done.stderr  # a clean exit, not a signal (negative) or MemoryError (1)
     assert done.stderr.startswith("error: ") and "limit" in done.stderr
+
+
+@pytest.mark.parametrize("argv", [
+    ["albedo", "{path}", "--theta", "0"],
+    ["normalize", "{path}"],
+    ["info", "{path}", "--samples", "16"],
+    ["fit", "{path}", "--sweep", "reflectance=0.2:1:6", "--form", "linear"],
+])
+def test_file_names_are_text_not_rich_markup(tmp_path, monkeypatch, capsys, argv):
+    """A name such as `[a]x[/a]b.brdf` is printed as it is: rich markup would drop `[a]` or fail on `[/a]`."""
+    (tmp_path / "[a]x[").mkdir()
+    (tmp_path / "[a]x[" / "a]b.brdf").write_text((ROOT / "examples" / "lambert.brdf").read_text())
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(capsys, *(a.format(path="[a]x[/a]b.brdf") for a in argv))
+    assert code == 0, err
+    assert "a]b" in out + err and "internal error" not in err
+    if argv[0] == "info":
+        assert "[a]x[/a]b.brdf" in out

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..codegen import LANGUAGES, emit
@@ -177,17 +178,17 @@ def fit_command(
 
 def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:
     out = console(stderr=to_stderr)
-    out.print(f"[bold]{model}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] ({result.metric}, "
-              f"{result.samples} samples)")
-    out.print(f"  α ≈ {result.expression}", highlight=False)
+    out.print(f"[bold]{escape(model)}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] "
+              f"({result.metric}, {result.samples} samples)")
+    out.print(f"  α ≈ {result.expression}", highlight=False, markup=False)
     where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
     out.print(f"  max relative error {result.max_rel_error:.4g} at {where}; max absolute error "
-              f"{result.max_abs_error:.4g}")
+              f"{result.max_abs_error:.4g}", markup=False)
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     out.print("  range: " + "; ".join(f"{k} ∈ [{lo:.6g}, {hi:.6g}]" for k, (lo, hi) in result.range.items())
-              + f"; operations: {ops or 'none'}")
+              + f"; operations: {ops or 'none'}", markup=False)
     for warning in result.warnings:
-        out.print(f"  [yellow]warning:[/yellow] {warning}")
+        out.print(f"  [yellow]warning:[/yellow] {escape(warning)}")
     if result.tried:
         table = Table(title="forms tried (auto)")
         for column in ("form", "coefficients", "max rel. error", "pole/degenerate"):

@@ -8,6 +8,7 @@ over the view (``--over``), e.g. not for the original Phong lobe (seed 000: 2π/
 from __future__ import annotations
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..brdffile import BrdfModel, reciprocity_check
@@ -68,14 +69,15 @@ def info(
             return
         out = console()
         title = f"{m.name}" + (f" ({m.source_path})" if is_file else " (built-in)")
-        table = Table(title=title)
+        table = Table(title=escape(title))  # a file name is text, not rich markup
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
         for p in m.parameters:
             kind_range = "R,G,B" if p.kind == "color" else p.describe_range()
             if not p.strict and p.kind == "float":
                 kind_range += " (slider)"
-            table.add_row(p.name, p.kind, kind_range, format_value(p.default, 6), format_value(bound[p.name], 6))
+            table.add_row(escape(p.name), p.kind, kind_range, format_value(p.default, 6),
+                          format_value(bound[p.name], 6))
         out.print(table)
         out.print(f"channels: {m.channels}")
         verdict = "yes" if check.reciprocal else "no"

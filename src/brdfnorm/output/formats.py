@@ -118,14 +118,16 @@ def _csv(records: Records) -> str:
 
 def _table(records: Records) -> str:
     from rich.console import Console  # rich loads only when a table is drawn, not with the library
+    from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=records.title)
+    # Names from outside (a file called "[bold]x.brdf") are text, never rich markup.
+    table = Table(title=escape(records.title))
     shown = [c for c in records.columns if c.in_table]
     for column in shown:
-        table.add_column(column.header, justify="right")
+        table.add_column(escape(column.header), justify="right")
     for row in records.rows:
-        table.add_row(*(format_value(records.cell(row, c), c.digits) for c in shown))
+        table.add_row(*(escape(format_value(records.cell(row, c), c.digits)) for c in shown))
     buffer = io.StringIO()
     Console(file=buffer, width=160).print(table)
     return buffer.getvalue()
