@@ -9,6 +9,11 @@ Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.int
 ``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
 substituted silently), and those registered by other modules (``"series"`` for Blinn-Phong, seed 002's
 hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER`.
+
+A BRDF whose values are finite but near float64's limit (2e307) is integrated divided by a power of two, so
+that the sums do not overflow; a BRDF that is NaN or infinite is reported at a real (L, V) pair.
+
+(The module is ``brdfnorm.directional`` so that the function ``brdfnorm.albedo`` does not shadow it.)
 """
 
 from __future__ import annotations

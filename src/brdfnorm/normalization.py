@@ -8,6 +8,8 @@ Conventions (``at=``):
   maximum is at normal incidence ("I have no proof"); here it is searched: a coarse grid evaluated in one batch,
   then a vectorized golden-section refinement of every sweep point's bracket (θ, then φ, alternately).
 * ``"view"`` — per direction on a θ grid (seed 002's open problem): a factor for every (parameter, θ).
+
+(The module is ``brdfnorm.normalization`` so that the function ``brdfnorm.normalize`` does not shadow it.)
 """
 
 from __future__ import annotations
