@@ -352,10 +352,6 @@ def _resolve_geometric(name: str, args: Sequence[Type], reusable: Sequence[bool]
 # --- matrices --------------------------------------------------------------------------------------------
 
 
-def _columns(m: Components, rows: int) -> list[Components]:
-    return [m[j : j + rows] for j in range(0, len(m), rows)]
-
-
 def determinant_of(m: Components, n: int):
     """Determinant of an n×n column-major matrix by cofactor expansion along the first column."""
     if n == 1:

@@ -62,11 +62,6 @@ class Type:
         return self.base in ("int", "uint")
 
     @property
-    def element_size(self) -> int:
-        """Components of one element (of the type itself when not an array)."""
-        return self.rows * self.cols
-
-    @property
     def size(self) -> int:
         """Number of flat components of a value of this type."""
         return self.rows * self.cols * (self.length or 1)
