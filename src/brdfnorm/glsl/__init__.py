@@ -9,7 +9,18 @@ names), :mod:`.builtins`, :mod:`.runtime` (lane masks), :mod:`.limits` (bounds o
 :mod:`.compiler` (a package: declarations, statements, expressions, operators, calls, Mesa's folds).
 """
 
-from .compiler import Program, compile_shader
+from __future__ import annotations
+
 from .limits import MAX_LOOP_ITERATIONS, MAX_TOTAL_ITERATIONS
 
 __all__ = ["MAX_LOOP_ITERATIONS", "MAX_TOTAL_ITERATIONS", "Program", "compile_shader"]
+
+
+def __getattr__(name: str):
+    """The compiler (and tree-sitter with it) loads on first use: :mod:`.names` serves the ``.brdf`` reader
+    without it."""
+    if name in ("Program", "compile_shader"):
+        from . import compiler
+
+        return getattr(compiler, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

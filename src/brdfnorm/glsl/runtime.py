@@ -96,7 +96,8 @@ class Frame:
 
     ``slots`` holds the local variables (indices assigned at compile time), ``globals`` the shared
     global variables and uniforms, ``mask`` the active lanes, ``ret`` the return value gathered so far
-    and ``loops`` the enclosing loops' states. ``budget`` is shared by all frames of one evaluation.
+    and ``loops`` the enclosing loops' states. ``budget`` (loop iterations, nodes run in loops) is shared by
+    all frames of one evaluation.
     """
 
     __slots__ = ("slots", "globals", "mask", "ret", "loops", "budget")

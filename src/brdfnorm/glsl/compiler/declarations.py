@@ -239,6 +239,16 @@ class DeclarationsMixin(CompilerBase):
             for fn in overloads:
                 if id(fn) not in state:
                     visit(fn, [])
+        total = 0  # the global initializers run once per evaluation, before BRDF
+        for callee, node, src in self.global_calls:
+            total += callee.inlined_size
+            if total > MAX_INLINED_NODES:
+                raise src.error(
+                    f"shader too large: the global initializers run more than {MAX_INLINED_NODES} nodes per "
+                    f"evaluation with their calls inlined (this call of '{callee.name}' alone runs "
+                    f"{callee.inlined_size})",
+                    node,
+                )
 
     def inline(self, fn: Function) -> None:
         """``fn.inlined_size``: its own nodes plus its callees' inlined sizes, one per call site (callees done).

@@ -234,7 +234,7 @@ class ExpressionsMixin(CompilerBase):
         if index.const is not None:
             value = float(index.const[0])
             if not (np.isfinite(value) and 0 <= value < count):
-                raise self.error(f"index {value:g} is out of range for {t}", index_node)
+                raise self.error(f"index {value:.0f} is out of range for {t}", index_node)
             return element, groups, int(value)
         return element, groups, index
 

@@ -113,7 +113,7 @@ class Program:
         globals_ = list(self._global_defaults)
         for slot, value in values.items():
             globals_[slot] = value
-        budget = [0]
+        budget = [0, 0]  # loop iterations, nodes run in loops
         entry = self._entry
         frame = Frame(entry.nslots, globals_, None, budget)
         for k in self._used_params:

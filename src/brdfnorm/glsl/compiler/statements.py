@@ -2,8 +2,9 @@
 
 Each statement compiles to a closure ``run(frame)``. Per-lane control flow runs under lane masks
 (:mod:`..runtime`); a condition that is the same in every lane runs only the branch taken. Loops are
-bounded at run time by :data:`..limits.MAX_LOOP_ITERATIONS` per loop and
-:data:`..limits.MAX_TOTAL_ITERATIONS` per evaluation.
+bounded at run time by :data:`..limits.MAX_LOOP_ITERATIONS` per loop, and per evaluation by
+:data:`..limits.MAX_TOTAL_ITERATIONS` iterations and :data:`..limits.MAX_LOOP_NODES` nodes run in loops
+(calls inlined).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ...errors import EvaluationError
-from ..limits import MAX_LOOP_ITERATIONS, MAX_TOTAL_ITERATIONS
+from ..limits import MAX_LOOP_ITERATIONS, MAX_LOOP_NODES, MAX_TOTAL_ITERATIONS
 from ..parser import PREPROCESSOR_NODES
 from ..runtime import Frame, LoopState, blend, is_uniform, mask_and, mask_and_not, mask_or
 from ..types import BOOL, VOID
@@ -197,6 +198,8 @@ class StatementsMixin(CompilerBase):
                     if initializer.type == "declaration"
                     else self.expression_effect(initializer)
                 )
+        nodes_before, calls_before = self.compiled_nodes, len(self.function.calls)
+        if node.type == "for_statement":
             cond_node = node.child_by_field_name("condition")
             cond = self.condition(cond_node) if cond_node is not None else None
             upd = node.child_by_field_name("update")
@@ -209,6 +212,9 @@ class StatementsMixin(CompilerBase):
         self.scopes.pop()
         test_first = node.type != "do_statement"
         where = self.where(node)
+        # Nodes one iteration runs with its calls inlined; the callees' sizes are known once all are compiled.
+        own_nodes, callees = self.compiled_nodes - nodes_before, [c for c, *_ in self.function.calls[calls_before:]]
+        cost: list[int] = []
 
         def run(f):
             if init is not None:
@@ -232,11 +238,20 @@ class StatementsMixin(CompilerBase):
                                 break
                     count += 1
                     f.budget[0] += 1
+                    if not cost:
+                        cost.append(own_nodes + sum(c.inlined_size for c in callees))
+                    f.budget[1] += cost[0]
                     if count > MAX_LOOP_ITERATIONS:
                         raise EvaluationError(f"loop exceeded {MAX_LOOP_ITERATIONS} iterations", where)
                     if f.budget[0] > MAX_TOTAL_ITERATIONS:
                         raise EvaluationError(
                             f"loops exceeded {MAX_TOTAL_ITERATIONS} iterations in total in one evaluation", where
+                        )
+                    if f.budget[1] > MAX_LOOP_NODES:
+                        raise EvaluationError(
+                            f"loops ran more than {MAX_LOOP_NODES} nodes in one evaluation "
+                            f"({cost[0]} per iteration of this loop, calls inlined)",
+                            where,
                         )
                     body(f)
                     f.mask = mask_or(f.mask, state.continued)
