@@ -23,8 +23,9 @@ line. A parameter name must be a GLSL identifier that is no keyword, reserved wo
 function or ``BRDF`` (it becomes a uniform of the shader). Every problem is a
 :class:`~brdfnorm.errors.BrdfFileError` at ``FILE:LINE:COL`` in the file's own numbering (1-based, columns in
 characters). Parsing is a single linear scan, so megabytes of comments cost milliseconds; files over
-:data:`MAX_BYTES` are refused unread, and the shader's own bounds are in :mod:`brdfnorm.glsl.limits`. The shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy
-operations; nothing from the file is ever executed as Python.
+:data:`MAX_BYTES` are refused unread, and the shader's own bounds are in :mod:`brdfnorm.glsl.limits`. The
+shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy operations;
+nothing from the file is ever executed as Python.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ MAX_SHADER_BYTES = 1024 * 1024
 #: reports plus one per :data:`PARSE_BYTES_PER_REPORT` bytes of text (valid GLSL needs about one report per
 #: 100 bytes; error recovery on junk can take far more work, and memory, per byte).
 PARSE_REPORTS = 2_000
-PARSE_BYTES_PER_REPORT = 4
+PARSE_BYTES_PER_REPORT = 16
 #: Syntax nodes compiled, each macro expansion counted anew (``#define A2 (A1+A1)`` doubles the count). The
 #: examples compile 8–191 nodes.
 MAX_COMPILED_NODES = 200_000

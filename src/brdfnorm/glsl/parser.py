@@ -102,7 +102,8 @@ def _first_error(root: tree_sitter.Node) -> tree_sitter.Node | None:
 
 
 def _parse_bounded(text: bytes) -> tree_sitter.Tree | None:
-    """tree-sitter's parse of ``text``, or None when cancelled after the work :mod:`.limits` allows.
+    """tree-sitter's parse of ``text``, or None when cancelled after the work :mod:`.limits` allows (older
+    py-tree-sitter returns None itself, newer raises ValueError).
 
     The progress callback is only called when the text is read through a callback, not from bytes.
     """
@@ -117,7 +118,12 @@ def _parse_bounded(text: bytes) -> tree_sitter.Tree | None:
         reports += 1
         return reports > allowed  # True cancels the parse
 
-    return tree_sitter.Parser(LANGUAGE).parse(read, progress_callback=progress)
+    try:
+        return tree_sitter.Parser(LANGUAGE).parse(read, progress_callback=progress)
+    except ValueError:  # py-tree-sitter 0.25+ raises "Parsing failed" when the callback cancels
+        if reports > allowed:
+            return None
+        raise
 
 
 def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) -> tuple[tree_sitter.Tree, Source]:

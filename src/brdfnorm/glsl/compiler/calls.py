@@ -17,7 +17,7 @@ from ..types import INT, VOID, Type, converts, parse_type_name, unsupported_type
 from .base import CompilerBase
 from .components import convert_component
 from .folds import constant_overrides, pow_with_constants, with_overrides
-from .values import Expr, Function, Node, zeros
+from .values import ONE, ZERO, Expr, Function, Node, zeros
 
 
 class CallsMixin(CompilerBase):
@@ -183,7 +183,7 @@ class CallsMixin(CompilerBase):
 
             def from_matrix(a):
                 return tuple(
-                    a[j * src_t.rows + i] if i < src_t.rows and j < src_t.cols else (1.0 if i == j else 0.0)
+                    a[j * src_t.rows + i] if i < src_t.rows and j < src_t.cols else (ONE if i == j else ZERO)
                     for j in range(cols)
                     for i in range(rows)
                 )
@@ -196,7 +196,7 @@ class CallsMixin(CompilerBase):
                 return self.make(
                     t,
                     lambda a: tuple(
-                        convert(a[0], src, "float") if i == j else 0.0 for j in range(cols) for i in range(rows)
+                        convert(a[0], src, "float") if i == j else ZERO for j in range(cols) for i in range(rows)
                     ),
                     args,
                 )

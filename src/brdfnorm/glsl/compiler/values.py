@@ -18,8 +18,10 @@ from ..types import Type
 
 Node = tree_sitter.Node
 
-#: The float 0 held by unset components (a numpy scalar: IEEE arithmetic, never ZeroDivisionError).
+#: The floats 0 and 1 of unset components and of matrix constructors: numpy scalars, so that arithmetic
+#: on them is IEEE arithmetic (±inf, NaN), never Python's ZeroDivisionError.
 ZERO = np.float64(0.0)
+ONE = np.float64(1.0)
 
 
 def zeros(t: Type) -> tuple:
