@@ -161,23 +161,23 @@ def _int32(value: int) -> int:
     return (value + 2**31) % 2**32 - 2**31
 
 
-@pytest.mark.parametrize(
-    ("expression", "expected"),
-    [
-        ("-1u", 2**32 - 1),
-        ("0u - 1u", 2**32 - 1),
-        ("uint(0) - 5u", 2**32 - 5),
-        ("3000000000u * 3u", 3000000000 * 3 % 2**32),
-        ("4294967295u + 2u", 1),
-        ("-(-2147483647 - 1)", -(2**31)),
-        ("2147483647 + 1", _int32(2**31)),
-        ("65537 * 65537 * 65537", _int32(65537**3)),
-        ("123456789 * 987654321", _int32(123456789 * 987654321)),
-        ("~0u", 2**32 - 1),
-        ("10u / uint(-1)", 0),
-        ("(-7) / 2", -3),
-    ],
-)
+WRAPPING = [
+    ("-1u", 2**32 - 1),
+    ("0u - 1u", 2**32 - 1),
+    ("uint(0) - 5u", 2**32 - 5),
+    ("3000000000u * 3u", 3000000000 * 3 % 2**32),
+    ("4294967295u + 2u", 1),
+    ("-(-2147483647 - 1)", -(2**31)),
+    ("2147483647 + 1", _int32(2**31)),
+    ("65537 * 65537 * 65537", _int32(65537**3)),
+    ("123456789 * 987654321", _int32(123456789 * 987654321)),
+    ("~0u", 2**32 - 1),
+    ("10u / uint(-1)", 0),
+    ("(-7) / 2", -3),
+]
+
+
+@pytest.mark.parametrize(("expression", "expected"), WRAPPING)
 def test_integer_arithmetic_wraps_to_32_bits(expression, expected):
     # Constant-folded, and at run time: every literal plus a uniform 0 of its type, so nothing folds.
     at_run_time = re.sub(r"\b(\d+)(u?)\b", lambda m: f"({m[1]}{m[2]} + z{m[2] or 'i'})", expression)
@@ -244,3 +244,17 @@ def test_mutated_shaders_raise_only_the_projects_errors(case):
             program.brdf(*DIRECTIONS, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], values)
         except BrdfnormError as error:
             assert "fuzz.brdf" in str(error)
+
+
+@pytest.mark.parametrize("expression", [e for e, _ in WRAPPING])
+def test_integer_wrap_around_agrees_with_mesa(expression):
+    # The same expression in Mesa's llvmpipe (a compute shader, float32 output), folded and at run time.
+    from test_glsl_compiler import mesa
+
+    at_run_time = re.sub(r"\b(\d+)(u?)\b", lambda m: f"({m[1]}{m[2]} + z{m[2] or 'i'})", expression)
+    for text in (expression, at_run_time):
+        shader = SIGNATURE + f" {{ return vec3(float({text}), 0.0, 0.0); }}"
+        types, values = {"zi": "int", "zu": "uint"}, {"zi": 0, "zu": 0}
+        ours = compile_shader(shader, uniforms=types).brdf(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0], values)
+        theirs = mesa(shader, values, types, dirs=(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0]))
+        np.testing.assert_allclose(ours, theirs, rtol=1e-7, err_msg=text)
