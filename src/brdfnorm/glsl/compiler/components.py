@@ -41,13 +41,14 @@ def convert_component(x, src: str, dst: str):
 
 
 def int_div(a, b):
+    """Integer ``/``: truncation toward zero; ``x / 0`` is 0 (Mesa llvmpipe, measured)."""
     with np.errstate(all="ignore"):
         q = np.trunc(np.true_divide(a, b))
     return np.where(b == 0, 0.0, q)
 
 
 def int_mod(a, b):
-    # Mesa evaluates % as an unsigned 32-bit remainder (x % 0 gives all bits set), measured on llvmpipe.
+    """Integer ``%`` as Mesa evaluates it: an unsigned 32-bit remainder, ``x % 0`` all bits set."""
     ua = np.mod(np.asarray(a, dtype=np.int64), 2**32)
     ub = np.mod(np.asarray(b, dtype=np.int64), 2**32)
     r = np.where(ub == 0, 2**32 - 1, ua % np.maximum(ub, 1))
@@ -55,6 +56,7 @@ def int_mod(a, b):
 
 
 def bitwise(op):
+    """A bitwise operator on the 32-bit two's complement patterns of two integers."""
     def fn(a, b):
         r = op(np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)) & 0xFFFFFFFF
         return np.where(r >= 2**31, r - 2**32, r).astype(np.float64)
@@ -63,6 +65,7 @@ def bitwise(op):
 
 
 def shift(left: bool):
+    """``<<`` or ``>>`` (arithmetic for negative ints) by the low 5 bits of the count."""
     def fn(a, b):
         x = np.asarray(a, dtype=np.int64) & 0xFFFFFFFF
         s = np.asarray(b, dtype=np.int64) & 31
@@ -115,6 +118,7 @@ COMPARE = {"<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator
 
 
 def sum_terms(terms):
+    """The sum of ``terms`` in order (a dot product of components for the matrix products)."""
     it = iter(terms)
     total = next(it)
     for x in it:
