@@ -18,8 +18,8 @@ MAX_SHADER_BYTES = 1024 * 1024
 PARSE_REPORTS = 2_000
 PARSE_BYTES_PER_REPORT = 16
 #: Syntax nodes compiled, each macro expansion counted anew (``#define A2 (A1+A1)`` doubles the count). The
-#: examples compile 8–191 nodes.
-MAX_COMPILED_NODES = 200_000
+#: examples compile 8–191 nodes; compiling takes 10–30 µs a node.
+MAX_COMPILED_NODES = 100_000
 #: Nodes one evaluation of a function runs with every call inlined (f calling g twice costs 2·|g|): the
 #: static size of the work, loops counted once; a call tree that doubles at each level is refused. The
 #: examples' BRDF functions inline to 5–195 nodes.
@@ -37,5 +37,6 @@ MAX_LOOP_ITERATIONS = 10_000
 #: Loop iterations all loops together may take in one evaluation of the shader.
 MAX_TOTAL_ITERATIONS = 100_000
 #: Nodes run by loop iterations in one evaluation, each iteration costing its body's size with calls
-#: inlined: a loop calling a large function is bounded by its work, not only by its iteration count.
-MAX_LOOP_NODES = 5_000_000
+#: inlined: a loop calling a large function is bounded by its work, not only by its iteration count (a
+#: node runs in 1–5 µs for a few lanes; a 1 000-iteration loop of a 100-node body is 100 000 nodes).
+MAX_LOOP_NODES = 2_000_000

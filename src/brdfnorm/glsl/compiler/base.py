@@ -35,6 +35,7 @@ class CompilerBase:
         self.uniforms: dict[str, tuple[Type, int, bool, tuple]] = {}
         self.functions: dict[str, list[Function]] = {}
         self.macros: dict[str, tuple[str, Node, Source] | None] = {}
+        self.macro_bodies: dict[tuple[int, int], tuple[Node, Source]] = {}  # parsed macro bodies, per definition
         self.uses: set[str] = set()
         self.function: Function | None = None
         self.nslots = 0

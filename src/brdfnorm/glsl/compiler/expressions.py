@@ -133,14 +133,17 @@ class ExpressionsMixin(CompilerBase):
         return Expr(var.type, lambda f: f.slots[slot])
 
     def macro(self, name: str, node: Node) -> Expr:
-        """Expand an object-like macro: its body is parsed and compiled where the name is used."""
+        """Expand an object-like macro: its body (parsed once per definition) is compiled where the name is used."""
         definition = self.macros[name]
         if definition is None:
             raise self.error(f"macro '{name}' has no value", node)
         if name in self.expanding:
             raise self.error(f"macro '{name}' expands to itself", node)
         text, value_node, src = definition
-        expression, msrc = parse_expression(text, src, value_node)
+        key = (id(src), value_node.start_byte)  # one definition: the shader's sources live as long as the compiler
+        if key not in self.macro_bodies:
+            self.macro_bodies[key] = parse_expression(text, src, value_node)
+        expression, msrc = self.macro_bodies[key]
         self.sources.append(msrc)
         self.expanding.append(name)
         try:

@@ -55,9 +55,11 @@ class OperatorsMixin(CompilerBase):
 
     def binary_types(self, op: str, a: Type, b: Type, node: Node) -> tuple[Type, Callable]:
         """Result type and component function of an arithmetic operator (§5.9)."""
-        bad = self.error(f"operator '{op}' cannot be applied to {a} and {b}", node)
+        def bad() -> Exception:  # built only when raised: this runs for every binary operator compiled
+            return self.error(f"operator '{op}' cannot be applied to {a} and {b}", node)
+
         if a.is_array or b.is_array or a.base in ("bool", "void") or b.base in ("bool", "void"):
-            raise bad
+            raise bad()
         integer = a.is_integer and b.is_integer
         base = ("uint" if "uint" in (a.base, b.base) else "int") if integer else "float"
         if op == "%" and not integer:
@@ -69,7 +71,7 @@ class OperatorsMixin(CompilerBase):
             return self.linear_algebra(a, b, bad)
         if op in ("<<", ">>"):
             if not (b.is_scalar or b.rows == a.rows):
-                raise bad
+                raise bad()
             if b.is_scalar:
                 return a.with_base(base), lambda x, y: tuple(fn(p, y[0]) for p in x)
             return a.with_base(base), lambda x, y: tuple(map(fn, x, y))
@@ -78,16 +80,16 @@ class OperatorsMixin(CompilerBase):
         if b.is_scalar and not a.is_scalar:
             return a.with_base(base), lambda x, y: tuple(fn(p, y[0]) for p in x)
         if a.rows != b.rows or a.cols != b.cols:
-            raise bad
+            raise bad()
         if a.is_scalar:
             return a.with_base(base), lambda x, y: (fn(x[0], y[0]),)
         return a.with_base(base), lambda x, y: tuple(map(fn, x, y))
 
-    def linear_algebra(self, a: Type, b: Type, bad: Exception) -> tuple[Type, Callable]:
+    def linear_algebra(self, a: Type, b: Type, bad: Callable[[], Exception]) -> tuple[Type, Callable]:
         """Matrix × matrix, matrix × column vector and row vector × matrix products (§5.10)."""
         if a.is_matrix and b.is_matrix:
             if a.cols != b.rows:
-                raise bad
+                raise bad()
             n, m, k = a.rows, b.cols, a.cols
 
             def matmul(x, y):
@@ -98,13 +100,13 @@ class OperatorsMixin(CompilerBase):
             return Type("float", n, m), matmul
         if a.is_matrix:  # mat * column vector
             if b.rows != a.cols or b.cols != 1:
-                raise bad
+                raise bad()
             n, k = a.rows, a.cols
             return Type("float", n), lambda x, y: tuple(
                 sum_terms(x[p * n + i] * y[p] for p in range(k)) for i in range(n)
             )
         if a.rows != b.rows or a.cols != 1:  # row vector * mat
-            raise bad
+            raise bad()
         n, m = b.rows, b.cols
         return Type("float", m), lambda x, y: tuple(sum_terms(x[i] * y[j * n + i] for i in range(n)) for j in range(m))
 

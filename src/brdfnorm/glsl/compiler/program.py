@@ -8,6 +8,7 @@ directions.
 
 from __future__ import annotations
 
+import gc
 import math
 from collections.abc import Mapping
 
@@ -148,11 +149,18 @@ def compile_shader(
     """
     from . import Compiler  # the parts of the compiler, assembled in the package
 
+    # The compiler allocates a few objects per node, all alive until it returns: the cyclic garbage collector
+    # would rescan them again and again (compile time growing faster than the shader), so it pauses.
+    collecting = gc.isenabled()
+    gc.disable()
     try:
         compiler = Compiler(source, path, first_line, first_column, uniforms or {})
         compiler.compile()
     except RecursionError:  # the compiler recurses along the syntax tree
         raise BrdfFileError("shader is nested too deeply", path, first_line, first_column) from None
+    finally:
+        if collecting:
+            gc.enable()
     for fn, node, src in compiler.global_calls:
         if fn.body_node is None:
             raise src.error(f"function '{fn.signature()}' is declared but never defined", node)
