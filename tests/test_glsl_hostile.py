@@ -258,3 +258,15 @@ def test_integer_wrap_around_agrees_with_mesa(expression):
         ours = compile_shader(shader, uniforms=types).brdf(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0], values)
         theirs = mesa(shader, values, types, dirs=(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0]))
         np.testing.assert_allclose(ours, theirs, rtol=1e-7, err_msg=text)
+
+
+def test_the_number_of_parameters_is_bounded(tmp_path):
+    from brdfnorm.brdffile import MAX_PARAMETERS
+
+    declarations = "\n".join(f"float p{k} 0 1 0.5" for k in range(MAX_PARAMETERS + 1))
+    text = brdf_text(SIGNATURE + " { return vec3(p0); }", declarations)
+    with pytest.raises(BrdfFileError, match=f"too many parameters: at most {MAX_PARAMETERS}") as info:
+        read_brdf(write(tmp_path, text))
+    assert (info.value.line, info.value.column) == where(text, f"float p{MAX_PARAMETERS} ")
+    fewer = text.replace(f"\nfloat p{MAX_PARAMETERS} 0 1 0.5", "")
+    np.testing.assert_array_equal(load_brdf(write(tmp_path, fewer)).eval(*DIRECTIONS), [[0.5] * 3] * 2)

@@ -49,6 +49,10 @@ from .parameters import Parameter
 #: for megabytes of comments while the reader's memory stays far below 1 GB).
 MAX_BYTES = 16 * 1024 * 1024
 
+#: Most parameters a file may declare (each is a slider in BRDF Explorer and a uniform of the shader; the
+#: examples declare 1–8).
+MAX_PARAMETERS = 256
+
 SECTIONS = ("parameters", "shader", "isFunc")
 #: Parameter kind -> (number of values after NAME, GLSL uniform type, what the values are).
 KINDS = {
@@ -238,6 +242,8 @@ def _parse_parameters(scanner: _Scanner, begin: _Token) -> list[Parameter]:
                 message = f"expected a parameter declaration (float, bool or color), got {token.text!r}"
             raise scanner.error(message, token.start)
         kind = token
+        if len(parameters) == MAX_PARAMETERS:
+            raise scanner.error(f"too many parameters: at most {MAX_PARAMETERS}", kind.start)
         count, _, shape = KINDS[kind.text]
         line = scanner.line_of(kind.start)
         fields: list[_Token] = []

@@ -26,7 +26,7 @@ MAX_COMPILED_NODES = 100_000
 MAX_INLINED_NODES = 200_000
 #: Longest array a shader may declare (each element is held as its own component arrays).
 MAX_ARRAY_LENGTH = 1024
-#: Components of all variables of a shader together (globals, parameters and locals of every function):
+#: Components of all variables of a shader together (uniforms, globals, parameters and locals of every function):
 #: one direction's state. ``mat4 m[1024]`` alone needs 16 384.
 MAX_VARIABLE_COMPONENTS = 4096
 #: Lanes (direction pairs) evaluated at once are chunked so that lanes × components stays under this:

@@ -100,6 +100,7 @@ class CompilerBase:
             if previous != t:
                 raise self.error(f"uniform '{name}' declared as {t}, but the parameter is {previous}", node)
             return
+        self.reserve_components(t, node)
         slot = self.new_global()
         self.uniforms[name] = (t, slot, caller, default if default is not None else zeros(t))
         self.scopes[0][name] = Var(name, t, slot, True, readonly="uniform")

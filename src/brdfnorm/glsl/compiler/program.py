@@ -41,8 +41,7 @@ class Program:
         self.uses: frozenset[str] = frozenset(compiler.uses)
         self.path = compiler.path
         self._used_params = sorted(entry.used_params)
-        components = compiler.components + sum(t.size for t, *_ in compiler.uniforms.values())
-        self.chunk = max(1, LANE_COMPONENTS // max(components, _MIN_COMPONENTS))
+        self.chunk = max(1, LANE_COMPONENTS // max(compiler.components, _MIN_COMPONENTS))
 
     def _uniform_value(self, name: str, t: Type, value) -> tuple:
         """The components of a uniform from a caller value (bools, numbers, vec3 arrays)."""
