@@ -426,6 +426,8 @@ class BrdfModel(Model):
             uniforms[p.name] = value
             shape = np.broadcast_shapes(shape, value.shape[:-1] if p.kind == "color" else value.shape)
         result = self.program.brdf(L, V, N, X, Y, uniforms)
+        if result.shape == shape + (3,):
+            return result  # a new C-contiguous float64 array of the program's: the caller owns it
         # A shader whose result does not depend on the directions (e.g. a constant) comes back smaller.
         # A writable array the caller owns (broadcast_to alone would give a read-only view).
         return np.require(np.broadcast_to(result, shape + (3,)), dtype=float, requirements=["C", "W"])
