@@ -130,6 +130,20 @@ def test_define_with_a_trailing_comment_is_accepted_and_later_errors_keep_their_
     refused(tmp_path, broken, "q)", "unknown identifier 'q'")
 
 
+@pytest.mark.parametrize(
+    ("body", "needle"),
+    [
+        ("#define X 1.0\n" + SIGNATURE + " { return vec3(X); }", "BRDF"),  # a parameter of BRDF
+        ("#define a 1.0\n" + SIGNATURE + " { float a = 2.0; return vec3(a); }", "a = 2.0"),
+        ("#define g 1.0\nfloat g = 2.0;\n" + SIGNATURE + " { return vec3(g); }", "g = 2.0"),
+    ],
+    ids=["parameter", "local", "global"],
+)
+def test_a_declaration_of_a_defined_macro_name_is_refused(tmp_path, body, needle):
+    # GLSL's preprocessor would replace the declared name (Mesa: a syntax error); silently declaring it is wrong.
+    refused(tmp_path, body, needle, "while a macro of that name is defined")
+
+
 def test_an_error_inside_a_macro_body_is_located_in_the_macro(tmp_path):
     body = "#define M (1.0 + q) // a comment\n" + SIGNATURE + " {\n    return vec3(M);\n}"
     refused(tmp_path, body, "q)", "unknown identifier 'q'")
@@ -270,3 +284,34 @@ def test_the_number_of_parameters_is_bounded(tmp_path):
     assert (info.value.line, info.value.column) == where(text, f"float p{MAX_PARAMETERS} ")
     fewer = text.replace(f"\nfloat p{MAX_PARAMETERS} 0 1 0.5", "")
     np.testing.assert_array_equal(load_brdf(write(tmp_path, fewer)).eval(*DIRECTIONS), [[0.5] * 3] * 2)
+
+
+@pytest.mark.parametrize(
+    ("prelude", "expression", "expected"),
+    [
+        ("", "(float(L.x) + 1.0)", lambda L, V: L[:, 0] + 1.0),
+        (
+            "",
+            "float(int(3.7) + 1) + (int(V.z * 10.0) > 3 ? 1.0 : 0.0)",
+            lambda L, V: 4.0 + (np.trunc(V[:, 2] * 10) > 3),
+        ),
+        ("", "((bool(L.x) && true) ? 2.0 : 3.0)", lambda L, V: np.where(L[:, 0] != 0, 2.0, 3.0)),
+        ("#define XOR (L.x > 0.0 ^^ true)\n", "(XOR ? 1.0 : 2.0)", lambda L, V: np.where(L[:, 0] > 0, 2.0, 1.0)),
+        ("#define M (float(1) + 0.5) // a comment\n", "M * L.y", lambda L, V: 1.5 * L[:, 1]),
+    ],
+    ids=["float-in-parentheses", "int", "bool", "xor-in-a-macro", "constructor-in-a-macro"],
+)
+def test_valid_glsl_the_grammar_needs_rewrites_for_evaluates_as_mesa_does(prelude, expression, expected):
+    # `(float(x) + 1.0)` reads as a C cast to tree-sitter, and a macro body's `^^` was lost: both parse now.
+    from test_glsl_compiler import mesa
+
+    L, V = DIRECTIONS
+    shader = prelude + SIGNATURE + f" {{ return vec3({expression}); }}"
+    ours = compile_shader(shader).brdf(L, V, L, L, L)
+    np.testing.assert_allclose(ours[:, 0], expected(L, V), rtol=1e-15)
+    np.testing.assert_allclose(ours, mesa(shader, dirs=(L, V, L, L, L)), rtol=1e-6)
+
+
+def test_a_user_function_named_like_a_rewritten_constructor_is_its_own():
+    shader = "float __flo(float x) { return 2.0 * x; }\n" + SIGNATURE + " { return vec3(__flo(3.0), float(3), 0.0); }"
+    np.testing.assert_array_equal(compile_shader(shader).brdf(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0])[0], [6, 3, 0])

@@ -9,6 +9,9 @@ length-preserving rewrites of the text before parsing, so every position stays t
 * precision qualifiers (``highp``, ``mediump``, ``lowp`` and ``precision ...;`` statements) have no
   effect in desktop GLSL (§4.7), nor ``#pragma`` lines here: they are blanked out.
 * the parameter qualifiers ``const in`` are swapped to ``in const``, the order the grammar knows.
+* the constructors ``int(``, ``bool(`` and ``float(`` become identifiers of the same length (``__i(``,
+  ``__bo(``, ``__flo(``): as C primitive types the grammar reads ``(float(x) + 1.0)`` as a cast and fails.
+  :meth:`Source.text_of` gives the original name back at those places.
 
 Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree. Parsing is bounded
 (:mod:`.limits`): the text's size, and the parser's work through tree-sitter's progress callback, which
@@ -19,7 +22,7 @@ from __future__ import annotations
 
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import tree_sitter
 import tree_sitter_glsl
@@ -48,6 +51,9 @@ _PRECISION = re.compile(
 
 # The grammar accepts `in const float a` but not the equally valid `const in float a`: swap the two words.
 _CONST_IN = re.compile(rb"\bconst(\s+)in\b")
+# Constructors named by a C primitive type, and the same-length identifiers they are parsed as.
+_PRIMITIVE_CONSTRUCTOR = re.compile(rb"\b(int|bool|float)(?=[ \t\r\n]*\()")
+_CONSTRUCTOR_ALIASES = {b"int": b"__i", b"bool": b"__bo", b"float": b"__flo"}
 
 
 def _blank(match: re.Match) -> bytes:
@@ -63,6 +69,8 @@ class Source:
     first_line: int
     first_column: int
     xor_offsets: frozenset[int]
+    original: bytes = b""  # the text before the length-preserving rewrites
+    constructors: dict[int, str] = field(default_factory=dict)  # offset -> constructor name rewritten there
 
     def position(self, node: tree_sitter.Node) -> tuple[int, int]:
         """File (line, column), both 1-based, of a node's first character."""
@@ -79,8 +87,15 @@ class Source:
         return BrdfFileError(message, self.path, line, column)
 
     def text_of(self, node: tree_sitter.Node) -> str:
-        """The text of ``node``."""
+        """The text of ``node`` as parsed (a rewritten constructor name is given back as written)."""
+        name = self.constructors.get(node.start_byte)
+        if name is not None and node.end_byte - node.start_byte == len(name):
+            return name
         return self.text[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
+
+    def original_text_of(self, node: tree_sitter.Node) -> str:
+        """The text of ``node`` as written in the file, before any rewrite (macro bodies are parsed anew)."""
+        return self.original[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
 
 
 def _first_error(root: tree_sitter.Node) -> tree_sitter.Node | None:
@@ -132,7 +147,9 @@ def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) ->
     xor_offsets = frozenset(m.start() for m in re.finditer(rb"\^\^", raw))
     text = _PRECISION.sub(_blank, raw.replace(b"^^", b"||"))
     text = _CONST_IN.sub(lambda m: b"in" + m.group(1) + b"const", text)
-    src = Source(text, path, first_line, first_column, xor_offsets)
+    constructors = {m.start(): m.group(1).decode() for m in _PRIMITIVE_CONSTRUCTOR.finditer(text)}
+    text = _PRIMITIVE_CONSTRUCTOR.sub(lambda m: _CONSTRUCTOR_ALIASES[m.group(1)], text)
+    src = Source(text, path, first_line, first_column, xor_offsets, raw, constructors)
     if len(text) > MAX_SHADER_BYTES:
         raise src.error(f"shader too large: {len(text)} bytes (at most {MAX_SHADER_BYTES})", None)
     tree = _parse_bounded(text)

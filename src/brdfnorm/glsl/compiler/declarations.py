@@ -104,7 +104,19 @@ class DeclarationsMixin(CompilerBase):
                 f"unsupported feature: '#define {name}' redefines a GLSL keyword, type or function", name_node
             )
         value = node.child_by_field_name("value")
-        self.macros[name] = (self.text(value).strip(), value, self.source) if value is not None else None
+        # The body as written: it is parsed anew where used, with the parser's rewrites (e.g. of '^^') redone.
+        self.macros[name] = (
+            (self.source.original_text_of(value).strip(), value, self.source) if value is not None else None
+        )
+
+    def refuse_macro_name(self, name: str, node: Node) -> None:
+        """A declaration of a name that is a macro here: the preprocessor would expand it (unsupported)."""
+        if name in self.macros:
+            raise self.error(
+                f"unsupported feature: '{name}' is declared while a macro of that name is defined "
+                "(the preprocessor would replace it here)",
+                node,
+            )
 
     def refuse_function_macro(self, node: Node) -> None:
         """Function-like macros are not supported."""
@@ -204,6 +216,7 @@ class DeclarationsMixin(CompilerBase):
             fn.param_slots.append(slot)
             self.reserve_components(p.type, fn.node)
             if p.name is not None:
+                self.refuse_macro_name(p.name, fn.node)
                 readonly = "const parameter" if p.const else None
                 self.scopes[-1][p.name] = Var(p.name, p.type, slot, False, readonly=readonly, param_index=index)
         body = self.block(fn.body_node, new_scope=False)
@@ -341,6 +354,7 @@ class DeclarationsMixin(CompilerBase):
         """Declare a variable in the current scope; return the initializing closure (or None)."""
         if t == VOID:
             raise self.error("variables cannot be void", name_node)
+        self.refuse_macro_name(name, name_node)
         self.reserve_components(t, name_node)
         init = self.convert(self.expr(value), t, value) if value is not None else None
         if const and (init is None or init.const is None):
