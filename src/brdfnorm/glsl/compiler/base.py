@@ -14,10 +14,9 @@ import numpy as np
 from ...errors import BrdfFileError
 from ..limits import MAX_ARRAY_LENGTH, MAX_COMPILED_NODES, MAX_VARIABLE_COMPONENTS
 from ..parser import Source, parse
-from ..runtime import Frame
 from ..types import Type, converts, parse_type_name, unsupported_type_feature
 from .folds import written_names
-from .values import Expr, Function, Node, Scope, Var, zeros
+from .values import Expr, Function, Node, Scope, Statement, Var, zeros
 
 
 class CompilerBase:
@@ -29,7 +28,7 @@ class CompilerBase:
         self.sources: list[Source] = [self.src]
         self.scopes: list[Scope] = [Scope()]  # scopes[0]: globals
         self.globals_count = 0
-        self.global_inits: list[Callable[[Frame], None]] = []
+        self.global_inits: list[Statement] = []
         self.global_defaults: dict[int, tuple] = {}  # slot -> zeros, what a global holds before its initializer
         # name -> (type, slot, declared by the caller, value when none is given)
         self.uniforms: dict[str, tuple[Type, int, bool, tuple]] = {}

@@ -8,7 +8,7 @@ graph is checked: every callee defined, no recursion (§6.1.1), and a bounded si
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 from ..limits import MAX_INLINED_NODES
 from ..names import is_reserved
@@ -17,7 +17,7 @@ from ..runtime import Frame
 from ..types import VOID, Type, parse_type_name
 from .base import CompilerBase
 from .statements import sequence
-from .values import Function, Node, Param, Scope, Var, zeros
+from .values import Function, Node, Param, Scope, Statement, Var, zeros
 
 #: Top-level node type -> method (function definitions, declarations, preprocessor lines, stray ';').
 TOP_LEVEL_RULES = {
@@ -331,7 +331,7 @@ class DeclarationsMixin(CompilerBase):
                 raise self.error(f"'{name}' is already declared", name_node)
             self.variable(name_node, name, t, value, "const" in quals, is_global=True)
 
-    def local_declaration(self, node: Node) -> Callable[[Frame], None] | None:
+    def local_declaration(self, node: Node) -> Statement | None:
         """A declaration in a function body; returns the initializing closure."""
         quals = self.qualifiers(node)
         if quals - {"const"}:

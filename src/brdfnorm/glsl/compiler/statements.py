@@ -17,9 +17,7 @@ from ..parser import PREPROCESSOR_NODES
 from ..runtime import Frame, LoopState, blend, is_uniform, mask_and, mask_and_not, mask_or
 from ..types import BOOL, VOID
 from .base import CompilerBase
-from .values import Node, Scope
-
-Statement = Callable[[Frame], None]
+from .values import Node, Scope, Statement
 
 #: Statement node type -> method.
 STATEMENT_RULES = {
@@ -153,7 +151,7 @@ class StatementsMixin(CompilerBase):
         ev = e.ev
         return lambda f: ev(f)[0]
 
-    def if_statement(self, node: Node) -> Callable[[Frame], None]:
+    def if_statement(self, node: Node) -> Statement:
         """``if``/``else``: uniform conditions run one branch, per-lane ones both under masks."""
         cond = self.condition(node.child_by_field_name("condition"))
         then = self.statement(node.child_by_field_name("consequence")) or nothing
@@ -186,7 +184,7 @@ class StatementsMixin(CompilerBase):
 
         return run
 
-    def loop(self, node: Node) -> Callable[[Frame], None]:
+    def loop(self, node: Node) -> Statement:
         """``for``, ``while`` and ``do``-``while`` loops, bounded per loop and per evaluation."""
         self.scopes.append(Scope())
         init = update = None
@@ -266,7 +264,7 @@ class StatementsMixin(CompilerBase):
 
         return run
 
-    def switch(self, node: Node) -> Callable[[Frame], None]:
+    def switch(self, node: Node) -> Statement:
         """``switch`` with fall-through (GLSL 4.10 §6.2): each case label adds its lanes to the running set."""
         cond_node = node.child_by_field_name("condition")
         selector = self.expr(cond_node.named_children[0] if cond_node.type == "parenthesized_expression" else cond_node)
@@ -322,7 +320,7 @@ class StatementsMixin(CompilerBase):
 
         return run
 
-    def expression_effect(self, node: Node) -> Callable[[Frame], None] | None:
+    def expression_effect(self, node: Node) -> Statement | None:
         """An expression statement: kept only if it has effects."""
         e = self.expr(node)
         if not e.effects:
@@ -334,7 +332,7 @@ class StatementsMixin(CompilerBase):
 
         return run
 
-    def return_statement(self, node: Node) -> Callable[[Frame], None]:
+    def return_statement(self, node: Node) -> Statement:
         """``return``: the value is kept for the active lanes, which then stop."""
         fn = self.function
         values = node.named_children

@@ -17,6 +17,8 @@ from ..runtime import Frame
 from ..types import Type
 
 Node = tree_sitter.Node
+#: A compiled statement: runs in a frame, for the frame's active lanes.
+Statement = Callable[[Frame], None]
 
 #: The floats 0 and 1 of unset components and of matrix constructors: numpy scalars, so that arithmetic
 #: on them is IEEE arithmetic (±inf, NaN), never Python's ZeroDivisionError.
@@ -78,7 +80,7 @@ class Function:
     node: Node
     source: Source
     body_node: Node | None = None
-    body: Callable[[Frame], None] | None = None
+    body: Statement | None = None
     nslots: int = 0
     param_slots: list[int] = field(default_factory=list)
     calls: list[tuple[Function, Node, Source]] = field(default_factory=list)
