@@ -56,7 +56,7 @@ def models(debug: bool = DEBUG_OPTION) -> None:
         for column in ("name", "formula", "parameters", "closed form"):
             table.add_column(column)
         for name, cls in REGISTRY.items():
-            params = ", ".join(f"{p.name}={p.default:g} {p.describe_range()}" for p in cls.parameters)
+            params = ", ".join(f"{p.name}={p.describe_default()} {p.describe_range()}" for p in cls.parameters)
             has_closed = "normal incidence" if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
             table.add_row(name, cls.formula, params, has_closed)
         console().print(table)

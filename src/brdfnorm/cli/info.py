@@ -20,6 +20,8 @@ from .common import DEBUG_OPTION, PARAM_OPTION, console, guarded, load_model, pr
 def _value_text(value: object) -> str:
     if isinstance(value, bool):
         return str(int(value))
+    if isinstance(value, str):
+        return value
     return ",".join(f"{v:g}" for v in np.atleast_1d(np.asarray(value, dtype=float)))
 
 
@@ -77,7 +79,7 @@ def info(
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
         for p in m.parameters:
-            kind_range = "R,G,B" if p.kind == "color" else p.describe_range()
+            kind_range = "R,G,B" if p.kind == "color" else p.describe_range()  # choices are listed as a|b|c
             if not p.strict and p.kind == "float":
                 kind_range += " (slider)"
             table.add_row(p.name, p.kind, kind_range, _value_text(p.default), _value_text(bound[p.name]))
