@@ -64,7 +64,7 @@ _LAYER = 4.0
 _PANELS_PER_CHUNK = 2000
 _TWO_PI = 2.0 * np.pi
 
-#: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), horizon piece (R,)) -> (R, n, n, C).
+#: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), piece floor(v) (R,)) -> (R, n, n, C).
 RectangleIntegrand = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
@@ -109,7 +109,7 @@ def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, 
     hb = (panels.b1[sl] - panels.b0[sl]) / 2
     a = ((panels.a0[sl] + panels.a1[sl]) / 2)[:, None] + ha[:, None] * nodes
     b = ((panels.b0[sl] + panels.b1[sl]) / 2)[:, None] + hb[:, None] * nodes
-    piece = panels.b0[sl] >= 1.0
+    piece = np.floor(panels.b0[sl]).astype(int)
     values = integrand(panels.case[sl], a[:, :, None], b[:, None, :], piece)
     return values * (ha * hb)[:, None, None, None]
 
@@ -254,11 +254,23 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
     offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ)
     layer = _LAYER * np.maximum(g.ax, g.ay)
     dist = g.distribution
+    # Azimuth grading (φ-map): y = c·d/|d| crosses the scales 1 and 1/(16α) — where the horizon enters the
+    # slope distribution's bulk — at an azimuthal distance ~δ from the zeros of p, with
+    # δ = ½ min(1, 1/(16α))/(|c| α_max/α_min); φ = δ sinh(κ ξ) spreads the distances δ … π/2 evenly in ξ.
+    a_min, a_max = np.minimum(g.ax, g.ay), np.maximum(g.ax, g.ay)
+    reach = np.hypot(cx, cy) * a_max / a_min
+    with np.errstate(divide="ignore"):
+        delta = np.clip(0.5 * np.minimum(1.0, 1.0 / (16.0 * a_min)) / reach, 1e-300, 1.0)
+    kappa = np.arcsinh(0.5 * np.pi / delta)
 
     def integrand(case, phi, v, piece):
         k = case[:, None, None]
         ax, ay, vz = g.ax[k], g.ay[k], Vz[k]
-        angle = phi + offset[k]
+        zero = np.pi * np.round(phi / np.pi)  # the zero of p at the panel's end (panels never straddle one)
+        xi = np.abs(phi - zero) / (0.5 * np.pi)
+        stretch = kappa[k] * xi
+        angle = offset[k] + zero + np.sign(phi - zero) * delta[k] * np.sinh(stretch)
+        phi_jacobian = delta[k] * kappa[k] * np.cosh(stretch) / (0.5 * np.pi)
         dx, dy = ax * np.cos(angle), ay * np.sin(angle)  # (R, n, 1)
         d2 = dx * dx + dy * dy
         p = cx[k] * dx + cy[k] * dy
@@ -269,23 +281,32 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
         r_h2 = q_plus_p * q_plus_p / d2
         gap = layer[k] * (1.0 + r_h2) / (2.0 * q * vz)
         s_split = s_h / (1.0 + gap / s_h)
-        t_h, t_split = dist.coordinate(s_h), dist.coordinate(s_split)
-        horizon = piece[:, None, None]
-        start = np.where(horizon, t_split, 0.0)
-        length = np.where(horizon, t_h - t_split, t_split)
-        t = start + (v - horizon) * length  # (R, n, n)
-        s, density = dist.radial(t)
+        s_middle = s_split / (1.0 + s_split)  # ≈ min(1, s_split), smooth in φ
+        s_end, s_split, s_middle = dist.cap(s_h), dist.cap(s_split), dist.cap(s_middle)
+        local = v - piece[:, None, None]  # position in the piece, [0, 1]
+        # Pole piece [0, s_middle] in the pole coordinate, tail piece [s_middle, s_split] in the tail
+        # coordinate, horizon piece [s_split, s_h] linear in s.
+        t_middle = dist.pole_coordinate(s_middle)
+        s_pole, density_pole = dist.pole(local * t_middle)
+        t_start, t_stop = dist.tail_coordinate(s_middle), dist.tail_coordinate(s_split)
+        s_tail, density_tail = dist.tail(t_start + local * (t_stop - t_start))
+        s_near = s_split + local * (s_end - s_split)
+        pole, tail = (piece == 0)[:, None, None], (piece == 1)[:, None, None]
+        s = np.where(pole, s_pole, np.where(tail, s_tail, s_near))
+        density = np.where(pole, density_pole, np.where(tail, density_tail, dist.slope_density(s_near)))
+        length = np.where(pole, t_middle, np.where(tail, t_stop - t_start, s_end - s_split))
+        gap_to_horizon = np.where(pole | tail, s_h - s, (s_h - s_end) + (s_end - s_split) * (1.0 - local))
         x, y = s * dx, s * dy
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
         vm = vz * one_sp  # V·m for m = (x, y, 1)
-        Lz = vz * (s_h - s) * (d2 * s + q_minus_p) / n2
+        Lz = vz * gap_to_horizon * (d2 * s + q_minus_p) / n2
         Lx = 2.0 * vm * x / n2 - g.V[k, 0]
         Ly = 2.0 * vm * y / n2 - g.V[k, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
             lambda_l = dist.smith_lambda(((ax * Lx) ** 2 + (ay * Ly) ** 2) / (Lz * Lz))
         G2 = shadowing_masking(g.shadowing, lambda_l, g.lambda_v[k])
-        weight = G2 * one_sp * density * length / _TWO_PI
+        weight = G2 * one_sp * density * length * phi_jacobian / _TWO_PI
         weight = np.where(Lz > 0, weight, 0.0)  # only t = t_h itself, where G2 = 0 anyway
         F = fresnel(_case_slice(g.fresnel_params, case), vm / np.sqrt(n2))
         return weight[..., None] * F
@@ -301,7 +322,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     K = fixed.shape[0]
     g = _geometry(distribution, fixed, params)
     edges_a = np.linspace(0.0, _TWO_PI, 5)
-    edges_b = np.array([0.0, 1.0, 2.0])
+    edges_b = np.array([0.0, 1.0, 2.0, 3.0])
     a0, b0 = np.meshgrid(edges_a[:-1], edges_b[:-1], indexing="ij")
     a1, b1 = np.meshgrid(edges_a[1:], edges_b[1:], indexing="ij")
     n = a0.size
@@ -310,7 +331,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     result = adaptive_rectangles(_microfacet_integrand(g), initial, K, rtol=rtol, atol=atol,
                                  max_evaluations=max_evaluations)
     # Beckmann's truncation: the dropped mass times a bound on w (G2 F ≤ 1, 1 + c·x ≤ 3/V_z² in the disk).
-    truncated = distribution.truncated_mass(np.full(K, np.inf)) * 3.0 / fixed[:, 2] ** 2
+    truncated = distribution.truncated_mass() * 3.0 / fixed[:, 2] ** 2
     return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
 
 

@@ -46,10 +46,12 @@ ALPHA_MIN = 1e-12
 
 
 class Distribution:
-    """A slope distribution P22 with its Smith Λ and the radial coordinate the half-vector integral uses.
+    """A slope distribution P22 with its Smith Λ and the radial coordinates the half-vector integral uses.
 
-    ``radial(t)`` maps the integration coordinate t to the standardized slope radius s and the density of the
-    distribution's radial CDF u(s) with respect to t (du/dt), so that ∫ g dμ = ∫ g(s(t)) du/dt dt.
+    The half-vector integral (:mod:`brdfnorm.halfvector`) runs over the distribution's radial CDF u(s) of the
+    standardized slope radius s in three pieces, each in its own coordinate t: ``pole(t)`` and ``tail(t)``
+    return (s, du/dt), ``pole_coordinate(s)`` and ``tail_coordinate(s)`` invert them; the piece next to the
+    horizon is linear in s with du/ds = ``slope_density(s)``.
     """
 
     name = ""
@@ -61,23 +63,37 @@ class Distribution:
         """Λ as a function of a² = α_ω² tan²θ_ω."""
         raise NotImplementedError
 
-    def coordinate(self, s: np.ndarray) -> np.ndarray:
-        """The radial integration coordinate t of slope radius s (inverse of ``radial``)."""
+    def slope_density(self, s: np.ndarray) -> np.ndarray:
         raise NotImplementedError
 
-    def radial(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+    def pole_coordinate(self, s: np.ndarray) -> np.ndarray:
+        return s
 
-    def truncated_mass(self, s: np.ndarray) -> np.ndarray:
-        """Probability mass beyond ``coordinate``'s cap (dropped from the integral), at horizon radius s."""
-        return np.zeros_like(s)
+    def pole(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return t, self.slope_density(t)
+
+    def tail_coordinate(self, s: np.ndarray) -> np.ndarray:
+        return s
+
+    def tail(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return t, self.slope_density(t)
+
+    def cap(self, s: np.ndarray) -> np.ndarray:
+        """Slope radii beyond which the mass is dropped (bounded by ``truncated_mass``); none by default."""
+        return s
+
+    def truncated_mass(self) -> float:
+        return 0.0
 
 
 class GGXDistribution(Distribution):
-    """Trowbridge-Reitz: u(s) = s²/(1 + s²); t = atan s, so u = sin²t and du/dt = sin 2t.
+    """Trowbridge-Reitz: u(s) = s²/(1 + s²).
 
-    In t the measure is smooth at the pole (no √u branch point) and the heavy tail is a finite interval whose
-    end t → π/2 is analytic in 1/s, i.e. in the real slope's inverse, where the horizon lies.
+    Pole piece (s ≤ 1): t = atan s, u = sin²t, du/dt = sin 2t — flat, and analytic at the pole (in u itself
+    the slope would be √u). Tail piece: t = asinh s, u = tanh²t, du/dt = 2 tanh t/cosh²t — the heavy tail
+    decays like e^{−2t}, and the integrand, analytic in the real slope α s within a radius R ~ 1, stays
+    analytic in a strip of half-width ~π/2 about the whole half-line (α sinh t = ±iR at t ≈ ln(2R/α) ± iπ/2),
+    so the region where the reflected direction changes is an O(1)-wide bump in t whatever α is.
     """
 
     name = "ggx"
@@ -88,15 +104,26 @@ class GGXDistribution(Distribution):
     def smith_lambda(self, a2):
         return 0.5 * a2 / (1.0 + np.sqrt(1.0 + a2))  # (−1 + √(1 + a²))/2 without cancellation
 
-    def coordinate(self, s):
+    def slope_density(self, s):
+        return 2.0 * s / (1.0 + s * s) ** 2
+
+    def pole_coordinate(self, s):
         return np.arctan(s)
 
-    def radial(self, t):
+    def pole(self, t):
         return np.tan(t), np.sin(2.0 * t)
+
+    def tail_coordinate(self, s):
+        return np.arcsinh(s)
+
+    def tail(self, t):
+        e2 = np.exp(-2.0 * t)  # 2 tanh t / cosh²t = 8e^{−2t}(1 − e^{−2t})/(1 + e^{−2t})³, without overflow
+        return np.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
 
 
 class BeckmannDistribution(Distribution):
-    """Beckmann: u(s) = 1 − exp(−s²); t = s, du/dt = 2s·exp(−s²), truncated at s = 8 (mass e⁻⁶⁴ ≈ 1.6e-28)."""
+    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²) — linear s in every piece (the Gaussian has no
+    heavy tail), truncated at s = 8 (dropped mass e⁻⁶⁴ ≈ 1.6e-28, bounded in the error estimate)."""
 
     name = "beckmann"
     CAP = 8.0
@@ -105,20 +132,20 @@ class BeckmannDistribution(Distribution):
         return np.exp(-r2) / np.pi
 
     def smith_lambda(self, a2):
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             b = 1.0 / np.sqrt(a2)
             # (erf(b) − 1)/2 + e^{−b²}/(2b√π) = e^{−b²}(1/(b√π) − erfcx(b))/2, stable for large b.
             value = 0.5 * np.exp(-b * b) * (1.0 / (b * _SQRT_PI) - erfcx(b))
         return np.where(a2 == 0.0, 0.0, np.where(np.isinf(a2), np.inf, value))
 
-    def coordinate(self, s):
+    def slope_density(self, s):
+        return 2.0 * s * np.exp(-s * s)
+
+    def cap(self, s):
         return np.minimum(s, self.CAP)
 
-    def radial(self, t):
-        return t, 2.0 * t * np.exp(-t * t)
-
-    def truncated_mass(self, s):
-        return np.where(s > self.CAP, np.exp(-self.CAP**2), 0.0)
+    def truncated_mass(self):
+        return float(np.exp(-self.CAP**2))
 
 
 # -- Fresnel -----------------------------------------------------------------------------------------------
