@@ -294,7 +294,7 @@ class MicrofacetModel(Model):
     def projected(self, L, V, params):
         value = self.single_scattering(L, V, params)
         if params["ms"] == "kulla-conty":
-            value = value + self._multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
+            value = value + self.multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
         return value
 
     def evaluate(self, L, V, params):
@@ -302,11 +302,12 @@ class MicrofacetModel(Model):
             value = self.single_scattering(L, V, params) / L[..., 2:3]
         value = np.where(L[..., 2:3] > 0, value, 0.0)
         if params["ms"] == "kulla-conty":
-            value = value + self._multiple_scattering(L, V, params)
+            value = value + self.multiple_scattering(L, V, params)
         return value
 
-    def _multiple_scattering(self, L, V, params) -> np.ndarray:
-        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1)."""
+    def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1); 0 at α = 0 (a mirror
+        loses no energy: E = E_avg = 1)."""
         from ..halfvector import compensation  # the lobe's own albedo tables (integrator layer)
 
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
@@ -315,8 +316,10 @@ class MicrofacetModel(Model):
         mu_v = np.broadcast_to(V[..., 2], shape)
         table = compensation(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
         e_l, e_v, e_avg = table.energies(mu_l, mu_v, alpha)
-        upper = (mu_l > 0) & (mu_v > 0)
-        return np.where(upper, (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg)), 0.0)[..., None]
+        lossy = (mu_l > 0) & (mu_v > 0) & (e_avg < 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value = (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg))
+        return np.where(lossy, value, 0.0)[..., None]
 
     def lobe(self, fixed, params, over):
         ax, ay = roughness(params)
