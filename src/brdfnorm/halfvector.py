@@ -291,19 +291,31 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
         s_split = s_h / (1.0 + gap / s_h)
         s_middle = s_split / (1.0 + s_split)  # ≈ min(1, s_split), smooth in φ
         s_end, s_split, s_middle = dist.cap(s_h), dist.cap(s_split), dist.cap(s_middle)
-        local = v - piece[:, None, None]  # position in the piece, [0, 1]
+        local = v - piece[:, None, None]  # position in the piece, [0, 1], (R, 1, n)
         # Pole piece [0, s_middle] in the pole coordinate, tail piece [s_middle, s_split] in the tail
-        # coordinate, horizon piece [s_split, s_h] linear in s.
-        t_middle = dist.pole_coordinate(s_middle)
-        s_pole, density_pole = dist.pole(local * t_middle)
-        t_start, t_stop = dist.tail_coordinate(s_middle), dist.tail_coordinate(s_split)
-        s_tail, density_tail = dist.tail(t_start + local * (t_stop - t_start))
-        s_near = s_split + local * (s_end - s_split)
-        pole, tail = (piece == 0)[:, None, None], (piece == 1)[:, None, None]
-        s = np.where(pole, s_pole, np.where(tail, s_tail, s_near))
-        density = np.where(pole, density_pole, np.where(tail, density_tail, dist.slope_density(s_near)))
-        length = np.where(pole, t_middle, np.where(tail, t_stop - t_start, s_end - s_split))
-        gap_to_horizon = np.where(pole | tail, s_h - s, (s_h - s_end) + (s_end - s_split) * (1.0 - local))
+        # coordinate, horizon piece [s_split, s_h] linear in s; each computed on its own panels only.
+        shape = np.broadcast_shapes(local.shape, s_h.shape)
+        s, weight_t, gap_to_horizon = np.empty(shape), np.empty(shape), np.empty(shape)
+        for kind in range(3):
+            rows = np.flatnonzero(piece == kind)
+            if not rows.size:
+                continue
+            at = local[rows]
+            if kind == 0:
+                length = dist.pole_coordinate(s_middle[rows])
+                radius, density = dist.pole(at * length)
+            elif kind == 1:
+                start = dist.tail_coordinate(s_middle[rows])
+                length = dist.tail_coordinate(s_split[rows]) - start
+                radius, density = dist.tail(start + at * length)
+            else:
+                length = s_end[rows] - s_split[rows]
+                radius = s_split[rows] + at * length
+                density = dist.slope_density(radius)
+            s[rows] = radius
+            weight_t[rows] = density * length
+            gap_to_horizon[rows] = (s_h[rows] - radius if kind < 2
+                                    else (s_h[rows] - s_end[rows]) + length * (1.0 - at))
         x, y = s * dx, s * dy
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
@@ -314,7 +326,7 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
         with np.errstate(divide="ignore", invalid="ignore"):
             lambda_l = dist.smith_lambda(((ax * Lx) ** 2 + (ay * Ly) ** 2) / (Lz * Lz))
         G2 = shadowing_masking(g.shadowing, lambda_l, g.lambda_v[k])
-        weight = G2 * one_sp * density * length * phi_jacobian * (g.multiplicity[k] / _TWO_PI)
+        weight = G2 * one_sp * weight_t * phi_jacobian * (g.multiplicity[k] / _TWO_PI)
         weight = np.where(Lz > 0, weight, 0.0)  # only t = t_h itself, where G2 = 0 anyway
         F = fresnel(_case_slice(g.fresnel_params, case), vm / np.sqrt(n2))
         return weight[..., None] * F
