@@ -257,3 +257,18 @@ def test_kulla_conty_interpolated_tables(capsys):
     code, out, err = run_cli(capsys, "albedo", "ggx", "-p", "ms=kulla-conty", "-p", "ms_table=4", "--theta", "0,60",
                              "--json")
     assert code == 0, err
+
+
+@pytest.mark.parametrize("name", ["ggx", "beckmann"])
+def test_normal_incidence_agrees_with_certified_enclosures(name):
+    # brdfnorm.certified encloses E(V = N) by Arb ball arithmetic in a 1-D reduction (another engineer's route).
+    pytest.importorskip("flint", reason="python-flint (the certified extra) is not installed")
+    for params in ({"alpha": 1e-8}, {"alpha": 0.02}, {"alpha": 0.7, "shadowing": "separable"},
+                   {"alpha": 0.3, "fresnel": "schlick", "f0": (0.9, 0.5, 0.1)},
+                   {"alpha": 0.5, "fresnel": "dielectric", "eta": 1 / 1.5}):
+        model = bn.load(name, **params)
+        fast = bn.albedo(model, 0.0)
+        certified = bn.albedo(model, 0.0, method="certified")
+        true_error = np.abs(fast.value - certified.value)
+        assert np.all(true_error <= fast.error + certified.error), params
+        assert np.all(true_error <= 1e-10 * certified.value), params
