@@ -91,6 +91,17 @@ def test_mirror_limit_with_mpmath(name, shadowing):
         assert abs(result.value[0] - _mirror_limit(name, mu, 1e-8, shadowing)) <= 1e-12
 
 
+def test_anisotropic_mirror_limit():
+    # α_x ≠ α_y → 0: E = 1/(1 + 2Λ(V)) with Λ from a² = (α_x² V_x² + α_y² V_y²)/V_z² (GGX), V at azimuth 0.5.
+    theta, phi, ax, ay = 1.4, 0.5, 1e-8, 4e-8
+    V = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    mpmath.mp.dps = 30
+    a2 = (mpmath.mpf(ax) * V[0]) ** 2 + (mpmath.mpf(ay) * V[1]) ** 2
+    lam = (mpmath.sqrt(1 + a2 / mpmath.mpf(V[2]) ** 2) - 1) / 2
+    result = bn.albedo(bn.load("ggx", alpha_x=ax, alpha_y=ay), theta, phi)
+    assert abs(result.value[0] - float(1 / (1 + 2 * lam))) <= 1e-12
+
+
 def _complex_fresnel(cos: float, n: complex) -> float:
     """Unpolarized reflectance from the complex Fresnel amplitudes (numpy complex arithmetic)."""
     sin2 = 1 - cos * cos
