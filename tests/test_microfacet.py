@@ -283,3 +283,10 @@ def test_normal_incidence_agrees_with_certified_enclosures(name):
         true_error = np.abs(fast.value - certified.value)
         assert np.all(true_error <= fast.error + certified.error), params
         assert np.all(true_error <= 1e-10 * certified.value), params
+
+
+def test_too_close_to_the_horizon_is_refused(capsys):
+    with pytest.raises(BrdfnormError, match="cos θ"):
+        bn.albedo(bn.load("ggx", alpha=0.5), np.arccos(1e-12))
+    code, out, err = run_cli(capsys, "albedo", "ggx", "--theta", "89.9999999999")
+    assert code == 2 and "--theta" in err and err.count("\n") == 1

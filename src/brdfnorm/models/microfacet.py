@@ -79,11 +79,12 @@ class Distribution:
         return t, self.slope_density(t)
 
     def cap(self, s: np.ndarray) -> np.ndarray:
-        """Slope radii beyond which the mass is dropped (bounded by ``truncated_mass``); none by default."""
+        """Slope radii beyond which the mass is dropped (bounded by ``truncated_moments``); none by default."""
         return s
 
-    def truncated_mass(self) -> float:
-        return 0.0
+    def truncated_moments(self) -> tuple[float, float]:
+        """(∫ dP, ∫ s dP) over the slope radii dropped by ``cap``: what bounds the dropped part of the integral."""
+        return 0.0, 0.0
 
 
 class GGXDistribution(Distribution):
@@ -144,8 +145,10 @@ class BeckmannDistribution(Distribution):
     def cap(self, s):
         return np.minimum(s, self.CAP)
 
-    def truncated_mass(self):
-        return float(np.exp(-self.CAP**2))
+    def truncated_moments(self):
+        # ∫_S^∞ 2s e^{−s²} ds = e^{−S²};  ∫_S^∞ 2s² e^{−s²} ds = S e^{−S²} + (√π/2) erfc S ≤ (S + 1) e^{−S²}.
+        mass = float(np.exp(-self.CAP**2))
+        return mass, (self.CAP + 1.0) * mass
 
 
 # -- Fresnel -----------------------------------------------------------------------------------------------
