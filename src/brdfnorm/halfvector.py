@@ -56,7 +56,14 @@ import numpy as np
 
 from .errors import ArgumentError
 from .integrate import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
-from .models.microfacet import Distribution, MicrofacetModel, fresnel, roughness, shadowing_masking
+from .models.microfacet import (
+    Distribution,
+    MicrofacetModel,
+    fresnel,
+    register_compensation,
+    roughness,
+    shadowing_masking,
+)
 from .series import adaptive_gauss_legendre
 
 _EPS = np.finfo(float).eps
@@ -510,6 +517,9 @@ def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensa
 def compensation(distribution: Distribution, shadowing: str, size: int) -> Compensation:
     """The (cached) Kulla-Conty tables of a lobe; ``size`` 0 for exact values."""
     return _compensation(distribution.name, shadowing, int(size))
+
+
+register_compensation(compensation)
 
 
 # -- the albedo method -------------------------------------------------------------------------------------

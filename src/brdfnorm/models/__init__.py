@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..registry import Registry
 from .base import Lobe, Model, Over, mirror
 from .beckmann import Beckmann
 from .blinn_phong import BlinnPhong
@@ -10,9 +11,9 @@ from .ggx import GGX
 from .lambert import Lambert
 from .phong import PhongModified, PhongOriginal
 
-REGISTRY: dict[str, type[Model]] = {
+REGISTRY: Registry[type[Model]] = Registry("model", "model", {
     cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann)
-}
+})
 
 __all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BlinnPhong", "BlinnPhongGaussian", "GGX",
            "Lambert", "PhongModified", "PhongOriginal"]

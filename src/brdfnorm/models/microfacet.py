@@ -31,12 +31,12 @@ compensation needs Kulla & Conty's Fresnel-average term, which is not implemente
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from scipy.special import erfcx
 
-from ..errors import ParameterError
+from ..errors import EvaluationError, ParameterError
 from ..parameters import Parameter
 from .base import Lobe, Model, mirror
 
@@ -182,6 +182,17 @@ def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.nda
 
 # -- the model ---------------------------------------------------------------------------------------------
 
+#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer (brdfnorm.halfvector), which
+#: registers its provider here when it is imported: ``provider(distribution, shadowing, size)`` -> an object with
+#: ``energies(mu_l, mu_v, alpha)``. Models stay below the integrator in the import graph.
+_COMPENSATION: Callable | None = None
+
+
+def register_compensation(provider: Callable) -> None:
+    global _COMPENSATION
+    _COMPENSATION = provider
+
+
 SHADOWING = ("height-correlated", "separable")
 FRESNEL = ("none", "schlick", "dielectric", "conductor")
 MULTIPLE_SCATTERING = ("none", "kulla-conty")
@@ -311,13 +322,13 @@ class MicrofacetModel(Model):
     def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
         """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1); 0 at α = 0 (a mirror
         loses no energy: E = E_avg = 1)."""
-        from ..halfvector import compensation  # the lobe's own albedo tables (integrator layer)
-
+        if _COMPENSATION is None:
+            raise EvaluationError("ms=kulla-conty needs the half-vector integrator (import brdfnorm)", where=self.name)
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
         alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), shape)
         mu_l = np.broadcast_to(L[..., 2], shape)
         mu_v = np.broadcast_to(V[..., 2], shape)
-        table = compensation(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+        table = _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
         e_l, e_v, e_avg = table.energies(mu_l, mu_v, alpha)
         lossy = (mu_l > 0) & (mu_v > 0) & (e_avg < 1.0)
         with np.errstate(divide="ignore", invalid="ignore"):
