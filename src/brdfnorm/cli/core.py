@@ -41,7 +41,8 @@ class NonFinite(str, Enum):
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
 METHOD_OPTION = typer.Option("auto", "--method",
-                             help="auto | quadrature | closed-form | series | certified (where it applies).")
+                             help="auto | quadrature | closed-form | series | microfacet | certified (where it "
+                                  "applies; microfacet: ggx and beckmann, over the half vector).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
