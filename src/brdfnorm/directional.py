@@ -128,7 +128,7 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     batch_shapes = []
     for p in model.parameters:
         value = np.asarray(bound[p.name])
-        batch_shapes.append(value.shape[:-1] if p.kind == "color" else value.shape)
+        batch_shapes.append(() if p.kind == "choice" else value.shape[:-1] if p.kind == "color" else value.shape)
     try:
         shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
     except ValueError:
@@ -139,6 +139,9 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     params, broadcast = {}, {}
     for p, batch in zip(model.parameters, batch_shapes, strict=True):
         value = bound[p.name]
+        if p.kind == "choice":  # a choice is one value for the whole batch (never swept)
+            params[p.name] = broadcast[p.name] = value
+            continue
         tail = (3,) if p.kind == "color" else ()
         broadcast[p.name] = np.broadcast_to(np.asarray(value, dtype=float), shape + tail)
         params[p.name] = broadcast[p.name].reshape((-1,) + tail) if batch else value
@@ -379,6 +382,14 @@ from .series import albedo_method as _series  # noqa: E402
 
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
+
+# Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
+# (brdfnorm.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates fail.
+from .halfvector import albedo_method as _microfacet  # noqa: E402
+from .models.microfacet import MicrofacetModel  # noqa: E402
+
+register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
+                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=0)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).

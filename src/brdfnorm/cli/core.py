@@ -41,7 +41,8 @@ class NonFinite(str, Enum):
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
 METHOD_OPTION = typer.Option("auto", "--method",
-                             help="auto | quadrature | closed-form | series | certified (where it applies).")
+                             help="auto | quadrature | closed-form | series | microfacet | certified (where it "
+                                  "applies; microfacet: ggx and beckmann, over the half vector).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
@@ -54,7 +55,7 @@ def models(debug: bool = DEBUG_OPTION) -> None:
         for column in ("name", "formula", "parameters", "closed form"):
             table.add_column(column)
         for name, cls in REGISTRY.items():
-            params = ", ".join(f"{p.name}={p.default:g} {p.describe_range()}" for p in cls.parameters)
+            params = ", ".join(f"{p.name}={p.describe_default()} {p.describe_range()}" for p in cls.parameters)
             has_closed = "normal incidence" if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
             table.add_row(name, cls.formula, params, has_closed)
         console().print(table)
