@@ -38,6 +38,9 @@ class AlbedoResult:
     over: Over
     params: dict = field(default_factory=dict)  # parameter values broadcast to S (colors: (*S, 3))
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
+    #: (*S,) str: "" where converged, else why not — "rounding-limited" (the integrand's float64 noise exceeds
+    #: the tolerance), "stalled" (the estimate stopped improving) or "budget" (max_evaluations ran out).
+    reason: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -124,7 +127,9 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    run: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]]
+    #: (value, error, evaluations, converged, nonfinite fraction or None[, reason]); without a reason array an
+    #: unconverged point's reason is "budget".
+    run: Callable[..., tuple]
     description: str = ""
 
 
@@ -148,7 +153,8 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
             f"L={_fmt(L)}, V={_fmt(V)}; pass nonfinite='zero' (--nonfinite zero) to count such values as 0",
             where=problem.model.name,
         ) from None
-    return result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction
+    return (result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction,
+            result.reason)
 
 
 def _fmt(direction: np.ndarray) -> str:
@@ -223,13 +229,14 @@ def albedo(
         raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {nonfinite!r}", where="nonfinite")
     problem = make_problem(model, theta, phi, over)
     chosen = resolve_method(model, over, method)
-    value, error, evaluations, converged, bad = chosen.run(
+    value, error, evaluations, converged, bad, *reason = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    reason = np.asarray(reason[0], dtype=str) if reason else np.where(converged, "", "budget")
     S, C = problem.shape, value.shape[-1]
     if not np.all(converged):
+        why = ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged]))
         warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
-                      f"reach rtol={rtol:g} within {max_evaluations} evaluations; see the error estimates",
-                      stacklevel=2)
+                      f"reach rtol={rtol:g} ({why}); see the error estimates", stacklevel=2)
     if bad is not None and np.any(bad > 0):
         warnings.warn(f"{model.name}: non-finite BRDF values counted as 0 on up to {100 * bad.max():.3g}% of "
                       "the hemisphere's solid angle", stacklevel=2)
@@ -237,6 +244,7 @@ def albedo(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+        reason=reason.reshape(S),
     )
 
 

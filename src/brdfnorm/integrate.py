@@ -105,6 +105,12 @@ class HemisphereResult:
     evaluations: np.ndarray  # (K,) integrand evaluations
     converged: np.ndarray  # (K,) bool
     nonfinite_fraction: np.ndarray  # (K,) share of the hemisphere's solid angle zeroed (nonfinite="zero")
+    reason: np.ndarray  # (K,) str: "" where converged, else why not (one of :data:`REASONS`)
+
+
+#: Why a case ends unconverged: its integrand's float64 rounding noise exceeds the tolerance
+#: ("rounding-limited"), its estimate stopped improving ("stalled"), or the evaluation budget ran out ("budget").
+REASONS = ("rounding-limited", "stalled", "budget")
 
 
 @dataclass
@@ -120,9 +126,10 @@ class _Panels:
     err_b: np.ndarray | None = None  # (R, C)
     err_u: np.ndarray | None = None  # (R, C)
     bad: np.ndarray | None = None  # (R,) solid angle where the integrand was non-finite
+    magnitude: np.ndarray | None = None  # (R, C) K15⊗K15 integral of |g| (the scale of rounding noise)
     inherited: np.ndarray | None = None  # (R, C) share of |parent − children| from the split that made it
 
-    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "inherited")
+    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "magnitude", "inherited")
 
     def take(self, index) -> _Panels:
         return _Panels(*(None if (a := getattr(self, f)) is None else a[index] for f in self.FIELDS))
@@ -215,7 +222,7 @@ def _estimate(values: np.ndarray, jacobian: np.ndarray):
     kg = np.einsum("rbc,b->rc", over_u_g, KRONROD)
     magnitude = np.einsum("rbuc,b,u->rc", np.abs(weighted), KRONROD, KRONROD)
     floor = 50.0 * _EPS * magnitude  # rounding noise: QUADPACK's floor on |K − G|
-    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor)
+    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor), magnitude
 
 
 def integrate_hemisphere(
@@ -249,7 +256,7 @@ def integrate_hemisphere(
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
-    widths = np.broadcast_to(np.clip(np.asarray(widths, dtype=float), 1e-6, 4.0), (K,)).copy()
+    widths = np.broadcast_to(np.clip(np.asarray(widths, dtype=float), 1e-12, 4.0), (K,)).copy()
     supports = np.broadcast_to(np.clip(np.asarray(supports, dtype=float), 1e-6, np.pi), (K,)).copy()
     frame = lobe_frame(poles)
 
@@ -271,7 +278,11 @@ def integrate_hemisphere(
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
     confirmed = np.zeros(K, dtype=bool)
+    reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
+    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call)
+    evaluations += _PROBE_EVALUATIONS
+    history = []  # total error estimate per case and round (for the stall check)
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
     parent_value = None  # values of the panels whose halves ``fresh`` holds
@@ -288,21 +299,21 @@ def integrate_hemisphere(
             change = _refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
             fresh.inherited = np.concatenate([change, change])
         pool = fresh if pool is None else _Panels.join(pool, fresh)
-        panel_error = pool.error()
         if value.shape[1] != pool.value.shape[1]:
             value = np.zeros((K, pool.value.shape[1]))
             error = np.zeros_like(value)
+            noise_amplitude = np.broadcast_to(noise_amplitude, value.shape).copy()
 
-        # Totals per unfinished case over all its panels.
+        # Totals per unfinished case over all its panels; the rounding-noise bound joins the error.
         total_value = np.zeros_like(value)
-        total_error = np.zeros_like(value)
+        magnitude = np.zeros_like(value)
         np.add.at(total_value, pool.case, pool.value)
-        np.add.at(total_error, pool.case, panel_error)
+        np.add.at(magnitude, pool.case, pool.magnitude)
+        noise = noise_bound(noise_amplitude, magnitude)
         tolerance = np.maximum(atol, rtol * np.abs(total_value))
-        ratio = _normalized(total_error, tolerance)
         present = np.zeros(K, dtype=bool)
         present[pool.case] = True
-        within = present & np.all(ratio <= 1.0, axis=1)
+        panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         # A case within tolerance for the first time is confirmed: every panel is recomputed as two halves
         # by the G7⊗G7 rule (new nodes, a quarter of the cost of K15 halves), and the difference joins its
         # error — a check that the embedded rules cannot pass together when a feature falls between all
@@ -313,16 +324,21 @@ def integrate_hemisphere(
             change = _check_by_halves(pool.take(checked), integrand, frame, widths, supports, max_nodes_per_call)
             np.add.at(evaluations, pool.case[checked], 2 * GAUSS_NODES.size**2)
             pool.inherited[checked] = np.maximum(pool.inherited[checked], change)
-            panel_error = pool.error()
-            total_error = np.zeros_like(value)
-            np.add.at(total_error, pool.case, panel_error)
-            ratio = _normalized(total_error, tolerance)
-            within = present & np.all(ratio <= 1.0, axis=1)
+            panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         confirmed |= confirming
         case_ok = within & confirmed
-        out_of_budget = evaluations + 2 * nodes_per_panel > max_evaluations
         converged |= case_ok
-        active = present & ~(case_ok | out_of_budget)
+        # Fail fast where more nodes cannot help: the rounding noise alone exceeds the tolerance and the
+        # quadrature error is already below it, or the estimate stopped improving (see _stalled).
+        rounding_limited = present & ~case_ok & np.any(_normalized(noise, tolerance) > 1.0, axis=1)
+        history.append(np.where(present, (quadrature_error + noise).max(axis=1), np.nan))
+        stop = rounding_limited & np.all(quadrature_error <= noise, axis=1)
+        stalled = present & ~case_ok & ~stop & _stalled(history, evaluations)
+        out_of_budget = present & ~case_ok & (evaluations + 2 * nodes_per_panel > max_evaluations)
+        reason[out_of_budget] = "budget"
+        reason[stalled] = "stalled"
+        reason[rounding_limited & (stop | stalled | out_of_budget)] = "rounding-limited"
+        active = present & ~(case_ok | stop | stalled | out_of_budget)
 
         # Within an active case, split the panels carrying the largest (tolerance-normalized) errors: all but
         # the smallest ones whose errors together stay under half the tolerance.
@@ -338,23 +354,116 @@ def integrate_hemisphere(
         split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
 
         finished = ~active[pool.case]
+        done = present & ~active
         np.add.at(value, pool.case[finished], pool.value[finished])
         np.add.at(error, pool.case[finished], panel_error[finished])
         np.add.at(bad_total, pool.case[finished], pool.bad[finished])
+        error[done] += noise[done]
         parents = pool.take(split)
         pool = pool.take(~split & ~finished)
         fresh = parents.halves(parents.err_b.max(axis=1) >= parents.err_u.max(axis=1))
         parent_value = parents.value
         if not fresh.case.size and pool.case.size:
             # Active cases whose every panel is too thin to split: finish them unconverged.
+            left = np.zeros(K, dtype=bool)
+            left[pool.case] = True
+            reason[left] = np.where(rounding_limited[left], "rounding-limited", "stalled")
             np.add.at(value, pool.case, pool.value)
             np.add.at(error, pool.case, pool.error())
             np.add.at(bad_total, pool.case, pool.bad)
+            error[left] += noise[left]
 
     if value.shape[1] == 0:
         value = np.zeros((K, 1))
         error = np.zeros((K, 1))
-    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi))
+    reason[converged] = ""
+    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
+
+
+def _case_errors(pool: _Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):
+    """Panel errors (R, C), their sums per case (K, C), and which present cases meet the tolerance with the
+    rounding-noise bound added."""
+    panel_error = pool.error()
+    summed = np.zeros_like(noise)
+    np.add.at(summed, pool.case, panel_error)
+    return panel_error, summed, present & np.all(_normalized(summed + noise, tolerance) <= 1.0, axis=1)
+
+
+#: Rounds over which a case's error estimate must shrink, and the evaluations after which that is checked.
+_STALL_ROUNDS = 6
+_STALL_EVALUATIONS = 200_000
+
+
+def _stalled(history: list[np.ndarray], evaluations: np.ndarray) -> np.ndarray:
+    """Cases whose error estimate shrank by less than 2× over the last rounds, once past a modest budget:
+    refining further only spends evaluations (rounding noise the probe missed, a singularity)."""
+    if len(history) <= _STALL_ROUNDS:
+        return np.zeros(evaluations.size, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        return (history[-1] > 0.5 * history[-1 - _STALL_ROUNDS]) & (evaluations > _STALL_EVALUATIONS)
+
+
+# Rounding-noise probe: along rays from each case's peak at these azimuths, the integrand at 32 + 4 points
+# spaced _PROBE_STEP widths apart, starting at these radii (in widths); their fourth differences are noise.
+_PROBE_RADII = np.array([1e-2, 0.3, 1.0])
+_PROBE_AZIMUTHS = np.arange(4) * (np.pi / 2)
+_PROBE_POINTS = 36
+_PROBE_STEP = 1e-4
+_PROBE_EVALUATIONS = _PROBE_RADII.size * _PROBE_AZIMUTHS.size * _PROBE_POINTS
+#: Fourth differences of independent noise of standard deviation σ have standard deviation √70·σ.
+_FOURTH_DIFFERENCE_GAIN = np.sqrt(70.0)
+#: Lobes narrower than this (rad) may be plateaus of float64 rounding at their core.
+_PLATEAU_WIDTH = 1e-6
+
+
+def rounding_noise(integrand: Integrand, frame, widths: np.ndarray, supports: np.ndarray,
+                   max_nodes_per_call: int = 1_500_000) -> np.ndarray:
+    """Relative amplitude (K, C) of each case's float64 evaluation noise around its peak.
+
+    Along rays from the peak, at 1e-2, 0.3 and 1 widths w, the integrand is sampled 1e-4·w apart: there a
+    smooth lobe's fourth differences are ~1e-16 of it, while float64 rounding of the cosine it is written in
+    (cos^n, (N·H)^n, 1 − (N·H)²) is a staircase with steps narrower than that, i.e. independent noise from
+    sample to sample. Perturbing directions by a few ulps would not show it: near a peak the steps are wider
+    than any ulp. The RMS fourth difference / √70 relative to the largest sample estimates the noise; a lobe
+    narrower than ~1e-6 rad is also charged ε/w²·(1e-6/w)² (its core may be a plateau of rounding, the cosine
+    1 across it, which no difference sees: Phong at n = 1e20), and non-finite samples count as noise of 1.
+    """
+    P, T, B = frame
+    K = P.shape[0]
+    pz = P[:, 2:3]
+    s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
+    cos_b, sin_b = np.cos(_PROBE_AZIMUTHS), np.sin(_PROBE_AZIMUTHS)
+    alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[:, None])  # (K, azimuths)
+    w = widths[:, None, None, None]
+    alpha = w * (_PROBE_RADII[:, None] + _PROBE_STEP * np.arange(_PROBE_POINTS))  # (K, 1, radii, points)
+    alpha = np.minimum(alpha, 0.5 * alpha_max[:, :, None, None])  # (K, az, radii, points)
+    radial = cos_b[None, :, None] * T[:, None, :] + sin_b[None, :, None] * B[:, None, :]  # (K, az, 3)
+    omega = (np.cos(alpha)[..., None] * P[:, None, None, None, :]
+             + np.sin(alpha)[..., None] * radial[:, :, None, None, :])
+    case = np.broadcast_to(np.arange(K)[:, None, None, None], alpha.shape)
+    per_call = max(1, max_nodes_per_call // case[0].size)
+    values = []
+    with np.errstate(all="ignore"):
+        for start in range(0, K, per_call):
+            part = slice(start, start + per_call)
+            values.append(np.asarray(integrand(omega[part].reshape(-1, 3), case[part].ravel()), dtype=float)
+                          .reshape(alpha[part].shape + (-1,)))
+    g = np.concatenate(values)  # (K, az, radii, points, C)
+    finite = np.isfinite(g).all(axis=(1, 2, 3))
+    g = np.where(np.isfinite(g), g, 0.0)
+    fourth = np.diff(g, n=4, axis=3)
+    rms = np.sqrt(np.mean(fourth**2, axis=3)) / _FOURTH_DIFFERENCE_GAIN  # (K, az, radii, C)
+    scale = np.abs(g).max(axis=3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        relative = np.where(scale > 0, rms / scale, 0.0).max(axis=(1, 2))
+    plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
+    return np.where(finite, np.minimum(1.0, np.maximum(relative, plateau)), 1.0)
+
+
+def noise_bound(amplitude: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
+    """Twice the relative float64 error ``amplitude`` of the integrand times its |g|-integral ``magnitude``
+    (the error need not average out: it can be a bias, as in Blinn-Phong's half vector)."""
+    return 2.0 * amplitude * magnitude
 
 
 def _refinement_change(whole: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
@@ -409,7 +518,8 @@ def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, ma
             values = np.where(finite[..., None], values, 0.0)
             bad = np.einsum("rbu,b,u->r", jacobian * ~finite, KRONROD, KRONROD)
         parts.append((*_estimate(values, jacobian), bad))
-    panels.value, panels.err_b, panels.err_u, panels.bad = (np.concatenate(p) for p in zip(*parts, strict=True))
+    panels.value, panels.err_b, panels.err_u, panels.magnitude, panels.bad = (
+        np.concatenate(p) for p in zip(*parts, strict=True))
 
 
 def fibonacci_hemisphere(count: int) -> np.ndarray:
