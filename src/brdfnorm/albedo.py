@@ -21,7 +21,7 @@ import numpy as np
 
 from .errors import ArgumentError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
-from .models.base import Model, Over
+from .models.base import Model, Over, mirror
 
 
 @dataclass(frozen=True)
@@ -138,7 +138,9 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
     K = problem.fixed.shape[0]
     lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
     if lobe is None:
-        poles, widths, supports = estimate_lobe(problem.integrand, K)
+        normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
+        candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
+        poles, widths, supports = estimate_lobe(problem.integrand, K, candidates=candidates)
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))

@@ -542,12 +542,15 @@ def fibonacci_hemisphere(count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
-def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024,
-                  max_nodes_per_call: int = 1_500_000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024, max_nodes_per_call: int = 1_500_000,
+                  candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Find the peak direction and angular width of each case's integrand by sampling (no model hint).
 
     A Fibonacci lattice of ``samples`` directions locates the maximum of |g| to within the lattice spacing
-    h ≈ √(2π/samples), and the |g|-weighted RMS angle about it estimates the width. A lobe narrower than the
+    h ≈ √(2π/samples), together with ``candidates`` (K, m, 3), directions where a peak is likely (the mirror
+    direction: a lobe narrower than h, Blinn-Phong at n = 1e7, underflows to 0 at every lattice point, and an
+    integrand that is 0 at every sample would be integrated to 0 with a zero error estimate). The
+    |g|-weighted RMS angle about the maximum estimates the width. A lobe narrower than the
     lattice (the RMS, or the distance to the nearest sample at half the peak, < 2h) is then zoomed into: a
     polar lattice on a cap of radius 3h around the peak relocates it and measures it again, and the cap shrinks
     threefold until the lobe spans several of its points (GGX at roughness 0.01 is 1e-4 rad wide; at α = 1e-8,
@@ -582,17 +585,24 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024,
         return np.concatenate(peaks), np.concatenate(widths)
 
     grid = fibonacci_hemisphere(samples)
-    peak, width = sample(lambda case: np.broadcast_to(grid, (case.size,) + grid.shape), samples, np.arange(cases))
+    extra = np.zeros((cases, 0, 3)) if candidates is None else np.asarray(candidates, dtype=float)
+
+    def lattice(case: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.broadcast_to(grid, (case.size,) + grid.shape), extra[case]], axis=1)
+
+    peak, width = sample(lattice, samples + extra.shape[1], np.arange(cases))
 
     cap = fibonacci_hemisphere(256)
-    cap_angle = np.arccos(cap[:, 2]) / (np.pi / 2)  # polar angle on a cap of unit radius
-    cap_phi = np.arctan2(cap[:, 1], cap[:, 0])
+    # Polar angles on a cap of unit radius, and the cap's centre (the peak so far: a zoom that finds nothing
+    # else above 0 must keep it rather than move to an arbitrary point).
+    cap_angle = np.concatenate([[0.0], np.arccos(cap[:, 2]) / (np.pi / 2)])
+    cap_phi = np.concatenate([[0.0], np.arctan2(cap[:, 1], cap[:, 0])])
     cap_spacing = np.sqrt(np.pi / cap.shape[0])  # mean spacing on that cap (area ≈ π)
     radius = np.full(cases, 3.0 * spacing)
     unresolved = np.flatnonzero(width < 2.0 * spacing)
     while unresolved.size and radius[unresolved].max() > 1e-10:
         around_peak = _cap_lattice(peak, unresolved, radius, cap_angle, cap_phi)
-        peak[unresolved], width[unresolved] = sample(around_peak, cap.shape[0], unresolved)
+        peak[unresolved], width[unresolved] = sample(around_peak, cap_angle.size, unresolved)
         resolved = width[unresolved] >= 2.0 * cap_spacing * radius[unresolved]
         radius[unresolved] /= 3.0
         unresolved = unresolved[~resolved]
