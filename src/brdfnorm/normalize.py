@@ -42,6 +42,7 @@ class NormalizationResult:
     method: str
     over: Over
     converged: np.ndarray  # (S, T)
+    reason: np.ndarray | None = None  # (S, T) str: "" where converged, else why not (AlbedoResult.reason)
 
 
 def normalize(
@@ -80,6 +81,7 @@ def normalize(
         theta=np.broadcast_to(result.theta, value.shape[:2]), phi=np.broadcast_to(result.phi, value.shape[:2]),
         albedo=value, error=np.broadcast_to(result.error, value.shape), factor=factor, method=result.method,
         over=over, converged=np.broadcast_to(result.converged, value.shape[:2]),
+        reason=np.broadcast_to(result.reason, value.shape[:2]),
     )
 
 

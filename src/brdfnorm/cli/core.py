@@ -87,7 +87,8 @@ def albedo(
         rows = [
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
              "error_estimate": channel_value(result.error[i]), "method": result.method,
-             "evaluations": int(result.evaluations[i]), "converged": bool(result.converged[i])}
+             "evaluations": int(result.evaluations[i]), "converged": bool(result.converged[i]),
+             "reason": str(result.reason[i])}
             for i, d in enumerate(degrees)
         ]
         if json_output:
@@ -98,7 +99,7 @@ def albedo(
             table.add_column(column, justify="right")
         for row in rows:
             table.add_row(f"{row['theta_deg']:g}", f"{row['phi_deg']:g}", _num(row["albedo"]),
-                          _num(row["error_estimate"], 3), row["method"] + ("" if row["converged"] else " (!)"),
+                          _num(row["error_estimate"], 3), row["method"] + _unconverged(row),
                           str(row["evaluations"]))
         console().print(table)
 
@@ -155,7 +156,7 @@ def normalize_command(
         for row in rows:
             cells = ([f"{row['params'][sweep_name]:g}"] if sweep_name else []) + [
                 f"{row['theta_deg']:.6g}", f"{row['phi_deg']:.6g}", _num(row["albedo"]),
-                _num(row["error_estimate"], 3), _num(row["factor"]), row["method"]]
+                _num(row["error_estimate"], 3), _num(row["factor"]), row["method"] + _unconverged(row)]
             table.add_row(*cells)
         if output:
             buffer = Console(file=io.StringIO(), width=160)
@@ -186,7 +187,7 @@ def _normalize_with_progress(model, at, name, values, degrees, phi, over, rtol, 
     return NormalizationResult(
         at=first.at, parameter=name, values=values,
         **{field: np.concatenate([getattr(p, field) for p in parts])
-           for field in ("theta", "phi", "albedo", "error", "factor", "converged")},
+           for field in ("theta", "phi", "albedo", "error", "factor", "converged", "reason")},
         method=first.method, over=first.over,
     )
 
@@ -204,6 +205,7 @@ def _normalization_rows(model, result: NormalizationResult) -> list[dict]:
                 "phi_deg": float(np.degrees(result.phi[s, t])), "albedo": channel_value(result.albedo[s, t]),
                 "error_estimate": channel_value(result.error[s, t]), "factor": channel_value(result.factor[s, t]),
                 "method": result.method, "at": result.at, "converged": bool(result.converged[s, t]),
+                "reason": str(result.reason[s, t]),
             })
     return rows
 
@@ -219,6 +221,11 @@ def _csv(rows: list[dict]) -> str:
             repr(row["theta_deg"]), repr(row["phi_deg"]), _flat(row["albedo"]), _flat(row["error_estimate"]),
             _flat(row["factor"]), row["method"], row["at"]])
     return buffer.getvalue().rstrip("\n")
+
+
+def _unconverged(row: dict) -> str:
+    """The table's mark on a point that missed its tolerance, with the reason (rounding-limited, …)."""
+    return "" if row["converged"] else f" (! {row['reason']})"
 
 
 def _flat(value) -> str:
