@@ -70,7 +70,8 @@ def ggx_albedo_reference(alpha: float, mu: float, order: int = 24) -> float:
     With tan²θ_h = α²t, D(H)(N·H) dω_h = dt/(1+t)² dφ/(2π) and dL = 4(V·H) dω_h, so
     E = ∫∫ G2(L, V)(V·H)/(μ (N·H)) dt/(1+t)² dφ/(2π) over the half vectors whose mirror L = 2(V·H)H − V lies
     above the horizon. For each φ node the horizon's t is found by bisection; u = ln t runs from ln 1e-40 to
-    it on 60 panels (the integrand is smooth in u), φ on 8 panels over [0, π] (the integrand is even in φ).
+    it on 60 panels and 30 more graded geometrically towards the horizon (where G2's masking layer is ~α wide
+    in u), φ on 8 panels over [0, π] (the integrand is even in φ).
     """
     x, w = np.polynomial.legendre.leggauss(order)
     sin_o = np.sqrt(1.0 - mu * mu)
@@ -97,7 +98,10 @@ def ggx_albedo_reference(alpha: float, mu: float, order: int = 24) -> float:
     t_horizon = np.tan(lo) ** 2 / a2
     total = 0.0
     for k in range(phi.size):
-        u, w_u = panels(np.linspace(np.log(1e-40), np.log(t_horizon[k]), 61))
+        # Panels graded towards the horizon, where the masking layer (μ_L ≲ α) is ~α wide in u.
+        top = np.log(t_horizon[k])
+        edges = np.concatenate([np.linspace(np.log(1e-40), top - 1.0, 60), top - np.geomspace(0.5, 1e-9, 30), [top]])
+        u, w_u = panels(edges)
         t = np.exp(u)
         tan_h = alpha * np.sqrt(t)
         cos_h = 1.0 / np.sqrt(1.0 + tan_h**2)
