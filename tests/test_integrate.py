@@ -210,8 +210,8 @@ def test_error_estimate_covers_the_grazing_sliver(n, rtol):
 
 # -- float64's limit (issue 13 item 1, issue 14 item 5): honest estimates, a reason, and no budget burnt ------
 
-#: A rounding-limited point must stop long before the 2e7-evaluation budget (issue 13 item 2).
-FAIL_FAST_EVALUATIONS = 200_000
+#: A point that cannot converge must stop long before the 2e7-evaluation budget (issue 13 item 2).
+FAIL_FAST_EVALUATIONS = 1_000_000
 
 
 def _quiet_albedo(model, theta, **kwargs):
@@ -221,13 +221,14 @@ def _quiet_albedo(model, theta, **kwargs):
 
 
 def _check_honest(result, reference: float, index=()) -> str:
-    """Estimate ≥ true error, a reason exactly where unconverged, and no budget burnt; returns the reason."""
+    """Estimate ≥ true error, a reason exactly where unconverged, and no budget burnt there; the reason."""
     value = float(np.asarray(result.value)[index].ravel()[0])
     assert float(np.asarray(result.error)[index].ravel()[0]) >= abs(value - reference)
     reason = str(np.asarray(result.reason)[index])
     assert (reason == "") == bool(np.asarray(result.converged)[index])
     assert reason in ("", *REASONS)
-    assert int(np.asarray(result.evaluations)[index]) <= FAIL_FAST_EVALUATIONS
+    if reason:
+        assert int(np.asarray(result.evaluations)[index]) <= FAIL_FAST_EVALUATIONS
     return reason
 
 
