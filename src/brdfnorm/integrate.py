@@ -40,6 +40,14 @@ bisected along their worse direction, largest errors first, until the summed est
 below max(atol, rtol·|E|) for every case and channel, or the evaluation budget runs out (then
 ``converged`` is False and the estimate still says how far off the value may be).
 
+At float64's limit the integrand itself is noise: a lobe written with a cosine near 1 (cos^n, (N·H)^n,
+1 − (N·H)²) sees that cosine only to within ε, which at n = 1e16 or GGX α = 1e-8 is a staircase as wide as
+the lobe. Before the first round :func:`rounding_noise` measures each case's noise by fourth differences
+along rays from the peak, and :func:`noise_bound` adds it (times the |g|-integral) to the estimate. A case
+whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
+one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
+``converged`` is False and ``reason`` says why.
+
 Every round evaluates all panels of all unconverged cases in one vectorized call to the integrand; there is
 no Python loop per node or per case. ``scipy.integrate.cubature`` implements the same idea for a single
 integrand; it cannot share rounds across thousands of integrals or use lobe-aligned coordinates, which is
