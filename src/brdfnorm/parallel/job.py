@@ -1,0 +1,263 @@
+"""A table job as data: the model as its source, the albedo settings, the cells, a hash, and fixed chunks.
+
+Issue #17: a job travels to other processes and machines as *source* — a built-in lobe's name and parameter
+values, or a ``.brdf`` file's text, display path and parameter values — never as a pickled closure, so any
+worker running the same brdfnorm version rebuilds exactly the same model (:meth:`ModelSource.load`).
+
+A :class:`CellsJob` is that source, the :class:`AlbedoSettings`, a task — ``"albedo"`` (E at each cell's
+direction) or ``"max"`` (per cell, the direction of largest E, searched as ``normalize(at="max")`` does; the
+cells' angles are then unused) — and the cells: polar angle, azimuth and the per-cell values of float
+parameters, flattened from a table of shape :attr:`CellsJob.shape`. :attr:`CellsJob.digest` is a SHA-256
+over a canonical encoding (sorted-key JSON for the scalars, little-endian float64 bytes for the arrays, the
+brdfnorm version), which names the job in checkpoints.
+
+Chunks (:func:`chunk_plan`) are a function of the job alone, never of the number of workers or where they
+run: the cells are put in a canonical order (per-cell parameters, then θ, then φ — neighbours in parameter
+space cost about the same, so each chunk groups cells of similar cost) and cut into chunks of a fixed number
+of cells, chosen from the evaluation counts of a deterministic probe (a few cells at a loose tolerance) so that
+a chunk is about :data:`TARGET_EVALUATIONS` integrand evaluations — a second or two of one core. Each chunk is
+one vectorized ``albedo`` batch, so whichever process computes it, it computes the same batch and the result
+is bit-for-bit the same.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Literal
+
+import numpy as np
+
+from ..albedo import albedo as compute_albedo
+from ..albedo import check_angles, check_tolerance, resolve_method
+from ..errors import ArgumentError
+from ..models import REGISTRY, Model
+
+Task = Literal["albedo", "max"]
+TASKS = ("albedo", "max")
+#: Version of the job encoding (part of the hash, so a format change never resumes an old checkpoint).
+FORMAT = 1
+#: About how many integrand evaluations one chunk should take (≈ 1–2 s of one core: 4–10 M evaluations/s).
+TARGET_EVALUATIONS = 8_000_000
+#: Most cells in one chunk (bounds a chunk's memory when its cells are cheap).
+MAX_CELLS_PER_CHUNK = 1024
+#: Jobs this small are one chunk: a probe would cost as much as the work.
+SMALL_JOB = 16
+#: Cells the probe integrates, at rtol max(job's, PROBE_RTOL).
+PROBE_CELLS = 12
+PROBE_RTOL = 1e-6
+#: Albedo integrals per cell of the "max" task (a 46-point grid, a 40-step golden-section search, the tie check).
+MAX_TASK_INTEGRALS = 90
+
+
+@dataclass(frozen=True)
+class ModelSource:
+    """A model as the data it was built from: ``kind`` "builtin" (``name`` is the registry name) or "brdf"
+    (``name`` is the file's display path, ``text`` its content), and the bound parameter values."""
+
+    kind: Literal["builtin", "brdf"]
+    name: str
+    params: Mapping[str, object] = field(default_factory=dict)
+    text: str | None = field(default=None, repr=False)
+
+    @classmethod
+    def of(cls, model: Model) -> ModelSource:
+        """The source of a built-in model or one read from a ``.brdf`` file, with its scalar parameter values."""
+        from ..brdffile import BrdfModel
+
+        params = {}
+        for p in model.parameters:
+            value = model.params[p.name]
+            array = np.asarray(value, dtype=float)
+            if array.ndim > (1 if p.kind == "color" else 0):
+                raise ArgumentError(f"parameter {p.name} is bound to an array; give per-cell values as the job's "
+                                    "cell values instead", where="model")
+            params[p.name] = (bool(value) if p.kind == "bool" else
+                              tuple(float(c) for c in array) if p.kind == "color" else float(array))
+        if isinstance(model, BrdfModel):
+            if not model.brdf_file.text:
+                raise ArgumentError(f"{model.name}: the model's .brdf text is unknown (parse it with "
+                                    "brdfnorm.brdffile.parse_brdf or read_brdf)", where="model")
+            return cls("brdf", model.brdf_file.path, params, model.brdf_file.text)
+        if REGISTRY.get(model.name) is type(model):
+            return cls("builtin", model.name, params)
+        raise ArgumentError(f"{type(model).__name__} cannot travel to other processes: only built-in lobes and "
+                            ".brdf models have a source", where="model")
+
+    def load(self) -> Model:
+        """Rebuild the model (parsing and compiling the ``.brdf`` text where there is one)."""
+        if self.kind == "builtin":
+            if self.name not in REGISTRY:
+                raise ArgumentError(f"unknown built-in model {self.name!r}", where="model")
+            return REGISTRY[self.name](**self.params)
+        from ..brdffile import compile_brdf, parse_brdf
+
+        return compile_brdf(parse_brdf(self.text or "", self.name), **self.params)
+
+    def to_json(self) -> dict:
+        params = {k: list(v) if isinstance(v, tuple) else v for k, v in sorted(self.params.items())}
+        return {"kind": self.kind, "name": self.name, "params": params, "text": self.text}
+
+    @classmethod
+    def from_json(cls, data: Mapping) -> ModelSource:
+        params = {k: tuple(v) if isinstance(v, list) else v for k, v in data["params"].items()}
+        return cls(data["kind"], data["name"], params, data.get("text"))
+
+
+@dataclass(frozen=True)
+class AlbedoSettings:
+    """The arguments of :func:`brdfnorm.albedo` a job fixes for all its cells."""
+
+    rtol: float = 1e-10
+    atol: float = 0.0
+    method: str = "auto"
+    over: str = "light"
+    nonfinite: str = "raise"
+    max_evaluations: int = 20_000_000
+
+    def to_json(self) -> dict:
+        return {"rtol": float(self.rtol), "atol": float(self.atol), "method": self.method, "over": self.over,
+                "nonfinite": self.nonfinite, "max_evaluations": int(self.max_evaluations)}
+
+    def validate(self, model: Model) -> None:
+        """Refuse bad settings in the calling process, before any work is sent out."""
+        check_tolerance(self.rtol, self.atol)
+        if self.nonfinite not in ("raise", "zero"):
+            raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {self.nonfinite!r}", where="nonfinite")
+        if self.over not in ("light", "view"):
+            raise ArgumentError(f"over must be 'light' or 'view', got {self.over!r}", where="over")
+        resolve_method(model, self.over, self.method)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True, eq=False)
+class CellsJob:
+    """A table of albedo cells: see the module docstring. Build one with :meth:`of`."""
+
+    source: ModelSource
+    settings: AlbedoSettings
+    shape: tuple[int, ...]
+    theta: np.ndarray  # (N,) radians
+    phi: np.ndarray  # (N,) radians
+    values: Mapping[str, np.ndarray]  # per-cell float parameter values, each (N,)
+    task: Task = "albedo"
+    chunk_cells: int | None = None  # fixed chunk size (None: chosen by the probe)
+
+    @classmethod
+    def of(cls, model: Model, theta=0.0, phi=0.0, values: Mapping[str, object] | None = None, *,
+           task: Task = "albedo", chunk_cells: int | None = None, **settings: object) -> CellsJob:
+        """Cells at the broadcast shape of ``theta``, ``phi`` (radians) and the per-cell parameter ``values``;
+        ``settings`` are :class:`AlbedoSettings` fields (rtol, atol, method, over, nonfinite, max_evaluations)."""
+        if task not in TASKS:
+            raise ArgumentError(f"task must be one of {', '.join(TASKS)}, got {task!r}", where="task")
+        if chunk_cells is not None and (int(chunk_cells) != chunk_cells or chunk_cells < 1):
+            raise ArgumentError(f"chunk_cells must be a positive whole number, got {chunk_cells!r}",
+                                where="chunk_cells")
+        theta, phi = check_angles(theta, phi)
+        per_cell = {}
+        for name, value in sorted((values or {}).items()):
+            parameter = model.parameter(name)
+            if parameter.kind != "float":
+                raise ArgumentError(f"only float parameters vary per cell; {name} is {parameter.kind}", where=name)
+            per_cell[name] = np.asarray(parameter.validate(value), dtype=float)
+        shape = np.broadcast_shapes(theta.shape, phi.shape, *(v.shape for v in per_cell.values()))
+        if math.prod(shape) == 0:
+            raise ArgumentError("the table has no cells", where="theta")
+        flat = {name: np.ascontiguousarray(np.broadcast_to(v, shape), dtype="<f8").ravel()
+                for name, v in per_cell.items()}
+        try:
+            unknown = sorted(set(settings) - set(AlbedoSettings.__dataclass_fields__))
+            if unknown:
+                raise TypeError
+            chosen = AlbedoSettings(**settings)  # type: ignore[arg-type]
+        except TypeError:
+            raise ArgumentError(f"unknown albedo settings {unknown}", where="settings") from None
+        # Per-cell values replace whatever the model had bound for those parameters (a sweep's array).
+        source = ModelSource.of(model.with_params(**{name: model.parameter(name).default for name in per_cell}))
+        return cls(source, chosen, tuple(int(s) for s in shape),
+                   np.ascontiguousarray(np.broadcast_to(theta, shape), dtype="<f8").ravel(),
+                   np.ascontiguousarray(np.broadcast_to(phi, shape), dtype="<f8").ravel(),
+                   flat, task, None if chunk_cells is None else int(chunk_cells))
+
+    @property
+    def size(self) -> int:
+        return int(self.theta.size)
+
+    def header(self) -> dict:
+        """Everything but the cells' arrays, as JSON-ready data (what each chunk task carries)."""
+        from .. import __version__
+
+        return {"format": FORMAT, "brdfnorm": __version__, "task": self.task, "source": self.source.to_json(),
+                "settings": self.settings.to_json(), "shape": list(self.shape), "per_cell": sorted(self.values),
+                "chunk_cells": self.chunk_cells}
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The cells' arrays by name, in the canonical order of the hash."""
+        return {"theta": self.theta, "phi": self.phi, **{f"param:{k}": self.values[k] for k in sorted(self.values)}}
+
+    @cached_property
+    def digest(self) -> str:
+        """SHA-256 of the job's definition (hex)."""
+        sha = hashlib.sha256(canonical_json(self.header()).encode())
+        for name, array in self.arrays().items():
+            sha.update(f"\n{name}:{array.size}\n".encode())
+            sha.update(np.ascontiguousarray(array, dtype="<f8").tobytes())
+        return sha.hexdigest()
+
+    def cells(self, index: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """θ, φ and per-cell parameter values of the cells ``index``."""
+        return self.theta[index], self.phi[index], {k: v[index] for k, v in self.values.items()}
+
+
+def canonical_json(data: object) -> str:
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
+
+
+@dataclass(frozen=True)
+class ChunkPlan:
+    """Cells in canonical order, cut into chunks of ``chunk_cells``: chunk k is ``order[k·c : (k+1)·c]``."""
+
+    order: np.ndarray
+    chunk_cells: int
+
+    @property
+    def count(self) -> int:
+        return -(-self.order.size // self.chunk_cells)
+
+    def chunk(self, k: int) -> np.ndarray:
+        return self.order[k * self.chunk_cells:(k + 1) * self.chunk_cells]
+
+
+def chunk_plan(job: CellsJob, model: Model) -> ChunkPlan:
+    """The job's fixed chunks (see the module docstring); ``model`` is ``job.source.load()``."""
+    keys = [job.phi, job.theta] + [job.values[k] for k in sorted(job.values, reverse=True)]
+    order = np.lexsort(keys)  # the last key is the primary one: the first per-cell parameter
+    if job.chunk_cells is not None:
+        return ChunkPlan(order, job.chunk_cells)
+    if job.size <= SMALL_JOB:
+        return ChunkPlan(order, job.size)
+    return ChunkPlan(order, _probed_chunk_cells(job, model, order))
+
+
+def _probed_chunk_cells(job: CellsJob, model: Model, order: np.ndarray) -> int:
+    """Cells per chunk from the evaluation counts of a few cells spread over the canonical order."""
+    sample = order[np.unique(np.linspace(0, job.size - 1, PROBE_CELLS).round().astype(int))]
+    theta, phi, values = job.cells(sample)
+    settings = job.settings
+    probe_rtol = max(settings.rtol, PROBE_RTOL)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        probe = compute_albedo(model.with_params(**values), theta, phi, over=settings.over, rtol=probe_rtol,
+                               atol=settings.atol, method=settings.method, nonfinite="zero",
+                               max_evaluations=settings.max_evaluations)
+    # Adaptive Gauss-Kronrod cost grows about as the square of the digits asked for (measured: ×3–4 from
+    # rtol 1e-6 to 1e-10); the estimate only sizes chunks, it never touches a value.
+    digits = math.log10(1.0 / settings.rtol) if settings.rtol > 0 else 14.0
+    per_cell = max(float(np.mean(probe.evaluations)), 1.0) * max(1.0, digits / -math.log10(probe_rtol)) ** 2
+    if job.task == "max":
+        per_cell *= MAX_TASK_INTEGRALS
+    return int(np.clip(TARGET_EVALUATIONS // per_cell, 1, MAX_CELLS_PER_CHUNK))
