@@ -9,20 +9,25 @@ from enum import Enum
 import numpy as np
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..albedo import albedo as compute_albedo
+from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalize import NormalizationResult
 from ..normalize import normalize as compute_normalize
+from ..parallel import CellsJob
+from ..parallel.sweeps import normalization_result, sweep_job
 from . import app
 from .common import (
+    CHECKPOINT_OPTION,
     DEBUG_OPTION,
     PARAM_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
     At,
     Over,
     channel_value,
+    compute_cells,
     console,
     guarded,
     load_model,
@@ -30,7 +35,6 @@ from .common import (
     parse_azimuth,
     parse_sweep,
     print_json,
-    stdout_is_terminal,
     to_json,
     write_output_atomically,
 )
@@ -75,6 +79,9 @@ def albedo(
     nonfinite: NonFinite = typer.Option(NonFinite.raise_, "--nonfinite",
                                         help="raise: fail at the first NaN/Inf; zero: count them as 0 (warns)."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view)."""
@@ -82,8 +89,9 @@ def albedo(
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
-        result = compute_albedo(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol,
-                                method=method, nonfinite=nonfinite.value)
+        job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
+                          nonfinite=nonfinite.value)
+        result = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
         rows = [
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
              "error_estimate": channel_value(result.error[i]), "method": result.method,
@@ -119,6 +127,9 @@ def normalize_command(
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
     csv_output: bool = typer.Option(False, "--csv", help="Print CSV."),
     output: str = typer.Option(None, "--output", "-o", help="Write the JSON/CSV/table to this file (atomically)."),
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
@@ -129,9 +140,18 @@ def normalize_command(
             m.parameter(name)  # unknown names fail before any work
         degrees = parse_angles(theta) if at == At.view else None
         azimuth = parse_azimuth(phi)
-        show_progress = not (json_output or csv_output) and stdout_is_terminal()
-        result = _normalize_with_progress(m, at.value, name, values, degrees, azimuth, over.value, rtol, method,
-                                          show_progress)
+        kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
+                      over=over.value, rtol=rtol, method=method)
+        if name is None:
+            if workers or scheduler or checkpoint:
+                raise ArgumentError("--workers, --scheduler and --checkpoint spread a --sweep's cells; there is "
+                                    "no sweep", where="--sweep")
+            result = compute_normalize(m, at.value, **kwargs)
+        else:
+            job = sweep_job(m, at.value, name, values, **kwargs)
+            cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
+                                  checkpoint=checkpoint)
+            result = normalization_result(job, at.value, name, cells)
         rows = _normalization_rows(m, result)
         if json_output:
             text = to_json({"model": m.name, "params": m.params, "at": at.value, "over": over.value, "rtol": rtol,
@@ -163,32 +183,6 @@ def normalize_command(
             write_output_atomically(output, buffer.file.getvalue())
         else:
             console().print(table)
-
-
-def _normalize_with_progress(model, at, name, values, degrees, phi, over, rtol, method,
-                             show_progress) -> NormalizationResult:
-    theta = None if degrees is None else np.radians(degrees)
-    kwargs = dict(at=at, theta=theta, phi=np.radians(phi), over=over, rtol=rtol, method=method)
-    if name is None:
-        return compute_normalize(model, **kwargs)
-    if not show_progress or values.size < 8:
-        return compute_normalize(model, sweep={name: values}, **kwargs)
-    # On a terminal, long sweeps run in chunks so a progress bar can advance; each chunk is still one batch.
-    chunks = np.array_split(values, min(values.size, 16))
-    parts = []
-    with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                  TimeElapsedColumn(), transient=True) as progress:
-        task = progress.add_task(f"{model.name}: sweeping {name}", total=values.size)
-        for chunk in chunks:
-            parts.append(compute_normalize(model, sweep={name: chunk}, **kwargs))
-            progress.advance(task, chunk.size)
-    first = parts[0]
-    return NormalizationResult(
-        at=first.at, parameter=name, values=values,
-        **{field: np.concatenate([getattr(p, field) for p in parts])
-           for field in ("theta", "phi", "albedo", "error", "factor", "converged")},
-        method=first.method, over=first.over,
-    )
 
 
 def _normalization_rows(model, result: NormalizationResult) -> list[dict]:

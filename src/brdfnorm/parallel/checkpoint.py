@@ -54,7 +54,7 @@ class Checkpoint:
         if job_file.is_file():
             try:
                 stored = json.loads(job_file.read_text(encoding="utf-8"))
-                digest, chunk_cells = stored["digest"], stored["chunk_cells"]
+                digest, chunk_cells = stored["digest"], stored["plan"]["chunk_cells"]
             except (OSError, ValueError, KeyError, TypeError) as error:
                 raise ArgumentError(f"{job_file} is not a brdfnorm checkpoint ({type(error).__name__}); use another "
                                     "directory", where=where) from None
@@ -80,7 +80,7 @@ class Checkpoint:
         np.savez(buffer, **job.arrays())
         checkpoint._write(CELLS_FILE, buffer.getvalue())
         # job.json last: a directory with it is a complete definition.
-        header = {"digest": job.digest, "chunk_cells": plan.chunk_cells, "chunks": plan.count, **job.header()}
+        header = {**job.header(), "digest": job.digest, "plan": {"chunk_cells": plan.chunk_cells, "chunks": plan.count}}
         checkpoint._write(JOB_FILE, (canonical_json(header) + "\n").encode())
         return checkpoint
 

@@ -37,7 +37,7 @@ from .job import CellsJob, ChunkPlan, ModelSource, canonical_json
 #: Dask re-runs a chunk task that raised this many more times (an unexpected failure on one worker).
 DASK_RETRIES = 2
 #: Seconds to wait for a Dask scheduler to answer.
-DASK_CONNECT_TIMEOUT = 15
+DASK_CONNECT_TIMEOUT = 10
 
 
 @dataclass(frozen=True)
@@ -169,7 +169,7 @@ def _on_dask(tasks: list[tuple], scheduler: str, digest: str) -> Iterator[ChunkR
     try:
         futures = [client.submit(run_chunk, *task, key=f"brdfnorm-{digest[:16]}-chunk-{task[1]}",
                                  retries=DASK_RETRIES, pure=False) for task in tasks]
-        for future in as_completed(futures):
+        for future in as_completed(futures, loop=client.loop):
             yield future.result()
     finally:
         client.cancel(futures)

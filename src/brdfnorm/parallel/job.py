@@ -157,6 +157,8 @@ class CellsJob:
         if chunk_cells is not None and (int(chunk_cells) != chunk_cells or chunk_cells < 1):
             raise ArgumentError(f"chunk_cells must be a positive whole number, got {chunk_cells!r}",
                                 where="chunk_cells")
+        if task == "max" and len(values or {}) > 1:
+            raise ArgumentError("the 'max' task searches one swept parameter at a time", where="values")
         theta, phi = check_angles(theta, phi)
         per_cell = {}
         for name, value in sorted((values or {}).items()):
