@@ -53,11 +53,14 @@ SCHEDULER_OPTION = typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDR
 CHECKPOINT_OPTION = typer.Option(None, "--checkpoint", metavar="DIR",
                                  help="Save each finished chunk of cells in DIR; rerunning the same command "
                                  "resumes, computing only what is missing.")
+CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
+                                  help="Cells per chunk (part of the job's definition; default: sized by a short "
+                                  "probe so that a chunk takes about a second or two).")
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
              "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "workers": "--workers",
-             "scheduler": "--scheduler", "checkpoint": "--checkpoint"}
+             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells"}
 
 
 def console() -> Console:

@@ -20,6 +20,7 @@ from ..parallel.sweeps import normalization_result, sweep_job
 from . import app
 from .common import (
     CHECKPOINT_OPTION,
+    CHUNK_CELLS_OPTION,
     DEBUG_OPTION,
     PARAM_OPTION,
     SCHEDULER_OPTION,
@@ -82,6 +83,7 @@ def albedo(
     workers: int = WORKERS_OPTION,
     scheduler: str = SCHEDULER_OPTION,
     checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view)."""
@@ -90,7 +92,7 @@ def albedo(
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
         job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
-                          nonfinite=nonfinite.value)
+                          nonfinite=nonfinite.value, chunk_cells=chunk_cells)
         result = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
         rows = [
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
@@ -130,6 +132,7 @@ def normalize_command(
     workers: int = WORKERS_OPTION,
     scheduler: str = SCHEDULER_OPTION,
     checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
@@ -143,12 +146,12 @@ def normalize_command(
         kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
                       over=over.value, rtol=rtol, method=method)
         if name is None:
-            if workers or scheduler or checkpoint:
-                raise ArgumentError("--workers, --scheduler and --checkpoint spread a --sweep's cells; there is "
-                                    "no sweep", where="--sweep")
+            if workers or scheduler or checkpoint or chunk_cells:
+                raise ArgumentError("--workers, --scheduler, --checkpoint and --chunk-cells spread a --sweep's "
+                                    "cells; there is no sweep", where="--sweep")
             result = compute_normalize(m, at.value, **kwargs)
         else:
-            job = sweep_job(m, at.value, name, values, **kwargs)
+            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=chunk_cells)
             cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
                                   checkpoint=checkpoint)
             result = normalization_result(job, at.value, name, cells)
