@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_parallel import w_parallel  # noqa: E402
 
 import brdfnorm as bn  # noqa: E402
 
@@ -46,7 +47,8 @@ ALBEDO = sys.modules["brdfnorm.albedo"]  # the module (``bn.albedo`` is the func
 with contextlib.suppress(ImportError):  # the series method registers itself where it has landed
     importlib.import_module("brdfnorm.series")
 
-WORKLOADS = ("single", "table90", "norm-table", "ggx-table", "fit", "eval", "work-precision", "memory", "profile")
+WORKLOADS = ("single", "table90", "norm-table", "ggx-table", "fit", "eval", "work-precision", "memory", "profile",
+             "parallel")
 
 
 @dataclass(frozen=True)
@@ -849,7 +851,7 @@ def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None
     start = time.perf_counter()
     functions = {"single": w_single, "table90": w_table90, "norm-table": w_norm_table, "ggx-table": w_ggx_table,
                  "fit": w_fit, "eval": w_eval, "work-precision": w_work_precision, "memory": w_memory,
-                 "profile": lambda c, r: w_profile(c, r, out_dir)}
+                 "profile": lambda c, r: w_profile(c, r, out_dir), "parallel": w_parallel}
     workloads = {}
     for name in chosen:
         began = time.perf_counter()

@@ -81,8 +81,11 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
         raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
     model = job.source.load()  # refuses a bad source here, once, with its own warnings
     job.settings.validate(model)
-    plan = chunk_plan(job, model)
-    store = Checkpoint.open(checkpoint, job, plan) if checkpoint is not None else None
+    if checkpoint is not None:
+        store = Checkpoint.open(checkpoint, job, lambda: chunk_plan(job, model))
+        plan = store.plan
+    else:
+        store, plan = None, chunk_plan(job, model)
     done = store.finished() if store is not None else {}
     missing = [k for k in range(plan.count) if k not in done]
     count = workers if workers is not None else local_cores()

@@ -22,13 +22,14 @@ import json
 import os
 import tempfile
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError, OutputError
 from .executors import ChunkResult
-from .job import CellsJob, ChunkPlan, canonical_json
+from .job import CellsJob, ChunkPlan, canonical_json, chunk_plan_order
 
 JOB_FILE = "job.json"
 CELLS_FILE = "cells.npz"
@@ -44,8 +45,9 @@ class Checkpoint:
         self.plan = plan
 
     @classmethod
-    def open(cls, directory: str | Path, job: CellsJob, plan: ChunkPlan) -> Checkpoint:
-        """Create ``directory`` for ``job``, or reopen it if it holds the same job; refuse anything else."""
+    def open(cls, directory: str | Path, job: CellsJob, make_plan: Callable[[], ChunkPlan]) -> Checkpoint:
+        """Reopen ``directory`` if it holds ``job`` (with the chunk plan stored there), or create it with the plan
+        ``make_plan()`` returns; refuse anything else."""
         directory = Path(directory)
         where = "checkpoint"
         if directory.exists() and not directory.is_dir():
@@ -54,7 +56,7 @@ class Checkpoint:
         if job_file.is_file():
             try:
                 stored = json.loads(job_file.read_text(encoding="utf-8"))
-                digest, chunk_cells = stored["digest"], stored["plan"]["chunk_cells"]
+                digest, bounds = stored["digest"], np.asarray(stored["plan"]["bounds"], dtype=np.int64)
             except (OSError, ValueError, KeyError, TypeError) as error:
                 raise ArgumentError(f"{job_file} is not a brdfnorm checkpoint ({type(error).__name__}); use another "
                                     "directory", where=where) from None
@@ -62,14 +64,16 @@ class Checkpoint:
                 raise ArgumentError(
                     f"{directory} holds the checkpoint of a different job (hash {str(digest)[:12]}…, this job's is "
                     f"{job.digest[:12]}…); use another directory, or delete it to start over", where=where)
-            if chunk_cells != plan.chunk_cells:
-                raise ArgumentError(f"{directory} was cut into chunks of {chunk_cells} cells, this run into "
-                                    f"{plan.chunk_cells}: written by another brdfnorm build; use another directory",
-                                    where=where)
-            return cls(directory, job, plan)
+            if bounds.ndim != 1 or bounds.size < 2 or bounds[0] != 0 or bounds[-1] != job.size or \
+                    np.any(np.diff(bounds) <= 0):
+                raise ArgumentError(f"{job_file}: damaged chunk plan; use another directory", where=where)
+            # The plan stored with the job, not one probed again (a probe elsewhere could place boundaries
+            # differently; the chunks on disk are cut by this one).
+            return cls(directory, job, ChunkPlan(chunk_plan_order(job), bounds))
         if directory.is_dir() and any(directory.iterdir()):
             raise ArgumentError(f"{directory} is not empty and holds no brdfnorm checkpoint ({JOB_FILE}); refusing "
                                 "to write into it", where=where)
+        plan = make_plan()
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as error:
@@ -80,7 +84,7 @@ class Checkpoint:
         np.savez(buffer, **job.arrays())
         checkpoint._write(CELLS_FILE, buffer.getvalue())
         # job.json last: a directory with it is a complete definition.
-        header = {**job.header(), "digest": job.digest, "plan": {"chunk_cells": plan.chunk_cells, "chunks": plan.count}}
+        header = {**job.header(), "digest": job.digest, "plan": {"bounds": plan.bounds.tolist()}}
         checkpoint._write(JOB_FILE, (canonical_json(header) + "\n").encode())
         return checkpoint
 

@@ -13,9 +13,10 @@ brdfnorm version), which names the job in checkpoints.
 
 Chunks (:func:`chunk_plan`) are a function of the job alone, never of the number of workers or where they
 run: the cells are put in a canonical order (per-cell parameters, then θ, then φ — neighbours in parameter
-space cost about the same, so each chunk groups cells of similar cost) and cut into chunks of a fixed number
-of cells, chosen from the evaluation counts of a deterministic probe (a few cells at a loose tolerance) so that
-a chunk is about :data:`TARGET_EVALUATIONS` integrand evaluations — a second or two of one core. Each chunk is
+space cost about the same, so each chunk groups cells of similar cost) and cut where the cost estimated by a
+deterministic probe (evaluation counts of a few cells at a loose tolerance, interpolated along the order)
+reaches multiples of about :data:`TARGET_EVALUATIONS` integrand evaluations — a second or two of one core —
+or every ``chunk_cells`` cells where the job fixes that. Each chunk is
 one vectorized ``albedo`` batch, so whichever process computes it, it computes the same batch and the result
 is bit-for-bit the same.
 """
@@ -49,7 +50,7 @@ MAX_CELLS_PER_CHUNK = 1024
 #: Jobs this small are one chunk: a probe would cost as much as the work.
 SMALL_JOB = 16
 #: Cells the probe integrates, at rtol max(job's, PROBE_RTOL).
-PROBE_CELLS = 12
+PROBE_CELLS = 32
 PROBE_RTOL = 1e-6
 #: Albedo integrals per cell of the "max" task (a 46-point grid, a 40-step golden-section search, the tie check).
 MAX_TASK_INTEGRALS = 90
@@ -221,34 +222,45 @@ def canonical_json(data: object) -> str:
 
 @dataclass(frozen=True)
 class ChunkPlan:
-    """Cells in canonical order, cut into chunks of ``chunk_cells``: chunk k is ``order[k·c : (k+1)·c]``."""
+    """Cells in canonical order cut at ``bounds``: chunk k is ``order[bounds[k]:bounds[k + 1]]``."""
 
     order: np.ndarray
-    chunk_cells: int
+    bounds: np.ndarray
 
     @property
     def count(self) -> int:
-        return -(-self.order.size // self.chunk_cells)
+        return self.bounds.size - 1
 
     def chunk(self, k: int) -> np.ndarray:
-        return self.order[k * self.chunk_cells:(k + 1) * self.chunk_cells]
+        return self.order[self.bounds[k]:self.bounds[k + 1]]
+
+
+def chunk_plan_order(job: CellsJob) -> np.ndarray:
+    """The canonical order of the cells: by per-cell parameters (in name order), then θ, then φ."""
+    keys = [job.phi, job.theta] + [job.values[k] for k in sorted(job.values, reverse=True)]
+    return np.lexsort(keys)  # the last key is the primary one: the first per-cell parameter
 
 
 def chunk_plan(job: CellsJob, model: Model) -> ChunkPlan:
     """The job's fixed chunks (see the module docstring); ``model`` is ``job.source.load()``."""
-    keys = [job.phi, job.theta] + [job.values[k] for k in sorted(job.values, reverse=True)]
-    order = np.lexsort(keys)  # the last key is the primary one: the first per-cell parameter
+    order = chunk_plan_order(job)
     if job.chunk_cells is not None:
-        return ChunkPlan(order, job.chunk_cells)
+        return ChunkPlan(order, np.append(np.arange(0, job.size, job.chunk_cells), job.size))
     if job.size <= SMALL_JOB:
-        return ChunkPlan(order, job.size)
-    return ChunkPlan(order, _probed_chunk_cells(job, model, order))
+        return ChunkPlan(order, np.array([0, job.size]))
+    cost = _probed_cost(job, model, order)
+    total = cost[-1]
+    count = max(math.ceil(total / TARGET_EVALUATIONS), math.ceil(job.size / MAX_CELLS_PER_CHUNK))
+    inner = np.searchsorted(cost, total * np.arange(1, count) / count, side="left") + 1
+    return ChunkPlan(order, np.unique(np.concatenate([[0], inner, [job.size]])))
 
 
-def _probed_chunk_cells(job: CellsJob, model: Model, order: np.ndarray) -> int:
-    """Cells per chunk from the evaluation counts of a few cells spread over the canonical order."""
-    sample = order[np.unique(np.linspace(0, job.size - 1, PROBE_CELLS).round().astype(int))]
-    theta, phi, values = job.cells(sample)
+def _probed_cost(job: CellsJob, model: Model, order: np.ndarray) -> np.ndarray:
+    """Cumulative estimated evaluations along the canonical order, from a probe of a few cells spread over it
+    (interpolated between them): chunks are then cut at equal estimated cost, not equal cell counts — the cost
+    of a cell varies 20-fold across a GGX table."""
+    positions = np.unique(np.linspace(0, job.size - 1, PROBE_CELLS).round().astype(int))
+    theta, phi, values = job.cells(order[positions])
     settings = job.settings
     probe_rtol = max(settings.rtol, PROBE_RTOL)
     with warnings.catch_warnings():
@@ -257,9 +269,8 @@ def _probed_chunk_cells(job: CellsJob, model: Model, order: np.ndarray) -> int:
                                atol=settings.atol, method=settings.method, nonfinite="zero",
                                max_evaluations=settings.max_evaluations)
     # Adaptive Gauss-Kronrod cost grows about as the square of the digits asked for (measured: ×3–4 from
-    # rtol 1e-6 to 1e-10); the estimate only sizes chunks, it never touches a value.
+    # rtol 1e-6 to 1e-10); the estimate only places chunk boundaries, it never touches a value.
     digits = math.log10(1.0 / settings.rtol) if settings.rtol > 0 else 14.0
-    per_cell = max(float(np.mean(probe.evaluations)), 1.0) * max(1.0, digits / -math.log10(probe_rtol)) ** 2
-    if job.task == "max":
-        per_cell *= MAX_TASK_INTEGRALS
-    return int(np.clip(TARGET_EVALUATIONS // per_cell, 1, MAX_CELLS_PER_CHUNK))
+    scale = max(1.0, digits / -math.log10(probe_rtol)) ** 2 * (MAX_TASK_INTEGRALS if job.task == "max" else 1)
+    per_cell = np.maximum(probe.evaluations.astype(float), 1.0) * scale
+    return np.cumsum(np.interp(np.arange(job.size), positions, per_cell))
