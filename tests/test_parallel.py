@@ -245,17 +245,18 @@ def _interrupt(directory: Path, sig: int, workers: int, chunks: int = 2) -> tupl
     process = subprocess.Popen([*CLI, *GGX_TABLE, "--workers", str(workers), "--checkpoint", str(directory),
                                 "--json"], env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
-    children = set()
+    children = {}
     while len(list(directory.glob("chunk-*.npz"))) < chunks:
         assert process.poll() is None, process.communicate()
         assert time.monotonic() < deadline, "no chunk was saved"
-        children |= {c.pid for c in psutil.Process(process.pid).children(recursive=True)}
+        children.update({c.pid: c for c in psutil.Process(process.pid).children(recursive=True)})
         time.sleep(0.02)
     saved = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in directory.glob("chunk-*.npz")}
     process.send_signal(sig)
     out, err = process.communicate(timeout=60)
-    for pid in children:  # the pool's workers stop with the job
-        assert not psutil.pid_exists(pid) or psutil.Process(pid).status() == psutil.STATUS_ZOMBIE, pid
+    # the pool's workers (and multiprocessing's helpers) stop with the job, not after their chunks
+    _, alive = psutil.wait_procs(list(children.values()), timeout=5)
+    assert not alive, [(c.pid, c.cmdline()) for c in alive]
     return subprocess.CompletedProcess(process.args, process.returncode, out, err), saved
 
 
