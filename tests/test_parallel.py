@@ -129,7 +129,10 @@ def test_chunks_are_fixed_by_the_job_and_group_neighbouring_cells():
 def test_one_process_and_a_local_pool_agree_bit_for_bit_with_albedo():
     job = _ggx_job()
     serial = albedo_cells(job, workers=1)
-    pooled = albedo_cells(job, workers=2)
+    progress = []
+    pooled = albedo_cells(job, workers=2, on_progress=lambda done, total: progress.append((done, total)))
+    assert progress[0] == (0, 36) and progress[-1] == (36, 36) and len(progress) == 7  # once per chunk
+    assert all(a[0] < b[0] for a, b in zip(progress, progress[1:], strict=False))
     assert serial.executor == "in-process" and pooled.executor == "local processes" and pooled.workers == 2
     assert serial.chunks == pooled.chunks == 6
     _same(serial, pooled)
@@ -200,10 +203,22 @@ def dask_cluster(tmp_path_factory):
                 process.kill()
 
 
-def test_dask_table_equals_the_in_process_one_even_when_a_worker_dies(dask_cluster):
+def test_dask_table_equals_the_in_process_one_even_when_a_worker_dies(dask_cluster, capsys, monkeypatch):
     from distributed import Client
 
     address, _ = dask_cluster
+    argv = ["normalize", str(GGX), "--sweep", "roughness=0.1,0.5", "--at", "view", "--theta", "0:80:5", "--json",
+            "--chunk-cells", "3"]
+    code, local, err = run_cli(capsys, *argv, "--workers", "1")
+    assert code == 0, err
+    code, remote, err = run_cli(capsys, *argv, "--scheduler", address)
+    assert code == 0 and f"on 2 workers (dask {address})" in err, err
+    assert remote == local
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)  # the variable Dask's own tools read
+    code, remote, err = run_cli(capsys, *argv)
+    assert code == 0 and f"(dask {address})" in err and remote == local, err
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS")
+
     job = _ggx_job(chunk_cells=3)  # 12 chunks
     serial = albedo_cells(job, workers=1)
     on_dask = albedo_cells(job, scheduler=address)

@@ -55,7 +55,7 @@ CHECKPOINT_OPTION = typer.Option(None, "--checkpoint", metavar="DIR",
                                  "resumes, computing only what is missing.")
 CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
                                   help="Cells per chunk (part of the job's definition; default: sized by a short "
-                                  "probe so that a chunk takes about a second or two).")
+                                  "probe so that a chunk takes about a second).")
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
