@@ -171,13 +171,14 @@ class CellsJob:
             raise ArgumentError("the table has no cells", where="theta")
         flat = {name: np.ascontiguousarray(np.broadcast_to(v, shape), dtype="<f8").ravel()
                 for name, v in per_cell.items()}
-        try:
-            unknown = sorted(set(settings) - set(AlbedoSettings.__dataclass_fields__))
-            if unknown:
-                raise TypeError
-            chosen = AlbedoSettings(**settings)  # type: ignore[arg-type]
-        except TypeError:
-            raise ArgumentError(f"unknown albedo settings {unknown}", where="settings") from None
+        unknown = sorted(set(settings) - set(AlbedoSettings.__dataclass_fields__))
+        if unknown:
+            raise ArgumentError(f"unknown albedo settings: {', '.join(unknown)}", where="settings")
+        chosen = AlbedoSettings(**settings)  # type: ignore[arg-type]
+        ignored = sorted({"atol", "nonfinite", "max_evaluations"} & set(settings))
+        if task == "max" and ignored:
+            # normalize(at="max") takes rtol, method and over only; a setting it would ignore is refused
+            raise ArgumentError(f"the 'max' task does not take {', '.join(ignored)}", where="settings")
         # Per-cell values replace whatever the model had bound for those parameters (a sweep's array).
         source = ModelSource.of(model.with_params(**{name: model.parameter(name).default for name in per_cell}))
         return cls(source, chosen, tuple(int(s) for s in shape),
