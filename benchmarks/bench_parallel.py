@@ -10,6 +10,7 @@ Run alone: ``.venv/bin/python benchmarks/bench_parallel.py [--quick]``.
 
 from __future__ import annotations
 
+import logging
 import sys
 import time
 import warnings
@@ -48,7 +49,7 @@ def w_parallel(cfg, refs=None) -> dict:
             start = time.perf_counter()
             runs[name] = (albedo_cells(job, **kwargs), time.perf_counter() - start)
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                          dashboard_address=None) as cluster:
+                          dashboard_address=None, silence_logs=logging.CRITICAL) as cluster:
             start = time.perf_counter()
             runs["dask, 2 workers"] = (albedo_cells(job, scheduler=cluster.scheduler_address),
                                        time.perf_counter() - start)
