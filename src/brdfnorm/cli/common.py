@@ -59,8 +59,9 @@ CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
-             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "workers": "--workers",
-             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells"}
+             "over": "--over", "digits": "--digits", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL",
+             "workers": "--workers", "scheduler": "--scheduler", "checkpoint": "--checkpoint",
+             "chunk_cells": "--chunk-cells"}
 
 
 def console() -> Console:

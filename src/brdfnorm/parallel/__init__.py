@@ -60,6 +60,8 @@ class CellsResult:
     workers: int
     executor: str  # "in-process", "local processes" or "dask tcp://…"
     seconds: float
+    lower: np.ndarray | None = None  # (*S, C) decimal strings: guaranteed bounds (method "certified")
+    upper: np.ndarray | None = None
 
 
 def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | None = None,
@@ -118,7 +120,7 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
     channels = parts[0].value.shape[1]
 
     def gather(name: str, tail: tuple = ()) -> np.ndarray:
-        out = np.empty((job.size, *tail), dtype=getattr(parts[0], name).dtype)
+        out = np.empty((job.size, *tail), dtype=getattr(parts[0], name).dtype)  # text bounds: object arrays
         out[plan.order] = np.concatenate([getattr(p, name) for p in parts])
         return out.reshape(job.shape + tail)
 
@@ -137,7 +139,8 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
         digest=job.digest, value=gather("value", (channels,)), error=gather("error", (channels,)),
         evaluations=gather("evaluations"), converged=converged, nonfinite_fraction=fraction,
         theta=gather("theta"), phi=gather("phi"), method="+".join(methods), chunks=plan.count,
-        chunks_computed=computed, evaluations_computed=spent, workers=workers, executor=executor, seconds=seconds)
+        chunks_computed=computed, evaluations_computed=spent, workers=workers, executor=executor, seconds=seconds,
+        **{name: gather(name, (channels,)) for name in ("lower", "upper") if getattr(parts[0], name) is not None})
 
 
 @contextlib.contextmanager

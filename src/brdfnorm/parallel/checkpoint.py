@@ -34,6 +34,7 @@ from .job import CellsJob, ChunkPlan, canonical_json, chunk_plan_order
 JOB_FILE = "job.json"
 CELLS_FILE = "cells.npz"
 _RESULT_ARRAYS = ("value", "error", "evaluations", "converged", "nonfinite_fraction", "theta", "phi")
+_BOUNDS = ("lower", "upper")  # decimal strings, method "certified" only
 
 
 class Checkpoint:
@@ -103,6 +104,9 @@ class Checkpoint:
     def save(self, result: ChunkResult) -> None:
         buffer = io.BytesIO()
         arrays = {name: getattr(result, name) for name in _RESULT_ARRAYS}
+        # bounds are Python strings (object arrays); stored as fixed-width text, never pickled
+        arrays |= {name: np.asarray(getattr(result, name), dtype=str) for name in _BOUNDS
+                   if getattr(result, name) is not None}
         np.savez(buffer, digest=np.array(self.job.digest), cells=self.plan.chunk(result.index),
                  method=np.array(result.method), seconds=np.array(result.seconds), **arrays)
         self._write(self.chunk_path(result.index).name, buffer.getvalue())
@@ -113,12 +117,13 @@ class Checkpoint:
                 if str(data["digest"]) != self.job.digest or not np.array_equal(data["cells"], self.plan.chunk(index)):
                     raise ValueError("it belongs to another job")
                 arrays = {name: data[name] for name in _RESULT_ARRAYS}
+                arrays |= {name: data[name].astype(object) for name in _BOUNDS if name in data}
                 method, seconds = str(data["method"]), float(data["seconds"])
         except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as error:
             raise ArgumentError(f"{path} is unreadable or damaged ({error}); delete it to recompute that chunk",
                                 where="checkpoint") from None
         n = self.plan.chunk(index).size
-        if arrays["value"].shape[0] != n or any(arrays[name].shape[:1] != (n,) for name in _RESULT_ARRAYS):
+        if any(array.shape[:1] != (n,) for array in arrays.values()):
             raise ArgumentError(f"{path} has the wrong number of cells; delete it to recompute that chunk",
                                 where="checkpoint")
         return ChunkResult(index=index, method=method, seconds=seconds, **arrays)

@@ -54,6 +54,8 @@ class ChunkResult:
     phi: np.ndarray
     method: str
     seconds: float
+    lower: np.ndarray | None = None  # (n, C) decimal strings: guaranteed bounds (method "certified")
+    upper: np.ndarray | None = None
 
 
 @functools.lru_cache(maxsize=8)
@@ -84,10 +86,12 @@ def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
             result = albedo(model.with_params(**values), theta, phi, **settings)
             n = theta.size
             fraction = result.nonfinite_fraction
+            bounds = {name: None if getattr(result, name) is None else getattr(result, name).reshape(n, -1)
+                      for name in ("lower", "upper")}
             return ChunkResult(index, result.value.reshape(n, -1), result.error.reshape(n, -1),
                                result.evaluations.reshape(n), result.converged.reshape(n),
                                np.zeros(n) if fraction is None else fraction.reshape(n),
-                               theta, phi, result.method, time.perf_counter() - start)
+                               theta, phi, result.method, time.perf_counter() - start, **bounds)
         (name, sweep), = values.items() if values else ((None, np.zeros(1)),)
         found = normalize(model, at="max", sweep=None if name is None else {name: sweep}, over=settings["over"],
                           rtol=settings["rtol"], method=settings["method"])

@@ -119,10 +119,12 @@ class AlbedoSettings:
     over: str = "light"
     nonfinite: str = "raise"
     max_evaluations: int = 20_000_000
+    digits: int | None = None  # method "certified" only
 
     def to_json(self) -> dict:
         return {"rtol": float(self.rtol), "atol": float(self.atol), "method": self.method, "over": self.over,
-                "nonfinite": self.nonfinite, "max_evaluations": int(self.max_evaluations)}
+                "nonfinite": self.nonfinite, "max_evaluations": int(self.max_evaluations),
+                "digits": None if self.digits is None else int(self.digits)}
 
     def validate(self, model: Model) -> None:
         """Refuse bad settings in the calling process, before any work is sent out."""
@@ -131,7 +133,9 @@ class AlbedoSettings:
             raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {self.nonfinite!r}", where="nonfinite")
         if self.over not in ("light", "view"):
             raise ArgumentError(f"over must be 'light' or 'view', got {self.over!r}", where="over")
-        resolve_method(model, self.over, self.method)  # type: ignore[arg-type]
+        chosen = resolve_method(model, self.over, self.method)  # type: ignore[arg-type]
+        if self.digits is not None and "digits" not in chosen.options:
+            raise ArgumentError(f"digits applies to method 'certified' only, not {chosen.name!r}", where="digits")
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,7 +155,8 @@ class CellsJob:
     def of(cls, model: Model, theta=0.0, phi=0.0, values: Mapping[str, object] | None = None, *,
            task: Task = "albedo", chunk_cells: int | None = None, **settings: object) -> CellsJob:
         """Cells at the broadcast shape of ``theta``, ``phi`` (radians) and the per-cell parameter ``values``;
-        ``settings`` are :class:`AlbedoSettings` fields (rtol, atol, method, over, nonfinite, max_evaluations)."""
+        ``settings`` are :class:`AlbedoSettings` fields (rtol, atol, method, over, nonfinite, max_evaluations,
+        digits)."""
         if task not in TASKS:
             raise ArgumentError(f"task must be one of {', '.join(TASKS)}, got {task!r}", where="task")
         if chunk_cells is not None and (int(chunk_cells) != chunk_cells or chunk_cells < 1):
@@ -175,7 +180,7 @@ class CellsJob:
         if unknown:
             raise ArgumentError(f"unknown albedo settings: {', '.join(unknown)}", where="settings")
         chosen = AlbedoSettings(**settings)  # type: ignore[arg-type]
-        ignored = sorted({"atol", "nonfinite", "max_evaluations"} & set(settings))
+        ignored = sorted({"atol", "nonfinite", "max_evaluations", "digits"} & set(settings))
         if task == "max" and ignored:
             # normalize(at="max") takes rtol, method and over only; a setting it would ignore is refused
             raise ArgumentError(f"the 'max' task does not take {', '.join(ignored)}", where="settings")
