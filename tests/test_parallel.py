@@ -345,3 +345,19 @@ def test_bad_parallel_arguments_are_one_line_errors(capsys):
         code, out, err = run_cli(capsys, *argv)
         assert code == 2 and out == "", argv
         assert err.count("\n") == 1 and where in err, err
+
+
+def test_certified_bounds_travel_through_a_pool_and_a_checkpoint(tmp_path):
+    pytest.importorskip("flint")
+    model = bn.load("phong", n=10.0)
+    theta = np.radians([0.0, 20.0, 40.0, 60.0])
+    direct = bn.albedo(model, theta, method="certified", digits=20)
+    job = CellsJob.of(model, theta, method="certified", digits=20, chunk_cells=2)
+    first = albedo_cells(job, workers=2, checkpoint=tmp_path / "c")
+    again = albedo_cells(job, workers=2, checkpoint=tmp_path / "c")  # read back from the files
+    assert again.chunks_computed == 0
+    for result in (first, again):
+        assert result.lower.tolist() == direct.lower.tolist() and result.upper.tolist() == direct.upper.tolist()
+        assert np.array_equal(result.value, direct.value)
+    with pytest.raises(ArgumentError, match="certified"):
+        albedo_cells(CellsJob.of(model, theta, digits=20), workers=1)
