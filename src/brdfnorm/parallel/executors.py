@@ -134,12 +134,14 @@ def _in_pool(tasks: list[tuple], workers: int) -> Iterator[ChunkResult]:
                 yield future.result()
     finally:
         # Stopped early: drop what has not started and end the workers now rather than after their chunks.
-        # (The pool has no public way to stop its workers before Python 3.14's terminate_workers.)
-        processes = list((getattr(pool, "_processes", None) or {}).values())
-        pool.shutdown(wait=False, cancel_futures=True)
-        for process in processes:
-            if process.is_alive():
-                process.terminate()
+        if hasattr(pool, "terminate_workers"):  # Python ≥ 3.14
+            pool.terminate_workers()
+        else:  # no public way before 3.14
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                if process.is_alive():
+                    process.terminate()
 
 
 def dask_client(scheduler: str):
