@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from .checkpoint import Checkpoint
-from .executors import ChunkResult, dask_workers, execute, local_cores, run_chunk
+from .executors import TEXT_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
 
 __all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "albedo_cells",
@@ -62,6 +62,7 @@ class CellsResult:
     seconds: float
     lower: np.ndarray | None = None  # (*S, C) decimal strings: guaranteed bounds (method "certified")
     upper: np.ndarray | None = None
+    reason: np.ndarray | None = None  # (*S,) why a cell did not converge ("" where it did), where albedo says
 
 
 def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | None = None,
@@ -140,7 +141,8 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
         evaluations=gather("evaluations"), converged=converged, nonfinite_fraction=fraction,
         theta=gather("theta"), phi=gather("phi"), method="+".join(methods), chunks=plan.count,
         chunks_computed=computed, evaluations_computed=spent, workers=workers, executor=executor, seconds=seconds,
-        **{name: gather(name, (channels,)) for name in ("lower", "upper") if getattr(parts[0], name) is not None})
+        **{name: gather(name, (channels,) if tail == "channels" else ())
+           for name, tail in TEXT_FIELDS.items() if getattr(parts[0], name) is not None})
 
 
 @contextlib.contextmanager

@@ -28,13 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, OutputError
-from .executors import ChunkResult
+from .executors import TEXT_FIELDS, ChunkResult
 from .job import CellsJob, ChunkPlan, canonical_json, chunk_plan_order
 
 JOB_FILE = "job.json"
 CELLS_FILE = "cells.npz"
 _RESULT_ARRAYS = ("value", "error", "evaluations", "converged", "nonfinite_fraction", "theta", "phi")
-_BOUNDS = ("lower", "upper")  # decimal strings, method "certified" only
 
 
 class Checkpoint:
@@ -104,8 +103,8 @@ class Checkpoint:
     def save(self, result: ChunkResult) -> None:
         buffer = io.BytesIO()
         arrays = {name: getattr(result, name) for name in _RESULT_ARRAYS}
-        # bounds are Python strings (object arrays); stored as fixed-width text, never pickled
-        arrays |= {name: np.asarray(getattr(result, name), dtype=str) for name in _BOUNDS
+        # text (certified bounds, reasons) is held as Python strings; stored as fixed-width text, never pickled
+        arrays |= {name: np.asarray(getattr(result, name), dtype=str) for name in TEXT_FIELDS
                    if getattr(result, name) is not None}
         np.savez(buffer, digest=np.array(self.job.digest), cells=self.plan.chunk(result.index),
                  method=np.array(result.method), seconds=np.array(result.seconds), **arrays)
@@ -117,7 +116,7 @@ class Checkpoint:
                 if str(data["digest"]) != self.job.digest or not np.array_equal(data["cells"], self.plan.chunk(index)):
                     raise ValueError("it belongs to another job")
                 arrays = {name: data[name] for name in _RESULT_ARRAYS}
-                arrays |= {name: data[name].astype(object) for name in _BOUNDS if name in data}
+                arrays |= {name: data[name].astype(object) for name in TEXT_FIELDS if name in data}
                 method, seconds = str(data["method"]), float(data["seconds"])
         except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as error:
             raise ArgumentError(f"{path} is unreadable or damaged ({error}); delete it to recompute that chunk",

@@ -56,6 +56,11 @@ class ChunkResult:
     seconds: float
     lower: np.ndarray | None = None  # (n, C) decimal strings: guaranteed bounds (method "certified")
     upper: np.ndarray | None = None
+    reason: np.ndarray | None = None  # (n,) why a cell did not converge ("" where it did), where albedo says
+
+
+#: Per-cell text an AlbedoResult may carry (object arrays of str), with the trailing shape of one cell.
+TEXT_FIELDS = {"lower": "channels", "upper": "channels", "reason": "cell"}
 
 
 @functools.lru_cache(maxsize=8)
@@ -86,12 +91,12 @@ def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
             result = albedo(model.with_params(**values), theta, phi, **settings)
             n = theta.size
             fraction = result.nonfinite_fraction
-            bounds = {name: None if getattr(result, name) is None else getattr(result, name).reshape(n, -1)
-                      for name in ("lower", "upper")}
+            text = {name: np.asarray(getattr(result, name), dtype=object).reshape((n, -1) if tail == "channels" else n)
+                    for name, tail in TEXT_FIELDS.items() if getattr(result, name, None) is not None}
             return ChunkResult(index, result.value.reshape(n, -1), result.error.reshape(n, -1),
                                result.evaluations.reshape(n), result.converged.reshape(n),
                                np.zeros(n) if fraction is None else fraction.reshape(n),
-                               theta, phi, result.method, time.perf_counter() - start, **bounds)
+                               theta, phi, result.method, time.perf_counter() - start, **text)
         (name, sweep), = values.items() if values else ((None, np.zeros(1)),)
         found = normalize(model, at="max", sweep=None if name is None else {name: sweep}, over=settings["over"],
                           rtol=settings["rtol"], method=settings["method"])
