@@ -78,8 +78,8 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
     """
     start = time.perf_counter()
     if scheduler is not None and workers is not None:
-        raise ArgumentError("workers sets the local process pool; with a Dask scheduler the cluster's workers "
-                            "compute", where="workers")
+        raise ArgumentError("give either workers (a local process pool) or a Dask scheduler (on the command line "
+                            "also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
     if workers is not None and (int(workers) != workers or workers < 1):
         raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
     model = job.source.load()  # refuses a bad source here, once, with its own warnings
@@ -94,6 +94,9 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
     count = workers if workers is not None else local_cores()
     if scheduler:
         executor, count = f"dask {scheduler}", dask_workers(scheduler)
+        if count == 0 and missing:  # tasks would wait for a worker forever
+            raise ArgumentError(f"the Dask scheduler at {scheduler} has no workers (start some with `dask worker "
+                                f"{scheduler}`)", where="scheduler")
     elif count <= 1 or len(missing) <= 1:
         executor, count = "in-process", 1
     else:
