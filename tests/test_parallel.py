@@ -366,3 +366,14 @@ def test_certified_bounds_travel_through_a_pool_and_a_checkpoint(tmp_path):
         assert np.array_equal(result.value, direct.value)
     with pytest.raises(ArgumentError, match="certified"):
         albedo_cells(CellsJob.of(model, theta, digits=20), workers=1)
+
+
+def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr("brdfnorm.parallel.executors.DASK_CONNECT_TIMEOUT", 1)
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=None) as empty:
+        with pytest.raises(ArgumentError, match="no workers"):
+            albedo_cells(_ggx_job(), scheduler=empty.scheduler_address)
+    with pytest.raises(ArgumentError, match="cannot reach the Dask scheduler"):
+        albedo_cells(_ggx_job(), scheduler="tcp://127.0.0.1:1")
