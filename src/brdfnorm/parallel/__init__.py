@@ -105,8 +105,10 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
     if on_progress is not None:
         on_progress(cells_done, job.size)
     spent = 0
-    with _sigterm_as_interrupt():
-        for result in execute(job, plan, missing, workers=count, scheduler=scheduler):
+    # closing(): stop the workers as soon as anything here fails, not when the generator is collected
+    with _sigterm_as_interrupt(), contextlib.closing(execute(job, plan, missing, workers=count,
+                                                              scheduler=scheduler)) as results:
+        for result in results:
             if store is not None:
                 store.save(result)
             done[result.index] = result
