@@ -70,7 +70,9 @@ class Checkpoint:
             # The plan stored with the job, not one probed again (a probe elsewhere could place boundaries
             # differently; the chunks on disk are cut by this one).
             return cls(directory, job, ChunkPlan(chunk_plan_order(job), bounds))
-        if directory.is_dir() and any(directory.iterdir()):
+        # A directory holding only what an interrupted creation leaves (cells.npz, temporary files) is ours.
+        if directory.is_dir() and any(p.name != CELLS_FILE and not (p.name.startswith(".") and p.name.endswith(".tmp"))
+                                      for p in directory.iterdir()):
             raise ArgumentError(f"{directory} is not empty and holds no brdfnorm checkpoint ({JOB_FILE}); refusing "
                                 "to write into it", where=where)
         plan = make_plan()
