@@ -24,6 +24,7 @@ from brdfnorm.errors import ArgumentError, EvaluationError
 from brdfnorm.normalize import normalize
 from brdfnorm.parallel import CellsJob, ModelSource, albedo_cells, chunk_plan
 from brdfnorm.parallel.checkpoint import Checkpoint
+from brdfnorm.parallel.results import albedo_result
 
 ROOT = Path(__file__).resolve().parents[1]
 GGX = ROOT / "examples" / "ggx.brdf"
@@ -141,11 +142,15 @@ def test_one_process_and_a_local_pool_agree_bit_for_bit_with_albedo():
 def test_a_cells_albedo_does_not_depend_on_its_batch():
     """Chunks are fixed so that this need not hold; it does today, so a table also equals one albedo() call
     (README). If an engine change breaks it, tables stay identical across executors but not to that call."""
-    serial = albedo_cells(_ggx_job(), workers=1)
+    job = _ggx_job()
+    serial = albedo_result(job, albedo_cells(job, workers=1))  # as brdfnorm.albedo returns it
     direct = bn.albedo(bn.load(GGX).with_params(roughness=np.geomspace(0.05, 1.0, 4)[:, None]),
                        np.radians(np.linspace(0, 85, 9))[None, :], rtol=1e-8)
-    assert np.array_equal(serial.value, direct.value) and np.array_equal(serial.error, direct.error)
-    assert np.array_equal(serial.evaluations, direct.evaluations)
+    for name in ("value", "error", "evaluations", "converged", "theta", "phi", "method", "over"):
+        assert np.array_equal(getattr(serial, name), getattr(direct, name)), name
+    assert serial.params.keys() == direct.params.keys()
+    for name, value in direct.params.items():
+        assert np.array_equal(serial.params[name], value), name
 
 
 def test_normalize_sweep_at_max_on_a_pool_matches_normalize(capsys):

@@ -16,7 +16,7 @@ from ..models import REGISTRY, Model
 from ..normalize import NormalizationResult
 from ..normalize import normalize as compute_normalize
 from ..parallel import CellsJob
-from ..parallel.sweeps import normalization_result, sweep_job
+from ..parallel.results import albedo_result, normalization_result, sweep_job
 from . import app
 from .common import (
     CHECKPOINT_OPTION,
@@ -100,7 +100,8 @@ def albedo(
         azimuth = parse_azimuth(phi)
         job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
                           nonfinite=nonfinite.value, digits=digits, chunk_cells=chunk_cells)
-        result = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+        cells = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+        result = albedo_result(job, cells)
         rows = [
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
              "error_estimate": channel_value(result.error[i]), "method": result.method,

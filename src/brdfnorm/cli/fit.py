@@ -19,7 +19,7 @@ from rich.table import Table
 from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
-from ..parallel.sweeps import normalization_result, sweep_job
+from ..parallel.results import normalization_result, sweep_job
 from . import app
 from .common import (
     CHECKPOINT_OPTION,

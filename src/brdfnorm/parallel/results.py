@@ -1,8 +1,10 @@
-"""Normalization factors over a parameter sweep (``brdfnorm.normalize`` with ``sweep=``), computed as a cells job.
+"""Computed cells as the serial API's result objects, and normalization sweeps as cells jobs.
 
-``at="normal"`` and ``at="view"`` are albedo cells (sweep value × direction); ``at="max"`` is one cell per sweep
-value of the ``"max"`` task (each cell runs the search of :func:`brdfnorm.normalize.normalize`). The result is
-the :class:`~brdfnorm.normalize.NormalizationResult` the serial call returns, bit for bit.
+:func:`albedo_result` gives the :class:`~brdfnorm.albedo.AlbedoResult` that ``brdfnorm.albedo`` returns for the
+same cells; :func:`sweep_job` / :func:`normalization_result` (or :func:`normalize_sweep`, both in one call) give
+what ``brdfnorm.normalize`` with ``sweep=`` returns: ``at="normal"`` and ``at="view"`` are albedo cells (sweep
+value × direction), ``at="max"`` is one cell per sweep value of the ``"max"`` task (each cell runs the search of
+:func:`brdfnorm.normalize.normalize`). Values are bit for bit those of the serial calls.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..albedo import AlbedoResult
 from ..errors import ArgumentError
 from ..models import Model
 from ..normalize import AT, NormalizationResult
@@ -54,3 +57,20 @@ def normalization_result(job: CellsJob, at: str, name: str, cells: CellsResult) 
                                theta=cells.theta, phi=cells.phi, albedo=cells.value, error=cells.error,
                                factor=factor, method=cells.method, over=job.settings.over,  # type: ignore[arg-type]
                                converged=cells.converged)
+
+
+def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
+    """The computed cells of an ``"albedo"`` job as :func:`brdfnorm.albedo` returns them."""
+    if job.task != "albedo":
+        raise ArgumentError(f"a {job.task!r} job's cells are not albedos at their directions", where="task")
+    params = {}
+    for name, value in job.source.params.items():
+        if name in job.values:
+            params[name] = job.values[name].reshape(job.shape)
+        else:  # as brdfnorm.albedo reports bound values: broadcast to the cells (colours keep their 3)
+            array = np.asarray(value, dtype=float)
+            params[name] = np.broadcast_to(array, job.shape + array.shape)
+    return AlbedoResult(value=cells.value, error=cells.error, evaluations=cells.evaluations,
+                        converged=cells.converged, method=cells.method, theta=cells.theta, phi=cells.phi,
+                        over=job.settings.over, params=params,  # type: ignore[arg-type]
+                        nonfinite_fraction=cells.nonfinite_fraction, lower=cells.lower, upper=cells.upper)
