@@ -21,7 +21,7 @@ from conftest import run_cli
 
 import brdfnorm as bn
 from brdfnorm.errors import ArgumentError, EvaluationError
-from brdfnorm.normalize import normalize
+from brdfnorm.normalization import normalize
 from brdfnorm.parallel import CellsJob, ModelSource, albedo_cells, chunk_plan
 from brdfnorm.parallel.checkpoint import Checkpoint
 from brdfnorm.parallel.results import albedo_result

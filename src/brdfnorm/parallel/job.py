@@ -34,8 +34,9 @@ from typing import Literal
 
 import numpy as np
 
-from ..albedo import albedo as compute_albedo
-from ..albedo import check_angles, check_tolerance, resolve_method
+from .. import validate
+from ..directional import albedo as compute_albedo
+from ..directional import resolve_method
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 
@@ -128,11 +129,10 @@ class AlbedoSettings:
 
     def validate(self, model: Model) -> None:
         """Refuse bad settings in the calling process, before any work is sent out."""
-        check_tolerance(self.rtol, self.atol)
-        if self.nonfinite not in ("raise", "zero"):
-            raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {self.nonfinite!r}", where="nonfinite")
-        if self.over not in ("light", "view"):
-            raise ArgumentError(f"over must be 'light' or 'view', got {self.over!r}", where="over")
+        validate.tolerances(self.rtol, self.atol)
+        validate.count(self.max_evaluations, "max_evaluations", maximum=10**12)
+        validate.choice(self.nonfinite, ("raise", "zero"), "nonfinite")
+        validate.choice(self.over, ("light", "view"), "over")
         chosen = resolve_method(model, self.over, self.method)  # type: ignore[arg-type]
         if self.digits is not None and "digits" not in chosen.options:
             raise ArgumentError(f"digits applies to method 'certified' only, not {chosen.name!r}", where="digits")
@@ -164,7 +164,7 @@ class CellsJob:
                                 where="chunk_cells")
         if task == "max" and len(values or {}) > 1:
             raise ArgumentError("the 'max' task searches one swept parameter at a time", where="values")
-        theta, phi = check_angles(theta, phi)
+        theta, phi = validate.angles(theta, phi)
         per_cell = {}
         for name, value in sorted((values or {}).items()):
             parameter = model.parameter(name)

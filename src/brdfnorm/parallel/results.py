@@ -1,10 +1,10 @@
 """Computed cells as the serial API's result objects, and normalization sweeps as cells jobs.
 
-:func:`albedo_result` gives the :class:`~brdfnorm.albedo.AlbedoResult` that ``brdfnorm.albedo`` returns for the
+:func:`albedo_result` gives the :class:`~brdfnorm.directional.AlbedoResult` that ``brdfnorm.albedo`` returns for the
 same cells; :func:`sweep_job` / :func:`normalization_result` (or :func:`normalize_sweep`, both in one call) give
 what ``brdfnorm.normalize`` with ``sweep=`` returns: ``at="normal"`` and ``at="view"`` are albedo cells (sweep
 value × direction), ``at="max"`` is one cell per sweep value of the ``"max"`` task (each cell runs the search of
-:func:`brdfnorm.normalize.normalize`). Values are bit for bit those of the serial calls.
+:func:`brdfnorm.normalization.normalize`). Values are bit for bit those of the serial calls.
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..albedo import AlbedoResult
+from ..directional import AlbedoResult
 from ..errors import ArgumentError
 from ..models import Model
-from ..normalize import AT, NormalizationResult
+from ..normalization import AT, NormalizationResult
 from . import CellsResult, albedo_cells
 from .job import CellsJob
 
@@ -50,13 +50,15 @@ def sweep_job(model: Model, at: str, name: str, values, theta=None, phi=0.0, **s
 
 
 def normalization_result(job: CellsJob, at: str, name: str, cells: CellsResult) -> NormalizationResult:
-    """The computed sweep as :func:`brdfnorm.normalize.normalize` returns it."""
+    """The computed sweep as :func:`brdfnorm.normalization.normalize` returns it."""
     with np.errstate(divide="ignore"):
         factor = 1.0 / cells.value
-    return NormalizationResult(at=at, parameter=name, values=job.values[name].reshape(job.shape)[:, 0],
-                               theta=cells.theta, phi=cells.phi, albedo=cells.value, error=cells.error,
-                               factor=factor, method=cells.method, over=job.settings.over,  # type: ignore[arg-type]
-                               converged=cells.converged)
+    values = job.values[name].reshape(job.shape)[:, 0]
+    return NormalizationResult(at=at, parameter=name, values=values, theta=cells.theta, phi=cells.phi,
+                               albedo=cells.value, error=cells.error, factor=factor, method=cells.method,
+                               over=job.settings.over, converged=cells.converged,  # type: ignore[arg-type]
+                               model=_model_name(job), params={**_bound(job), name: values},
+                               rtol=job.settings.rtol)
 
 
 def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
@@ -73,4 +75,15 @@ def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
     return AlbedoResult(value=cells.value, error=cells.error, evaluations=cells.evaluations,
                         converged=cells.converged, method=cells.method, theta=cells.theta, phi=cells.phi,
                         over=job.settings.over, params=params,  # type: ignore[arg-type]
-                        nonfinite_fraction=cells.nonfinite_fraction, lower=cells.lower, upper=cells.upper)
+                        nonfinite_fraction=cells.nonfinite_fraction, lower=cells.lower, upper=cells.upper,
+                        model=_model_name(job), bound=_bound(job), rtol=job.settings.rtol)
+
+
+def _model_name(job: CellsJob) -> str:
+    """The model's name as brdfnorm.load gives it (a .brdf file's stem)."""
+    return job.source.name if job.source.kind == "builtin" else Path(job.source.name).stem
+
+
+def _bound(job: CellsJob) -> dict:
+    """The model's bound parameter values as the serial results report them (colours as tuples)."""
+    return dict(job.source.params)
