@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_parallel import w_parallel  # noqa: E402
 
 import brdfnorm as bn  # noqa: E402
 from brdfnorm import closed_forms  # noqa: E402
@@ -858,7 +859,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "microfacet-table": lambda c, r, _: w_microfacet_table(c, r),
     "fit": lambda c, r, _: w_fit(c, r), "eval": lambda c, r, _: w_eval(c, r),
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
-    "profile": w_profile,
+    "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r),
 })
 
 

@@ -8,27 +8,33 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..directional import albedo as compute_albedo
+from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize
 from ..output import STDOUT, write_file
 from ..output.formats import render
+from ..parallel import CellsJob
+from ..parallel.results import albedo_result, normalization_result, sweep_job
 from .application import app
 from .common import (
+    CHECKPOINT_OPTION,
+    CHUNK_CELLS_OPTION,
     CSV_OPTION,
     DEBUG_OPTION,
     JSON_OPTION,
     OUTPUT_OPTION,
     PARAM_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
     At,
     Over,
+    compute_cells,
     console,
     guarded,
     load_model,
     parse_angles,
     parse_azimuth,
     parse_sweep,
-    progress_bar,
     result_format,
 )
 
@@ -78,6 +84,10 @@ def albedo(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
@@ -90,9 +100,10 @@ def albedo(
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
-        result = compute_albedo(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol,
-                                method=method, nonfinite=nonfinite.value, digits=digits)
-        write_file(output or STDOUT, render(result.records(), chosen))
+        job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
+                          nonfinite=nonfinite.value, digits=digits, chunk_cells=chunk_cells)
+        cells = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+        write_file(output or STDOUT, render(albedo_result(job, cells).records(), chosen))
 
 
 @app.command("normalize")
@@ -111,6 +122,10 @@ def normalize_command(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
@@ -122,9 +137,16 @@ def normalize_command(
             m.parameter(name)  # unknown names fail before any work
         degrees = parse_angles(theta) if at == At.view else None
         azimuth = parse_azimuth(phi)
-        with progress_bar(f"{m.name}: sweeping {name}", enabled=values is not None and values.size >= 8) as step:
-            result = compute_normalize(m, at=at.value, sweep=None if name is None else {name: values},
-                                       theta=None if degrees is None else np.radians(degrees),
-                                       phi=np.radians(azimuth), over=over.value, rtol=rtol, method=method,
-                                       on_progress=step)
+        kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
+                      over=over.value, rtol=rtol, method=method)
+        if name is None:
+            if workers or scheduler or checkpoint or chunk_cells:
+                raise ArgumentError("--workers, --scheduler, --checkpoint and --chunk-cells spread a --sweep's "
+                                    "cells; there is no sweep", where="--sweep")
+            result = compute_normalize(m, at=at.value, **kwargs)
+        else:
+            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=chunk_cells)
+            cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
+                                  checkpoint=checkpoint)
+            result = normalization_result(job, at.value, name, cells)
         write_file(output or STDOUT, render(result.records(), chosen))
