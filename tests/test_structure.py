@@ -14,9 +14,12 @@ import brdfnorm
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "brdfnorm"
-#: Being split into a package by the GLSL engineer (issue 11, item 4).
-LONG_FILES_ALLOWED = {"brdfnorm/glsl/compiler.py"}
 MAX_LINES = 600
+#: Cycles known and owned elsewhere, each with the fix it awaits; the test below fails once one is gone, so
+#: the entry is removed rather than left to hide a new cycle. glsl/compiler/program.compile_shader imports the
+#: package's assembled Compiler inside the function (the GLSL engineer's split, issue 11 item 4): moving the
+#: Compiler class out of compiler/__init__ into a module that program.py imports would end it.
+KNOWN_CYCLES = [["brdfnorm.glsl.compiler", "brdfnorm.glsl.compiler.program"]]
 
 
 def _module_name(path: Path) -> str:
@@ -86,11 +89,20 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return components
 
 
-def test_the_import_graph_of_src_has_no_cycles():
+def _graph() -> dict[str, set[str]]:
     known = _modules()
-    graph = {name: _imports(name, path, known) for name, path in known.items()}
+    return {name: _imports(name, path, known) for name, path in known.items()}
+
+
+def test_the_import_graph_of_src_has_no_cycles():
+    graph = _graph()
     assert graph["brdfnorm.cli.core"] >= {"brdfnorm.output.formats"}  # the parser sees real imports
-    assert _cycles(graph) == []
+    assert [c for c in _cycles(graph) if c not in KNOWN_CYCLES] == []
+
+
+@pytest.mark.parametrize("cycle", KNOWN_CYCLES)
+def test_each_known_cycle_still_exists(cycle):
+    assert cycle in _cycles(_graph()), "the cycle is gone: remove it from KNOWN_CYCLES"
 
 
 def test_the_cycle_finder_finds_a_cycle():
@@ -100,7 +112,7 @@ def test_the_cycle_finder_finds_a_cycle():
 def test_no_module_is_longer_than_600_lines():
     long = {str(path.relative_to(SRC)): n for path in PACKAGE.rglob("*.py")
             if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
-    assert set(long) <= LONG_FILES_ALLOWED, long
+    assert long == {}
 
 
 @pytest.mark.parametrize("module", sorted(m.name for m in pkgutil.walk_packages(brdfnorm.__path__, "brdfnorm.")
