@@ -21,7 +21,7 @@ import numpy as np
 
 from .errors import ArgumentError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
-from .models.base import Model, Over
+from .models.base import Lobe, Model, Over
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,8 @@ class AlbedoResult:
     over: Over
     params: dict = field(default_factory=dict)  # parameter values broadcast to S (colors: (*S, 3))
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
+    reflected: np.ndarray | None = None  # (*S, C) the upper hemisphere's share, for models that transmit (BSDFs)
+    transmitted: np.ndarray | None = None  # (*S, C) the lower hemisphere's share; value = reflected + transmitted
     lower: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed lower bound (method "certified")
     upper: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed upper bound (method "certified")
 
@@ -129,7 +131,7 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    run: Callable[..., tuple]  # (value, error, evaluations, converged, nonfinite share[, bounds])
+    run: Callable[..., tuple]  # (value, error, evaluations, converged, nonfinite share[, more result fields])
     description: str = ""
     #: Keyword options of :func:`albedo` this method takes besides the tolerances (e.g. ``digits``).
     options: tuple[str, ...] = ()
@@ -137,15 +139,36 @@ class Method:
 
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
                 max_evaluations: int):
+    reflected = _hemisphere(problem, problem.integrand, None, rtol=rtol, atol=atol, nonfinite=nonfinite,
+                            max_evaluations=max_evaluations)
+    if not getattr(problem.model, "transmits", False):
+        return reflected
+    # A BSDF: the lower hemisphere as a second hemisphere integral, mirrored into the upper one (ω_z → −ω_z),
+    # about its own peak, the refraction direction.
+    flip = np.array([1.0, 1.0, -1.0])
     K = problem.fixed.shape[0]
-    lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+    lobe = problem.model.transmission_lobe(problem.fixed, problem.case_params(np.arange(K)))
+    lower = Lobe(lobe.direction * flip, lobe.width, lobe.support)
+    transmitted = _hemisphere(problem, lambda omega, case: problem.integrand(omega * flip, case), lower,
+                              rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    value, error = reflected[0] + transmitted[0], reflected[1] + transmitted[1]
+    bad = None if reflected[4] is None else reflected[4] + transmitted[4]
+    return (value, error, reflected[2] + transmitted[2], reflected[3] & transmitted[3], bad,
+            {"reflected": reflected[0], "transmitted": transmitted[0]})
+
+
+def _hemisphere(problem: Problem, integrand, lobe, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
+                max_evaluations: int):
+    K = problem.fixed.shape[0]
     if lobe is None:
-        poles, widths, supports = estimate_lobe(problem.integrand, K)
+        lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+    if lobe is None:
+        poles, widths, supports = estimate_lobe(integrand, K)
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
     try:
-        result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
+        result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol,
                                       nonfinite=nonfinite, max_evaluations=max_evaluations)
     except NonFiniteIntegrand as bad:
         fixed = problem.fixed[bad.case]
@@ -237,10 +260,14 @@ def albedo(
     for name, given in options.items():
         if given is not None and name not in chosen.options:
             raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
-    value, error, evaluations, converged, bad, *bounds = chosen.run(
+    if over == "view" and getattr(model, "transmits", False):
+        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
+                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
+                            where="over")
+    value, error, evaluations, converged, bad, *more = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})
-    bounds = bounds[0] if bounds else {}
+    more = more[0] if more else {}
     S, C = problem.shape, value.shape[-1]
     if not np.all(converged):
         warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
@@ -253,7 +280,7 @@ def albedo(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
-        **{name: bound.reshape(S + (C,)) for name, bound in bounds.items()},
+        **{name: part.reshape(S + (C,)) for name, part in more.items()},
     )
 
 
@@ -288,6 +315,15 @@ from .models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
                        "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=0)
+
+# Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
+# (brdfnorm.transmission); the result reports both parts.
+from .models.dielectric import MicrofacetDielectric  # noqa: E402
+from .transmission import albedo_method as _dielectric  # noqa: E402
+
+register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
+                       "reflection + refraction over the facet normal, the slope distribution as measure"),
+                auto_priority=0)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).

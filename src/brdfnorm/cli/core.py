@@ -95,6 +95,8 @@ def albedo(
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
              "error_estimate": channel_value(result.error[i]), "method": result.method,
              "evaluations": int(result.evaluations[i]), "converged": bool(result.converged[i])}
+            | ({} if result.reflected is None else {"reflected": channel_value(result.reflected[i]),
+                                                    "transmitted": channel_value(result.transmitted[i])})
             | ({} if result.lower is None else {"lower": _decimals(result.lower[i]),
                                                 "upper": _decimals(result.upper[i])})
             for i, d in enumerate(degrees)
@@ -104,12 +106,15 @@ def albedo(
             return
         table = Table(title=f"{m.name} albedo over the {over.value} ({_params_text(m.params)})")
         certified = result.lower is not None
-        columns = ("θ (deg)", "φ (deg)", "albedo", "error estimate", "method", "evaluations")
+        parts = result.reflected is not None
+        columns = ("θ (deg)", "φ (deg)", "albedo", *(("reflected", "transmitted") if parts else ()), "error estimate",
+                   "method", "evaluations")
         for column in columns + (("lower", "upper") if certified else ()):
             table.add_column(column, justify="right", overflow="fold")
         for row in rows:
             bounds = (" ".join(np.atleast_1d(row["lower"])), " ".join(np.atleast_1d(row["upper"]))) if certified else ()
-            table.add_row(f"{row['theta_deg']:g}", f"{row['phi_deg']:g}", _num(row["albedo"]),
+            shares = (_num(row["reflected"]), _num(row["transmitted"])) if parts else ()
+            table.add_row(f"{row['theta_deg']:g}", f"{row['phi_deg']:g}", _num(row["albedo"]), *shares,
                           _num(row["error_estimate"], 3), row["method"] + ("" if row["converged"] else " (!)"),
                           str(row["evaluations"]), *bounds)
         console().print(table)
