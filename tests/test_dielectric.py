@@ -91,6 +91,16 @@ def test_half_vector_method_agrees_with_the_generic_sphere_quadrature(name):
     assert np.all(np.abs(exact.transmitted - generic.transmitted) <= generic.error + exact.error)
 
 
+def test_inside_view_past_the_critical_angle_against_the_generic_sphere_quadrature():
+    """η < 1 at a grazing view: the window where facets are below the critical angle opens at azimuths where
+    every part's ray integral has a square-root onset (a case a cubature node can step over)."""
+    m = bn.load("ggx-dielectric", alpha=0.3, eta=1 / 1.5)
+    exact = bn.albedo(m, 1.3, rtol=1e-10)
+    generic = bn.albedo(m, 1.3, method="quadrature", rtol=1e-5, max_evaluations=3_000_000)
+    assert abs(exact.reflected[0] - generic.reflected[0]) <= generic.error[0] + exact.error[0]
+    assert abs(exact.value[0] - generic.value[0]) <= generic.error[0] + exact.error[0]
+
+
 @pytest.mark.parametrize("name", DIELECTRICS)
 @pytest.mark.parametrize("eta", [1.5, 0.7])
 def test_reciprocity_in_the_energy_form(name, eta, rng):
