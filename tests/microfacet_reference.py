@@ -42,8 +42,10 @@ def _panels(edges: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def reference_albedo(name: str, mu: float, alpha: float, shadowing: str = "height-correlated", *,
-                     order: int = 10, phi_depth: int = 44, radial_depth: int = 44) -> float:
+                     order: int = 10, phi_depth: int | None = None, radial_depth: int = 40) -> float:
     V = np.array([np.sqrt(1.0 - mu * mu), 0.0, mu])
+    if phi_depth is None:  # the horizon's azimuthal features are ~μ wide at grazing views
+        phi_depth = int(np.log2(1.0 / mu)) + 16
 
     def nl_and_w(phi, s):
         x, y = alpha * s * np.cos(phi), alpha * s * np.sin(phi)  # real slopes of H = (x, y, 1)/n
@@ -75,7 +77,7 @@ def reference_albedo(name: str, mu: float, alpha: float, shadowing: str = "heigh
         lo, hi = np.where(inside, mid, lo), np.where(inside, hi, mid)
     s_h = np.exp(lo)
     if name == "beckmann":
-        s_h = np.minimum(s_h, 9.0)  # e^{-81}: nothing beyond
+        s_h = np.minimum(s_h, 7.0)  # mass e^{-49} beyond, times (1 + c·x) ≤ 1e5 here: nothing
     u_h = u_of_s(s_h)
     z_h = 1.0 / (1.0 + s_h * s_h) if name == "ggx" else np.exp(-s_h * s_h)
     total = 0.0

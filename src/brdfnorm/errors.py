@@ -18,17 +18,38 @@ class BrdfnormError(Exception):
     def __str__(self) -> str:
         return f"{self.where}: {self.message}" if self.where else self.message
 
+    def __reduce__(self):
+        # Errors raised in a worker process (brdfnorm.parallel) travel back pickled; the subclasses' own
+        # __init__ signatures differ, so rebuild from the attributes rather than by calling __init__.
+        return _rebuild, (type(self), self.args, dict(self.__dict__))
+
+
+def _rebuild(cls: type[BrdfnormError], args: tuple, state: dict) -> BrdfnormError:
+    error = cls.__new__(cls)
+    error.args = args
+    error.__dict__.update(state)
+    return error
+
 
 class ParameterError(BrdfnormError, ValueError):
     """A model parameter is unknown, of the wrong type, or outside a hard limit."""
+
+
+class ParameterTypeError(ParameterError, TypeError):
+    """A model parameter of the wrong type (text, complex, a date): both a ValueError and a TypeError."""
 
 
 class ArgumentError(BrdfnormError, ValueError):
     """A command-line or API argument is malformed (``where`` names the argument, e.g. ``--theta``)."""
 
 
-class ModelNotFoundError(BrdfnormError, LookupError):
-    """Neither a built-in model name nor a readable file."""
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An API argument of the wrong type (a list where a name goes, a complex angle): both a ValueError and a
+    TypeError, so callers may catch either."""
+
+
+class ModelNotFoundError(BrdfnormError, LookupError, ValueError):
+    """Neither a built-in model name nor a readable file (a bad value, so also a ValueError)."""
 
 
 class BrdfFileError(BrdfnormError):

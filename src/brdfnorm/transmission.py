@@ -218,9 +218,11 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     initial = _Panels(cases, a0, a1, b0, b0 + 1.0)
     result = adaptive_rectangles(_part_integrand(distribution, shadowing, fixed, alpha, eta, part), initial, K,
                                  rtol=rtol, atol=atol, max_evaluations=max_evaluations)
-    # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight), Beckmann's cap.
+    # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight, p = |c|α), and
+    # Beckmann's cap, where the weight (1 − F) G2 (1 + c·x) ≤ 1 + |c| α s over the dropped slope radii.
     p = alpha * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2]
-    dropped = 1.0 / _S_CAP**2 + 2.0 * p / _S_CAP + distribution.truncated_mass() * 3.0 / fixed[:, 2] ** 2
+    mass, moment = distribution.truncated_moments()
+    dropped = 1.0 / _S_CAP**2 + 2.0 * p / _S_CAP + mass + moment * p
     return CubatureResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..registry import Registry
 from .base import Lobe, Model, Over, mirror
 from .beckmann import Beckmann
 from .beckmann_dielectric import BeckmannDielectric
@@ -12,10 +13,10 @@ from .ggx_dielectric import GGXDielectric
 from .lambert import Lambert
 from .phong import PhongModified, PhongOriginal
 
-REGISTRY: dict[str, type[Model]] = {
+REGISTRY: Registry[type[Model]] = Registry("model", "model", {
     cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann,
                               GGXDielectric, BeckmannDielectric)
-}
+})
 
 __all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BeckmannDielectric", "BlinnPhong",
            "BlinnPhongGaussian", "GGX", "GGXDielectric", "Lambert", "PhongModified", "PhongOriginal"]

@@ -31,12 +31,12 @@ compensation needs Kulla & Conty's Fresnel-average term, which is not implemente
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from scipy.special import erfcx
 
-from ..errors import ParameterError
+from ..errors import EvaluationError, ParameterError
 from ..parameters import Parameter
 from .base import Lobe, Model, mirror
 
@@ -79,11 +79,12 @@ class Distribution:
         return t, self.slope_density(t)
 
     def cap(self, s: np.ndarray) -> np.ndarray:
-        """Slope radii beyond which the mass is dropped (bounded by ``truncated_mass``); none by default."""
+        """Slope radii beyond which the mass is dropped (bounded by ``truncated_moments``); none by default."""
         return s
 
-    def truncated_mass(self) -> float:
-        return 0.0
+    def truncated_moments(self) -> tuple[float, float]:
+        """(∫ dP, ∫ s dP) over the slope radii dropped by ``cap``: what bounds the dropped part of the integral."""
+        return 0.0, 0.0
 
 
 class GGXDistribution(Distribution):
@@ -144,8 +145,10 @@ class BeckmannDistribution(Distribution):
     def cap(self, s):
         return np.minimum(s, self.CAP)
 
-    def truncated_mass(self):
-        return float(np.exp(-self.CAP**2))
+    def truncated_moments(self):
+        # ∫_S^∞ 2s e^{−s²} ds = e^{−S²};  ∫_S^∞ 2s² e^{−s²} ds = S e^{−S²} + (√π/2) erfc S ≤ (S + 1) e^{−S²}.
+        mass = float(np.exp(-self.CAP**2))
+        return mass, (self.CAP + 1.0) * mass
 
 
 # -- Fresnel -----------------------------------------------------------------------------------------------
@@ -178,6 +181,17 @@ def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.nda
 
 
 # -- the model ---------------------------------------------------------------------------------------------
+
+#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer (brdfnorm.halfvector), which
+#: registers its provider here when it is imported: ``provider(distribution, shadowing, size)`` -> an object with
+#: ``energies(mu_l, mu_v, alpha)``. Models stay below the integrator in the import graph.
+_COMPENSATION: Callable | None = None
+
+
+def register_compensation(provider: Callable) -> None:
+    global _COMPENSATION
+    _COMPENSATION = provider
+
 
 SHADOWING = ("height-correlated", "separable")
 FRESNEL = ("none", "schlick", "dielectric", "conductor")
@@ -294,7 +308,7 @@ class MicrofacetModel(Model):
     def projected(self, L, V, params):
         value = self.single_scattering(L, V, params)
         if params["ms"] == "kulla-conty":
-            value = value + self._multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
+            value = value + self.multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
         return value
 
     def evaluate(self, L, V, params):
@@ -302,21 +316,24 @@ class MicrofacetModel(Model):
             value = self.single_scattering(L, V, params) / L[..., 2:3]
         value = np.where(L[..., 2:3] > 0, value, 0.0)
         if params["ms"] == "kulla-conty":
-            value = value + self._multiple_scattering(L, V, params)
+            value = value + self.multiple_scattering(L, V, params)
         return value
 
-    def _multiple_scattering(self, L, V, params) -> np.ndarray:
-        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1)."""
-        from ..halfvector import compensation  # the lobe's own albedo tables (integrator layer)
-
+    def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1); 0 at α = 0 (a mirror
+        loses no energy: E = E_avg = 1)."""
+        if _COMPENSATION is None:
+            raise EvaluationError("ms=kulla-conty needs the half-vector integrator (import brdfnorm)", where=self.name)
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
         alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), shape)
         mu_l = np.broadcast_to(L[..., 2], shape)
         mu_v = np.broadcast_to(V[..., 2], shape)
-        table = compensation(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+        table = _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
         e_l, e_v, e_avg = table.energies(mu_l, mu_v, alpha)
-        upper = (mu_l > 0) & (mu_v > 0)
-        return np.where(upper, (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg)), 0.0)[..., None]
+        lossy = (mu_l > 0) & (mu_v > 0) & (e_avg < 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value = (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg))
+        return np.where(lossy, value, 0.0)[..., None]
 
     def lobe(self, fixed, params, over):
         ax, ay = roughness(params)
