@@ -218,7 +218,7 @@ def _quadrature_hemisphere(problem: Problem, lower: bool, options: dict):
             overflowed = True
         if overflowed:
             try:
-                scale = _scales(problem, options["nonfinite"])  # raises at a real (L, V) pair where the BRDF is not finite
+                scale = _scales(problem, options["nonfinite"])  # raises where the BRDF is not finite
                 if not np.any(scale > 1.0):
                     raise EvaluationError("the integration overflowed, yet no sampled BRDF value is large",
                                           where=where)
