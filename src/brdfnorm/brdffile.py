@@ -35,7 +35,7 @@ import re
 import warnings
 from array import array
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +91,8 @@ class BrdfFile:
     parameters: tuple[Parameter, ...]
     shader: SourceText
     is_func: SourceText | None = None
+    #: The whole text as parsed (what a model sent to another process is rebuilt from).
+    text: str = field(default="", repr=False)
 
     @property
     def uniforms(self) -> dict[str, str]:
@@ -346,7 +348,7 @@ def parse_brdf(text: str, path: str = "<string>") -> BrdfFile:
             path,
             *scanner.where(len(text)),
         )
-    return BrdfFile(path, tuple(parameters), shader, sections.get("isFunc"))
+    return BrdfFile(path, tuple(parameters), shader, sections.get("isFunc"), text)
 
 
 def read_brdf(path: str | Path) -> BrdfFile:
@@ -439,7 +441,11 @@ def load_brdf(path: str | Path, **params: object) -> BrdfModel:
     Parameter values outside a file's slider range are accepted with a warning; a value of the wrong type
     raises :class:`~brdfnorm.errors.ParameterError`.
     """
-    brdf = read_brdf(path)
+    return compile_brdf(read_brdf(path), **params)
+
+
+def compile_brdf(brdf: BrdfFile, **params: object) -> BrdfModel:
+    """The model of a parsed file (:func:`parse_brdf` on a text sent elsewhere, or :func:`read_brdf`)."""
     from .glsl import compile_shader  # the GLSL toolchain (tree-sitter) loads only for a readable file
 
     program = compile_shader(
