@@ -15,11 +15,6 @@ import brdfnorm
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "brdfnorm"
 MAX_LINES = 600
-#: Cycles known and owned elsewhere, each with the fix it awaits; the test below fails once one is gone, so
-#: the entry is removed rather than left to hide a new cycle. glsl/compiler/program.compile_shader imports the
-#: package's assembled Compiler inside the function (the GLSL engineer's split, issue 11 item 4): moving the
-#: Compiler class out of compiler/__init__ into a module that program.py imports would end it.
-KNOWN_CYCLES = [["brdfnorm.glsl.compiler", "brdfnorm.glsl.compiler.program"]]
 
 
 def _module_name(path: Path) -> str:
@@ -97,12 +92,7 @@ def _graph() -> dict[str, set[str]]:
 def test_the_import_graph_of_src_has_no_cycles():
     graph = _graph()
     assert graph["brdfnorm.cli.core"] >= {"brdfnorm.output.formats"}  # the parser sees real imports
-    assert [c for c in _cycles(graph) if c not in KNOWN_CYCLES] == []
-
-
-@pytest.mark.parametrize("cycle", KNOWN_CYCLES)
-def test_each_known_cycle_still_exists(cycle):
-    assert cycle in _cycles(_graph()), "the cycle is gone: remove it from KNOWN_CYCLES"
+    assert _cycles(graph) == []
 
 
 def test_the_cycle_finder_finds_a_cycle():
