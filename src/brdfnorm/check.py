@@ -321,7 +321,8 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
         # Size the next chunk from the time per point so far: one batch is large, yet a small budget holds.
         per_point = (meter.elapsed() - started) / done
         left = None if meter.budget.seconds is None else 0.6 * meter.budget.seconds - meter.elapsed()
-        chunk = max(1, min(4000 // D, int(0.5 * left / per_point) if left is not None and per_point > 0 else 4000))
+        chunk = max(1, min(max(1, 1000 // D), int(0.25 * left / per_point) if left is not None and per_point > 0
+                            else 1000))
     coarse_seconds = meter.elapsed() - started
     # Refinement from the best grid points: a compass search over (θ, φ, continuous parameters) in [0, 1]^n.
     order = np.argsort(-best[:done], kind="stable")[:3]

@@ -119,7 +119,10 @@ def check_command(
         elif len(reports) == 1:
             console().print(detail_table(reports[0]))
         else:
-            console().print(summary_table(reports))
+            out = console()
+            out.print(summary_table(reports))
+            if any(r.failed for r in reports):
+                out.print(failures_table(reports))
         if any(r.failed for r in reports):
             raise typer.Exit(1)
 
@@ -189,4 +192,15 @@ def summary_table(reports: list[CheckReport]) -> Table:
     for r in reports:
         cells = [f"{VERDICT[r.results[n].status]}: {cell(r.results[n])}" if n in r.results else "—" for n in names]
         table.add_row(r.source or r.model, VERDICT[r.status], *cells, f"{r.coverage['elapsed_s']:.1f}")
+    return table
+
+
+def failures_table(reports: list[CheckReport]) -> Table:
+    """Where each failing check fails: parameter values and directions."""
+    table = Table(title="failures")
+    for column in ("model", "check", "details"):
+        table.add_column(column, overflow="fold")
+    for r in reports:
+        for name in r.failed:
+            table.add_row(r.source or r.model, name, r.results[name].message)
     return table
