@@ -289,3 +289,28 @@ def test_cli_bad_input_is_one_line_exit_2(capsys, argv, where):
 def test_cli_missing_file_stops_before_any_work(capsys):
     code, out, err = run_cli(capsys, "check", "lambert", "no/such.brdf")
     assert code == 2 and "no/such.brdf" in err and out == ""
+
+
+# -- the report's audit section -----------------------------------------------------------------------------
+
+def test_report_audit_section_has_one_row_per_file(tmp_path):
+    from brdfnorm.report import StudyConfig, build_report
+
+    out = tmp_path / "report"
+    files = [EXAMPLES / "lambert.brdf", FIXTURES / "negative_lobe.brdf"]
+    build_report(out, ["lambert"], config=StudyConfig.quick(), audit=files)
+    html = (out / "index.html").read_text()
+    table = html[html.index('id="audit-table"'):]
+    table = table[:table.index("</table>")]
+    rows = table.split("<tr>")[2:]
+    assert len(rows) == 2 and "lambert.brdf" in rows[0] and "negative_lobe.brdf" in rows[1]
+    energy = float(rows[0].split('data-value="')[1].split('"')[0])
+    assert abs(energy - 1.0) < 1e-7  # Lambert at reflectance 1: albedo 1 (closed form)
+    assert 'class="bad">fail' in rows[1] and "negative: f = " in rows[1] and "c=" in rows[1]
+    assert "Audit of 2 .brdf files: 1 pass every check" in html
+
+
+def test_cli_report_audit_of_a_missing_path_is_one_line(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "report", "lambert", "--audit", str(tmp_path / "nothing"),
+                             "-o", str(tmp_path / "r"))
+    assert code == 2 and "--audit" in err and len(err.splitlines()) == 1 and not (tmp_path / "r").exists()
