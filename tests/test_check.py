@@ -298,7 +298,8 @@ def test_report_audit_section_has_one_row_per_file(tmp_path):
 
     out = tmp_path / "report"
     files = [EXAMPLES / "lambert.brdf", FIXTURES / "negative_lobe.brdf"]
-    build_report(out, ["lambert"], config=StudyConfig.quick(), audit=files)
+    build_report(out, ["lambert"], sweep=("reflectance", np.array([0.5, 1.0])), config=StudyConfig.quick(),
+                 audit=files)
     html = (out / "index.html").read_text()
     table = html[html.index('id="audit-table"'):]
     table = table[:table.index("</table>")]

@@ -52,9 +52,14 @@ COARSE_RTOL = 1e-4
 REFINE_RTOL = 1e-6
 FINAL_RTOL = 1e-8
 TIGHT_RTOL = 1e-11
+#: Evaluations every integral may use whatever the budget says (about five rounds of panels).
+MIN_EVALUATIONS = 20_000
+#: The final integral of the best point may take this share of the budget even when the search spent it all.
+FINAL_SHARE = 0.1
 #: Polar angles of the coarse energy grid: uniform in cos θ, so that grazing views are well represented.
 THETA_GRID = np.arccos(np.linspace(1.0, np.cos(THETA_MAX), 10))
 PHI_GRID = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+AXES_PHI = np.array([0.0, np.pi / 2])
 
 
 @dataclass(frozen=True)
@@ -90,6 +95,19 @@ class _Meter:
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.start
+
+    def allowance(self, cases: int, minimum_seconds: float = 0.0) -> float | None:
+        """Evaluations per case that the rest of the budget (or at least ``minimum_seconds`` of work) pays for,
+        at the rate measured so far; None while nothing bounds it. One albedo call cannot be interrupted, so
+        its per-case evaluation cap is what keeps it within the budget (a capped integral keeps an honest error).
+        """
+        b, limits = self.budget, []
+        if b.evaluations is not None:
+            limits.append(b.evaluations - self.evaluations)
+        if b.seconds is not None and self.evaluations > 0:
+            rate = self.evaluations / max(self.elapsed(), 1e-3)
+            limits.append(max(b.seconds - self.elapsed(), minimum_seconds) * rate)
+        return None if not limits else max(min(limits), 0.0) / max(cases, 1)
 
     def spent(self, share: float = 1.0) -> bool:
         b = self.budget
@@ -285,9 +303,12 @@ def _params_at(model: Model, space: _Space, points: _Points, index: int) -> dict
 
 # -- the energy search --------------------------------------------------------------------------------------
 
-def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations=2_000_000):
+def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations=2_000_000, minimum_seconds=0.0):
     """Albedo (K, C), error (K, C), non-finite share (K,) at points × directions given case by case."""
     K = len(points)
+    allowed = meter.allowance(K, minimum_seconds)
+    if allowed is not None:  # at least a few rounds of panels per integral, so that every value has an estimate
+        max_evaluations = int(np.clip(allowed, MIN_EVALUATIONS, max_evaluations))
     value, error, bad = np.zeros((K, model.channels)), np.zeros((K, model.channels)), np.zeros(K)
     for combo in np.unique(points.combo):
         cases = np.flatnonzero(points.combo == combo)
@@ -302,32 +323,55 @@ def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations
     return value, error, bad
 
 
-def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) -> tuple[Result, dict]:
-    phis = np.zeros(1) if isotropic else PHI_GRID
-    directions = np.array([(t, p) for t in THETA_GRID for p in (phis if t > 0 else [0.0])])
+def _directions(phis: np.ndarray) -> np.ndarray:
+    """(θ, φ) pairs of the coarse grid: :data:`THETA_GRID` × ``phis`` (one direction at θ = 0)."""
+    return np.array([(t, p) for t in THETA_GRID for p in (phis if t > 0 else [0.0])])
+
+
+def _scan(model, space, points: _Points, index: np.ndarray, directions, over, meter):
+    """Coarse albedo (largest channel) of the parameter points ``index`` × ``directions``: (len(index), D)."""
     D = directions.shape[0]
-    # Coarse stage: chunks of parameter points × all directions, until the points or ~60 % of the budget end.
+    value, _, _ = _albedo(model, space, points.take(np.repeat(index, D)), np.tile(directions[:, 0], index.size),
+                          np.tile(directions[:, 1], index.size), over, COARSE_RTOL, meter, 400_000)
+    return value.max(axis=1).reshape(index.size, D)
+
+
+def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) -> tuple[Result, dict]:
+    # Anisotropic lobes are scanned along the tangent axes (φ = 0°, 90°) at every parameter point, then over
+    # the whole azimuth grid at the best few: parameter space gets the coverage, the refinement moves φ.
+    directions = _directions(np.zeros(1) if isotropic else AXES_PHI)
+    D = directions.shape[0]
+    # Coarse stage: chunks of parameter points × directions, until the points or ~50 % of the budget end.
     best = np.full(len(points), -np.inf)
-    best_dir = np.zeros(len(points), dtype=int)
+    best_theta, best_phi = np.zeros(len(points)), np.zeros(len(points))
     done, chunk, started = 0, 1, meter.elapsed()
-    while done < len(points) and not (done and meter.spent(0.6)):
+    while done < len(points) and not (done and meter.spent(0.5)):
         index = np.arange(done, min(done + chunk, len(points)))
-        cases = points.take(np.repeat(index, D))
-        value, _, _ = _albedo(model, space, cases, np.tile(directions[:, 0], index.size),
-                              np.tile(directions[:, 1], index.size), over, COARSE_RTOL, meter, 400_000)
-        energy = value.max(axis=1).reshape(index.size, D)
-        best[index], best_dir[index] = energy.max(axis=1), energy.argmax(axis=1)
+        energy = _scan(model, space, points, index, directions, over, meter)
+        k = energy.argmax(axis=1)
+        best[index], best_theta[index], best_phi[index] = energy.max(axis=1), *directions[k].T
         done = index[-1] + 1
         # Size the next chunk from the time per point so far: one batch is large, yet a small budget holds.
         per_point = (meter.elapsed() - started) / done
-        left = None if meter.budget.seconds is None else 0.6 * meter.budget.seconds - meter.elapsed()
-        chunk = max(1, min(max(1, 1000 // D), int(0.25 * left / per_point) if left is not None and per_point > 0
-                            else 1000))
+        left = None if meter.budget.seconds is None else 0.5 * meter.budget.seconds - meter.elapsed()
+        chunk = max(1, min(max(1, 400 // D), int(0.15 * left / per_point) if left is not None and per_point > 0
+                            else 400))
+    full = 0
+    if not isotropic and not meter.spent(0.6):
+        index = np.argsort(-best[:done], kind="stable")[:4]
+        azimuths = _directions(PHI_GRID)
+        energy = _scan(model, space, points, index, azimuths, over, meter)
+        k = energy.argmax(axis=1)
+        better = energy.max(axis=1) > best[index]
+        best[index] = np.maximum(best[index], energy.max(axis=1))
+        best_theta[index] = np.where(better, azimuths[k, 0], best_theta[index])
+        best_phi[index] = np.where(better, azimuths[k, 1], best_phi[index])
+        full = index.size
     coarse_seconds = meter.elapsed() - started
     # Refinement from the best grid points: a compass search over (θ, φ, continuous parameters) in [0, 1]^n.
     order = np.argsort(-best[:done], kind="stable")[:3]
     start = points.take(order)
-    theta0, phi0 = directions[best_dir[order], 0], directions[best_dir[order], 1]
+    theta0, phi0 = best_theta[order], best_phi[order]
     y = np.column_stack([theta0 / THETA_MAX, phi0 / (2 * np.pi), start.x])
     free = np.array([True, not isotropic] + [True] * len(space.ranges))
     step = np.where(np.arange(y.shape[1]) < 2, 0.5 / len(THETA_GRID),
@@ -373,7 +417,7 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
     limit = 1.0 + tolerance
     for rtol, cap in ((FINAL_RTOL, 4_000_000), (TIGHT_RTOL, 40_000_000)):
         value, error, bad = _albedo(model, space, final, y[[c], 0] * THETA_MAX, y[[c], 1] * 2 * np.pi, over,
-                                    rtol, meter, cap)
+                                    rtol, meter, cap, minimum_seconds=FINAL_SHARE * (meter.budget.seconds or 0))
         channel = int(np.argmax(value[0]))
         E, err = float(value[0, channel]), float(error[0, channel])
         status = "fail" if E - err > limit else "pass" if E + err <= limit else "inconclusive"
@@ -392,6 +436,7 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
     if bad[0] > 0:
         message += f"; non-finite values counted as 0 on {100 * bad[0]:.3g}% of the hemisphere there"
     coverage = {"parameter_points": int(done), "parameter_points_planned": len(points), "directions": D,
+                "full_azimuth_points": full,
                 "refinement_rounds": rounds, "refinement_finished": finished,
                 "coarse_seconds": coarse_seconds, "refinement_seconds": refine_seconds}
     sampled = dict(coverage, theta_deg=[0.0, float(np.degrees(THETA_MAX))], phi_swept=not isotropic)

@@ -144,8 +144,9 @@ def coverage_text(report: CheckReport) -> str:
         e = c["energy"]
         refined = ("refinement finished" if e["refinement_finished"]
                    else f"refinement stopped by the budget after {e['refinement_rounds']} rounds")
+        azimuths = f" (and 8 azimuths at the best {e['full_azimuth_points']})" if e["full_azimuth_points"] else ""
         parts.append(f"energy: {e['parameter_points']} of {e['parameter_points_planned']} parameter points × "
-                     f"{e['directions']} directions, {refined}")
+                     f"{e['directions']} directions{azimuths}, {refined}")
     if "pairs" in c:
         p = c["pairs"]
         parts.append(f"{p['pairs_per_point']} direction pairs at {p['parameter_points']} parameter points")
