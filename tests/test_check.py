@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from conftest import run_cli
 from scipy import integrate
+from scipy.optimize import minimize_scalar
 
 import brdfnorm as bn
 from brdfnorm.check import THETA_MAX, Budget, check
@@ -120,6 +121,22 @@ def test_unguarded_cook_torrance_fails_energy_at_grazing_views_with_its_value_co
     reference, _ = integrate.nquad(projected, [[0, 2 * np.pi], [0, np.pi / 2]],
                                    opts=[{**options, "points": [np.pi]}, {**options, "points": [theta_v]}])
     assert abs(reference - energy.value) <= energy.error + 1e-8 * reference
+
+
+def test_folklore_normalized_blinn_phong_gains_what_the_closed_form_says():
+    # multi_lobe.brdf with one lobe is (n+8)/(8π) (N·H)^n. Seed 000's closed form at L = N, maximized over n by
+    # scipy's bounded scalar minimizer, is the independent route: (n+8)(2^(−n/2)+n)/((n+2)(n+4)).
+    model = bn.load(EXAMPLES / "multi_lobe.brdf", lobes=1.0, falloff=0.5)
+    report = check(model, checks=("energy",), fixed=("lobes", "falloff"), points=16)
+    energy = report.results["energy"]
+
+    def gain(n):
+        return -(n + 8.0) * (2.0 ** (-n / 2.0) + n) / ((n + 2.0) * (n + 4.0))
+
+    best = minimize_scalar(gain, bounds=(1.0, 100.0), method="bounded", options={"xatol": 1e-10})
+    assert energy.status == "fail" and energy.theta_deg < 1.0
+    assert abs(energy.value - (-best.fun)) <= energy.error + 1e-7  # 1.0752…: the folklore's 7.5 % (README)
+    assert abs(energy.params["n"] - best.x) < 0.05
 
 
 def test_an_error_bar_straddling_the_limit_is_inconclusive():
