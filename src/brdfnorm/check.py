@@ -116,7 +116,7 @@ class _Meter:
 
 
 @dataclass(frozen=True)
-class Result:
+class CheckResult:
     """One check's verdict (``pass``, ``fail``, ``inconclusive``), its headline number and where it occurs.
 
     ``value``: the largest albedo (energy), relative asymmetry (reciprocity), most negative value relative to
@@ -152,7 +152,7 @@ class CheckReport:
     source: str | None
     tolerance: float
     over: Over
-    results: dict[str, Result]
+    results: dict[str, CheckResult]
     coverage: dict
 
     @property
@@ -336,7 +336,7 @@ def _scan(model, space, points: _Points, index: np.ndarray, directions, over, me
     return value.max(axis=1).reshape(index.size, D)
 
 
-def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) -> tuple[Result, dict]:
+def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) -> tuple[CheckResult, dict]:
     # Anisotropic lobes are scanned along the tangent axes (φ = 0°, 90°) at every parameter point, then over
     # the whole azimuth grid at the best few: parameter space gets the coverage, the refinement moves φ.
     directions = _directions(np.zeros(1) if isotropic else AXES_PHI)
@@ -429,18 +429,21 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
     if status == "fail":
         message = f"gains energy: albedo {E:.10g} ± {err:.2g} > 1 + {tolerance:g} (gained {E - 1:.4g}) {where}"
     elif status == "pass":
-        message = f"largest albedo {E:.10g} ± {err:.2g} ≤ 1 + {tolerance:g} {where}"
+        message = f"largest albedo found {E:.10g} ± {err:.2g} ≤ 1 + {tolerance:g} {where}"
     else:
-        message = (f"inconclusive: largest albedo {E:.10g} ± {err:.2g} straddles 1 + {tolerance:g} {where}; "
+        message = (f"inconclusive: largest albedo found {E:.10g} ± {err:.2g} straddles 1 + {tolerance:g} {where}; "
                    "tighten the tolerance or check the integrand")
     if bad[0] > 0:
         message += f"; non-finite values counted as 0 on {100 * bad[0]:.3g}% of the hemisphere there"
+    if status != "fail" and (done < len(points) or not finished):
+        message += (f"; search cut short by the budget ({done} of {len(points)} parameter points, refinement "
+                    f"{'finished' if finished else 'unfinished'})")
     coverage = {"parameter_points": int(done), "parameter_points_planned": len(points), "directions": D,
                 "full_azimuth_points": full,
                 "refinement_rounds": rounds, "refinement_finished": finished,
                 "coarse_seconds": coarse_seconds, "refinement_seconds": refine_seconds}
     sampled = dict(coverage, theta_deg=[0.0, float(np.degrees(THETA_MAX))], phi_swept=not isotropic)
-    return Result("energy", status, E, message, error=err, params=params, theta_deg=theta_deg, phi_deg=phi_deg,
+    return CheckResult("energy", status, E, message, error=err, params=params, theta_deg=theta_deg, phi_deg=phi_deg,
                   channel=int(channel), sampled=sampled), coverage
 
 
@@ -525,7 +528,7 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
         if at is None:
             what = {"reciprocity": "reciprocal", "positivity": "no negative value",
                     "finiteness": "every value finite"}[name]
-            results[name] = Result(name, "pass", max(amount, 0.0), f"{what} on {done * M} direction pairs at "
+            results[name] = CheckResult(name, "pass", max(amount, 0.0), f"{what} on {done * M} direction pairs at "
                                    f"{done} parameter points", share=share, sampled=sampled)
             continue
         p, i = at[0], at[1]
@@ -545,12 +548,12 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
             amount = share
             message = (f"not finite: f = {_values_text(at[2])} {where}; {share_all} of {done * M} pairs, "
                        f"{100 * share:.3g}% of the domain")
-        results[name] = Result(name, status, float(amount), message, params=params, L=_tuple(L[i]),
+        results[name] = CheckResult(name, status, float(amount), message, params=params, L=_tuple(L[i]),
                                V=_tuple(V[i]), share=share, sampled=sampled)
     return results, sampled
 
 
-def _normalization(model, space, points: _Points, at, over, tolerance, meter, isotropic) -> Result:
+def _normalization(model, space, points: _Points, at, over, tolerance, meter, isotropic) -> CheckResult:
     if at == "normal":
         directions = np.zeros((1, 2))
     else:
@@ -578,7 +581,7 @@ def _normalization(model, space, points: _Points, at, over, tolerance, meter, is
     verdict = {"fail": "not normalized", "pass": "normalized", "inconclusive": "inconclusive"}[status]
     message = (f"{verdict} (at {at}): largest |E − 1| {dev:.3g} ± {err:.2g} (tolerance {tolerance:g}), "
                f"E = {E:.10g} {where}")
-    return Result("normalization", status, dev, message, error=err, params=params,
+    return CheckResult("normalization", status, dev, message, error=err, params=params,
                   theta_deg=float(np.degrees(theta)), phi_deg=float(np.degrees(phi)), channel=int(c),
                   sampled={"parameter_points": P, "directions": D, "at": at})
 
@@ -629,7 +632,7 @@ def check(
     space = _space(model, sweep, fixed)
     grid = _points(space, points, seed)
     isotropic = bool(model.isotropic)
-    results: dict[str, Result] = {}
+    results: dict[str, CheckResult] = {}
     pointwise = [c for c in checks if c in ("reciprocity", "positivity", "finiteness")]
     coverage: dict = {"parameters": list(space.described), "parameter_points_planned": len(grid),
                       "isotropic": isotropic, "budget": budget.describe()}
