@@ -303,10 +303,15 @@ def _params_at(model: Model, space: _Space, points: _Points, index: int) -> dict
 
 # -- the energy search --------------------------------------------------------------------------------------
 
-def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations=2_000_000, minimum_seconds=0.0):
-    """Albedo (K, C), error (K, C), non-finite share (K,) at points × directions given case by case."""
+def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations=2_000_000, minimum_seconds=0.0,
+            budgeted=True):
+    """Albedo (K, C), error (K, C), non-finite share (K,) at points × directions given case by case.
+
+    ``budgeted``: cap each integral's evaluations by what the rest of the budget pays for (the coarse grid is
+    bounded by its chunk size instead: a starved narrow-lobe integral there would mislead the ranking).
+    """
     K = len(points)
-    allowed = meter.allowance(K, minimum_seconds)
+    allowed = meter.allowance(K, minimum_seconds) if budgeted else None
     if allowed is not None:  # at least a few rounds of panels per integral, so that every value has an estimate
         max_evaluations = int(np.clip(allowed, MIN_EVALUATIONS, max_evaluations))
     value, error, bad = np.zeros((K, model.channels)), np.zeros((K, model.channels)), np.zeros(K)
@@ -332,7 +337,7 @@ def _scan(model, space, points: _Points, index: np.ndarray, directions, over, me
     """Coarse albedo (largest channel) of the parameter points ``index`` × ``directions``: (len(index), D)."""
     D = directions.shape[0]
     value, _, _ = _albedo(model, space, points.take(np.repeat(index, D)), np.tile(directions[:, 0], index.size),
-                          np.tile(directions[:, 1], index.size), over, COARSE_RTOL, meter, 400_000)
+                          np.tile(directions[:, 1], index.size), over, COARSE_RTOL, meter, 400_000, budgeted=False)
     return value.max(axis=1).reshape(index.size, D)
 
 
@@ -452,9 +457,11 @@ def _with_x(points: _Points, y: np.ndarray) -> _Points:
 
 
 def _y_energy(model, space, points, y, over, meter) -> np.ndarray:
-    value, _, _ = _albedo(model, space, _with_x(points, y), y[:, 0] * THETA_MAX, y[:, 1] * 2 * np.pi, over,
-                          REFINE_RTOL, meter, 2_000_000)
-    return value.max(axis=1)
+    """The refinement's score: the albedo's lower bound E − error (largest channel). An integral cut short by
+    the budget keeps an honest but wide error bar; scoring its lower bound keeps it from steering the search."""
+    value, error, _ = _albedo(model, space, _with_x(points, y), y[:, 0] * THETA_MAX, y[:, 1] * 2 * np.pi, over,
+                              REFINE_RTOL, meter, 2_000_000)
+    return (value - error).max(axis=1)
 
 
 # -- pointwise checks ---------------------------------------------------------------------------------------
