@@ -139,6 +139,15 @@ def test_folklore_normalized_blinn_phong_gains_what_the_closed_form_says():
     assert abs(energy.params["n"] - best.x) < 0.05
 
 
+def test_fixed_all_searches_only_directions_of_the_bound_lobe():
+    report = check(bn.load("blinn-phong", n=1.0), checks=("energy",), fixed="all")
+    energy = report.results["energy"]
+    assert energy.params == {"n": 1.0} and report.coverage["energy"]["parameter_points_planned"] == 1
+    # Seed 000's closed form at L = N, where the n = 1 lobe's albedo peaks: 8π(2^(−1/2) + 1)/15.
+    assert energy.theta_deg < 1.0
+    assert abs(energy.value - 8 * np.pi * (2**-0.5 + 1) / 15) <= energy.error + 1e-12
+
+
 def test_an_error_bar_straddling_the_limit_is_inconclusive():
     report = check("lambert", checks=("energy",), tolerance=0.0, sweep={"reflectance": [1.0]}, points=1)
     energy = report.results["energy"]

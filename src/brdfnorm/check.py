@@ -536,7 +536,7 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
             what = {"reciprocity": "reciprocal", "positivity": "no negative value",
                     "finiteness": "every value finite"}[name]
             results[name] = CheckResult(name, "pass", max(amount, 0.0), f"{what} on {done * M} direction pairs at "
-                                   f"{done} parameter points", share=share, sampled=sampled)
+                                        f"{_count(done, 'parameter point')}", share=share, sampled=sampled)
             continue
         p, i = at[0], at[1]
         params = _params_at(model, space, points, p)
@@ -600,7 +600,7 @@ def check(
     *,
     checks: Iterable[str] = DEFAULT_CHECKS,
     sweep: Mapping[str, object] | None = None,
-    fixed: Iterable[str] = (),
+    fixed: Iterable[str] | str = (),
     tolerance: float = 1e-6,
     at: str = "normal",
     over: Over = "light",
@@ -612,7 +612,8 @@ def check(
     """Audit ``model`` (a :class:`Model`, a built-in name or a ``.brdf`` path); see the module docstring.
 
     ``checks``: names from :data:`CHECKS`; ``sweep``: explicit values per float parameter; ``fixed``: names
-    kept at the model's bound values; ``tolerance``: on the albedo (energy, normalization) and on the relative
+    kept at the model's bound values, or ``"all"`` for all of them (the lobe as bound: only directions are
+    searched, e.g. for an interactive view); ``tolerance``: on the albedo (energy, normalization) and on the relative
     asymmetry (reciprocity); ``at``: the normalization convention; ``budget``: a :class:`Budget` or seconds
     (default 20 s); ``points``: parameter points of the coarse grid; ``pairs``: uniform direction pairs per
     parameter point (as many grazing ones and a structured grid are added).
@@ -636,6 +637,10 @@ def check(
         raise ArgumentError("points and pairs must be ≥ 1", where="points" if points < 1 else "pairs")
     budget = Budget() if budget is None else budget if isinstance(budget, Budget) else Budget(seconds=budget)
     meter = _Meter(budget)
+    if isinstance(fixed, str):
+        if fixed != "all":
+            raise ArgumentError(f"fixed must be parameter names or 'all', got {fixed!r}", where="fixed")
+        fixed = [p.name for p in model.parameters]
     space = _space(model, sweep, fixed)
     grid = _points(space, points, seed)
     isotropic = bool(model.isotropic)
@@ -658,8 +663,8 @@ def check(
 
 # -- text ---------------------------------------------------------------------------------------------------
 
-def _colors(model: Model) -> set[str]:
-    return {p.name for p in model.parameters if p.kind == "color"}
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}" + ("" if number == 1 else "s")
 
 
 def _plain(value):
