@@ -313,6 +313,8 @@ def test_cli_summary_rows_and_failures(capsys):
     (["--sweep", "nope=1,2"], "nope"),
     (["--tolerance", "nan"], "--tolerance"),
     (["-p", "n=abc"], "n"),
+    (["--points", "1000000000"], "--points"),
+    (["--sweep", "n=1:1e4:200000"], "--sweep"),
 ])
 def test_cli_bad_input_is_one_line_exit_2(capsys, argv, where):
     code, out, err = run_cli(capsys, "check", "phong", *argv)

@@ -52,6 +52,8 @@ COARSE_RTOL = 1e-4
 REFINE_RTOL = 1e-6
 FINAL_RTOL = 1e-8
 TIGHT_RTOL = 1e-11
+#: Most parameter points one check plans (memory and time stay bounded whatever the arguments).
+MAX_POINTS = 100_000
 #: Evaluations every integral may use whatever the budget says (about five rounds of panels).
 MIN_EVALUATIONS = 20_000
 #: The final integral of the best point may take this share of the budget even when the search spent it all.
@@ -642,6 +644,11 @@ def check(
             raise ArgumentError(f"fixed must be parameter names or 'all', got {fixed!r}", where="fixed")
         fixed = [p.name for p in model.parameters]
     space = _space(model, sweep, fixed)
+    planned = len(space.bools) * max(points, 2) * int(np.prod([v.size for _, v in space.discrete]))
+    if planned > MAX_POINTS:
+        raise ArgumentError(f"{planned} parameter points (bool combinations × swept values × points) exceed "
+                            f"{MAX_POINTS}; sweep fewer values or hold parameters fixed",
+                            where="sweep" if space.discrete else "points")
     grid = _points(space, points, seed)
     isotropic = bool(model.isotropic)
     results: dict[str, CheckResult] = {}

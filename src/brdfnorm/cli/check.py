@@ -108,8 +108,8 @@ def check_command(
                 report = run_check(m, checks=checks, sweep=sweeps, fixed=held, tolerance=tolerance, at=at.value,
                                    over=over.value, budget=limit, points=points)
             except ArgumentError as error:
-                error.where = {"sweep": "--sweep", "checks": "--only", "budget": "--budget"}.get(error.where,
-                                                                                                  error.where)
+                flags = {"sweep": "--sweep", "checks": "--only", "budget": "--budget", "points": "--points"}
+                error.where = flags.get(error.where, error.where)
                 raise
             reports.append(report)
             typer.echo(f"{name}: {report.status}{_failed(report)} — {coverage_text(report)}", err=True)
