@@ -503,7 +503,7 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
         with np.errstate(all="ignore"):
             forward = bound.eval(L, V)
             backward = bound.eval(V, L) if "reciprocity" in checks else forward
-        meter.evaluations += 2 * M
+        meter.evaluations += (2 if "reciprocity" in checks else 1) * M
         done += 1
         finite = np.isfinite(forward) & np.isfinite(backward)
         # The lobe's scale per channel: the largest |f| sampled at these parameters, either way round.
@@ -558,16 +558,12 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
             message = (f"not finite: f = {_values_text(at[2])} {where}; {share_all} of {done * M} pairs, "
                        f"{100 * share:.3g}% of the domain")
         results[name] = CheckResult(name, status, float(amount), message, params=params, L=_tuple(L[i]),
-                               V=_tuple(V[i]), share=share, sampled=sampled)
+                                    V=_tuple(V[i]), share=share, sampled=sampled)
     return results, sampled
 
 
 def _normalization(model, space, points: _Points, at, over, tolerance, meter, isotropic) -> CheckResult:
-    if at == "normal":
-        directions = np.zeros((1, 2))
-    else:
-        phis = np.zeros(1) if isotropic else PHI_GRID
-        directions = np.array([(t, p) for t in THETA_GRID for p in (phis if t > 0 else [0.0])])
+    directions = np.zeros((1, 2)) if at == "normal" else _directions(np.zeros(1) if isotropic else PHI_GRID)
     D = directions.shape[0]
     P = len(points)
     cases = points.take(np.repeat(np.arange(P), D))
@@ -591,8 +587,8 @@ def _normalization(model, space, points: _Points, at, over, tolerance, meter, is
     message = (f"{verdict} (at {at}): largest |E − 1| {dev:.3g} ± {err:.2g} (tolerance {tolerance:g}), "
                f"E = {E:.10g} {where}")
     return CheckResult("normalization", status, dev, message, error=err, params=params,
-                  theta_deg=float(np.degrees(theta)), phi_deg=float(np.degrees(phi)), channel=int(c),
-                  sampled={"parameter_points": P, "directions": D, "at": at})
+                       theta_deg=float(np.degrees(theta)), phi_deg=float(np.degrees(phi)), channel=int(c),
+                       sampled={"parameter_points": P, "directions": D, "at": at})
 
 
 # -- the entry point ----------------------------------------------------------------------------------------
@@ -658,10 +654,10 @@ def check(
     if pointwise:
         found, coverage["pairs"] = _pointwise(model, space, grid, pointwise, tolerance, pairs, seed, meter)
         results.update(found)
+    if "normalization" in checks:  # before the energy search, which takes what is left of the budget
+        results["normalization"] = _normalization(model, space, grid, at, over, tolerance, meter, isotropic)
     if "energy" in checks:
         results["energy"], coverage["energy"] = _energy(model, space, grid, over, tolerance, meter, isotropic)
-    if "normalization" in checks:
-        results["normalization"] = _normalization(model, space, grid, at, over, tolerance, meter, isotropic)
     coverage.update(evaluations=meter.evaluations, elapsed_s=meter.elapsed(), budget_spent=meter.spent())
     ordered = {name: results[name] for name in CHECKS if name in results}
     source = getattr(model, "source_path", None)
