@@ -5,9 +5,9 @@ exact integrator, over the model's declared parameter ranges and every direction
 
 * **energy** — the largest directional albedo E = ∫ f(L, V)(N·L) dL (seed 002's integral, ``over="light"``)
   over parameters and the fixed direction (θ ∈ [0°, 89.9°], and φ for anisotropic lobes): a coarse grid of
-  albedo integrals in one batch, then a compass (pattern) search from the best grid points
+  albedo integrals in batches, then a compass (pattern) search from the best grid points
   (Kolda, Lewis & Torczon 2003, "Optimization by direct search", SIAM Review 45(3), §3), then the best point
-  integrated at rtol 1e-10. Verdict with the error bar: *fail* if E − err > 1 + tolerance (the energy gained
+  integrated at rtol 1e-8 (1e-11 if that bar straddles the limit). Verdict with the error bar: *fail* if E − err > 1 + tolerance (the energy gained
   is E − 1), *pass* if E + err ≤ 1 + tolerance, *inconclusive* when the bar straddles the limit. A pass is the
   verdict of a search, not a proof: the coverage says what was searched.
 * **reciprocity** — the largest |f(L, V) − f(V, L)| relative to the lobe's scale (the largest |f| sampled at
