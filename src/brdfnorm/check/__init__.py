@@ -5,11 +5,12 @@ exact integrator, over the model's declared parameter ranges and every direction
 
 * **energy** — the largest directional albedo E = ∫ f(L, V)(N·L) dL (seed 002's integral, ``over="light"``)
   over parameters and the fixed direction (θ ∈ [0°, 89.9°], and φ for anisotropic lobes): a coarse grid of
-  albedo integrals in batches, then a compass (pattern) search from the best grid points
-  (Kolda, Lewis & Torczon 2003, "Optimization by direct search", SIAM Review 45(3), §3), then the best point
-  integrated at rtol 1e-8 (1e-11 if that bar straddles the limit). Verdict with the error bar: *fail* if E − err > 1 + tolerance (the energy gained
-  is E − 1), *pass* if E + err ≤ 1 + tolerance, *inconclusive* when the bar straddles the limit. A pass is the
-  verdict of a search, not a proof: the coverage says what was searched.
+  albedo integrals in batches, then a compass (pattern) search from the best grid points (Kolda, Lewis &
+  Torczon 2003, "Optimization by direct search", SIAM Review 45(3), §3), then the best point integrated at
+  rtol 1e-8 (1e-11 if that bar straddles the limit). Verdict with the error bar: *fail* if
+  E − err > 1 + tolerance (the energy gained is E − 1), *pass* if E + err ≤ 1 + tolerance, *inconclusive*
+  when the bar straddles the limit. A pass is the verdict of a search, not a proof: the coverage says what
+  was searched.
 * **reciprocity** — the largest |f(L, V) − f(V, L)| relative to the lobe's scale (the largest |f| sampled at
   the same parameters), on uniform, grazing and structured direction pairs (Helmholtz reciprocity).
 * **positivity** / **finiteness** — negative, NaN or ±Inf values on the same pairs, with a pair and the share

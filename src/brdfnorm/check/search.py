@@ -77,15 +77,17 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
     # Coarse stage: chunks of parameter points × directions, until the points or ~50 % of the budget end.
     best = np.full(len(points), -np.inf)
     best_theta, best_phi = np.zeros(len(points)), np.zeros(len(points))
-    done, chunk, started = 0, 1, meter.elapsed()
+    done, chunk, started, per_point = 0, 1, meter.elapsed(), 0.0
     while done < len(points) and not (done and meter.spent(0.5)):
         index = np.arange(done, min(done + chunk, len(points)))
+        chunk_started = meter.elapsed()
         energy = _scan(model, space, points, index, directions, over, meter)
         k = energy.argmax(axis=1)
         best[index], best_theta[index], best_phi[index] = energy.max(axis=1), *directions[k].T
         done = index[-1] + 1
-        # Size the next chunk from the time per point so far: one batch is large, yet a small budget holds.
-        per_point = (meter.elapsed() - started) / done
+        # Size the next chunk from the slowest point cost seen so far (costs vary with the parameters: a shader
+        # loop may run 100× longer at one corner): one batch is large, yet a small budget holds.
+        per_point = max(per_point, (meter.elapsed() - chunk_started) / index.size)
         left = None if meter.budget.seconds is None else 0.5 * meter.budget.seconds - meter.elapsed()
         chunk = max(1, min(max(1, 400 // D), int(0.15 * left / per_point) if left is not None and per_point > 0
                             else 400))
