@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import validate
 from ..errors import ArgumentError
 from ..models.base import Model, Over
 from .core import Budget, CheckReport, CheckResult, _Meter
@@ -77,20 +78,21 @@ def check(
         from .. import load
 
         model = load(model)
-    checks = tuple(dict.fromkeys(checks))
-    unknown = [c for c in checks if c not in CHECKS]
-    if unknown or not checks:
-        raise ArgumentError(f"unknown check {unknown[0]!r} (known: {', '.join(CHECKS)})" if unknown
-                            else "no check selected", where="checks")
-    if not (np.isfinite(tolerance) and tolerance >= 0):
-        raise ArgumentError(f"tolerance must be finite and ≥ 0, got {tolerance!r}", where="tolerance")
-    if at not in AT:
-        raise ArgumentError(f"unknown convention {at!r} (known: {', '.join(AT)})", where="at")
-    if over not in ("light", "view"):
-        raise ArgumentError(f"over must be 'light' or 'view', got {over!r}", where="over")
-    if points < 1 or pairs < 1:
-        raise ArgumentError("points and pairs must be ≥ 1", where="points" if points < 1 else "pairs")
-    budget = Budget() if budget is None else budget if isinstance(budget, Budget) else Budget(seconds=budget)
+    if isinstance(checks, str):
+        checks = (checks,)
+    checks = tuple(dict.fromkeys(validate.choice(c, CHECKS, "checks") for c in checks))
+    if not checks:
+        raise ArgumentError("no check selected", where="checks")
+    tolerance = validate.real_number(tolerance, "tolerance")
+    if tolerance < 0:
+        raise ArgumentError(f"must be ≥ 0, got {tolerance:g}", where="tolerance")
+    at = validate.choice(at, AT, "at")
+    over = validate.choice(over, ("light", "view"), "over")
+    points = validate.count(points, "points", maximum=MAX_POINTS)
+    pairs = validate.count(pairs, "pairs", maximum=1_000_000)
+    if budget is not None and not isinstance(budget, Budget):
+        budget = Budget(seconds=validate.real_number(budget, "budget"))
+    budget = Budget() if budget is None else budget
     meter = _Meter(budget)
     if isinstance(fixed, str):
         if fixed != "all":

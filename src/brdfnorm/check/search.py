@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 
-from ..albedo import albedo
+from ..directional import albedo
 from .core import CheckResult, _fixed_name, _params_text
 from .space import _bind, _params_at, _Points
 

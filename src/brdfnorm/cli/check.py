@@ -11,12 +11,15 @@ import re
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..check import CHECKS, DEFAULT_CHECKS, Budget, CheckReport
 from ..check import check as run_check
 from ..errors import ArgumentError
-from . import app
+from ..output import STDOUT, write_file
+from ..output.formats import to_json
+from .application import app
 from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
@@ -27,7 +30,6 @@ from .common import (
     load_model,
     parse_params,
     parse_sweep,
-    print_json,
 )
 
 _BUDGET = re.compile(r"\s*([0-9.eE+-]+)\s*(s|sec|seconds|evals|evaluations)?\s*\Z")
@@ -114,8 +116,9 @@ def check_command(
             reports.append(report)
             typer.echo(f"{name}: {report.status}{_failed(report)} — {coverage_text(report)}", err=True)
         if json_output:
-            print_json({"tolerance": tolerance, "over": over.value, "checks": list(checks),
-                        "status": _overall(reports), "reports": [report_json(r) for r in reports]})
+            write_file(STDOUT, to_json({"tolerance": tolerance, "over": over.value, "checks": list(checks),
+                                        "status": _overall(reports),
+                                        "reports": [report_json(r) for r in reports]}) + "\n")
         elif len(reports) == 1:
             console().print(detail_table(reports[0]))
         else:
@@ -167,11 +170,12 @@ def report_json(report: CheckReport) -> dict:
 
 
 def detail_table(report: CheckReport) -> Table:
-    table = Table(title=f"{report.model}: {VERDICT[report.status]} (tolerance {report.tolerance:g})")
+    # Names and messages come from outside (file names, parameter names): text, never rich markup.
+    table = Table(title=escape(f"{report.model}: {VERDICT[report.status]} (tolerance {report.tolerance:g})"))
     for column in ("check", "verdict", "value", "details"):
         table.add_column(column, overflow="fold")
     for name, r in report.results.items():
-        table.add_row(name, VERDICT[r.status], cell(r), r.message)
+        table.add_row(name, VERDICT[r.status], cell(r), escape(r.message))
     return table
 
 
@@ -192,7 +196,7 @@ def summary_table(reports: list[CheckReport]) -> Table:
         table.add_column(column, overflow="fold")
     for r in reports:
         cells = [f"{VERDICT[r.results[n].status]}: {cell(r.results[n])}" if n in r.results else "—" for n in names]
-        table.add_row(r.source or r.model, VERDICT[r.status], *cells, f"{r.coverage['elapsed_s']:.1f}")
+        table.add_row(escape(r.source or r.model), VERDICT[r.status], *cells, f"{r.coverage['elapsed_s']:.1f}")
     return table
 
 
@@ -203,5 +207,5 @@ def failures_table(reports: list[CheckReport]) -> Table:
         table.add_column(column, overflow="fold")
     for r in reports:
         for name in r.failed:
-            table.add_row(r.source or r.model, name, r.results[name].message)
+            table.add_row(escape(r.source or r.model), name, escape(r.results[name].message))
     return table
