@@ -350,3 +350,15 @@ def test_cli_report_audit_of_a_missing_path_is_one_line(capsys, tmp_path):
     code, out, err = run_cli(capsys, "report", "lambert", "--audit", str(tmp_path / "nothing"),
                              "-o", str(tmp_path / "r"))
     assert code == 2 and "--audit" in err and len(err.splitlines()) == 1 and not (tmp_path / "r").exists()
+
+
+def test_cli_file_names_are_text_not_markup(capsys, tmp_path):
+    (tmp_path / "[bold]x[").mkdir()
+    path = tmp_path / "[bold]x[" / "bold]lobe.brdf"  # the path reads …/[bold]x[/bold]lobe.brdf
+    path.write_text((EXAMPLES / "lambert.brdf").read_text())
+    other = tmp_path / "plain.brdf"
+    other.write_text((EXAMPLES / "lambert.brdf").read_text())
+    code, out, err = run_cli(capsys, "check", str(path), "--points", "2", "--only", "positivity")
+    assert code == 0 and "[bold]x[/bold]lobe" in out
+    code, out, err = run_cli(capsys, "check", str(path), str(other), "--points", "2", "--only", "positivity")
+    assert code == 0 and "[bold]x[/bold]lobe" in out and "plain.brdf" in out

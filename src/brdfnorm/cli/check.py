@@ -171,7 +171,8 @@ def report_json(report: CheckReport) -> dict:
 
 def detail_table(report: CheckReport) -> Table:
     # Names and messages come from outside (file names, parameter names): text, never rich markup.
-    table = Table(title=escape(f"{report.model}: {VERDICT[report.status]} (tolerance {report.tolerance:g})"))
+    table = Table(title=escape(f"{report.source or report.model}: {VERDICT[report.status]} "
+                               f"(tolerance {report.tolerance:g})"))
     for column in ("check", "verdict", "value", "details"):
         table.add_column(column, overflow="fold")
     for name, r in report.results.items():
