@@ -20,7 +20,7 @@ exact integrator, over the model's declared parameter ranges and every direction
 
 Parameters: floats with a finite declared range are sampled over it (corners, centre and a scrambled Halton
 sequence; on a log1p scale where the range spans more than two decades) and refined continuously; ranges open
-above are capped at min + :data:`UNBOUNDED_SPAN`; bools take both values; colours and the names in ``fixed``
+above are capped at min + :data:`UNBOUNDED_SPAN`; bools take both values; colours, choices and the names in ``fixed``
 keep the bound value; ``sweep`` gives explicit values. Work is bounded by a :class:`Budget` (seconds and/or
 integrand evaluations); what was covered is reported.
 """

@@ -2,7 +2,8 @@
 
 Floats with a finite declared range are searched through x ∈ [0, 1] (a log1p scale where the range spans more
 than two decades), sampled at the centre, the corners and a scrambled Halton sequence; ranges open above are
-capped at min + :data:`UNBOUNDED_SPAN`; bools take both values; colours and held names keep the bound value.
+capped at min + :data:`UNBOUNDED_SPAN`; bools take both values; colours, choices and held names keep the
+bound value.
 """
 
 from __future__ import annotations
@@ -76,7 +77,8 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             model.with_params(**{p.name: values})  # validates the values (hard ranges)
             discrete.append((p.name, values))
             described.append(f"{p.name}: {values.size} given values")
-        elif p.name in fixed or p.kind == "color" or np.ndim(bound[p.name]) > (1 if p.kind == "color" else 0):
+        elif (p.name in fixed or p.kind in ("color", "choice")
+              or np.ndim(bound[p.name]) > (1 if p.kind == "color" else 0)):
             held[p.name] = bound[p.name]
             described.append(f"{p.name} = {_text(bound[p.name])} (held)")
         elif p.kind == "bool":
