@@ -362,3 +362,26 @@ def test_cli_file_names_are_text_not_markup(capsys, tmp_path):
     assert code == 0 and "[bold]x[/bold]lobe" in out
     code, out, err = run_cli(capsys, "check", str(path), str(other), "--points", "2", "--only", "positivity")
     assert code == 0 and "[bold]x[/bold]lobe" in out and "plain.brdf" in out
+
+
+def test_builtin_microfacet_lobe_with_choice_parameters_against_certified_and_nquad():
+    report = check("ggx", checks=("normalization", "energy"), sweep={"alpha": [0.5]},
+                   fixed=("alpha_x", "alpha_y", "ms_table"), points=2)
+    normalization, energy = report.results["normalization"], report.results["energy"]
+    assert energy.params["shadowing"] == "height-correlated" and energy.params["alpha"] == 0.5  # choices held
+    # E at normal incidence by the Arb-certified route (an enclosure, not quadrature).
+    certified = bn.albedo(bn.load("ggx", alpha=0.5), 0.0, method="certified")
+    assert abs((1.0 - normalization.value) - certified.value[0]) <= normalization.error + certified.error[0] + 1e-12
+    # The largest albedo (at grazing views for F = 1) by scipy nquad in spherical coordinates about N.
+    model = bn.load("ggx", alpha=0.5)
+    theta = np.radians(energy.theta_deg)
+    V = np.array([np.sin(theta), 0.0, np.cos(theta)])
+
+    def projected(phi, t):
+        L = np.array([np.sin(t) * np.cos(phi), np.sin(t) * np.sin(phi), np.cos(t)])
+        return model.eval(L, V)[0] * L[2] * np.sin(t)
+
+    options = {"epsabs": 0.0, "epsrel": 1e-7, "limit": 100}
+    reference, _ = integrate.nquad(projected, [[0, 2 * np.pi], [0, np.pi / 2]],
+                                   opts=[{**options, "points": [np.pi]}, {**options, "points": [theta]}])
+    assert energy.status == "pass" and abs(reference - energy.value) <= energy.error + 1e-6

@@ -124,13 +124,15 @@ def _count(number: int, noun: str) -> str:
 
 
 def _plain(value):
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
+    if isinstance(value, (bool, np.bool_, str)):
+        return value if isinstance(value, str) else bool(value)
     array = np.asarray(value, dtype=float)
     return float(array) if array.ndim == 0 else [float(v) for v in array.ravel()]
 
 
 def _text(value) -> str:
+    if isinstance(value, str):  # a choice
+        return value
     if isinstance(value, (bool, np.bool_)):
         return str(int(value))
     return ",".join(f"{v:.6g}" for v in np.atleast_1d(np.asarray(value, dtype=float)))

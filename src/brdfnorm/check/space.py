@@ -40,8 +40,10 @@ class _Range:
     def value(self, x: np.ndarray) -> np.ndarray:
         x = np.clip(x, 0.0, 1.0)
         if self.log:  # log1p scale: n = 1, 10, 100, … get equal room (and a minimum of 0 is allowed)
-            return self.low + np.expm1(x * np.log1p(self.high - self.low))
-        return self.low + x * (self.high - self.low)
+            value = self.low + np.expm1(x * np.log1p(self.high - self.low))
+        else:
+            value = self.low + x * (self.high - self.low)
+        return np.clip(value, self.low, self.high)  # rounding must not step outside a hard range
 
     def describe(self) -> str:
         scale = ", log1p scale" if self.log else ""
