@@ -20,6 +20,7 @@ from scipy.optimize import minimize_scalar
 
 import brdfnorm as bn
 from brdfnorm.check import THETA_MAX, Budget, check
+from brdfnorm.check.search import REFINE_RTOL
 from brdfnorm.models.base import Model, normal_lobe
 from brdfnorm.parameters import Parameter
 from brdfnorm.testing import assert_energy_conserving, assert_normalized, assert_reciprocal
@@ -135,7 +136,10 @@ def test_folklore_normalized_blinn_phong_gains_what_the_closed_form_says():
 
     best = minimize_scalar(gain, bounds=(1.0, 100.0), method="bounded", options={"xatol": 1e-10})
     assert energy.status == "fail" and energy.theta_deg < 1.0
-    assert abs(energy.value - (-best.fun)) <= energy.error + 1e-7  # 1.0752…: the folklore's 7.5 % (README)
+    # 1.0752…: the folklore's 7.5 % (README). The value at the reported point is exact to its error bar; the
+    # point is the maximum to the search's resolution (gains below REFINE_RTOL relative count as noise).
+    assert energy.value <= -best.fun + energy.error
+    assert energy.value >= -best.fun * (1 - 2 * REFINE_RTOL)
     assert abs(energy.params["n"] - best.x) < 0.05
 
 

@@ -99,11 +99,10 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
 
 
 def _unit_samples(dimensions: int, count: int, seed: int) -> np.ndarray:
-    """Points of [0, 1]^d: the centre, the corners (up to 32), then a scrambled Halton sequence."""
+    """Points of [0, 1]^d: the centre, the corners (up to 32), then a scrambled Halton sequence — an order in
+    which every prefix is spread over the whole box, so a search cut short by its budget still covers it."""
     if dimensions == 0:
         return np.zeros((1, 0))
-    if dimensions == 1:
-        return np.linspace(0.0, 1.0, max(count, 2))[:, None]
     corners = np.array(list(itertools.product((0.0, 1.0), repeat=dimensions)))[:32]
     halton = qmc.Halton(dimensions, scramble=True, seed=seed).random(max(count - corners.shape[0] - 1, 0))
     return np.vstack([np.full((1, dimensions), 0.5), corners, halton])
