@@ -36,8 +36,8 @@ _TWO_PI = 2.0 * np.pi
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
 #: Samples of L_z along a ray's β-interval before its sign changes are located by bisection.
-_SAMPLES = 33
-_BISECTIONS = 60
+_SAMPLES = 17
+_BISECTIONS = 48
 #: The last part of a ray spans the band where Λ(L) turns on: |L_z| ≲ LAYER·α.
 _LAYER = 4.0
 
@@ -86,7 +86,9 @@ def _ray(V, alpha, eta, angle, part):
     dx, dy = alpha * np.cos(angle), alpha * np.sin(angle)
     vx, vy, vz = V
     lo, hi, empty = _window(V, eta, angle, part)
-    if part != "refraction":  # the window is exact already
+    # The window is exact already for reflection, and for refraction into a denser medium: there
+    # L_z = −V_z/η + m_z(V·m/η − cos θ_t) < 0 always, as cos θ_t > V·m/η when η > 1.
+    if part != "refraction" or np.all(eta > 1.0):
         return dx, dy, np.where(empty, 0.0, lo), np.where(empty, 0.0, hi), empty
 
     def on_side(beta):  # β may carry one more axis than the ray quantities
