@@ -434,7 +434,7 @@ from .halfvector import albedo_method as _microfacet  # noqa: E402
 from .models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
-                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=0)
+                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=1)
 
 # Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
 # (brdfnorm.transmission); the result reports both parts.
@@ -443,7 +443,7 @@ from .transmission import albedo_method as _dielectric  # noqa: E402
 
 register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
                        "reflection + refraction over the facet normal, the slope distribution as measure"),
-                auto_priority=0)
+                auto_priority=2)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).
