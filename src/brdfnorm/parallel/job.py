@@ -175,7 +175,6 @@ class CellsJob:
                 raise ArgumentError(f"only float parameters vary per cell; {name} is {parameter.kind}", where=name)
             per_cell[name] = np.asarray(parameter.validate(value), dtype=float)
         shape = np.broadcast_shapes(theta.shape, phi.shape, *(v.shape for v in per_cell.values()))
-        validate.batch_size(shape)  # a clear limit before the cells' arrays are allocated
         if math.prod(shape) == 0:
             raise ArgumentError("the table has no cells", where="theta")
         validate.batch_size(shape)  # bounded memory: refused before any array of the table's size is made
