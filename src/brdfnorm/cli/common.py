@@ -46,7 +46,9 @@ class Over(str, Enum):
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
-             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL"}
+             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL",
+             "axes": "--axis", "clamp": "--clamp", "channels": "--channels", "tables": "--table", "half": "--half",
+             "grid": "--grid", "format": "--format"}
 
 
 def console() -> Console:
