@@ -34,6 +34,7 @@ import math
 import re
 import struct
 import tempfile
+import zipfile
 import zlib
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -127,7 +128,7 @@ def _read_npz(data: bytes, path: str) -> Lut:
             tables = {name: np.asarray(archive[name], dtype=float) for name in table_axes}
     except TableFileError:
         raise
-    except (OSError, ValueError, KeyError, TypeError, zlib.error) as error:
+    except (OSError, ValueError, KeyError, TypeError, EOFError, zlib.error, zipfile.BadZipFile) as error:
         raise TableFileError(f"not a brdfnorm npz table ({type(error).__name__}: {error})", path) from None
     return _build(tables, axes, meta, path)
 
@@ -311,7 +312,8 @@ def _read_code(data: bytes, path: str) -> Lut:
         count = math.prod(int(n) for n in re.findall(r"\d+", match.group(2)))
         if len(numbers) != count:
             raise TableFileError(f"{match.group(1)}: {len(numbers)} values for {count} elements", path, line)
-        found[match.group(1)] = np.array([float(n) for n in numbers], dtype=float)
+        # the file declares float32: its decimals name float32 values (9 digits name each one exactly)
+        found[match.group(1)] = np.array([float(n) for n in numbers], dtype=float).astype(np.float32).astype(float)
     try:
         axis_values = meta.pop("axis_values")
         axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
