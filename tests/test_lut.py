@@ -8,6 +8,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from conftest import run_cli
 from scipy import integrate
 
 import brdfnorm as bn
@@ -15,8 +16,6 @@ from brdfnorm import lut
 from brdfnorm.errors import ArgumentError, TableFileError
 from brdfnorm.lut import formats
 from brdfnorm.lut.table import grid_values
-
-from conftest import run_cli
 
 MU = [0.05, 0.3, 0.7, 1.0]
 N = [2.0, 30.0, 400.0]

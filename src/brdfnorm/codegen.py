@@ -109,8 +109,9 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
 
 
 def emit(result: FitResult, language: str, model_name: str, *, variable: str | None = None,
-         second: str = "cos_theta_o") -> str:
-    """Source text of one self-contained function evaluating ``result`` in ``language``."""
+         second: str = "cos_theta_o", quantity: str = "Normalization factor", suffix: str = "norm") -> str:
+    """Source text of one self-contained function evaluating ``result`` in ``language`` (``quantity`` names
+    what was fitted in the comment, ``suffix`` ends the function's name)."""
     if language not in LANGUAGES:
         raise ArgumentError(f"unknown language {language!r} (known: {', '.join(LANGUAGES)})", where="--emit")
     syn = _SYNTAX[language]
@@ -119,12 +120,12 @@ def emit(result: FitResult, language: str, model_name: str, *, variable: str | N
     if x == t:
         t = t + "_2"
     two_d = result.form_object.two_d
-    name = function_name(model_name)
+    name = function_name(model_name).removesuffix("_norm") + f"_{identifier(suffix)}"
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     ranges = "; ".join(f"{k} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
     where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
     comment = [
-        f"Normalization factor of {model_name}: {result.form} fit ({result.metric}) over {result.samples} samples,",
+        f"{quantity} of {model_name}: {result.form} fit ({result.metric}) over {result.samples} samples,",
         f"{ranges}.",
         f"Max relative error {result.max_rel_error:.3g} (at {where}); max absolute error "
         f"{result.max_abs_error:.3g}.",
