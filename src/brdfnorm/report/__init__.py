@@ -29,7 +29,7 @@ import numpy as np
 from .. import __version__, load
 from ..errors import ArgumentError
 from ..models.base import Model
-from . import sections
+from . import microfacet, sections
 from .html import page
 from .output import check_target, staged
 from .study import StudyConfig
@@ -71,6 +71,8 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
         elif config.extras:
             notes.append("Seed 003's fits are left out: brdfnorm.fit is not installed.")
         steps.append(("polar plots of the lobes", sections.polar_section))
+        if microfacet.available():
+            steps.append(("microfacet energy: GGX's compensation tables", microfacet.section))
         verify = _optional("brdfnorm.verify") if config.extras else None
         if verify is not None:
             steps.append(("verifying the seeds' claims", sections.verify_section(verify.verify)))
