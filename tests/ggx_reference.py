@@ -18,7 +18,7 @@ import numpy as np
 
 def _lambda(cos_theta: np.ndarray, alpha: float) -> np.ndarray:
     """Smith Λ of GGX: (−1 + √(1 + α² tan²θ))/2."""
-    cos2 = cos_theta * cos_theta
+    cos2 = np.maximum(cos_theta * cos_theta, 1e-300)  # N·L → 0: Λ → ∞ and G2 → 0, as it should
     tan2 = np.maximum(1.0 - cos2, 0.0) / cos2
     return 0.5 * (-1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
 

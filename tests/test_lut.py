@@ -267,3 +267,60 @@ def test_cli_unconverged_cells_exit_1_unless_allowed(capsys, tmp_path, monkeypat
     assert code == 1 and "did not reach" in stderr and not out.exists()
     code, _, stderr = run_cli(capsys, *argv, "--allow-unconverged")
     assert code == 0 and lut.load(out).meta["unconverged"] > 0
+
+
+# -- fits of a table ----------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def ggx_table(tmp_path_factory):
+    """E(μ, α) of GGX (height-correlated, F = 1) on a 7×6 grid from the tests' own half-vector reference."""
+    from ggx_reference import ggx_albedo
+
+    mu, alpha = np.linspace(0.05, 1.0, 7), np.linspace(0.2, 1.0, 6)
+    E = np.array([[ggx_albedo(m, a, nodes=24) for a in alpha] for m in mu])
+    path = tmp_path_factory.mktemp("fit") / "E.npz"
+    lut.save(lut.Lut({"E": E}, {"mu": mu, "alpha": alpha}, {"model": "ggx"}), path)
+    return path, mu, alpha, E
+
+
+def test_fit_table_front_and_chosen_form(ggx_table):
+    from brdfnorm.lut.fitting import fit_table
+
+    path, mu, alpha, E = ggx_table
+    result = fit_table(lut.load(path), target=1e-12, max_coefficients=7, metric="abs-lsq")
+    counts = [entry["coefficients"] for entry in result.front]
+    errors = [entry["max_abs_error"] for entry in result.front]
+    assert counts == sorted(counts) and errors == sorted(errors, reverse=True) and len(counts) >= 2
+    assert result.variables == ("mu", "alpha") and result.best.warnings  # the target is out of reach
+    # the reported error is the fit's error on the table, evaluated here independently of the fit module
+    M, A = np.meshgrid(mu, alpha, indexing="ij")
+    assert np.isclose(np.max(np.abs(result.best(M.ravel(), A.ravel()) - E.ravel())), result.best.max_abs_error,
+                      rtol=1e-9)
+    loose = fit_table(lut.load(path), target=errors[0] * 1.0001, max_coefficients=7, metric="abs-lsq")
+    assert len(loose.best.coefficients) == counts[0]  # the fewest coefficients that meet the target
+
+
+def test_cli_fit_lut_emits_glsl_and_front_on_stderr(capsys, ggx_table, tmp_path):
+    path, *_ = ggx_table
+    code, stdout, stderr = run_cli(capsys, "fit", "--lut", str(path), "--form", "rational-sqrt:2/0@1",
+                                   "--metric", "abs-lsq", "--emit", "glsl")
+    assert code == 0, stderr
+    assert "Pareto front" in stderr and "float brdfnorm_ggx_e(float mu, float alpha)" in stdout
+    assert "Table E of ggx" in stdout and "Pareto" not in stdout
+    if shutil.which("glslangValidator"):
+        shader = "#version 330\n" + stdout + "out vec4 c;\nvoid main() { c = vec4(brdfnorm_ggx_e(0.5, 0.3)); }\n"
+        (tmp_path / "f.frag").write_text(shader)
+        done = subprocess.run(["glslangValidator", str(tmp_path / "f.frag")], capture_output=True, text=True)
+        assert done.returncode == 0, done.stdout
+
+
+def test_cli_fit_lut_refusals(capsys, ggx_table, tmp_path):
+    path, *_ = ggx_table
+    code, _, stderr = run_cli(capsys, "fit", "blinn-phong", "--lut", str(path))
+    assert code == 2 and "--lut" in stderr
+    one_axis = tmp_path / "one.npz"
+    lut.save(lut.Lut({"E": np.ones(3)}, {"mu": [0.1, 0.5, 1.0]}, {}), one_axis)
+    code, _, stderr = run_cli(capsys, "fit", "--lut", str(one_axis))
+    assert code == 2 and "two" in stderr and stderr.count("\n") == 1
+    code, _, stderr = run_cli(capsys, "fit", "--lut", str(tmp_path / "missing.npz"))
+    assert code == 2 and "missing.npz" in stderr
