@@ -5,16 +5,17 @@
 
 from __future__ import annotations
 
-import sys
+from pathlib import Path
 
 import numpy as np
 import typer
 
-from ..errors import ArgumentError
+from ..errors import ArgumentError, OutputError
 from ..lut import formats
 from ..lut.table import DIRECTION_AXES, GRIDS, compute, grid_values
-from . import app
-from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_range
+from ..output import write_file
+from .application import app
+from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_range, progress_bar
 
 AXIS_HELP = ("An axis NAME=SPEC (repeatable; the tables are indexed in this order): mu (cos θ_o), theta "
              "(degrees) or a float parameter; SPEC is START:STOP:COUNT (spaced by --grid) or V,V,...")
@@ -98,14 +99,10 @@ def lut_command(
         for axis_name in axes:
             if axis_name not in DIRECTION_AXES:
                 m.parameter(axis_name)  # an unknown axis is a one-line error before any work
-        if not to_stdout:
-            from pathlib import Path
-
-            from ..errors import OutputError
-            if not Path(output).parent.is_dir():
-                raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
+        if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
+            raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
         table_names = table or None
-        with _progress(m.name) as progress:
+        with progress_bar(f"{m.name}: table cells") as progress:
             result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
                              average=not no_average, grid=grid, source=model, progress=progress)
         data = formats.dumps(result, name, tables=table_names, half=half)
@@ -114,40 +111,8 @@ def lut_command(
             typer.echo(f"error: {unconverged} cells did not reach --rtol {rtol:g}; nothing written (see their "
                        "error estimates with --allow-unconverged)", err=True)
             raise typer.Exit(1)
-        if to_stdout:
-            sys.stdout.write(data)
-            sys.stdout.flush()
-        else:
-            formats.save_bytes(output, data)
+        write_file(output, data)
         cells = int(np.prod([len(v) for v in axes.values()]))
         worst = float(np.max(result["E_error"])) if result["E_error"].size else 0.0
         typer.echo(f"{m.name}: {cells} cells, max error estimate {worst:.3g}, {unconverged} unconverged"
                    + ("" if to_stdout else f"; wrote {output}"), err=True)
-
-
-class _progress:
-    """A progress bar over cells on stderr when it is a terminal; otherwise nothing."""
-
-    def __init__(self, label: str) -> None:
-        self.label = label
-        self.bar = None
-
-    def __enter__(self):
-        if not sys.stderr.isatty():
-            return None
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-        self.bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                            TimeElapsedColumn(), transient=True, console=Console(stderr=True))
-        self.bar.__enter__()
-        task = self.bar.add_task(f"{self.label}: cells", total=None)
-
-        def advance(done: int, total: int) -> None:
-            self.bar.update(task, completed=done, total=total)
-
-        return advance
-
-    def __exit__(self, *exc) -> None:
-        if self.bar is not None:
-            self.bar.__exit__(*exc)

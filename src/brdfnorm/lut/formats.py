@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
+from ..output import write_file
 from .table import Lut
 
 #: Refuse tables larger than this many cells on reading (a 1024³ float64 table is 8 GB).
@@ -522,10 +523,8 @@ def save(lut: Lut, path: str | Path, *, fmt: str | None = None, tables: Sequence
 
 
 def save_bytes(path: str | Path, data: str | bytes) -> None:
-    """The one atomic writer (a failure leaves any previous file as it was)."""
-    from ..cli.common import write_output_atomically
-
-    write_output_atomically(path, data)
+    """:func:`brdfnorm.output.write_file`, the one atomic writer (``-`` is stdout)."""
+    write_file(path, data)
 
 
 def load(path: str | Path, *, fmt: str | None = None) -> Lut:

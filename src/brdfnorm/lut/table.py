@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..albedo import albedo
+from ..directional import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..parameters import resolve

@@ -12,10 +12,11 @@ from html import escape
 import numpy as np
 
 from .. import closed_forms
+from ..output.directories import Stage
+from ..output.formats import format_value
 from . import figures, study
 from .figures import Image
 from .html import Cell, Section, figure, number, percent, relative, table, text
-from .output import Stage
 
 #: Quadrature against a closed form is flagged when the relative difference exceeds this many × rtol.
 AGREEMENT = 10.0
@@ -43,11 +44,22 @@ class Context:
 Step = tuple[str, Callable[[Context], Section]]
 
 
-def _degrees(value: float) -> str:
-    return f"{value:.4g}°"
-
-
 # -- default study -----------------------------------------------------------------------------------------
+
+def _certified_line(data) -> str:
+    """The factor table's certification, in one sentence (or why there is none)."""
+    cert = data.certified
+    if cert is None:
+        return ("Not certified: python-flint is not installed (pip install 'brdfnorm[certified]' adds guaranteed "
+                "enclosures by Arb ball arithmetic).")
+    worst = max(float(np.max(r)) for r in cert.radius.values())
+    inside = all(bool(np.all(v)) for v in cert.closed_inside.values())
+    covered = all(bool(np.all(v)) for v in cert.quadrature_covered.values())
+    return (f"Certified to {cert.digits} digits: every albedo of this table lies in a guaranteed enclosure (Arb ball "
+            f"arithmetic, brdfnorm's method 'certified') of relative radius ≤ {worst:.1e}; seed 000's closed forms "
+            f"lie {'inside' if inside else 'OUTSIDE'} their enclosures, and the quadrature's error estimates "
+            f"{'cover' if covered else 'DO NOT cover'} their distance to them.")
+
 
 def factor_section(ctx: Context) -> Section:
     config = ctx.config
@@ -77,6 +89,7 @@ def factor_section(ctx: Context) -> Section:
     ctx.findings.append(
         f"Adaptive quadrature reproduces seed 000's closed-form factors to {worst:.1e} (largest relative "
         f"difference over {len(data.closed) * data.n.size} values, rtol {config.table_rtol:g}).")
+    certified_line = _certified_line(data)
 
     # Seeds 000 and 003 assume (without proof) that the albedo is largest at normal incidence; it is searched.
     search_rows = []
@@ -99,6 +112,7 @@ def factor_section(ctx: Context) -> Section:
         f"difference = quadrature/closed form − 1, green within {tolerance:g}. The Gaussian Blinn-Phong lobe of "
         "seed 003 has no closed form; its column gives the quadrature and its error estimate.</p>\n"
         + table([top, sub], rows, table_id="factor-table")
+        + f'\n<p id="factor-certified">{escape(certified_line)}</p>\n'
         + "\n<h3>Where is the albedo largest?</h3>\n<p>θ (degrees) of the largest albedo over the view angle "
         f"θ ∈ [0°, 89.9°], found by a grid and golden-section search (<code>normalize(at=\"max\")</code>, rtol "
         f"{config.search_rtol:g}). {escape(verdict)}</p>\n"
@@ -178,12 +192,12 @@ def fit_section(fit: Callable) -> Callable[[Context], Section]:
         seed, best = data.fits[0], min(data.fits[1:], key=lambda f: np.abs(data.relative_error(f)).max())
         seed_error = np.abs(data.relative_error(seed))
         ctx.findings.append(
-            f"Seed 003's line 0.17287429 + 0.01388682·n misses the Gaussian Blinn-Phong factor by up to "
+            f"Seed 003's line {closed_forms.SEED_003_TEXT} misses the Gaussian Blinn-Phong factor by up to "
             f"{100 * seed_error.max():.1f} % over n ∈ [1, 512] ({100 * seed_error[steep].max():.2f} % for "
             f"n ≥ 16); the {best.label} <code>{escape(best.expression)}</code> stays within "
             f"{100 * np.abs(data.relative_error(best)).max():.2g} %.")
         body = (
-            "<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by 0.17287429 + 0.01388682·n, a line "
+            f"<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by {closed_forms.SEED_003_TEXT}, a line "
             "fitted numerically over n ∈ [1, 512] (\"not accurate for small specular power values\"); a "
             "commenter suggests a scaled hyperbola √(x² + 1) instead. Here the factor 1/E(L = N) is computed "
             f"by quadrature at {data.n.size} values of n in that range (rtol {ctx.config.table_rtol:g}) and "
@@ -300,7 +314,7 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
                       f"{data.values.min():.4g} to {data.values.max():.4g})" if data.parameter else
                       "its bound parameters (no float parameter to sweep)")
         formula = f"<p><code>{escape(model.formula)}</code></p>" if getattr(model, "formula", "") else ""
-        params = ", ".join(f"{k} = {_param_text(v)}" for k, v in model.params.items()) or "none"
+        params = ", ".join(f"{k} = {format_value(v, 6)}" for k, v in model.params.items()) or "none"
         body = (
             f"{formula}<p>{escape(model.name)} ({escape(label)}; parameters {escape(params)}) over {sweep_text}. "
             "Factors 1/E at L = N and at the maximum of E over directions (<code>normalize(at=\"max\")</code>: the "
@@ -324,9 +338,3 @@ def _channel_cell(values: np.ndarray) -> Cell:
     return Cell(", ".join(number(v).text for v in values), None, "num")
 
 
-def _param_text(value) -> str:
-    if isinstance(value, bool):
-        return str(int(value))
-    if isinstance(value, tuple):
-        return ",".join(f"{v:g}" for v in value)
-    return f"{value:g}"

@@ -26,18 +26,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import closed_forms, load
-from ..albedo import METHODS, albedo
+from ..directional import METHODS, albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..normalize import normalize
+from ..normalization import normalize
 
 #: The seed lobes of the default study, in page order.
 SEED_LOBES = ("phong", "modified-phong", "blinn-phong", "blinn-phong-gaussian")
 #: Seed 000's closed-form albedo at L = N for each lobe that has one (over the light, as the albedo is defined).
 CLOSED_FORM_OF = {"phong": "phong-original", "modified-phong": "phong-modified", "blinn-phong": "blinn-phong-normal"}
-#: Seed 003's fitted normalization of the Gaussian Blinn-Phong lobe: 0.17287429 + 0.01388682·n over [1, 512].
-SEED003_COEFFICIENTS = (0.17287429, 0.01388682)
-SEED003_RANGE = (1.0, 512.0)
 
 
 @dataclass(frozen=True)
@@ -88,9 +85,41 @@ class FactorTable:
     error: dict[str, np.ndarray]  # lobe -> (S,) relative error estimate of the quadrature factor
     theta_max: dict[str, np.ndarray]  # lobe -> (S,) θ (radians) of the largest albedo over θ ∈ [0°, 89.9°]
     max_over_normal: dict[str, np.ndarray]  # lobe -> (S,) E(θ_max)/E(0) − 1 (0 when the max is at N)
+    certified: CertifiedFactors | None = None  # None where python-flint (brdfnorm[certified]) is not installed
 
     def relative_difference(self, lobe: str) -> np.ndarray:
         return self.quadrature[lobe] / self.closed[lobe] - 1.0
+
+
+@dataclass(frozen=True)
+class CertifiedFactors:
+    """Guaranteed enclosures of the albedo at L = N for every lobe and n of the factor table (brdfnorm.certified)."""
+
+    digits: int
+    radius: dict[str, np.ndarray]  # lobe -> (S,) relative radius of the enclosure
+    closed_inside: dict[str, np.ndarray]  # lobe -> (S,) the closed form lies inside the enclosure (lobes with one)
+    quadrature_covered: dict[str, np.ndarray]  # lobe -> (S,) the quadrature estimate covers its distance to it
+
+
+def certified_factors(n: np.ndarray, quadrature: dict, error: dict, digits: int = 30) -> CertifiedFactors | None:
+    from .. import certified
+    from ..errors import ArgumentError
+
+    try:
+        certified.require_flint()
+    except ArgumentError:
+        return None
+    radius, inside, covered = {}, {}, {}
+    for lobe in SEED_LOBES:
+        enclosures = [certified.enclose(load(lobe, n=k), 0.0, {"n": float(k)}, digits=digits)[0] for k in n]
+        radius[lobe] = np.array([float(e.ball.rad()) / abs(e.value) for e in enclosures])
+        # the float64 factor's relative error estimate against its distance from the certified albedo
+        covered[lobe] = np.array([abs(1.0 / q - e.value) / e.value <= r + e.error / e.value
+                                  for q, r, e in zip(quadrature[lobe], error[lobe], enclosures, strict=True)])
+        if lobe in CLOSED_FORM_OF:
+            inside[lobe] = np.array([certified.closed_form_inside(lobe, float(k), e)
+                                     for k, e in zip(n, enclosures, strict=True)])
+    return CertifiedFactors(digits, radius, inside, covered)
 
 
 def factor_table(config: StudyConfig) -> FactorTable:
@@ -106,7 +135,7 @@ def factor_table(config: StudyConfig) -> FactorTable:
         at_max = normalize(model, "max", sweep={"n": n}, rtol=config.search_rtol, method="quadrature")
         theta_max[lobe] = at_max.theta[:, 0]
         excess[lobe] = at_max.albedo[:, 0, 0] * at_normal.factor[:, 0, 0] - 1.0
-    return FactorTable(n, closed, quad, error, theta_max, excess)
+    return FactorTable(n, closed, quad, error, theta_max, excess, certified_factors(n, quad, error))
 
 
 @dataclass(frozen=True)
@@ -180,13 +209,14 @@ def seed003_fits(config: StudyConfig, fit: Callable) -> Seed003Fits:
     the seed did, and so should reproduce the seed's coefficients. The minimax fits (the commenter's hyperbola
     and the automatic choice) see only a geometrically spaced subset; their errors are shown on the whole grid.
     """
-    n = np.linspace(*SEED003_RANGE, config.fit_count)
+    n = np.linspace(*closed_forms.SEED_003_RANGE, config.fit_count)
     result = normalize(load("blinn-phong-gaussian"), "normal", sweep={"n": n}, rtol=config.table_rtol,
                        method="quadrature")
     factor = result.factor[:, 0, 0]
-    subset = np.unique(np.abs(n[:, None] - np.geomspace(*SEED003_RANGE, config.fit_samples)).argmin(axis=0))
-    a, b = SEED003_COEFFICIENTS
-    fits = [FitCurve("seed 003 line", f"{a} + {b}·n", a + b * n, SEED003_COEFFICIENTS)]
+    spaced = np.geomspace(*closed_forms.SEED_003_RANGE, config.fit_samples)
+    subset = np.unique(np.abs(n[:, None] - spaced).argmin(axis=0))
+    fits = [FitCurve("seed 003 line", closed_forms.SEED_003_TEXT, closed_forms.seed003_factor(n),
+                     closed_forms.SEED_003_LINE)]
     for label, form, metric, points in (
         ("least-squares line", "linear", "abs-lsq", slice(None)),
         ("hyperbola (minimax)", "hyperbola", "minimax-rel", subset),
@@ -275,7 +305,7 @@ def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, 
         name, values = sweep
         parameter = model.parameter(name)
         if parameter.kind != "float":
-            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="--sweep")
+            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
         values = np.asarray(values, dtype=float)
     else:
         name = first_float(model)
