@@ -27,8 +27,10 @@ _PHI_EDGES = np.array([0.0, *(1.0 - 0.25 ** k for k in range(1, 12)), 1.0])
 PHI_LO, PHI_WIDTH = _PHI_EDGES[:-1], np.diff(_PHI_EDGES)
 
 
-def ggx_albedo(mu: float, alpha: float, *, shadowing: str = "height-correlated", nodes: int = 48) -> float:
-    """E(μ) of the GGX lobe with F = 1 (``shadowing``: ``height-correlated`` or ``separable``).
+def ggx_albedo(mu: float, alpha: float, *, shadowing: str = "height-correlated", nodes: int = 48,
+               schlick: str | None = None) -> float:
+    """E(μ) of the GGX lobe with F = 1 (``shadowing``: ``height-correlated`` or ``separable``); with ``schlick``
+    ``"f0"`` or ``"f90"`` times the split-sum weight 1 − (1 − V·h)⁵ or (1 − V·h)⁵ instead.
 
     u = sin²β with tan β = tan θ_h / α (so du = sin 2β dβ and 1 − u = cos²β never cancels); the piece where φ is
     cut is split into panels graded geometrically towards its lower end, where φ0 turns over on the scale μ.
@@ -68,5 +70,8 @@ def ggx_albedo(mu: float, alpha: float, *, shadowing: str = "height-correlated",
         else:
             g2 = 1.0 / ((1.0 + lam_l) * (1.0 + lam_v))
         g = g2 * v_dot_h / (mu * cos_h[:, None])
+        if schlick is not None:
+            tail = (1.0 - np.clip(v_dot_h, 0.0, 1.0)) ** 5
+            g = g * (1.0 - tail if schlick == "f0" else tail)
         total += float(np.sum(du[:, None] * dphi * g))
     return total / np.pi  # (1/2π)·2 for the even φ integral over [0, φ0]
