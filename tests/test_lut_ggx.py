@@ -99,3 +99,19 @@ def test_report_microfacet_section(tmp_path):
     residuals = furnace_residuals(quick=True)
     assert residuals[0] <= 1e-8  # exact tables: the compensated lobe is white (rtol 1e-8 integrals)
     assert residuals[16] > residuals[0]
+
+
+def test_benchmark_lut_workload_quick(tmp_path):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    import run as bench
+
+    results = bench.run(quick=True, only=["lut"], out_dir=tmp_path)
+    workload = results["workloads"]["lut"]
+    assert workload["status"] == "ok", workload
+    ours, mc = workload["methods"]["brdfnorm"], workload["methods"]["mc vndf"]
+    assert ours["max_abs_error"] <= 1e-9 and mc["max_abs_error"] > ours["max_abs_error"]
+    assert mc["max_abs_error"] <= 6 * mc["max_standard_error"] + 1e-12  # the peer is a correct estimator
+    assert any("Monte Carlo" in t["target"] for t in results["targets"])
