@@ -9,10 +9,10 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 * Cells: one batched :func:`brdfnorm.albedo` call per chunk of cells (parameter values as arrays broadcast
   against θ), :func:`compute_cells` — a pure function of (model, directions, parameter values, settings), so a
   process pool or a cluster can compute any chunk.
-* E_avg: the exact integral over μ ∈ [0, 1] by its own adaptive Gauss–Kronrod (G7/K15) quadrature in μ,
-  vectorized over the other axes — never a sum over the table's samples. Its error estimate is the panels'
-  |K15 − G7| (the error of the G7 rule, a deliberately pessimistic bound for the K15 value that is used) plus
-  the albedo error estimates propagated through the K15 weights.
+* E_avg: the exact integral over μ ∈ [0, 1] by its own globally adaptive Gauss–Kronrod (G7/K15) quadrature in
+  x = √μ, vectorized over the other axes — never a sum over the table's samples. Its error estimate is the
+  panels' |K15 − G7| (the error of the G7 rule, a deliberately pessimistic bound for the K15 value that is used)
+  plus the albedo error estimates propagated through the K15 weights.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
@@ -42,6 +42,8 @@ CHANNELS = ("dfg",)
 CHUNK_CELLS = 256
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
+#: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
+MU_FLOOR = 1e-7
 
 # Kronrod's 15-point extension of the 7-point Gauss rule on [-1, 1] (nodes ≥ 0; the rule is symmetric).
 _XK = np.array([0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
@@ -222,46 +224,64 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
 
 def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
                     max_panels: int = MAX_AVG_PANELS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15 in μ.
+    """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15.
 
-    Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed). A panel is accepted
-    when its |K15 − G7| ≤ rtol·|E_avg estimate|·(panel width), so the accepted panels' errors sum to at most
-    rtol·|E_avg|; the albedo at each node is computed to rtol/4 so its propagated error stays below that too.
+    In x = √μ the integral is ∫₀¹ 4x³ E(x²) dx: the weight vanishes where E has its boundary layer (μ ≲ α for a
+    height-correlated microfacet lobe), so that layer needs no refinement. Globally adaptive (as QUADPACK):
+    while a combination's summed panel errors exceed rtol·|E_avg|, its worst panels (error ≥ ¼ of its largest)
+    are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights; albedos
+    are computed to rtol/4. Nodes below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing
+    directions); that changes the integral by at most MU_FLOOR²·max|E|, which is added to the error.
+    Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
     """
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.asarray(v, dtype=float).ravel() for n, v in params.items()}
-    owner = np.arange(M)  # panels: owning combination, left end, width
-    left, width = np.zeros(M), np.ones(M)
-    total, total_error = np.zeros(M), np.zeros(M)
-    estimate = np.zeros(M)  # running |E_avg| guess for the tolerance: accepted panels + pending K15 values
-    converged = np.ones(M, dtype=bool)
     integrals = 0
-    panels_used = np.zeros(M, dtype=np.int64)
-    while owner.size:
-        mu = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
-        panel_params = {n: np.repeat(v[owner], 15) for n, v in flat.items()}
-        cells = compute_cells(model, np.arccos(mu.ravel()), panel_params, rtol=rtol / 4, method=method)
+    albedo_converged = np.ones(M, dtype=bool)
+    largest_e = np.zeros(M)
+
+    def evaluate(owner: np.ndarray, left: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nonlocal integrals
+        x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
+        mu = np.maximum(x * x, MU_FLOOR)
+        cells = compute_cells(model, np.arccos(mu.ravel()), {n: np.repeat(v[owner], 15) for n, v in flat.items()},
+                              rtol=rtol / 4, method=method)
         integrals += mu.size
         value, error = _single_channel(cells.value, cells.error, model)
-        converged[owner[~cells.converged.reshape(-1, 15).all(axis=1)]] = False
-        g = 2.0 * mu * value.reshape(-1, 15)  # integrand 2 μ E(μ)
+        albedo_converged[owner[~cells.converged.reshape(-1, 15).all(axis=1)]] = False
+        np.maximum.at(largest_e, owner, np.abs(value).reshape(-1, 15).max(axis=1))
+        weight = 4.0 * x**3  # dμ 2μ = 4x³ dx
+        g, g_error = weight * value.reshape(-1, 15), weight * error.reshape(-1, 15)
         half = 0.5 * width
         kronrod = half * (g @ KRONROD_WEIGHTS)
-        gauss = half * (g @ GAUSS_WEIGHTS)
-        propagated = half * ((2.0 * mu * error.reshape(-1, 15)) @ np.abs(KRONROD_WEIGHTS))
-        difference = np.abs(kronrod - gauss)
-        estimate = total + np.bincount(owner, kronrod, minlength=M)
-        tolerance = rtol * np.abs(estimate[owner]) * width
-        panels_used += np.bincount(owner, minlength=M)
-        exhausted = panels_used[owner] >= max_panels
-        accept = (difference <= tolerance) | exhausted | (width < 1e-14)
-        np.add.at(total, owner[accept], kronrod[accept])
-        np.add.at(total_error, owner[accept], difference[accept] + propagated[accept])
-        converged[owner[accept & (difference > tolerance)]] = False
-        split = ~accept
-        owner = np.repeat(owner[split], 2)
-        left = np.stack([left[split], left[split] + half[split]], axis=1).ravel()
-        width = np.repeat(half[split], 2)
+        difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
+        return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
+
+    owner = np.repeat(np.arange(M), 2)
+    left, width = np.tile([0.0, 0.5], M), np.full(2 * M, 0.5)
+    value, error = evaluate(owner, left, width)
+    while True:
+        total, total_error = np.bincount(owner, value, M), np.bincount(owner, error, M)
+        panels = np.bincount(owner, minlength=M)
+        open_ = (total_error > rtol * np.abs(total)) & (panels < max_panels)
+        if not open_.any():
+            break
+        worst = np.zeros(M)
+        np.maximum.at(worst, owner, error)
+        split = open_[owner] & (error >= 0.25 * worst[owner]) & (width > 1e-12)
+        if not split.any():
+            break
+        keep = ~split
+        children_owner = np.repeat(owner[split], 2)
+        children_left = np.stack([left[split], left[split] + 0.5 * width[split]], axis=1).ravel()
+        children_width = np.repeat(0.5 * width[split], 2)
+        children_value, children_error = evaluate(children_owner, children_left, children_width)
+        owner = np.concatenate([owner[keep], children_owner])
+        left, width = np.concatenate([left[keep], children_left]), np.concatenate([width[keep], children_width])
+        value, error = np.concatenate([value[keep], children_value]), np.concatenate([error[keep], children_error])
+    floor_error = MU_FLOOR**2 * largest_e
+    total_error = total_error + floor_error
+    converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
     return total, total_error, converged, integrals
 
 
