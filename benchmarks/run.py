@@ -690,7 +690,7 @@ def w_lut(cfg: Config, refs: References) -> dict:
     builtin = axis == "alpha"
     out = {"title": f"energy tables E(μ, {axis}) + E_avg, rtol 1e-10, of "
                     f"{'the built-in ggx' if builtin else 'examples/ggx.brdf (the built-in ggx has not landed)'}",
-           "status": "ok", "sizes": {}, "methods": {}}
+           "status": "ok", "sizes": {}, "compare": {}}
     # Without the built-in (its half-vector integrator), a .brdf table at rtol 1e-12 takes many minutes: then only
     # one small table at rtol 1e-10 is timed, with no reference and no Monte-Carlo peer.
     sizes = cfg.lut_sizes if builtin else (4,)
@@ -727,20 +727,20 @@ def w_lut(cfg: Config, refs: References) -> dict:
     size, reference, ours, seconds = out.pop("_reference")
     mus, params = bench_grid(size, axis_range)
     pick = np.unique(np.linspace(0, size - 1, min(cfg.lut_mc_cells, size)).round().astype(int))
-    out["methods"]["brdfnorm"] = {"time_s": seconds, "max_abs_error": float(np.max(np.abs(ours - reference))),
+    out["compare"]["brdfnorm"] = {"time_s": seconds, "max_abs_error": float(np.max(np.abs(ours - reference))),
                                   "cells": size * size, "timing": "measured"}
     if builtin:
         start = time.perf_counter()
         values, errors = P.ggx_vndf_table(np.maximum(mus[pick], 1e-4), np.maximum(params[pick], clamp),
                                           cfg.lut_mc_samples)
         spent = time.perf_counter() - start
-        out["methods"]["mc vndf"] = {
+        out["compare"]["mc vndf"] = {
             "time_s": spent * size * size / pick.size ** 2, "measured_s": spent, "cells": int(pick.size ** 2),
             "timing": f"extrapolated from {pick.size}×{pick.size} cells", "samples": cfg.lut_mc_samples,
             "max_abs_error": float(np.max(np.abs(values - reference[np.ix_(pick, pick)]))),
             "max_standard_error": float(errors.max())}
     else:
-        out["methods"]["mc vndf"] = {"status": "the peer samples the height-correlated built-in ggx only"}
+        out["compare"]["mc vndf"] = {"status": "the peer samples the height-correlated built-in ggx only"}
     return out
 
 
@@ -763,7 +763,7 @@ def targets(results: dict, cfg: Config) -> list[dict]:
             if size == "128":
                 out.append({"target": "128×128 table peak RSS < 1 GB", "measured": f"{entry['peak_rss_mib']:.0f} MiB",
                             "met": bool(entry["peak_rss_mib"] < 1000)})
-    mc, ours = lut_run.get("methods", {}).get("mc vndf", {}), lut_run.get("methods", {}).get("brdfnorm")
+    mc, ours = lut_run.get("compare", {}).get("mc vndf", {}), lut_run.get("compare", {}).get("brdfnorm")
     if ours and "time_s" in mc:
         speed, accuracy = mc["time_s"] / ours["time_s"], mc["max_abs_error"] / max(ours["max_abs_error"], 1e-300)
         out.append({"target": "E table: ≥ 20× faster than Monte Carlo (VNDF, 2¹⁶ samples a cell) at ≥ 1000× "

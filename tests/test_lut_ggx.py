@@ -112,7 +112,7 @@ def test_benchmark_lut_workload_quick(tmp_path):
     results = bench.run(quick=True, only=["lut"], out_dir=tmp_path)
     workload = results["workloads"]["lut"]
     assert workload["status"] == "ok", workload
-    ours, mc = workload["methods"]["brdfnorm"], workload["methods"]["mc vndf"]
+    ours, mc = workload["compare"]["brdfnorm"], workload["compare"]["mc vndf"]
     assert ours["max_abs_error"] <= 1e-9 and mc["max_abs_error"] > ours["max_abs_error"]
     assert mc["max_abs_error"] <= 6 * mc["max_standard_error"] + 1e-12  # the peer is a correct estimator
     assert any("Monte Carlo" in t["target"] for t in results["targets"])
