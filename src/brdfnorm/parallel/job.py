@@ -74,6 +74,9 @@ class ModelSource:
         params = {}
         for p in model.parameters:
             value = model.params[p.name]
+            if p.kind == "choice":  # a name (e.g. shadowing=separable) travels as itself
+                params[p.name] = str(value)
+                continue
             array = np.asarray(value, dtype=float)
             if array.ndim > (1 if p.kind == "color" else 0):
                 raise ArgumentError(f"parameter {p.name} is bound to an array; give per-cell values as the job's "
