@@ -850,6 +850,9 @@ def markdown(results: dict) -> str:
         if w.get("status") != "ok" and "methods" not in w:
             lines += [f"**{w['status']}**", ""]
             continue
+        if "methods" not in w:  # a workload with its own layout (lut): its numbers are in latest.json
+            lines += ["See `latest.json` and the targets above.", ""]
+            continue
         if w.get("status") != "ok":
             lines += [f"Partly {w['status']}", ""]
         lines += [f"Reference: {w.get('reference', '')}", ""]
