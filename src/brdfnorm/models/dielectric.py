@@ -76,15 +76,6 @@ class MicrofacetDielectric(Model):
     #: Scatters into both hemispheres: the integrators cover the sphere, results report both parts.
     transmits = True
 
-    def __init__(self, **values: object) -> None:
-        super().__init__(**values)
-        self._check()
-
-    def with_params(self, **values: object) -> Model:
-        clone = super().with_params(**values)
-        clone._check()
-        return clone
-
     def _check(self) -> None:
         if np.any(np.abs(np.asarray(self._params["eta"], dtype=float) - 1.0) < ETA_MATCH):
             raise ParameterError(f"must differ from 1 by at least {ETA_MATCH:g} (an index-matched interface "

@@ -177,6 +177,7 @@ class CellsJob:
         shape = np.broadcast_shapes(theta.shape, phi.shape, *(v.shape for v in per_cell.values()))
         if math.prod(shape) == 0:
             raise ArgumentError("the table has no cells", where="theta")
+        validate.batch_size(shape)  # bounded memory: refused before any array of the table's size is made
         flat = {name: np.ascontiguousarray(np.broadcast_to(v, shape), dtype="<f8").ravel()
                 for name, v in per_cell.items()}
         unknown = sorted(set(settings) - set(AlbedoSettings.__dataclass_fields__))
