@@ -250,3 +250,48 @@ def blinn_phong_reference(n: float, theta_o: float, dps: int = 30) -> float:
                 points.append(x)
         points.append(mpmath.pi / 2)
         return float(2 * mpmath.pi * mpmath.power(2, -n_ / 2) * mpmath.quad(g, points))
+
+
+# -- energy tables by Monte Carlo, as engines make them ------------------------------------------------------
+
+def _ggx_lambda(cos_theta: np.ndarray, alpha: float) -> np.ndarray:
+    cos2 = np.clip(cos_theta * cos_theta, 1e-300, 1.0)
+    return 0.5 * (-1.0 + np.sqrt(1.0 + alpha * alpha * (1.0 - cos2) / cos2))
+
+
+def ggx_vndf_albedo(mu: float, alpha: float, samples: int, rng: np.random.Generator) -> tuple[float, float]:
+    """E(μ) of GGX (height-correlated Smith, F = 1) by visible-normal sampling (Heitz 2018, "Sampling the GGX
+    distribution of visible normals", JCGT 7(4)): h ~ D_V(h), L = reflect(V, h), weight G2(L, V)/G1(V).
+    Returns (estimate, standard error of the mean)."""
+    V = np.array([math.sqrt(max(0.0, 1.0 - mu * mu)), 0.0, mu])
+    u1, u2 = rng.random(samples), rng.random(samples)
+    # Section 3 of Heitz 2018: stretch V, sample the projected hemisphere disk, unstretch.
+    vh = np.array([alpha * V[0], alpha * V[1], V[2]])
+    vh /= np.linalg.norm(vh)
+    lensq = vh[0] ** 2 + vh[1] ** 2
+    t1_axis = np.array([-vh[1], vh[0], 0.0]) / math.sqrt(lensq) if lensq > 0 else np.array([1.0, 0.0, 0.0])
+    t2_axis = np.cross(vh, t1_axis)
+    r, phi = np.sqrt(u1), 2.0 * math.pi * u2
+    t1, t2 = r * np.cos(phi), r * np.sin(phi)
+    s = 0.5 * (1.0 + vh[2])
+    t2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - t1 * t1)) + s * t2
+    nh = (t1[:, None] * t1_axis + t2[:, None] * t2_axis
+          + np.sqrt(np.maximum(0.0, 1.0 - t1 * t1 - t2 * t2))[:, None] * vh)
+    h = np.stack([alpha * nh[:, 0], alpha * nh[:, 1], np.maximum(0.0, nh[:, 2])], axis=1)
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    v_dot_h = h @ V
+    L = 2.0 * v_dot_h[:, None] * h - V
+    lam_v = _ggx_lambda(np.array(mu), alpha)
+    weight = np.where(L[:, 2] > 0, (1.0 + lam_v) / (1.0 + lam_v + _ggx_lambda(L[:, 2], alpha)), 0.0)
+    return float(weight.mean()), float(weight.std(ddof=1) / math.sqrt(samples))
+
+
+def ggx_vndf_table(mus: np.ndarray, alphas: np.ndarray, samples: int, seed: int = 2018) -> tuple[np.ndarray,
+                                                                                                   np.ndarray]:
+    """E(μ, α) over a grid by :func:`ggx_vndf_albedo`, ``samples`` a cell: (estimates, standard errors)."""
+    rng = np.random.default_rng(seed)
+    values, errors = np.empty((len(mus), len(alphas))), np.empty((len(mus), len(alphas)))
+    for i, mu in enumerate(mus):
+        for j, alpha in enumerate(alphas):
+            values[i, j], errors[i, j] = ggx_vndf_albedo(float(mu), float(alpha), samples, rng)
+    return values, errors

@@ -131,9 +131,10 @@ def quick_report(tmp_path_factory) -> Path:
 
 def test_default_study_sections_and_images(default_report):
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
-    assert page.section_ids == ["factors", "albedo", "folklore", "fits", "polar", "verify"]
+    assert page.section_ids == ["factors", "albedo", "folklore", "fits", "polar", "microfacet", "verify"]
     sources = [image["src"] for image in page.images]
-    assert sources == ["albedo.png", "folklore.png", "fits.png", "polar.png"]
+    assert sources == ["albedo.png", "folklore.png", "fits.png", "polar.png", "microfacet-e.png",
+                       "microfacet-eavg.png", "microfacet-dfg.png"]
     for image in page.images:
         data = (default_report / image["src"]).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n"

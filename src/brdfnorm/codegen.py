@@ -157,20 +157,21 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
 
 
 def emit(result: FitResult, language: str, model_name: str, *, variable: str | None = None,
-         second: str = "cos_theta_o") -> str:
-    """Source text of one self-contained function evaluating ``result`` in ``language``."""
+         second: str = "cos_theta_o", quantity: str = "Normalization factor", suffix: str = "norm") -> str:
+    """Source text of one self-contained function evaluating ``result`` in ``language`` (``quantity`` names
+    what was fitted in the comment, ``suffix`` ends the function's name)."""
     syn = LANGUAGES[LANGUAGES.validate(language)]
     x = identifier(variable or result.variables[0])
     t = identifier(second)
     if x == t:
         t = t + "_2"
     two_d = result.form_object.two_d
-    name = function_name(model_name)
+    name = function_name(model_name).removesuffix("_norm") + f"_{identifier(suffix)}"
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     ranges = "; ".join(f"{comment_text(k)} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
     where = ", ".join(f"{comment_text(k)} = {v:.6g}" for k, v in result.argmax.items())
     comment = [
-        f"Normalization factor of {comment_text(model_name)}: {result.form} fit ({result.metric}) over "
+        f"{comment_text(quantity)} of {comment_text(model_name)}: {result.form} fit ({result.metric}) over "
         f"{result.samples} samples,",
         f"{ranges}.",
         f"Max relative error {result.max_rel_error:.3g} (at {where}); max absolute error "

@@ -73,3 +73,7 @@ class EvaluationError(BrdfnormError, ArithmeticError):
 
 class OutputError(BrdfnormError, OSError):
     """An output file or directory cannot be written."""
+
+
+class TableFileError(BrdfFileError):
+    """A lookup-table file (``brdfnorm.lut.load``) is not one brdfnorm wrote, or is damaged: ``FILE[:LINE]``."""

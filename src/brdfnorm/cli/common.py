@@ -64,7 +64,9 @@ CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--
              "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
              "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
              "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits", "workers": "--workers",
-             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells"}
+             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells",
+             "axes": "--axis", "clamp": "--clamp", "channels": "--channels", "tables": "--table", "half": "--half",
+             "grid": "--grid", "format": "--format"}
 
 
 class _Console(Console):

@@ -99,10 +99,15 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
 
 @app.command("fit")
 def fit_command(
-    model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name or a .brdf file."),
+    model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
-    sweep: str = typer.Option(..., "--sweep", metavar="NAME=SPEC",
+    sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
                               help="The fitted parameter: NAME=START:STOP:COUNT[:log] or NAME=V,V,..."),
+    lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
+                            "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
+                            "(coefficients vs max absolute error) on stderr. --target is then absolute "
+                            "(default 5e-3) and --max-coefficients defaults to 16."),
+    lut_table: str = typer.Option("E", "--table", metavar="NAME", help="The table fitted with --lut."),
     form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
                              "rational-sqrt:P/Q | auto; with --at view add @D (degree in cos θ_o) and "
                              "optionally ~tau, e.g. rational-sqrt:4/2@3~tau."),
@@ -110,7 +115,8 @@ def fit_command(
     at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
     theta: str = typer.Option(None, "--theta", metavar="SPEC",
                               help="Polar angles in degrees for --at view (START:STOP:COUNT or list)."),
-    target: float = typer.Option(1e-3, "--target", help="Max relative error that --form auto aims for."),
+    target: float = typer.Option(None, "--target", help="Max relative error that --form auto aims for (default "
+                                 "1e-3; with --lut the max absolute error, default 5e-3)."),
     max_coefficients: int = typer.Option(None, "--max-coefficients",
                                          help="Largest coefficient count --form auto tries (default 10; 40 "
                                               "in two variables)."),
@@ -133,6 +139,15 @@ def fit_command(
             raise ArgumentError("--json prints to stdout: '-o -' would put the code before it", where="--output")
         if output is not None and emit_language is None:
             raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
+        if lut is not None:
+            if model is not None or sweep is not None or at is not At.normal or theta is not None:
+                raise ArgumentError("--lut fits a table file: give no MODEL, --sweep, --at or --theta", where="--lut")
+            _fit_lut(lut, lut_table, form, metric.value, 5e-3 if target is None else target,
+                     max_coefficients or 16, emit_language, output, json_output)
+            return
+        if model is None or sweep is None:
+            raise ArgumentError("give MODEL and --sweep NAME=SPEC (or --lut FILE)", where="--sweep")
+        target = 1e-3 if target is None else target
         if at is At.view and theta is None:
             raise ArgumentError("--at view fits over the view angle: give --theta SPEC", where="--theta")
         if at is not At.view and theta is not None:
@@ -185,6 +200,49 @@ def fit_command(
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
         _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT))
+
+
+def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_coefficients: int,
+             emit_language: str | None, output: str | None, json_output: bool) -> None:
+    """``fit --lut``: a two-axis table fitted by :func:`brdfnorm.lut.fitting.fit_table`; the Pareto front on
+    stderr, the code (or the expression) alone on stdout."""
+    from ..lut import load
+    from ..lut.fitting import fit_table
+
+    if form.strip() != "auto":
+        parse_form(form, two_d=True)
+    if output not in (None, STDOUT) and not Path(output).parent.is_dir():
+        raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
+    data = load(path)
+    result = fit_table(data, table=table, form=form, metric=metric, target=target,
+                       max_coefficients=max_coefficients)
+    best, (x, t) = result.best, result.variables
+    source = str(data.meta.get("model", "table"))
+    code = (emit(best, emit_language, source, variable=x, second=t, quantity=f"Table {table}",
+                 suffix=table) if emit_language else None)
+    if output is not None:
+        write_file(output, code)
+    if json_output:
+        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], "front": result.front,
+                                    "tried": result.tried, **best.to_dict(),
+                                    **({"language": emit_language, "code": code} if code else {})}) + "\n")
+        return
+    err = console(stderr=True)
+    front = Table(title=f"Pareto front: {escape(table)}({x}, {t}) of {escape(source)}")
+    for column in ("coefficients", "form", "max abs. error", "max rel. error"):
+        front.add_column(column)
+    for entry in result.front:
+        front.add_row(str(entry["coefficients"]), entry["form"], f"{entry['max_abs_error']:.3g}",
+                      f"{entry['max_rel_error']:.3g}")
+    err.print(front)
+    err.print(f"chosen: {best.form} ({len(best.coefficients)} coefficients), max absolute error "
+              f"{best.max_abs_error:.4g}, max relative error {best.max_rel_error:.4g}", highlight=False, markup=False)
+    for warning in best.warnings:
+        err.print(f"warning: {warning}", highlight=False, markup=False)
+    if code is not None and output is None:
+        write_file(STDOUT, code)
+    elif code is None:
+        write_file(STDOUT, best.expression + "\n")
 
 
 def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:

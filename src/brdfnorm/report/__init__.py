@@ -29,7 +29,7 @@ from ..fit import fit
 from ..models.base import Model
 from ..output.directories import check_target, staged
 from ..verify import verify
-from . import sections
+from . import microfacet, sections
 from .html import page
 from .study import StudyConfig
 
@@ -59,6 +59,8 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
         if config.extras:
             steps.append(("seed 003: fits of the Gaussian Blinn-Phong factor", sections.fit_section(fit)))
         steps.append(("polar plots of the lobes", sections.polar_section))
+        if microfacet.available():
+            steps.append(("microfacet energy: GGX's compensation tables", microfacet.section))
         if config.extras:
             steps.append(("verifying the seeds' claims", sections.verify_section(verify)))
         return config, steps

@@ -1,0 +1,118 @@
+"""``brdfnorm lut``: energy-compensation tables over a grid (:mod:`brdfnorm.lut`), written in an engine's format.
+
+``brdfnorm lut ggx --axis mu=0:1:32 --axis alpha=0:1:32 --clamp mu=1e-4 --clamp alpha=1e-8 -o E.npz``
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from ..errors import ArgumentError, OutputError
+from ..lut import formats
+from ..lut.table import DIRECTION_AXES, GRIDS, compute, grid_values
+from ..output import write_file
+from .application import app
+from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_range, progress_bar
+
+AXIS_HELP = ("An axis NAME=SPEC (repeatable; the tables are indexed in this order): mu (cos θ_o), theta "
+             "(degrees) or a float parameter; SPEC is START:STOP:COUNT (spaced by --grid) or V,V,...")
+
+
+def parse_axis(spec: str, grid: str) -> tuple[str, np.ndarray]:
+    """``NAME=START:STOP:COUNT`` (node or texel grid) or ``NAME=V,V,...`` (as given)."""
+    name, sep, values = spec.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise ArgumentError(f"expected NAME=SPEC, got {spec!r}", where="--axis")
+    parsed = parse_range(values, f"--axis {name}", allow_log=False)
+    if ":" in values:
+        parsed = grid_values(parsed[0], parsed[-1], parsed.size, grid)
+    return name, parsed
+
+
+def parse_clamp(spec: str) -> tuple[str, float]:
+    name, sep, value = spec.partition("=")
+    if not sep or not name.strip():
+        raise ArgumentError(f"expected NAME=MIN, got {spec!r}", where="--clamp")
+    (minimum,) = parse_range(value, f"--clamp {name.strip()}", allow_log=False)[:1]
+    return name.strip(), float(minimum)
+
+
+@app.command("lut")
+def lut_command(
+    model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name or a .brdf file."),
+    param: list[str] = PARAM_OPTION,
+    axis: list[str] = typer.Option(..., "--axis", metavar="NAME=SPEC", help=AXIS_HELP),
+    grid: str = typer.Option("node", "--grid", help="node: START + i/(N−1)·(STOP − START) (default); texel: "
+                             "START + (i + ½)/N·(STOP − START), where a GPU samples an N-texel texture."),
+    clamp: list[str] = typer.Option([], "--clamp", metavar="NAME=MIN", help="Evaluate an axis at max(value, MIN) "
+                                    "(repeatable), e.g. --clamp mu=1e-4 --clamp alpha=1e-8; the file keeps the "
+                                    "grid's values and records the clamps."),
+    channels: list[str] = typer.Option([], "--channels", help="dfg: add the split-sum pair DFG_f0 = ∫ f cos "
+                                       "(1 − (1 − V·H)⁵), DFG_f90 = ∫ f cos (1 − V·H)⁵, Fresnel off."),
+    table: list[str] = typer.Option([], "--table", metavar="NAME", help="Write only these tables (repeatable; "
+                                    "default all: E, E_error, E_avg, E_avg_error, 1-E, …; a PNG holds E)."),
+    no_average: bool = typer.Option(False, "--no-average", help="Skip E_avg = 2∫ E(μ) μ dμ."),
+    rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of every cell (and of E_avg)."),
+    method: str = typer.Option("auto", "--method", help="Albedo method (auto picks the model's best)."),
+    allow_unconverged: bool = typer.Option(False, "--allow-unconverged",
+                                           help="Write the table even if some cells miss --rtol (exit 0)."),
+    output: str = typer.Option(..., "--output", "-o", metavar="FILE",
+                               help=f"The table file; the extension picks the format (.{', .'.join(formats.FORMATS)})"
+                                    "; - writes a text format to stdout (with --format)."),
+    fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
+    half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
+    debug: bool = DEBUG_OPTION,
+) -> None:
+    """Energy-compensation tables: E, its error, E_avg and 1 − E (and DFG) over the axes, one file."""
+    with guarded(debug):
+        if grid not in GRIDS:
+            raise ArgumentError(f"unknown grid {grid!r} (known: {', '.join(GRIDS)})", where="--grid")
+        to_stdout = output == "-"
+        if to_stdout and fmt is None:
+            raise ArgumentError("-o - writes to stdout: give --format (json, csv, h, glsl or hlsl)", where="--format")
+        name = formats.format_of(output if not to_stdout else "", fmt, where="--format" if fmt else "--output")
+        if to_stdout and name not in formats.TEXT_FORMATS:
+            raise ArgumentError(f"{name} is binary; stdout takes {', '.join(formats.TEXT_FORMATS)}", where="--format")
+        if half and name != "exr":
+            raise ArgumentError("--half applies to .exr only", where="--half")
+        axes: dict[str, np.ndarray] = {}
+        for spec in axis:
+            axis_name, values = parse_axis(spec, grid)
+            if axis_name in axes:
+                raise ArgumentError(f"axis {axis_name} given twice", where="--axis")
+            axes[axis_name] = values
+        if "theta" in axes:
+            if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
+                raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")
+            axes["theta"] = np.radians(axes["theta"])
+        clamps = dict(parse_clamp(c) for c in clamp)
+        if "theta" in clamps:
+            clamps["theta"] = float(np.radians(clamps["theta"]))
+        for c in channels:
+            if c not in ("dfg",):
+                raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="--channels")
+        m = load_model(model, param)
+        for axis_name in axes:
+            if axis_name not in DIRECTION_AXES:
+                m.parameter(axis_name)  # an unknown axis is a one-line error before any work
+        if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
+            raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
+        table_names = table or None
+        with progress_bar(f"{m.name}: table cells") as progress:
+            result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
+                             average=not no_average, grid=grid, source=model, progress=progress)
+        data = formats.dumps(result, name, tables=table_names, half=half)
+        unconverged = result.meta["unconverged"]
+        if unconverged and not allow_unconverged:
+            typer.echo(f"error: {unconverged} cells did not reach --rtol {rtol:g}; nothing written (see their "
+                       "error estimates with --allow-unconverged)", err=True)
+            raise typer.Exit(1)
+        write_file(output, data)
+        cells = int(np.prod([len(v) for v in axes.values()]))
+        worst = float(np.max(result["E_error"])) if result["E_error"].size else 0.0
+        typer.echo(f"{m.name}: {cells} cells, max error estimate {worst:.3g}, {unconverged} unconverged"
+                   + ("" if to_stdout else f"; wrote {output}"), err=True)

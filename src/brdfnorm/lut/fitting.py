@@ -1,0 +1,87 @@
+"""Fits of a two-axis lookup table, E(μ, α) say, by :func:`brdfnorm.fit.fit`, with the Pareto front.
+
+The table's direction axis (``mu``, or ``theta`` as μ = cos θ) is the fit's first variable x — the forms are
+rationals in √x, which follow the steep rise of a height-correlated lobe's E towards μ → 0 — and the other axis
+its second variable t, on which every coefficient depends polynomially (:mod:`brdfnorm.fit`'s ``P/Q@D`` forms).
+Every candidate form up to ``max_coefficients`` is fitted (minimax in relative error by default); the front lists,
+for each coefficient count, the smallest maximum absolute error reached on the table's cells when no form with
+fewer coefficients does better. The chosen fit is the one with the fewest coefficients meeting ``target`` (an
+absolute error), or the most accurate one when none does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..fit import FitResult, auto_candidates, fit, parse_form
+from .table import Lut
+
+
+@dataclass
+class TableFit:
+    """The chosen fit, the Pareto front and every candidate (form, coefficients, max abs/rel error, pole)."""
+
+    best: FitResult
+    front: list[dict]
+    tried: list[dict] = field(default_factory=list)
+    variables: tuple[str, str] = ("mu", "alpha")
+    table: str = "E"
+
+
+def table_samples(lut: Lut, table: str = "E") -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, str]]:
+    """(x, t, y) over the cells of a two-axis table: x the direction axis as μ, t the other axis."""
+    if table not in lut:
+        raise ArgumentError(f"no table {table!r} in the lut (tables: {', '.join(lut)})", where="--table")
+    axes = lut.table_axes[table]
+    if len(axes) != 2:
+        raise ArgumentError(f"table {table} has {len(axes)} axes ({', '.join(axes) or 'none'}); a fit takes two",
+                            where="--lut")
+    values = lut[table]
+    first, second = axes
+    if second in ("mu", "theta") and first not in ("mu", "theta"):
+        first, second, values = second, first, values.T
+    x = lut.axes[first]
+    if first == "theta":
+        x, first = np.cos(x), "mu"
+    X, T = np.meshgrid(x, lut.axes[second], indexing="ij")
+    return X.ravel(), T.ravel(), values.ravel(), (first, second)
+
+
+def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "minimax-rel",
+              target: float = 5e-3, max_coefficients: int = 16) -> TableFit:
+    """Fit ``table`` over its two axes; ``form="auto"`` tries every candidate up to ``max_coefficients``."""
+    x, t, y, names = table_samples(lut, table)
+    if np.any(x < 0):
+        raise ArgumentError("the direction axis must be μ ≥ 0 (rationals in √μ)", where="--lut")
+    if form.strip() != "auto":
+        candidates = [parse_form(form, two_d=True)]
+    else:
+        candidates = auto_candidates(True, min(max_coefficients, x.size))
+    tried, results = [], []
+    for candidate in candidates:
+        result = fit(x, y, t, form=candidate, metric=metric, names=names)
+        pole = bool(result.warnings)
+        tried.append({"form": result.form, "coefficients": len(result.coefficients),
+                      "max_abs_error": result.max_abs_error, "max_rel_error": result.max_rel_error, "pole": pole})
+        if not pole:
+            results.append(result)
+    if not results:
+        raise ArgumentError("every candidate form has a pole over the table", where="--form")
+    front, best_so_far = [], np.inf
+    for count in sorted({len(r.coefficients) for r in results}):
+        level = min((r for r in results if len(r.coefficients) == count), key=lambda r: r.max_abs_error)
+        if level.max_abs_error < best_so_far:
+            best_so_far = level.max_abs_error
+            front.append({"coefficients": count, "form": level.form, "max_abs_error": level.max_abs_error,
+                          "max_rel_error": level.max_rel_error, "_result": level})
+    meeting = [entry for entry in front if entry["max_abs_error"] <= target]
+    chosen = (meeting[0] if meeting else front[-1])["_result"]
+    if not meeting:
+        chosen.warnings.append(f"no form with ≤ {max_coefficients} coefficients reached the target {target:g} "
+                               f"(absolute); this is the most accurate one")
+    for entry in front:
+        del entry["_result"]
+    return TableFit(chosen, front, tried, names, table)

@@ -1,0 +1,439 @@
+"""Energy-compensation tables: the directional albedo of a lobe over a grid of view angles and parameters.
+
+What every engine that ships a microfacet lobe also ships (Kulla & Conty 2017, "Revisiting physically based
+shading at Imageworks"; Karis 2013's split-sum "DFG" texture): the single-scattering albedo E(μ, α) with
+μ = cos θ_o, its cosine-weighted average E_avg(α) = 2∫₀¹ E(μ) μ dμ, and 1 − E, here with an error estimate on
+every cell. The tables are arrays indexed in the order of the axes given; tables that do not depend on an axis
+(E_avg does not depend on μ) drop it and keep the others' order.
+
+* Cells: one batched :func:`brdfnorm.albedo` call per chunk of cells (parameter values as arrays broadcast
+  against θ), :func:`compute_cells` — a pure function of (model, directions, parameter values, settings), so a
+  process pool or a cluster can compute any chunk.
+* E_avg: the exact integral over μ ∈ [0, 1] by its own globally adaptive Gauss–Kronrod (G7/K15) quadrature in
+  x = √μ, vectorized over the other axes — never a sum over the table's samples. Its error estimate is the
+  panels' |K15 − G7| (the error of the G7 rule, a deliberately pessimistic bound for the K15 value that is used)
+  plus the albedo error estimates propagated through the K15 weights.
+* DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
+  Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
+  ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
+  weighted as given (:class:`SchlickWeighted`) — its own Fresnel, if it has one, must be switched off by its
+  parameters (e.g. ``f0=1`` for ``examples/ggx.brdf``), which is recorded in ``meta["dfg"]``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..directional import albedo
+from ..errors import ArgumentError
+from ..models.base import Model
+from ..parameters import resolve
+
+#: Axes that give the view direction: μ = cos θ_o, or θ_o itself (radians in the API).
+DIRECTION_AXES = ("mu", "theta")
+GRIDS = ("node", "texel")
+CHANNELS = ("dfg",)
+#: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
+#: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
+CHUNK_CELLS = 256
+#: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
+MAX_AVG_PANELS = 400
+#: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
+MU_FLOOR = 1e-7
+
+# Kronrod's 15-point extension of the 7-point Gauss rule on [-1, 1] (nodes ≥ 0; the rule is symmetric).
+_XK = np.array([0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
+                0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
+                0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
+                0.207784955007898467600689403773245, 0.0])
+_WK = np.array([0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
+                0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
+                0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
+                0.204432940075298892414161999234649, 0.209482141084727828012999174891714])
+_WG = np.array([0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
+                0.381830050505118944950369775488975, 0.417959183673469387755102040816327])
+KRONROD_NODES = np.concatenate([-_XK[:-1], _XK[::-1]])
+KRONROD_WEIGHTS = np.concatenate([_WK[:-1], _WK[::-1]])
+#: The G7 weights on the K15 nodes (zero on the Kronrod-only nodes, which are the even positions).
+GAUSS_WEIGHTS = np.zeros(15)
+GAUSS_WEIGHTS[1::2] = np.concatenate([_WG, _WG[-2::-1]])
+
+
+def grid_values(start: float, stop: float, count: int, grid: str = "node") -> np.ndarray:
+    """``count`` values over [start, stop]: at i/(N−1) (``node``, the default) or at (i + ½)/N (``texel``,
+    where a GPU samples texel i of an N-texel texture)."""
+    if grid not in GRIDS:
+        raise ArgumentError(f"unknown grid {grid!r} (known: {', '.join(GRIDS)})", where="grid")
+    if count < 1:
+        raise ArgumentError(f"an axis needs at least one value, got {count}", where="axes")
+    if grid == "node":
+        return np.linspace(start, stop, count)
+    return start + (np.arange(count) + 0.5) / count * (stop - start)
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """Albedo of a flat batch of K cells: value and error (K, C), evaluations and convergence (K,)."""
+
+    value: np.ndarray
+    error: np.ndarray
+    evaluations: np.ndarray
+    converged: np.ndarray
+
+
+def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarray], *, rtol: float,
+                  method: str = "auto", over: str = "light") -> CellResult:
+    """E for K cells: view angles ``theta`` (K,) radians and per-cell parameter values (K,) — one albedo call.
+
+    A pure function of its arguments (the unit of work a process pool or a cluster computes).
+    """
+    theta = np.asarray(theta, dtype=float).ravel()
+    flat = {name: np.asarray(v, dtype=float).ravel() for name, v in params.items()}
+    parts = []
+    for start in range(0, theta.size, CHUNK_CELLS):
+        cells = slice(start, start + CHUNK_CELLS)
+        bound = model.with_params(**{name: v[cells] for name, v in flat.items()})
+        with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
+            warnings.simplefilter("ignore", UserWarning)
+            parts.append(albedo(bound, theta[cells], over=over, rtol=rtol, method=method))
+    return CellResult(*(np.concatenate([getattr(r, key) for r in parts])
+                        for key in ("value", "error", "evaluations", "converged")))
+
+
+class SchlickWeighted(Model):
+    """A model's lobe times a split-sum weight of V·H: 1 − (1 − V·H)⁵ (``f0``) or (1 − V·H)⁵ (``f90``).
+
+    V·H = √((1 + L·V)/2) for H = normalize(L + V). Keeps the base model's parameters and lobe hint.
+    """
+
+    def __init__(self, base: Model, term: str) -> None:  # noqa: D107 — binds to the base's values
+        if term not in ("f0", "f90"):
+            raise ArgumentError(f"unknown split-sum term {term!r}", where="channels")
+        self.base = base
+        self.term = term
+        self.name = f"{base.name}·schlick-{term}"
+        self.parameters = base.parameters
+        self.channels = base.channels
+        self.isotropic = base.isotropic
+        self._params = dict(base.params)
+
+    def _weight(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
+        cos_vh = np.sqrt(np.clip(0.5 * (1.0 + np.einsum("...i,...i->...", L, V)), 0.0, 1.0))
+        tail = (1.0 - cos_vh) ** 5
+        return (1.0 - tail if self.term == "f0" else tail)[..., None]
+
+    def evaluate(self, L, V, params):
+        return self.base.evaluate(L, V, params) * self._weight(L, V)
+
+    def projected(self, L, V, params):
+        return self.base.projected(L, V, params) * self._weight(L, V)
+
+    def lobe(self, fixed, params, over):
+        return self.base.lobe(fixed, params, over)
+
+
+def split_sum_models(model: Model) -> tuple[dict[str, Model], str]:
+    """The two DFG models (coefficient of f0, of f90) and how they were made (recorded in the table's meta)."""
+    names = {p.name for p in model.parameters}
+    if {"fresnel", "f0", "f90"} <= names:
+        return ({"DFG_f0": model.with_params(fresnel="schlick", f0=1.0, f90=0.0),
+                 "DFG_f90": model.with_params(fresnel="schlick", f0=0.0, f90=1.0)},
+                "the model's own fresnel=schlick with (f0, f90) = (1, 0) and (0, 1)")
+    return ({"DFG_f0": SchlickWeighted(model, "f0"), "DFG_f90": SchlickWeighted(model, "f90")},
+            "the model as given times 1 - (1 - V.H)^5 and (1 - V.H)^5; its own Fresnel must be off")
+
+
+def _single_channel(value: np.ndarray, error: np.ndarray, model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """Channel 0 of (K, C) results; several channels only when they are all equal (a grey lobe)."""
+    if value.shape[-1] > 1 and not np.array_equal(value, np.broadcast_to(value[..., :1], value.shape)):
+        raise ArgumentError(f"{model.name} has {value.shape[-1]} channels with different albedos; tabulate one "
+                            "channel at a time (set its colour parameters equal)", where="model")
+    return value[..., 0], error[..., 0]
+
+
+ProgressCallback = Callable[[int, int], None]
+
+
+def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapping[str, float]):
+    if not axes:
+        raise ArgumentError("give at least one axis", where="axes")
+    names = list(axes)
+    direction = [n for n in names if n in DIRECTION_AXES]
+    if len(direction) != 1:
+        raise ArgumentError(f"exactly one of the axes must give the view direction ({' or '.join(DIRECTION_AXES)}"
+                            f"); got {direction or 'none'}", where="axes")
+    values: dict[str, np.ndarray] = {}
+    for name in names:
+        array = np.asarray(axes[name], dtype=float)
+        if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
+            raise ArgumentError(f"axis {name!r} needs a non-empty list of finite numbers", where="axes")
+        if name not in DIRECTION_AXES:
+            parameter = model.parameter(name)
+            if parameter.kind != "float":
+                raise ArgumentError(f"only float parameters can be axes; {name} is {parameter.kind}", where="axes")
+        values[name] = array
+    for name, minimum in clamp.items():
+        if name not in values:
+            raise ArgumentError(f"--clamp {name}: no axis of that name", where="clamp")
+        if not np.isfinite(minimum):
+            raise ArgumentError(f"clamp for {name} must be finite", where="clamp")
+    evaluated = {name: np.maximum(v, clamp[name]) if name in clamp else v for name, v in values.items()}
+    (dname,) = direction
+    if dname == "mu":
+        mu = evaluated["mu"]
+        if np.any(mu <= 0) or np.any(mu > 1):
+            raise ArgumentError("mu = cos θ_o must lie in (0, 1]: μ = 0 is the horizon, where the albedo is not "
+                                "defined; clamp it, e.g. --clamp mu=1e-4", where="axes")
+    else:
+        theta = evaluated["theta"]
+        if np.any(theta < 0) or np.any(theta >= np.pi / 2):
+            raise ArgumentError("theta must lie in [0, π/2) radians ([0°, 90°) on the command line)", where="axes")
+    for name, array in evaluated.items():
+        if name not in DIRECTION_AXES:
+            resolve(model.parameters, {name: array}, where=f"axis {name}")  # range check before any work
+    return values, evaluated, dname
+
+
+def _theta_of(direction_axis: str, values: np.ndarray) -> np.ndarray:
+    return np.arccos(np.clip(values, -1.0, 1.0)) if direction_axis == "mu" else values
+
+
+def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, total, progress):
+    """E, its error, convergence and evaluation counts over the full grid, CHUNK_CELLS cells per call."""
+    K = int(np.prod(shape))
+    theta_flat = np.broadcast_to(theta_grid, shape).ravel()
+    flat = {n: np.broadcast_to(g, shape).ravel() for n, g in param_grids.items()}
+    value, error = np.empty(K), np.empty(K)
+    converged, evaluations = np.empty(K, dtype=bool), np.empty(K, dtype=np.int64)
+    for start in range(0, K, CHUNK_CELLS):
+        cells = slice(start, min(K, start + CHUNK_CELLS))
+        result = compute_cells(model, theta_flat[cells], {n: v[cells] for n, v in flat.items()}, rtol=rtol,
+                               method=method)
+        value[cells], error[cells] = _single_channel(result.value, result.error, model)
+        converged[cells], evaluations[cells] = result.converged, result.evaluations
+        done += cells.stop - cells.start
+        if progress is not None:
+            progress(done, total)
+    return (value.reshape(shape), error.reshape(shape), converged.reshape(shape), evaluations.reshape(shape),
+            done)
+
+
+def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
+                    max_panels: int = MAX_AVG_PANELS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15.
+
+    In x = √μ the integral is ∫₀¹ 4x³ E(x²) dx: the weight vanishes where E has its boundary layer (μ ≲ α for a
+    height-correlated microfacet lobe), so that layer needs no refinement. Globally adaptive (as QUADPACK):
+    while a combination's summed panel errors exceed rtol·|E_avg|, its worst panels (error ≥ ¼ of its largest)
+    are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights; albedos
+    are computed to rtol/4. Nodes below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing
+    directions); that changes the integral by at most MU_FLOOR²·max|E|, which is added to the error.
+    Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
+    """
+    M = len(next(iter(params.values()))) if params else 1
+    flat = {n: np.asarray(v, dtype=float).ravel() for n, v in params.items()}
+    integrals = 0
+    albedo_converged = np.ones(M, dtype=bool)
+    largest_e = np.zeros(M)
+
+    def evaluate(owner: np.ndarray, left: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nonlocal integrals
+        x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
+        mu = np.maximum(x * x, MU_FLOOR)
+        cells = compute_cells(model, np.arccos(mu.ravel()), {n: np.repeat(v[owner], 15) for n, v in flat.items()},
+                              rtol=rtol / 4, method=method)
+        integrals += mu.size
+        value, error = _single_channel(cells.value, cells.error, model)
+        albedo_converged[owner[~cells.converged.reshape(-1, 15).all(axis=1)]] = False
+        np.maximum.at(largest_e, owner, np.abs(value).reshape(-1, 15).max(axis=1))
+        weight = 4.0 * x**3  # dμ 2μ = 4x³ dx
+        g, g_error = weight * value.reshape(-1, 15), weight * error.reshape(-1, 15)
+        half = 0.5 * width
+        kronrod = half * (g @ KRONROD_WEIGHTS)
+        difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
+        return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
+
+    owner = np.repeat(np.arange(M), 2)
+    left, width = np.tile([0.0, 0.5], M), np.full(2 * M, 0.5)
+    value, error = evaluate(owner, left, width)
+    while True:
+        total, total_error = np.bincount(owner, value, M), np.bincount(owner, error, M)
+        panels = np.bincount(owner, minlength=M)
+        open_ = (total_error > rtol * np.abs(total)) & (panels < max_panels)
+        if not open_.any():
+            break
+        worst = np.zeros(M)
+        np.maximum.at(worst, owner, error)
+        split = open_[owner] & (error >= 0.25 * worst[owner]) & (width > 1e-12)
+        if not split.any():
+            break
+        keep = ~split
+        children_owner = np.repeat(owner[split], 2)
+        children_left = np.stack([left[split], left[split] + 0.5 * width[split]], axis=1).ravel()
+        children_width = np.repeat(0.5 * width[split], 2)
+        children_value, children_error = evaluate(children_owner, children_left, children_width)
+        owner = np.concatenate([owner[keep], children_owner])
+        left, width = np.concatenate([left[keep], children_left]), np.concatenate([width[keep], children_width])
+        value, error = np.concatenate([value[keep], children_value]), np.concatenate([error[keep], children_error])
+    floor_error = MU_FLOOR**2 * largest_e
+    total_error = total_error + floor_error
+    converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
+    return total, total_error, converged, integrals
+
+
+@dataclass(frozen=True)
+class Computed:
+    """What :func:`compute_tables` returns: tables with their axes, per-cell convergence and counts."""
+
+    tables: dict[str, np.ndarray]
+    table_axes: dict[str, tuple[str, ...]]
+    converged: np.ndarray  # over the full grid (E, and the DFG channels if asked)
+    avg_converged: np.ndarray | None
+    evaluations: int
+    dfg: str | None
+
+
+def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
+                   rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (),
+                   average: bool = True, progress: ProgressCallback | None = None) -> Computed:
+    """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors)."""
+    clamp = dict(clamp or {})
+    for channel in channels:
+        if channel not in CHANNELS:
+            raise ArgumentError(f"unknown channel set {channel!r} (known: {', '.join(CHANNELS)})", where="channels")
+    _, evaluated, direction = _checked_axes(model, axes, clamp)
+    names = list(evaluated)
+    shape = tuple(len(evaluated[n]) for n in names)
+
+    def along(name: str, values: np.ndarray, order: list[str]) -> np.ndarray:
+        index = [1] * len(order)
+        index[order.index(name)] = -1
+        return values.reshape(index)
+
+    theta_grid = along(direction, _theta_of(direction, evaluated[direction]), names)
+    param_grids = {n: along(n, evaluated[n], names) for n in names if n != direction}
+    others = [n for n in names if n != direction]
+    avg_shape = tuple(len(evaluated[n]) for n in others)
+    cells = int(np.prod(shape))
+    total = cells * (1 + 2 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
+    done = 0
+    E, E_error, converged, evaluations, done = _tabulate(model, shape, theta_grid, param_grids, rtol, method,
+                                                         done, total, progress)
+    tables = {"E": E, "E_error": E_error}
+    table_axes: dict[str, tuple[str, ...]] = {"E": tuple(names), "E_error": tuple(names)}
+    avg_converged = None
+    if average:
+        combos = {n: np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel() for n in others}
+        avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
+        tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
+        table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
+        avg_converged = avg_converged.reshape(avg_shape)
+        done += int(np.prod(avg_shape))
+        if progress is not None:
+            progress(done, total)
+    tables["1-E"] = 1.0 - E
+    table_axes["1-E"] = tuple(names)
+    dfg = None
+    if "dfg" in channels:
+        dfg_models, dfg = split_sum_models(model)
+        for name, weighted in dfg_models.items():
+            value, error, ok, count, done = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
+                                                      done, total, progress)
+            tables[name], tables[f"{name}_error"] = value, error
+            table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
+            converged &= ok
+            evaluations = evaluations + count
+    return Computed(tables, table_axes, converged, avg_converged, int(evaluations.sum()), dfg)
+
+
+class Lut(Mapping):
+    """A lookup table: a mapping table name (``E``, ``E_error``, ``E_avg``, ``1-E``, ``DFG_f0`` …) -> array.
+
+    ``axes`` maps axis name -> values in the order the arrays are indexed (the nominal grid values; clamped
+    values are what was evaluated, see ``meta["clamp"]``); ``table_axes`` names the axes of each table (E_avg
+    lacks the direction axis); ``meta`` holds the model, parameters, grid, clamps, tolerance and version.
+    """
+
+    def __init__(self, tables: Mapping[str, np.ndarray], axes: Mapping[str, Sequence[float]], meta: Mapping,
+                 table_axes: Mapping[str, Sequence[str]] | None = None) -> None:
+        self.axes = {name: np.asarray(values, dtype=float) for name, values in axes.items()}
+        self.table_axes = {name: tuple(table_axes[name]) if table_axes else tuple(self.axes) for name in tables}
+        self._tables = {}
+        for name, array in tables.items():
+            if list(self.table_axes[name]) != [a for a in self.axes if a in self.table_axes[name]]:
+                raise ArgumentError(f"table {name!r}: its axes {self.table_axes[name]} must be some of "
+                                    f"{tuple(self.axes)} in that order", where="tables")
+            expected = tuple(len(self.axes[a]) for a in self.table_axes[name])
+            array = np.asarray(array, dtype=float)
+            if array.shape != expected:
+                raise ArgumentError(f"table {name!r} has shape {array.shape}, its axes "
+                                    f"{self.table_axes[name]} need {expected}", where="tables")
+            self._tables[name] = array
+        self.meta = dict(meta)
+        self.meta["axes"] = list(self.axes)
+        self.meta["tables"] = {name: list(self.table_axes[name]) for name in self._tables}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self._tables[name]
+
+    def __iter__(self):
+        return iter(self._tables)
+
+    def __len__(self) -> int:
+        return len(self._tables)
+
+    def __repr__(self) -> str:
+        axes = ", ".join(f"{n}[{len(v)}]" for n, v in self.axes.items())
+        return f"Lut({self.meta.get('model', '?')}; axes {axes}; tables {', '.join(self._tables)})"
+
+    def full(self, name: str) -> np.ndarray:
+        """Table ``name`` broadcast over every axis of the lut (E_avg repeated along μ)."""
+        index = tuple(slice(None) if a in self.table_axes[name] else None for a in self.axes)
+        return np.broadcast_to(self._tables[name][index], tuple(len(v) for v in self.axes.values()))
+
+
+def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
+            rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
+            grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None) -> Lut:
+    """The energy tables of ``model`` over ``axes`` (name -> values; ``mu`` = cos θ_o or ``theta`` in radians,
+    plus any float parameters), indexed in the order of ``axes``; ``source`` names the model as the user gave it
+    (a built-in name or a ``.brdf`` path) in ``meta``. ``clamp`` raises axis values below a minimum
+    before evaluation (μ ≥ 1e-4, α ≥ 1e-8 are the usual ones); ``grid`` only records how the values were made.
+
+    >>> import brdfnorm as bn
+    >>> lut = compute(bn.load("blinn-phong"), {"mu": [0.5, 1.0], "n": [10.0, 100.0]}, rtol=1e-8)
+    >>> lut["E"].shape, lut["E_avg"].shape
+    ((2, 2), (2,))
+    """
+    from .. import __version__
+
+    result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
+                            average=average, progress=progress)
+    unconverged = int(np.count_nonzero(~result.converged))
+    if result.avg_converged is not None:
+        unconverged += int(np.count_nonzero(~result.avg_converged))
+    fixed = {k: v for k, v in model.params.items() if k not in axes}
+    meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": dict(clamp or {}),
+            "rtol": rtol, "method": method, "units": {"mu": "cos theta_o", "theta": "radians"},
+            "brdfnorm": __version__, "unconverged": unconverged, "evaluations": result.evaluations}
+    if result.dfg is not None:
+        meta["dfg"] = result.dfg
+    return Lut(result.tables, axes, meta, result.table_axes)
+
+
+def _plain(params: Mapping[str, object]) -> dict:
+    out = {}
+    for name, value in params.items():
+        if isinstance(value, (bool, np.bool_)):
+            out[name] = bool(value)
+        elif isinstance(value, (tuple, list, np.ndarray)):
+            out[name] = [float(v) for v in np.ravel(value)]
+        elif isinstance(value, (int, float, np.number)):
+            out[name] = float(value)
+        else:
+            out[name] = str(value)
+    return out
