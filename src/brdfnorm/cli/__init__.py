@@ -15,7 +15,7 @@ app = typer.Typer(
 )
 
 # Command modules register themselves on `app` when imported.
-from . import core, fit, info, report, verify  # noqa: E402,F401
+from . import core, explore, fit, info, report, verify  # noqa: E402,F401
 
 
 def main(argv: list[str] | None = None) -> None:
