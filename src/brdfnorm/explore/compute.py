@@ -101,11 +101,13 @@ def bind_parameters(model: Model, raw: object) -> Model:
             if not isinstance(value, bool):
                 raise ParameterError(f"expected true or false, got {str(value)[:40]!r}", where=where)
         elif p.kind == "color":
-            if not (isinstance(value, list) and len(value) == 3 and all(_is_number(v) for v in value)):
-                raise ParameterError(f"expected [R, G, B], got {str(value)[:60]!r}", where=where)
+            if not (isinstance(value, list) and len(value) == 3 and all(_is_finite(v) for v in value)):
+                raise ParameterError(f"expected [R, G, B] (finite numbers), got {str(value)[:60]!r}", where=where)
+            value = [float(v) for v in value]
         elif p.kind == "float":
-            if not _is_number(value):
-                raise ParameterError(f"expected a number, got {str(value)[:40]!r}", where=where)
+            if not _is_finite(value):
+                raise ParameterError(f"expected a finite number, got {str(value)[:40]!r}", where=where)
+            value = float(value)  # type: ignore[arg-type]
         elif not isinstance(value, str):  # a choice (or a kind this page does not know): its name
             raise ParameterError(f"expected one of the choices, got {str(value)[:40]!r}", where=where)
         values[p.name] = tuple(value) if p.kind == "color" else value
@@ -116,9 +118,19 @@ def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def _is_finite(value: object) -> bool:
+    """A JSON number that is a finite float (an integer of 400 digits is not)."""
+    if not _is_number(value):
+        return False
+    try:
+        return math.isfinite(float(value))  # type: ignore[arg-type]
+    except OverflowError:
+        return False
+
+
 def view_angle(raw: object) -> float:
     """The page's view angle θ_o in degrees, checked: [0°, 89.9°]."""
-    if not _is_number(raw) or not 0.0 <= float(raw) <= VIEW_MAX_DEG:  # type: ignore[arg-type]
+    if not _is_finite(raw) or not 0.0 <= float(raw) <= VIEW_MAX_DEG:  # type: ignore[arg-type]
         raise ArgumentError(f"view angle must be a number in [0, {VIEW_MAX_DEG:g}] degrees", where="view")
     return float(raw)  # type: ignore[arg-type]
 
@@ -167,7 +179,8 @@ def format_with_error(value: float, error: float) -> str:
     shown = round_up_error(error)
     leading = math.floor(math.log10(abs(value))) if value else math.floor(math.log10(shown))
     digits = min(15, max(1, leading - math.floor(math.log10(shown)) + 1))
-    return f"{value:.{digits}g} ± {shown:.1g}"
+    # '#' keeps trailing zeros (they are digits shown); a bare trailing point is dropped.
+    return f"{value:#.{digits}g}".replace(".e", "e").rstrip(".") + f" ± {shown:.1g}"
 
 
 def _readout(values: np.ndarray, errors: np.ndarray) -> dict:
@@ -218,17 +231,22 @@ def energy_verdict(E_max: float, error: float, theta_deg: float, searched: bool)
 
 
 def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
-                  check: Callable[[], None] = lambda: None) -> dict:
-    """Everything the page shows for one state; see the module docstring."""
+                  check: Callable[[], None] = lambda: None, params: object = None) -> dict:
+    """Everything the page shows for one state; see the module docstring.
+
+    ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
+    outside a file's slider range) are reported with the computation's own.
+    """
     if convention not in CONVENTIONS:
         raise ArgumentError(f"unknown convention {str(convention)[:40]!r} (known: {', '.join(CONVENTIONS)})",
                             where="convention")
     if quality not in QUALITIES:
         raise ArgumentError(f"quality must be 'coarse' or 'fine', got {str(quality)[:40]!r}", where="quality")
     q = QUALITIES[quality]
-    m = cancellable(model, check)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        model = bind_parameters(model, params)
+        m = cancellable(model, check)
         kwargs = dict(max_evaluations=q.max_evaluations)
         theta_v = math.radians(view_deg)
         points = albedo(m, np.array([theta_v, 0.0]), rtol=q.point_rtol, **kwargs)
@@ -323,13 +341,13 @@ def _lobes(model: Model, theta_v: float, alpha: np.ndarray) -> tuple[dict, dict]
 
 def fit_factor(model: Model, parameter: object, low: object, high: object, count: object, at: object,
                language: object, scale: object = "linear", form: object = "auto",
-               check: Callable[[], None] = lambda: None) -> dict:
+               check: Callable[[], None] = lambda: None, params: object = None) -> dict:
     """Fit α(x) = 1/E over a float parameter's range (:func:`brdfnorm.fit.fit`, ``auto`` form by default) and
-    emit it (:func:`brdfnorm.codegen.emit`)."""
+    emit it (:func:`brdfnorm.codegen.emit`); the other parameters at the page's values ``params``."""
     p = model.parameter(str(parameter)[:80])
     if p.kind != "float":
         raise ArgumentError(f"only float parameters can be fitted; {p.name} is {p.kind}", where="parameter")
-    if not (_is_number(low) and _is_number(high) and math.isfinite(low) and math.isfinite(high) and low < high):
+    if not (_is_finite(low) and _is_finite(high) and low < high):  # type: ignore[operator]
         raise ArgumentError("the range needs finite numbers low < high", where="range")
     if not (isinstance(count, int) and not isinstance(count, bool) and 4 <= count <= 64):
         raise ArgumentError("samples must be a whole number in [4, 64]", where="samples")
@@ -343,9 +361,9 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, count
         raise ArgumentError("form must be a form name such as auto or rational:2/1", where="form")
     assert language in LANGUAGES
     values = np.geomspace(low, high, count) if scale == "log" else np.linspace(low, high, count)
-    m = cancellable(model, check)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        m = cancellable(bind_parameters(model, params), check)
         result = normalize(m, at=at, sweep={p.name: values}, rtol=1e-9)
         factor = result.factor[:, 0, :]
         if not np.allclose(factor, factor[:, :1], rtol=1e-12, atol=0.0):

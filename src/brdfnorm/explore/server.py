@@ -50,7 +50,6 @@ from .compute import (
     FIT_LANGUAGES,
     VIEW_MAX_DEG,
     Superseded,
-    bind_parameters,
     describe_parameters,
     evaluate_view,
     fit_factor,
@@ -104,7 +103,7 @@ def plain_json(value: object) -> object:
 class Explorer:
     """The application state: the catalog, the clients' generations, the event subscribers, the watcher."""
 
-    def __init__(self, catalog: Catalog, *, loopback_only: bool = True) -> None:
+    def __init__(self, catalog: Catalog, *, loopback_only: bool = True, host: str = "127.0.0.1") -> None:
         self.catalog = catalog
         self.generations: OrderedDict[tuple[str, str], int] = OrderedDict()
         self.subscribers: set[asyncio.Queue] = set()
@@ -120,7 +119,8 @@ class Explorer:
             Route("/api/events", self.events),
         ]
         # Against DNS rebinding: a page from another site that resolves its name to 127.0.0.1 is refused.
-        middleware = [Middleware(TrustedHostMiddleware, allowed_hosts=list(LOOPBACK_NAMES))] if loopback_only else []
+        allowed = [*LOOPBACK_NAMES, host, f"[{host}]"]
+        middleware = [Middleware(TrustedHostMiddleware, allowed_hosts=allowed)] if loopback_only else []
         self.app = Starlette(routes=routes, middleware=middleware, lifespan=self.lifespan)
         self.static_files = {"app.js": (STATIC / "app.js", "text/javascript"),
                              "style.css": (STATIC / "style.css", "text/css"),
@@ -159,7 +159,7 @@ class Explorer:
     async def model(self, request: Request) -> Response:
         async def describe() -> dict:
             entry = self.catalog.entry(request.path_params["model_id"])
-            model = await anyio.to_thread.run_sync(self.catalog.get, entry.id, limiter=self.limiter)
+            model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
             return {**entry.describe(), "name": model.name, "formula": model.formula, "channels": model.channels,
                     "parameters": describe_parameters(model), "error": entry.error}
 
@@ -169,19 +169,18 @@ class Explorer:
     async def evaluate(self, request: Request) -> Response:
         async def run() -> dict:
             body = await read_json(request)
+            check = self.claim("view", body, request)  # first: a newer move must cancel older work at once
             entry, model = await self.model_of(body)
-            check = self.claim("view", body)
-            bound = bind_parameters(model, body.get("params"))
             view = view_angle(body.get("view"))
             received = time.perf_counter()
             started = []
 
             def timed() -> dict:
                 started.append(time.perf_counter())
-                return evaluate_view(bound, view, body.get("convention", "normal"), body.get("quality", "coarse"),
-                                     check)
+                return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
+                                     check, params=body.get("params"))
 
-            result = await anyio.to_thread.run_sync(timed, limiter=self.limiter)
+            result = await self.compute(request, check, timed)
             finished = time.perf_counter()
             timing = {"queued_ms": 1e3 * (started[0] - received), "compute_ms": 1e3 * (finished - started[0])}
             return {**result, "model": {"id": entry.id, "version": entry.version, "error": entry.error},
@@ -192,25 +191,39 @@ class Explorer:
     async def fit(self, request: Request) -> Response:
         async def run() -> dict:
             body = await read_json(request)
+            check = self.claim("fit", body, request)
             entry, model = await self.model_of(body)
-            check = self.claim("fit", body)
-            bound = bind_parameters(model, body.get("params"))
-            result = await anyio.to_thread.run_sync(
-                lambda: fit_factor(bound, body.get("parameter"), body.get("low"), body.get("high"),
-                                   body.get("samples"), body.get("at"), body.get("language"),
-                                   body.get("scale", "linear"), body.get("form", "auto"), check),
-                limiter=self.limiter)
+            result = await self.compute(request, check, lambda: fit_factor(
+                model, body.get("parameter"), body.get("low"), body.get("high"), body.get("samples"), body.get("at"),
+                body.get("language"), body.get("scale", "linear"), body.get("form", "auto"), check,
+                params=body.get("params")))
             return {**result, "generation": body["generation"]}
 
         return await self.respond(run)
 
     async def model_of(self, body: dict) -> tuple[Entry, object]:
+        """The entry and its model; a first use compiles it (in a thread, outside the computation queue)."""
         entry = self.catalog.entry(body.get("model"))
-        model = await anyio.to_thread.run_sync(self.catalog.get, entry.id, limiter=self.limiter)
+        model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
         return entry, model
 
-    def claim(self, kind: str, body: dict) -> Callable[[], None]:
-        """Record the request's generation for its client; the returned check raises once a newer one arrives."""
+    async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict]) -> dict:
+        """Run ``work`` in the worker thread, one at a time; a client that hangs up cancels it (``check``)."""
+
+        async def watch_disconnect() -> None:
+            while (await request.receive())["type"] != "http.disconnect":
+                pass
+            check.gone.set()  # type: ignore[attr-defined]
+
+        watcher = asyncio.create_task(watch_disconnect())
+        try:
+            return await anyio.to_thread.run_sync(work, limiter=self.limiter)
+        finally:
+            watcher.cancel()
+
+    def claim(self, kind: str, body: dict, request: Request | None = None) -> Callable[[], None]:
+        """Record the request's generation for its client; the returned check raises once a newer one arrives
+        or the client has gone."""
         client, generation = body.get("client"), body.get("generation")
         if not isinstance(client, str) or not 0 < len(client) <= 64:
             raise ArgumentError("client must be a short string", where="client")
@@ -223,11 +236,13 @@ class Explorer:
         self.generations.move_to_end(key)
         while len(self.generations) > MAX_CLIENTS:
             self.generations.popitem(last=False)
+        gone = threading.Event()
 
         def check() -> None:
-            if self.generations.get(key, generation) != generation:
+            if gone.is_set() or self.generations.get(key, generation) != generation:
                 raise Superseded
 
+        check.gone = gone  # type: ignore[attr-defined]
         return check
 
     async def respond(self, work: Callable[[], object]) -> Response:
@@ -347,7 +362,7 @@ def url_of(sock: socket.socket) -> str:
 
 
 def make_server(catalog: Catalog, host: str) -> _Server:
-    explorer = Explorer(catalog, loopback_only=is_loopback(host))
+    explorer = Explorer(catalog, loopback_only=is_loopback(host), host=host.strip("[]"))
     config = uvicorn.Config(explorer.app, log_level="warning", access_log=False, lifespan="on",
                             timeout_graceful_shutdown=1)
     return _Server(config)
