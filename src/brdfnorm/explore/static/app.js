@@ -100,7 +100,7 @@ function buildControls(description, previous) {
       const s = p.slider;
       const range = element("input", {
         type: "range", id: "param-" + p.name, "data-testid": "param-" + p.name,
-        min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high, step: s.log ? 1 : (s.high - s.low) / 1000,
+        min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high, step: "any",
       });
       range.value = valueToSlider(s, values[p.name]);
       const box = element("input", { type: "number", step: "any", "data-testid": "param-" + p.name + "-value",
