@@ -321,8 +321,8 @@ def _lobes(model: Model, theta_v: float, alpha: np.ndarray) -> tuple[dict, dict]
     e1 = np.cross(P, [0.0, 1.0, 0.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(P, e1)
-    a = np.pi * np.linspace(0.0, 1.0, 33) ** 2
-    b = np.linspace(0.0, 2 * np.pi, 61)
+    a = np.pi * np.linspace(0.0, 1.0, 25) ** 2
+    b = np.linspace(0.0, 2 * np.pi, 49)
     A, B = np.meshgrid(a, b, indexing="ij")
     L3 = (np.cos(A)[..., None] * P + np.sin(A)[..., None] * (np.cos(B)[..., None] * e1 + np.sin(B)[..., None] * e2))
     with np.errstate(all="ignore"):

@@ -253,13 +253,16 @@ async function render(data, generation) {
   draw("lobe", plotLobe);
   draw("albedo", plotAlbedo);
   await nextFrame();  // the 2-D plots and numbers are on screen; the 3-D surface (WebGL) follows
+  const flat = performance.now();
   if (generation !== state.generation) return;
   draw("surface", plotSurface);
   await nextFrame();
   // Where the time of the last update went (the status tooltip shows it; the benchmark reads it).
   const moved = state.movedAt.get(generation);
-  const timing = { ...data.timing, draw_ms: timings, latency_ms: moved === undefined ? null
-                   : Math.round(performance.now() - moved) };
+  const now = performance.now();
+  const timing = { ...data.timing, draw_ms: timings, generation, page_ms: Math.round(now),
+                   page_2d_ms: Math.round(flat), latency_ms: moved === undefined ? null : Math.round(now - moved),
+                   latency_2d_ms: moved === undefined ? null : Math.round(flat - moved) };
   document.body.dataset[data.quality + "Timing"] = JSON.stringify(timing);
   $("status").title = `${data.quality}: server ${Math.round(timing.compute_ms)} ms, `
     + `move to plots ${timing.latency_ms} ms`;
