@@ -276,11 +276,19 @@ class Explorer:
                     except TimeoutError:
                         yield ": keep-alive\n\n"
                         continue
+                    if message is None:  # the server is stopping
+                        return
                     yield f"data: {json.dumps(plain_json(message))}\n\n"
             finally:
                 self.subscribers.discard(queue)
 
         return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache"})
+
+    def close_streams(self) -> None:
+        """End every event stream (at shutdown, so that no connection holds the server open)."""
+        for queue in list(self.subscribers):
+            with contextlib.suppress(asyncio.QueueFull):
+                queue.put_nowait(None)
 
     def publish(self, entry: Entry) -> None:
         message = {"model": entry.id, "version": entry.version, "error": entry.error}
@@ -325,7 +333,16 @@ async def read_json(request: Request) -> dict:
 # -- serving --------------------------------------------------------------------------------------------------
 
 class _Server(uvicorn.Server):
-    """uvicorn's server without re-raising the signal that stopped it: Ctrl-C ends ``serve`` normally."""
+    """uvicorn's server, ending the explorer's event streams first at shutdown, and without re-raising the
+    signal that stopped it: Ctrl-C ends ``serve`` normally."""
+
+    def __init__(self, config: uvicorn.Config, explorer: Explorer) -> None:
+        super().__init__(config)
+        self.explorer = explorer
+
+    async def shutdown(self, sockets: list[socket.socket] | None = None) -> None:
+        self.explorer.close_streams()
+        await super().shutdown(sockets=sockets)
 
     @contextlib.contextmanager
     def capture_signals(self) -> Iterator[None]:
@@ -364,8 +381,8 @@ def url_of(sock: socket.socket) -> str:
 def make_server(catalog: Catalog, host: str) -> _Server:
     explorer = Explorer(catalog, loopback_only=is_loopback(host), host=host.strip("[]"))
     config = uvicorn.Config(explorer.app, log_level="warning", access_log=False, lifespan="on",
-                            timeout_graceful_shutdown=1)
-    return _Server(config)
+                            timeout_graceful_shutdown=2)
+    return _Server(config, explorer)
 
 
 def serve(catalog: Catalog, sock: socket.socket) -> None:

@@ -342,8 +342,8 @@ function plotAlbedo(data) {
                   line: { color: c.normalized.length === 1 ? "#2ca02c" : CHANNEL_COLORS[k], dash: "dash", width: 2 } });
   });
   // Two panels sharing θ_o: E with its band above, α·E (the energy kept, 1 = all of it) below.
-  const layout = { ...BASE_LAYOUT, margin: { l: 64, r: 16, t: 8, b: 40 },
-    xaxis: { title: { text: "θ_o (degrees)" }, range: [0, 90], anchor: "y2" },
+  const layout = { ...BASE_LAYOUT, margin: { l: 64, r: 16, t: 8, b: 64 },
+    xaxis: { title: { text: "θ_o (degrees)", standoff: 4 }, range: [0, 90], anchor: "y2" },
     yaxis: { title: { text: "E(θ_o)" }, rangemode: "tozero", domain: [0.45, 1] },
     yaxis2: { title: { text: "α·E" }, rangemode: "tozero", domain: [0, 0.36] },
     shapes: [
@@ -351,7 +351,7 @@ function plotAlbedo(data) {
         line: { color: "#ff7f0e", width: 1, dash: "dot" } },
       { type: "line", xref: "paper", yref: "y2", x0: 0, x1: 1, y0: 1, y1: 1, line: { color: "#999", width: 1 } },
     ],
-    legend: { orientation: "v", x: 1.0, xanchor: "right", y: 1.0, bgcolor: "rgba(255,255,255,0.7)" } };
+    legend: { orientation: "h", x: 0, y: -0.16, traceorder: "normal" } };
   Plotly.react("plot-albedo", traces, layout, PLOT_CONFIG);
 }
 
