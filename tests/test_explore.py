@@ -273,6 +273,7 @@ def test_dns_rebinding_is_refused(server_url):
     assert httpx.get(server_url, headers={"Host": "attacker.example"}).status_code == 400
     page = httpx.get(server_url)
     assert page.status_code == 200 and 'data-testid="view-angle"' in page.text
+    assert "script-src 'self'" in page.headers["content-security-policy"]
     assert httpx.get(server_url + "static/plotly.min.js").status_code == 200
 
 

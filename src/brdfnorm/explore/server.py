@@ -62,6 +62,11 @@ MAX_BODY = 64 * 1024
 #: Clients whose generation numbers are remembered (the oldest are forgotten first).
 MAX_CLIENTS = 1024
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1", "[::1]")
+#: The page runs only its own two scripts (plotly's WebGL layer, regl, compiles its draw calls with
+#: ``new Function``, hence 'unsafe-eval'; plotly sets inline styles) and talks only to this server.
+PAGE_POLICY = ("default-src 'none'; script-src 'self' 'unsafe-eval'; style-src 'self' 'unsafe-inline'; "
+               "img-src 'self' data: blob:; connect-src 'self'; font-src 'self' data:; base-uri 'none'; "
+               "form-action 'none'; frame-ancestors 'none'")
 log = logging.getLogger("brdfnorm.explore")
 
 
@@ -142,7 +147,8 @@ class Explorer:
     # -- pages and assets ---------------------------------------------------------------------------------------
     async def page(self, request: Request) -> Response:
         return FileResponse(STATIC / "index.html", media_type="text/html; charset=utf-8",
-                            headers={"Cache-Control": "no-cache"})
+                            headers={"Cache-Control": "no-cache", "Content-Security-Policy": PAGE_POLICY,
+                                     "X-Content-Type-Options": "nosniff"})
 
     async def static(self, request: Request) -> Response:
         name = request.path_params["name"]
