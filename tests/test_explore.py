@@ -139,11 +139,9 @@ def test_cancellation_stops_a_running_view_at_the_next_integrand_batch():
         if len(calls) > 3:
             raise Superseded
 
-    started = time.perf_counter()
     with pytest.raises(Superseded):
         evaluate_view(bn.load(str(GGX)), 30.0, "max", "fine", check)
     assert len(calls) == 4  # no evaluation after the check failed
-    assert time.perf_counter() - started < 5.0
 
 
 def test_parameters_from_the_page_are_checked_by_kind():
@@ -227,6 +225,15 @@ def test_server_survives_malformed_requests(server_url):
         response = post(server_url, "api/evaluate", body)
         assert response.status_code == status, (body[:80], response.text)
         assert "error" in response.json()
+    fits = [{"parameter": "roughness", "low": 0.1, "high": 1.0, "samples": 10**9, "at": "normal", "language": "glsl"},
+            {"parameter": "roughness", "low": 1.0, "high": 0.1, "samples": 8, "at": "normal", "language": "glsl"},
+            {"parameter": "roughness", "low": 0.1, "high": 1.0, "samples": 8, "at": "max", "language": "rust"},
+            {"parameter": "roughness", "low": 0.1, "high": 1.0, "samples": 8, "at": "normal", "language": "glsl",
+             "form": "x" * 1000},
+            {"parameter": "../f0", "low": 0.1, "high": 1.0, "samples": 8, "at": "normal", "language": "glsl"}]
+    for fit in fits:
+        response = post(server_url, "api/fit", {"model": "arg0", "client": "c", "generation": next(generation), **fit})
+        assert response.status_code == 400 and "error" in response.json(), (fit, response.text)
     # Raw junk on the socket, and a request cut off mid-body.
     host, port = server_url.split("//")[1].rstrip("/").split(":")
     for junk in (b"\x00\x01\x02 garbage\r\n\r\n", b"POST /api/evaluate HTTP/1.1\r\nContent-Length: 500\r\n\r\n{\"a"):
