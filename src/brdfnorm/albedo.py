@@ -38,6 +38,8 @@ class AlbedoResult:
     over: Over
     params: dict = field(default_factory=dict)  # parameter values broadcast to S (colors: (*S, 3))
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
+    lower: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed lower bound (method "certified")
+    upper: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed upper bound (method "certified")
 
 
 @dataclass(frozen=True)
@@ -124,8 +126,10 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    run: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]]
+    run: Callable[..., tuple]  # (value, error, evaluations, converged, nonfinite share[, bounds])
     description: str = ""
+    #: Keyword options of :func:`albedo` this method takes besides the tolerances (e.g. ``digits``).
+    options: tuple[str, ...] = ()
 
 
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
@@ -211,20 +215,29 @@ def albedo(
     method: str = "auto",
     nonfinite: NonFinitePolicy = "raise",
     max_evaluations: int = 20_000_000,
+    digits: int | None = None,
 ) -> AlbedoResult:
     """Directional albedo of ``model`` at polar angles ``theta`` and azimuths ``phi`` (radians, broadcast).
 
     Parameter values bound to the model may be arrays (a sweep); they broadcast with ``theta`` and ``phi``.
     Returns values of shape (*S, C) with an absolute error estimate; a point that did not reach the
     tolerance within ``max_evaluations`` has ``converged`` False and triggers a warning.
+    ``digits`` (method ``"certified"`` only, default 30) is the number of significant digits asked of the
+    enclosure; the result then also carries ``lower`` and ``upper``.
     """
     check_tolerance(rtol, atol)
     if nonfinite not in ("raise", "zero"):
         raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {nonfinite!r}", where="nonfinite")
     problem = make_problem(model, theta, phi, over)
     chosen = resolve_method(model, over, method)
-    value, error, evaluations, converged, bad = chosen.run(
-        problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    options = {"digits": digits}
+    for name, given in options.items():
+        if given is not None and name not in chosen.options:
+            raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
+    value, error, evaluations, converged, bad, *bounds = chosen.run(
+        problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
+        **{name: given for name, given in options.items() if given is not None})
+    bounds = bounds[0] if bounds else {}
     S, C = problem.shape, value.shape[-1]
     if not np.all(converged):
         warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
@@ -237,6 +250,7 @@ def albedo(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+        **{name: bound.reshape(S + (C,)) for name, bound in bounds.items()},
     )
 
 
@@ -263,3 +277,10 @@ from .series import albedo_method as _series  # noqa: E402
 
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
+
+# Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
+# by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).
+from . import certified as _certified  # noqa: E402
+
+register_method(Method("certified", _certified.applies, _certified.albedo_method,
+                       "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)))

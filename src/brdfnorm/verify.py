@@ -17,7 +17,7 @@ angle as E (R·V = L·mirror(V)), so the peak premises are checked on E.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mpmath as mp
 import numpy as np
@@ -56,9 +56,12 @@ class Claim:
     ok: bool
     detail: str = ""
     cases: list[dict] = field(default_factory=list)
+    #: With ``verify(certified=True)``: the albedo enclosures the claim was checked against (see :func:`certify`).
+    certified: dict | None = None
 
     def as_dict(self) -> dict:
         return {
+            **({} if self.certified is None else {"certified": self.certified}),
             "id": self.id,
             "source": self.source,
             "statement": self.statement,
@@ -674,11 +677,63 @@ def check_exponents(exponents: Sequence[float]) -> np.ndarray:
     return n
 
 
-def verify(exponents: Sequence[float] = DEFAULT_EXPONENTS, only: Sequence[str] | None = None) -> list[Claim]:
-    """Run the checks (all, or the ids in ``only``) at the given exponents for the parametric claims."""
+def verify(exponents: Sequence[float] = DEFAULT_EXPONENTS, only: Sequence[str] | None = None,
+           certified: bool = False, digits: int = 30) -> list[Claim]:
+    """Run the checks (all, or the ids in ``only``) at the given exponents for the parametric claims.
+
+    ``certified``: also check every claim that is an albedo value against a guaranteed enclosure
+    (:func:`certify`); a claim whose formula falls outside its enclosure is then not ok.
+    """
     n = check_exponents(exponents)
     ids = list(CHECKS) if only is None else list(only)
     unknown = [i for i in ids if i not in CHECKS]
     if unknown:
         raise ArgumentError(f"unknown claim id(s) {', '.join(unknown)} (known: {', '.join(CHECKS)})", where="claim")
-    return [CHECKS[i](n) for i in ids]
+    claims = [CHECKS[i](n) for i in ids]
+    return [certify(claim, digits) for claim in claims] if certified else claims
+
+
+#: Claims that are albedo values: id -> (model, view angle in degrees, whether the seed's formula is a closed form
+#: (checked in ball arithmetic, brdfnorm.certified.NORMAL_INCIDENCE_CLOSED_FORMS) or a numerical procedure (then it
+#: must agree within the claim's tolerance)).
+CERTIFIABLE: dict[str, tuple[str, float, bool]] = {
+    "phong-original": ("phong", 0.0, True),
+    "phong-modified": ("modified-phong", 0.0, True),
+    "blinn-phong-normal": ("blinn-phong", 0.0, True),
+    "bp-spherical-form": ("blinn-phong", 60.0, False),
+    "bp-hypergeometric-series": ("blinn-phong", 45.0, False),
+}
+#: The tolerance of the claims whose formula is a float64 procedure (the claims' own, relative).
+CERTIFIED_FLOAT_TOLERANCE = 1e-10
+
+
+def certify(claim: Claim, digits: int = 30) -> Claim:
+    """``claim`` with ``certified`` filled in: per exponent, the enclosure [lower, upper] of the albedo and whether
+    the seed's formula lies inside it (closed forms, evaluated in Arb) or within the claim's tolerance of it
+    (formulas that are float64 procedures). Claims that are not albedo values are returned unchanged."""
+    if claim.id not in CERTIFIABLE:
+        return claim
+    import flint
+
+    from . import certified
+    from .models import REGISTRY
+
+    model_name, degrees, closed_form = CERTIFIABLE[claim.id]
+    cases = []
+    for case in claim.cases:
+        n = case["n"]
+        (enclosure,) = certified.enclose(REGISTRY[model_name](n=n), np.radians(degrees), {"n": n}, digits=digits)
+        if closed_form:
+            inside = certified.closed_form_inside(model_name, n, enclosure)
+        else:  # the claim's formula value is the albedo computed by the seed's procedure, in float64
+            old, flint.ctx.prec = flint.ctx.prec, 4 * digits + 64
+            try:
+                value = flint.arb(float(case["formula_value"]))
+                slack = CERTIFIED_FLOAT_TOLERANCE * abs(value)
+                inside = bool(flint.arb(enclosure.lower) - slack <= value <= flint.arb(enclosure.upper) + slack)
+            finally:
+                flint.ctx.prec = old
+        cases.append({"n": n, "lower": enclosure.lower, "upper": enclosure.upper, "inside": inside})
+    summary = {"model": model_name, "theta_deg": degrees, "digits": digits, "exact_formula": closed_form,
+               "ok": all(c["inside"] for c in cases), "cases": cases}
+    return replace(claim, ok=claim.ok and summary["ok"], certified=summary)

@@ -46,7 +46,7 @@ class Over(str, Enum):
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
-             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL"}
+             "over": "--over", "digits": "--digits", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL"}
 
 
 def console() -> Console:

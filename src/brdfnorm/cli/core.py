@@ -43,7 +43,8 @@ class NonFinite(str, Enum):
 
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
-METHOD_OPTION = typer.Option("auto", "--method", help="auto | quadrature | closed-form | series (where it applies).")
+METHOD_OPTION = typer.Option("auto", "--method",
+                             help="auto | quadrature | closed-form | series | certified (where it applies).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
@@ -74,32 +75,43 @@ def albedo(
     rtol: float = RTOL_OPTION,
     nonfinite: NonFinite = typer.Option(NonFinite.raise_, "--nonfinite",
                                         help="raise: fail at the first NaN/Inf; zero: count them as 0 (warns)."),
+    digits: int = typer.Option(None, "--digits", min=1,
+                               help="With --method certified: significant digits of the enclosure (default 30)."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
     debug: bool = DEBUG_OPTION,
 ) -> None:
-    """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view)."""
+    """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
+
+    With --method certified the albedo is a guaranteed enclosure [lower, upper] (Arb ball arithmetic), printed
+    as decimals rounded outward; JSON carries them as strings so that no digit is lost to float parsing.
+    """
     with guarded(debug):
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
         result = compute_albedo(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol,
-                                method=method, nonfinite=nonfinite.value)
+                                method=method, nonfinite=nonfinite.value, digits=digits)
         rows = [
             {"theta_deg": float(d), "phi_deg": azimuth, "albedo": channel_value(result.value[i]),
              "error_estimate": channel_value(result.error[i]), "method": result.method,
              "evaluations": int(result.evaluations[i]), "converged": bool(result.converged[i])}
+            | ({} if result.lower is None else {"lower": _decimals(result.lower[i]),
+                                                "upper": _decimals(result.upper[i])})
             for i, d in enumerate(degrees)
         ]
         if json_output:
             print_json({"model": m.name, "params": m.params, "over": over.value, "rtol": rtol, "results": rows})
             return
         table = Table(title=f"{m.name} albedo over the {over.value} ({_params_text(m.params)})")
-        for column in ("θ (deg)", "φ (deg)", "albedo", "error estimate", "method", "evaluations"):
-            table.add_column(column, justify="right")
+        certified = result.lower is not None
+        columns = ("θ (deg)", "φ (deg)", "albedo", "error estimate", "method", "evaluations")
+        for column in columns + (("lower", "upper") if certified else ()):
+            table.add_column(column, justify="right", overflow="fold")
         for row in rows:
+            bounds = (" ".join(np.atleast_1d(row["lower"])), " ".join(np.atleast_1d(row["upper"]))) if certified else ()
             table.add_row(f"{row['theta_deg']:g}", f"{row['phi_deg']:g}", _num(row["albedo"]),
                           _num(row["error_estimate"], 3), row["method"] + ("" if row["converged"] else " (!)"),
-                          str(row["evaluations"]))
+                          str(row["evaluations"]), *bounds)
         console().print(table)
 
 
@@ -219,6 +231,11 @@ def _csv(rows: list[dict]) -> str:
             repr(row["theta_deg"]), repr(row["phi_deg"]), _flat(row["albedo"]), _flat(row["error_estimate"]),
             _flat(row["factor"]), row["method"], row["at"]])
     return buffer.getvalue().rstrip("\n")
+
+
+def _decimals(values: np.ndarray):
+    """Certified bounds (decimal strings): a string for single-channel models, a list for multi-channel ones."""
+    return str(values[0]) if values.size == 1 else [str(v) for v in values]
 
 
 def _flat(value) -> str:

@@ -88,9 +88,41 @@ class FactorTable:
     error: dict[str, np.ndarray]  # lobe -> (S,) relative error estimate of the quadrature factor
     theta_max: dict[str, np.ndarray]  # lobe -> (S,) θ (radians) of the largest albedo over θ ∈ [0°, 89.9°]
     max_over_normal: dict[str, np.ndarray]  # lobe -> (S,) E(θ_max)/E(0) − 1 (0 when the max is at N)
+    certified: CertifiedFactors | None = None  # None where python-flint (brdfnorm[certified]) is not installed
 
     def relative_difference(self, lobe: str) -> np.ndarray:
         return self.quadrature[lobe] / self.closed[lobe] - 1.0
+
+
+@dataclass(frozen=True)
+class CertifiedFactors:
+    """Guaranteed enclosures of the albedo at L = N for every lobe and n of the factor table (brdfnorm.certified)."""
+
+    digits: int
+    radius: dict[str, np.ndarray]  # lobe -> (S,) relative radius of the enclosure
+    closed_inside: dict[str, np.ndarray]  # lobe -> (S,) the closed form lies inside the enclosure (lobes with one)
+    quadrature_covered: dict[str, np.ndarray]  # lobe -> (S,) the quadrature estimate covers its distance to it
+
+
+def certified_factors(n: np.ndarray, quadrature: dict, error: dict, digits: int = 30) -> CertifiedFactors | None:
+    from .. import certified
+    from ..errors import ArgumentError
+
+    try:
+        certified.require_flint()
+    except ArgumentError:
+        return None
+    radius, inside, covered = {}, {}, {}
+    for lobe in SEED_LOBES:
+        enclosures = [certified.enclose(load(lobe, n=k), 0.0, {"n": float(k)}, digits=digits)[0] for k in n]
+        radius[lobe] = np.array([float(e.ball.rad()) / abs(e.value) for e in enclosures])
+        # the float64 factor's relative error estimate against its distance from the certified albedo
+        covered[lobe] = np.array([abs(1.0 / q - e.value) / e.value <= r + e.error / e.value
+                                  for q, r, e in zip(quadrature[lobe], error[lobe], enclosures, strict=True)])
+        if lobe in CLOSED_FORM_OF:
+            inside[lobe] = np.array([certified.closed_form_inside(lobe, float(k), e)
+                                     for k, e in zip(n, enclosures, strict=True)])
+    return CertifiedFactors(digits, radius, inside, covered)
 
 
 def factor_table(config: StudyConfig) -> FactorTable:
@@ -106,7 +138,7 @@ def factor_table(config: StudyConfig) -> FactorTable:
         at_max = normalize(model, "max", sweep={"n": n}, rtol=config.search_rtol, method="quadrature")
         theta_max[lobe] = at_max.theta[:, 0]
         excess[lobe] = at_max.albedo[:, 0, 0] * at_normal.factor[:, 0, 0] - 1.0
-    return FactorTable(n, closed, quad, error, theta_max, excess)
+    return FactorTable(n, closed, quad, error, theta_max, excess, certified_factors(n, quad, error))
 
 
 @dataclass(frozen=True)
