@@ -107,7 +107,7 @@ def main(moves: int = 8) -> None:
     (RESULTS / "explore.json").write_text(json.dumps(summary, indent=1) + "\n")
     lines = ["# brdfnorm explore: page load and update latency", "",
              f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before and {load_after[0]:.1f} after the run "
-             "(other processes share the machine). Headless Chromium (software WebGL), cold cache per model.", "",
+             "(other processes share the machine). Headless Chromium, cold cache per model.", "",
              "| model | first load: numbers + 2-D plots | + 3-D | first refined | reload: 2-D / + 3-D "
              "| update: numbers + 2-D | + 3-D (median) | + 3-D (max) | server (coarse) | draw | refined median "
              "| last move of a drag |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]

@@ -188,7 +188,7 @@ def server_url():
 
 def post(url: str, path: str, body) -> httpx.Response:
     data = body if isinstance(body, (bytes, str)) else json.dumps(body)
-    return httpx.post(url + path.lstrip("/"), content=data, timeout=60)
+    return httpx.post(url + path.lstrip("/"), content=data, timeout=60, headers={"Content-Type": "application/json"})
 
 
 def view_request(**overrides) -> dict:
@@ -274,6 +274,18 @@ def test_only_loopback_addresses_count_as_local():
 
     assert all(is_loopback(h) for h in ("127.0.0.1", "localhost", "::1", "[::1]", "127.0.0.2"))
     assert not any(is_loopback(h) for h in ("0.0.0.0", "::", "192.168.1.2", "example.com"))
+
+
+def test_other_sites_cannot_make_the_server_compute(server_url):
+    body = json.dumps(view_request(client="site", generation=1))
+    as_form = httpx.post(server_url + "api/evaluate", content=body, headers={"Content-Type": "text/plain"})
+    assert as_form.status_code == 415  # what a cross-site page can send without a preflight
+    foreign = httpx.post(server_url + "api/evaluate", content=body,
+                         headers={"Content-Type": "application/json", "Origin": "https://attacker.example"})
+    assert foreign.status_code == 403
+    own = httpx.post(server_url + "api/evaluate", content=body,
+                     headers={"Content-Type": "application/json", "Origin": server_url.rstrip("/")})
+    assert own.status_code == 200
 
 
 def test_dns_rebinding_is_refused(server_url):

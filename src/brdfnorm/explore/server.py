@@ -318,7 +318,16 @@ class Explorer:
 
 
 async def read_json(request: Request) -> dict:
-    """The request's JSON object, at most :data:`MAX_BODY` bytes."""
+    """The request's JSON object, at most :data:`MAX_BODY` bytes.
+
+    Only ``Content-Type: application/json`` from this server's own pages: another site's page cannot send
+    that cross-origin without a CORS preflight, which this server never grants (no computing on its behalf).
+    """
+    origin = request.headers.get("origin")
+    if origin is not None and origin != f"{request.url.scheme}://{request.headers.get('host', '')}":
+        raise RequestError(403, "requests from other sites are refused")
+    if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
+        raise RequestError(415, "the request body must be JSON (Content-Type: application/json)")
     length = request.headers.get("content-length")
     if length is not None and (not length.isdigit() or int(length) > MAX_BODY):
         raise RequestError(413, f"request body over {MAX_BODY} bytes")

@@ -200,9 +200,7 @@ async function run() {
   }
   state.inflight = false;
   if (state.pending) { run(); return; }
-  if (!(await accept(coarse, generation))) return;
-  await nextFrame();  // let the coarse plots reach the screen before the refinement takes the CPU
-  if (generation !== state.generation) return;
+  if (!(await accept(coarse, generation))) return;  // (accept returns once the coarse plots are on screen)
   setStatus("refining…", "refining");
   let fine;
   try {
@@ -252,11 +250,9 @@ async function render(data, generation) {
   };
   draw("lobe", plotLobe);
   draw("albedo", plotAlbedo);
-  await nextFrame();  // the 2-D plots and numbers are on screen; the 3-D surface (WebGL) follows
   const flat = performance.now();
-  if (generation !== state.generation) return;
   draw("surface", plotSurface);
-  await nextFrame();
+  await nextFrame();  // on screen
   // Where the time of the last update went (the status tooltip shows it; the benchmark reads it).
   const moved = state.movedAt.get(generation);
   const now = performance.now();
@@ -296,26 +292,95 @@ function plotLobe(data) {
   Plotly.react("plot-lobe", traces, layout, PLOT_CONFIG);
 }
 
+// The 3-D lobe is drawn as a wireframe projected in this script (drag to turn it): SVG, like the other plots,
+// because a WebGL scene costs seconds to start and a third of a second per frame where WebGL runs in software.
+const camera = { azimuth: -55, elevation: 22 };
+const RING_COLORS = ["#440154", "#3b528b", "#21918c", "#5ec962", "#fde725"];
+
+function project(x, y, z) {
+  const a = camera.azimuth * Math.PI / 180;
+  const e = camera.elevation * Math.PI / 180;
+  const across = x * Math.cos(a) + y * Math.sin(a);
+  const depth = -x * Math.sin(a) + y * Math.cos(a);
+  return [across, z * Math.cos(e) + depth * Math.sin(e)];
+}
+
+function polyline(points) {  // [[x, y, z], ...] -> projected xs, ys with a null after the line
+  const xs = [], ys = [];
+  for (const [x, y, z] of points) {
+    if (x === null || y === null || z === null) { xs.push(null); ys.push(null); continue; }
+    const [u, v] = project(x, y, z);
+    xs.push(u); ys.push(v);
+  }
+  xs.push(null); ys.push(null);
+  return [xs, ys];
+}
+
 function plotSurface(data) {
   const s = data.surface;
-  const radius = Math.max(1e-300, ...s.z.flat().filter((v) => v !== null).map(Math.abs),
-                          ...s.x.flat().filter((v) => v !== null).map(Math.abs));
-  const traces = [
-    { type: "surface", x: s.x, y: s.y, z: s.z, surfacecolor: s.z.map((row, i) => row.map((_, j) => {
-        const [a, b, c] = [s.x[i][j], s.y[i][j], s.z[i][j]];
-        return a === null ? null : Math.hypot(a, b, c);
-      })),
-      colorscale: "Viridis", showscale: false, name: "lobe", hoverinfo: "skip" },
-    { type: "scatter3d", mode: "lines", x: [0, radius * s.view[0]], y: [0, radius * s.view[1]],
-      z: [0, radius * s.view[2]], line: { color: "#ff7f0e", width: 6 }, name: "V (view)" },
-  ];
-  const axis = (title) => ({ title: { text: title }, range: [-radius, radius], showspikes: false });
-  const layout = { ...BASE_LAYOUT, margin: { l: 0, r: 0, t: 0, b: 0 }, showlegend: false,
-    scene: { xaxis: axis("X"), yaxis: axis("Y"), zaxis: { ...axis("N"), range: [0, radius] },
-             aspectmode: "manual", aspectratio: { x: 1, y: 1, z: 0.5 },
-             camera: { eye: { x: 0.2, y: -1.7, z: 0.8 } } },
-    uirevision: "keep-camera" };
-  Plotly.react("plot-3d", traces, layout, PLOT_CONFIG);
+  state.lastSurface = s;
+  const rows = s.x.length, columns = s.x[0].length;
+  let radius = 1e-300;
+  for (let i = 0; i < rows; i++) for (let j = 0; j < columns; j++) {
+    if (s.x[i][j] !== null) radius = Math.max(radius, Math.hypot(s.x[i][j], s.y[i][j], s.z[i][j]));
+  }
+  const traces = [];
+  const line = (points, color, width, name, dash) => {
+    const [x, y] = polyline(points);
+    traces.push({ x, y, type: "scatter", mode: "lines", hoverinfo: "skip", name,
+                  line: { color, width, dash: dash || "solid" } });
+  };
+  const circle = [];
+  for (let k = 0; k <= 72; k++) {
+    const t = 2 * Math.PI * k / 72;
+    circle.push([radius * Math.cos(t), radius * Math.sin(t), 0]);
+  }
+  line(circle, "#b8bec9", 1, "horizon", "dot");
+  line([[-radius, 0, 0], [radius, 0, 0]], "#b8bec9", 1, "X axis");
+  line([[0, -radius, 0], [0, radius, 0]], "#b8bec9", 1, "Y axis");
+  line([[0, 0, 0], [0, 0, radius]], "#8a93a3", 1.5, "N");
+  const meridians = [];  // lines of constant azimuth about the mirror direction
+  for (let j = 0; j < columns; j += 2) {
+    meridians.push(...Array.from({ length: rows }, (_, i) => [s.x[i][j], s.y[i][j], s.z[i][j]]), [null, null, null]);
+  }
+  line(meridians, "rgba(59,82,139,0.45)", 1, "lobe");
+  const bands = RING_COLORS.map(() => []);  // rings about the mirror direction, coloured from the peak outwards
+  for (let i = 1; i < rows; i++) {
+    const band = bands[Math.min(bands.length - 1, Math.floor(bands.length * i / rows))];
+    band.push(...Array.from({ length: columns }, (_, j) => [s.x[i][j], s.y[i][j], s.z[i][j]]), [null, null, null]);
+  }
+  bands.forEach((points, k) => line(points, RING_COLORS[k], 1.2, "lobe"));
+  line([[0, 0, 0], s.view.map((c) => c * radius)], "#ff7f0e", 3, "V (view)");
+  const labels = [["N", [0, 0, 1.08 * radius]], ["X", [1.1 * radius, 0, 0]], ["Y", [0, 1.1 * radius, 0]],
+                  ["V", s.view.map((c) => 1.1 * c * radius)]];
+  const placed = labels.map(([, p]) => project(...p));
+  traces.push({ x: placed.map((p) => p[0]), y: placed.map((p) => p[1]), text: labels.map(([t]) => t),
+                type: "scatter", mode: "text", hoverinfo: "skip", textfont: { size: 12, color: "#5d6677" } });
+  const layout = { ...BASE_LAYOUT, margin: { l: 8, r: 8, t: 8, b: 8 }, showlegend: false, dragmode: false,
+    plot_bgcolor: "rgba(0,0,0,0)",
+    xaxis: { visible: false, range: [-1.2 * radius, 1.2 * radius], fixedrange: true },
+    yaxis: { visible: false, scaleanchor: "x", scaleratio: 1, fixedrange: true },
+    annotations: [{ text: "drag to turn", xref: "paper", yref: "paper", x: 1, y: 0, showarrow: false,
+                    font: { size: 10, color: "#8a93a3" }, xanchor: "right", yanchor: "bottom" }] };
+  Plotly.react("plot-3d", traces, layout, { ...PLOT_CONFIG, staticPlot: false, displayModeBar: false });
+}
+
+function enableTurning() {
+  const div = $("plot-3d");
+  let last = null;
+  let queued = false;
+  div.addEventListener("pointerdown", (event) => { last = [event.clientX, event.clientY]; div.setPointerCapture(event.pointerId); });
+  div.addEventListener("pointerup", () => { last = null; });
+  div.addEventListener("pointermove", (event) => {
+    if (!last || !state.lastSurface) return;
+    camera.azimuth -= 0.4 * (event.clientX - last[0]);
+    camera.elevation = Math.min(89, Math.max(-10, camera.elevation + 0.4 * (event.clientY - last[1])));
+    last = [event.clientX, event.clientY];
+    if (!queued) {
+      queued = true;
+      requestAnimationFrame(() => { queued = false; plotSurface({ surface: state.lastSurface }); });
+    }
+  });
 }
 
 function plotAlbedo(data) {
@@ -451,6 +516,7 @@ async function start() {
     schedule();
   });
   $("fit-parameter").addEventListener("change", setFitRange);
+  enableTurning();
   $("fit-run").addEventListener("click", runFit);
   $("fit-copy").addEventListener("click", copyCode);
   listen();
