@@ -221,8 +221,6 @@ async function accept(response, generation) {
   }
   state.requestError = null;
   showErrors();
-  await plotlyReady;
-  if (generation !== state.generation) return false;
   await render(response.data, generation);
   return generation === state.generation;
 }
@@ -242,6 +240,9 @@ async function render(data, generation) {
   $("quality").textContent = data.quality === "fine" ? "refined" : "coarse, refining…";
   const warnings = $("warnings");
   warnings.replaceChildren(...data.warnings.map((w) => element("li", {}, w)));
+  const numbers = performance.now();
+  await plotlyReady;  // the numbers need no plotting library; on a first visit they come before it is ready
+  if (generation !== state.generation) return;
   const timings = {};
   const draw = (name, plot) => {
     const begin = performance.now();
@@ -257,6 +258,7 @@ async function render(data, generation) {
   const moved = state.movedAt.get(generation);
   const now = performance.now();
   const timing = { ...data.timing, draw_ms: timings, generation, page_ms: Math.round(now),
+                   page_numbers_ms: Math.round(numbers),
                    page_2d_ms: Math.round(flat), latency_ms: moved === undefined ? null : Math.round(now - moved),
                    latency_2d_ms: moved === undefined ? null : Math.round(flat - moved) };
   document.body.dataset[data.quality + "Timing"] = JSON.stringify(timing);
