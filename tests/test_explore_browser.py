@@ -32,7 +32,7 @@ TIMEOUT_MS = 60_000
 REFINED = """([view]) => {
   const readout = document.querySelector('[data-testid=readout-albedo]');
   return readout.dataset.quality === 'fine' && readout.dataset.generation === document.body.dataset.generation
-    && Number(document.querySelector('[data-testid=view-angle-value]').value) === view;
+    && (view === null || Number(document.querySelector('[data-testid=view-angle-value]').value) === view);
 }"""
 
 
@@ -56,16 +56,16 @@ def page(watched):
         browser.close()
 
 
-def refined(page, view: float = 30.0) -> None:
+def refined(page, view: float | None = None) -> None:
     page.wait_for_function(REFINED, arg=[view], timeout=TIMEOUT_MS, polling=50)
 
 
-def cli_albedo(capsys, path: Path, roughness: float, view: float) -> float:
-    code, out, err = run_cli(capsys, "albedo", str(path), "-p", f"roughness={roughness!r}", "--theta", f"{view!r}",
-                             "--json")
+def cli_albedo(capsys, path: Path, roughness: float | None, view: float, *params: str) -> float | list[float]:
+    options = [*(["-p", f"roughness={roughness!r}"] if roughness is not None else []), *params]
+    code, out, err = run_cli(capsys, "albedo", str(path), *options, "--theta", f"{view!r}", "--json")
     assert code == 0, err
     value = json.loads(out)["results"][0]["albedo"]
-    return value[0] if isinstance(value, list) else value
+    return value[0] if isinstance(value, list) and len(set(value)) == 1 else value
 
 
 def assert_shows(text: str, expected: float) -> None:
@@ -133,7 +133,34 @@ def test_page_follows_the_slider_and_the_file(page, watched, capsys):
     assert page.errors == []
 
 
+def test_switches_and_colour_pickers(page, capsys):
+    page.get_by_test_id("model-picker").select_option("example:blinn_phong_gaussian.brdf")
+    switch = page.get_by_test_id("param-normalized")
+    switch.wait_for(timeout=TIMEOUT_MS)
+    assert switch.is_checked()
+    switch.uncheck()
+    refined(page)
+    view = float(page.get_by_test_id("view-angle-value").input_value())
+    path = ROOT / "examples" / "blinn_phong_gaussian.brdf"
+    assert_shows(page.get_by_test_id("readout-albedo").inner_text(), cli_albedo(capsys, path, None, view,
+                                                                                "-p", "normalized=0"))
+    page.get_by_test_id("model-picker").select_option("example:disney_diffuse.brdf")
+    picker = page.get_by_test_id("param-baseColor")
+    picker.wait_for(timeout=TIMEOUT_MS)
+    picker.fill("#336699")  # sRGB bytes / 255, taken as the linear values BRDF Explorer's sliders give
+    refined(page)
+    expected = cli_albedo(capsys, ROOT / "examples" / "disney_diffuse.brdf", None, view,
+                          "-p", f"baseColor={0x33 / 255!r},{0x66 / 255!r},{0x99 / 255!r}")
+    shown = page.get_by_test_id("readout-albedo").inner_text().split(" · ")
+    assert [part.split()[0] for part in shown] == ["R", "G", "B"]
+    for part, value in zip(shown, expected, strict=True):
+        assert_shows(part.split(" ", 1)[1], value)
+
+
 def test_fit_panel_and_model_picker(page):
+    page.get_by_test_id("model-picker").select_option("arg0")
+    page.get_by_test_id("fit-parameter").wait_for(timeout=TIMEOUT_MS)
+    refined(page)
     page.get_by_test_id("fit-samples").fill("8")
     page.get_by_test_id("fit-run").click()
     code = page.get_by_test_id("fit-code")
@@ -153,5 +180,5 @@ def test_fit_panel_and_model_picker(page):
     page.get_by_test_id("param-n-value").fill("100")
     page.get_by_test_id("param-n-value").press("Enter")
     page.get_by_test_id("error").wait_for(state="hidden", timeout=TIMEOUT_MS)
-    refined(page, 60.0)
+    refined(page)
     assert page.errors == []
