@@ -275,9 +275,10 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
                            ("view", (E_view, err_view))):
         readouts[f"factor_{name}"] = _readout(*factor_bound(E, err))
     max_channel = int(np.argmax(E_max))
-    if not searched:  # E_max is only a lower bound: its factor an upper one
+    if not searched:  # the grid's largest channel is a lower bound of the true maximum: its factor an upper one
         lower = float(E_max[max_channel] - err_max[max_channel])
-        readouts["factor_max"]["text"] = (f"≤ {1.0 / lower:.6g} (grid max, refining)" if lower > 0
+        channel = f"{'RGB'[max_channel]}, " if len(set(np.atleast_1d(E_max).tolist())) > 1 else ""
+        readouts["factor_max"]["text"] = (f"≤ {1.0 / lower:.6g} ({channel}grid max, refining)" if lower > 0
                                           else "refining…")
     readouts["factor_max"]["theta_deg"] = theta_max
     readouts["energy"] = energy_verdict(float(E_max[max_channel]), float(err_max[max_channel]), theta_max, searched)
