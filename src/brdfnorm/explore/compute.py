@@ -26,12 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..albedo import albedo
-from ..codegen import LANGUAGES, emit
+from .. import albedo, normalize
+from ..codegen import emit
 from ..errors import ArgumentError, EvaluationError, ParameterError
 from ..fit import fit
 from ..models.base import Model, mirror
-from ..normalize import THETA_MAX, normalize
+from ..normalize import THETA_MAX
 
 CONVENTIONS = ("normal", "max", "view")
 FIT_LANGUAGES = ("glsl", "hlsl")
@@ -363,7 +363,6 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, count
         raise ArgumentError("scale is 'linear', or 'log' with low > 0", where="scale")
     if not isinstance(form, str) or len(form) > 40:
         raise ArgumentError("form must be a form name such as auto or rational:2/1", where="form")
-    assert language in LANGUAGES
     values = np.geomspace(low, high, count) if scale == "log" else np.linspace(low, high, count)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
