@@ -345,6 +345,33 @@ def test_command_line_refuses_bad_input_in_one_line(capsys, tmp_path):
         assert code == 2 and err.startswith("error: --port: cannot listen")
 
 
+def test_command_line_warns_beyond_localhost_and_opens_the_browser(capsys, monkeypatch):
+    import threading
+    import webbrowser
+
+    import brdfnorm.explore
+
+    opened, served = [], []
+    done = threading.Event()
+    monkeypatch.setattr(webbrowser, "open", lambda url: (opened.append(url), done.set()))
+
+    def serve(catalog, sock):  # instead of serving: what the server would be started with
+        served.append(([entry.id for entry in catalog.entries()], sock.getsockname()))
+        sock.close()
+
+    monkeypatch.setattr(brdfnorm.explore, "serve", serve)
+    code, out, err = run_cli(capsys, "explore", str(GGX), "phong", "--host", "0.0.0.0")
+    assert code == 0 and out == ""
+    lines = err.splitlines()
+    assert lines[0].startswith("warning: listening on 0.0.0.0") and "anyone" in lines[0]
+    (ids, (host, port)), = served
+    assert ids[:2] == ["arg0", "arg1"] and host == "0.0.0.0" and port > 0
+    assert f"http://0.0.0.0:{port}/" in lines[1] and lines[-1].endswith("stopped")
+    assert done.wait(5) and opened == [f"http://0.0.0.0:{port}/"]
+    code, _, err = run_cli(capsys, "explore", "--no-browser")
+    assert code == 0 and not err.startswith("warning") and len(opened) == 1
+
+
 @pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
 def test_ctrl_c_stops_the_server_cleanly():
     env = {**os.environ, "PYTHONPATH": str(Path(bn.__file__).resolve().parents[1])}

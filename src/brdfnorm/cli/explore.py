@@ -39,7 +39,7 @@ def explore(
             typer.echo(f"warning: listening on {host}: anyone who can reach this machine can use the explorer "
                        "(it serves only its models and runs nothing from requests)", err=True)
         typer.echo(f"brdfnorm explore: {url}  (Ctrl-C stops)", err=True)
-        if not no_browser:
-            threading.Timer(0.3, webbrowser.open, [url]).start()
+        if not no_browser:  # the socket already listens; a thread, because a console browser would block
+            threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()
         serve(catalog, sock)
         typer.echo("brdfnorm explore: stopped", err=True)
