@@ -13,7 +13,7 @@ from .common import DEBUG_OPTION, guarded
 
 @app.command()
 def explore(
-    models: list[str] = typer.Argument(None, metavar="[MODEL_OR_FILE]...",
+    models: list[str] = typer.Argument(None, metavar="MODEL_OR_FILE",
                                        help="Built-in names or .brdf files to open first; files are watched and "
                                             "reloaded when saved. The built-ins and examples/ are always offered."),
     port: int = typer.Option(0, "--port", min=0, max=65535, help="Port to listen on (default: a free one)."),
