@@ -263,6 +263,9 @@ def test_a_newer_generation_supersedes_the_running_one(server_url):
                            view_request(client="mover", generation=1, quality="fine", convention="max",
                                         params={"roughness": 0.02}))
         time.sleep(0.3)
+        # Another tab's coarse pass does not queue behind this refinement (it runs in its own lane).
+        other = post(server_url, "api/evaluate", view_request(client="other tab", generation=1))
+        assert other.status_code == 200 and not slow.done()
         fast = pool.submit(post, server_url, "api/evaluate", view_request(client="mover", generation=2))
         assert fast.result().status_code == 200
         assert slow.result().status_code == 409 and slow.result().json() == {"stale": True}

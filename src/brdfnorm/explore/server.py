@@ -8,11 +8,12 @@ Routes (nothing else is served, and no path from a request is ever opened):
 * ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`), ``POST /api/fit`` the fit panel.
 * ``GET /api/events`` server-sent events: a watched ``.brdf`` file was reloaded (or failed to compile).
 
-Heavy work runs in a worker thread, one computation at a time (two cores are shared by the page's plots and
-the integrals). Each request carries the client's id and a *generation* number; a request with a newer
-generation makes the running one raise :class:`.compute.Superseded` at its next integrand batch, so a slider
-move never waits for stale work. A bad request gets a JSON ``{"error": ...}`` with status 4xx; an unexpected
-exception a 500 — the server keeps serving either way.
+Heavy work runs in worker threads, one computation at a time in each of two lanes — the coarse passes a slider
+move waits for, and the background (refinements, fits) — so a move never queues behind a long refinement.
+Each request carries the client's id and a *generation* number; a request with a newer generation makes the
+running one raise :class:`.compute.Superseded` at its next integrand batch (and so does a client that hangs
+up), so stale work never holds a lane. A bad request gets a JSON ``{"error": ...}`` with status 4xx; an
+unexpected exception a 500 — the server keeps serving either way.
 """
 
 from __future__ import annotations
@@ -112,7 +113,7 @@ class Explorer:
         self.catalog = catalog
         self.generations: OrderedDict[tuple[str, str], int] = OrderedDict()
         self.subscribers: set[asyncio.Queue] = set()
-        self.limiter: anyio.CapacityLimiter | None = None
+        self.lanes: dict[str, anyio.CapacityLimiter] = {}
         self.stop_watching = asyncio.Event()
         routes = [
             Route("/", self.page),
@@ -133,7 +134,9 @@ class Explorer:
 
     @contextlib.asynccontextmanager
     async def lifespan(self, app: Starlette):
-        self.limiter = anyio.CapacityLimiter(1)
+        # Two lanes of one computation each: a slider's coarse pass never queues behind a refinement or a fit
+        # (another tab's, say, which may take seconds); a client's own stale work is cancelled anyway.
+        self.lanes = {"coarse": anyio.CapacityLimiter(1), "background": anyio.CapacityLimiter(1)}
         self.stop_watching = asyncio.Event()
         watcher = asyncio.create_task(self.watch())
         try:
@@ -186,7 +189,8 @@ class Explorer:
                 return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
                                      check, params=body.get("params"))
 
-            result = await self.compute(request, check, timed)
+            lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
+            result = await self.compute(request, check, timed, lane)
             finished = time.perf_counter()
             timing = {"queued_ms": 1e3 * (started[0] - received), "compute_ms": 1e3 * (finished - started[0])}
             return {**result, "model": {"id": entry.id, "version": entry.version, "error": entry.error},
@@ -202,7 +206,7 @@ class Explorer:
             result = await self.compute(request, check, lambda: fit_factor(
                 model, body.get("parameter"), body.get("low"), body.get("high"), body.get("samples"), body.get("at"),
                 body.get("language"), body.get("scale", "linear"), body.get("form", "auto"), check,
-                params=body.get("params")))
+                params=body.get("params")), "background")
             return {**result, "generation": body["generation"]}
 
         return await self.respond(run)
@@ -213,8 +217,8 @@ class Explorer:
         model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
         return entry, model
 
-    async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict]) -> dict:
-        """Run ``work`` in the worker thread, one at a time; a client that hangs up cancels it (``check``)."""
+    async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict], lane: str) -> dict:
+        """Run ``work`` in a worker thread, one at a time per lane; a client that hangs up cancels it (``check``)."""
 
         async def watch_disconnect() -> None:
             while (await request.receive())["type"] != "http.disconnect":
@@ -223,7 +227,7 @@ class Explorer:
 
         watcher = asyncio.create_task(watch_disconnect())
         try:
-            return await anyio.to_thread.run_sync(work, limiter=self.limiter)
+            return await anyio.to_thread.run_sync(work, limiter=self.lanes[lane])
         finally:
             watcher.cancel()
 
