@@ -59,7 +59,7 @@ class Quality:
 
 QUALITIES = {
     "coarse": Quality(curve_points=19, curve_rtol=1e-3, point_rtol=1e-6, max_rtol=None, max_evaluations=2_000_000),
-    "fine": Quality(curve_points=61, curve_rtol=1e-8, point_rtol=1e-10, max_rtol=1e-8, max_evaluations=8_000_000),
+    "fine": Quality(curve_points=61, curve_rtol=1e-8, point_rtol=1e-10, max_rtol=1e-8, max_evaluations=2_000_000),
 }
 
 
