@@ -41,12 +41,11 @@ sys.path.insert(0, str(HERE))
 import peers as P  # noqa: E402
 
 import brdfnorm as bn  # noqa: E402
-
-ALBEDO = sys.modules["brdfnorm.albedo"]  # the module (``bn.albedo`` is the function)
-with contextlib.suppress(ImportError):  # the series method registers itself where it has landed
-    importlib.import_module("brdfnorm.series")
-
-WORKLOADS = ("single", "table90", "norm-table", "ggx-table", "fit", "eval", "work-precision", "memory", "profile")
+from brdfnorm import closed_forms  # noqa: E402
+from brdfnorm.errors import BrdfnormError  # noqa: E402
+from brdfnorm.output import write_file  # noqa: E402
+from brdfnorm.output.formats import jsonable  # noqa: E402
+from brdfnorm.registry import Registry  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -128,10 +127,6 @@ def add_ratios(workload: dict, baseline: str = "brdfnorm") -> dict:
     for name, line in workload["methods"].items():
         line["speedup_of_brdfnorm"] = (line["time_s"] / base) if base and name != baseline else None
     return workload
-
-
-def series_available() -> bool:
-    return "series" in ALBEDO.METHODS
 
 
 def brdfnorm_lines(methods: dict, model, theta, reference, cfg: Config) -> None:
@@ -378,11 +373,7 @@ def w_norm_table(cfg: Config, refs: References) -> dict:
 
 
 def w_ggx_table(cfg: Config, refs: References) -> dict:
-    path = ROOT / "examples" / "ggx.brdf"
-    try:
-        model = bn.load(str(path))
-    except Exception as error:  # noqa: BLE001 — any failure means the .brdf issue has not landed yet
-        return {"title": "normalization table for examples/ggx.brdf", "status": f"not available yet: {error}"}
+    model = bn.load(str(ROOT / "examples" / "ggx.brdf"))
     cache: dict[tuple[float, float], float] = {}
     cross = {}
 
@@ -416,13 +407,10 @@ def w_ggx_table(cfg: Config, refs: References) -> dict:
 
 def w_fit(cfg: Config, refs: References) -> dict:
     """Seed 003 end to end: α(n) = 1/E(n) at L = N for n = 1…512, fitted by a line (abs least squares)."""
-    from brdfnorm.cli import app, main
+    from brdfnorm.cli import main
 
     title = f"seed 003 fit: blinn-phong-gaussian, n = 1…512 ({cfg.fit_points} points), linear, abs-lsq, at normal"
-    names = [c.name or (c.callback.__name__ if c.callback else "") for c in app.registered_commands]
-    if "fit" not in names:
-        return {"title": title, "status": "not available yet: no `brdfnorm fit` command registered"}
-    seed = np.array([0.17287429, 0.01388682])
+    seed = np.array(closed_forms.SEED_003_LINE)
     argv = ["fit", "blinn-phong-gaussian", "--sweep", f"n=1:512:{cfg.fit_points}", "--form", "linear",
             "--metric", "abs-lsq", "--at", "normal", "--json"]
 
@@ -433,10 +421,7 @@ def w_fit(cfg: Config, refs: References) -> dict:
         return json.loads(buffer.getvalue())
 
     methods = {}
-    try:
-        t, out, runs = measure(ours, cfg.repeats, budget_s=10.0)
-    except (SystemExit, Exception) as error:  # noqa: BLE001 — report the failure, keep benchmarking
-        return {"title": title, "status": f"not available yet: `brdfnorm {' '.join(argv)}` failed: {error!r}"}
+    t, out, runs = measure(ours, cfg.repeats, budget_s=10.0)
     coefficients = np.asarray(out["coefficients"], dtype=float)[:2]
     # seed 003 prints a + b·n; the fit's coefficient order follows its expression (a first for `linear`).
     methods["brdfnorm"] = record(t, coefficients, seed, runs=runs, note=f"`brdfnorm {' '.join(argv)}`",
@@ -454,7 +439,7 @@ def w_fit(cfg: Config, refs: References) -> dict:
                                           coefficients=coefficients.tolist())
     return add_ratios({
         "title": title, "status": "ok", "methods": methods,
-        "reference": "seed 003's printed coefficients 0.17287429 + 0.01388682·n (8 decimals: rounding alone "
+        "reference": f"seed 003's printed coefficients {closed_forms.SEED_003_TEXT} (8 decimals: rounding alone "
                      "allows ~3e-8 and ~4e-7 relative)",
     })
 
@@ -470,34 +455,27 @@ def w_eval(cfg: Config, refs: References) -> dict:
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
     L, V = hemisphere(cfg.eval_pairs), hemisphere(cfg.eval_pairs)
-    methods, status = {}, "ok"
+    methods = {}
     builtin = bn.load("blinn-phong", n=cfg.n)
     t, base, runs = measure(lambda: builtin.eval(L, V)[:, 0], cfg.repeats)
     methods["built-in blinn-phong"] = record(t, base, base, runs=runs, note="numpy lobe (the baseline here)")
-    try:
-        from_file = bn.load(str(ROOT / "examples" / "blinn_phong.brdf"), n=cfg.n)
-        t, values, runs = measure(lambda: from_file.eval(L, V)[:, 0], cfg.repeats)
-        methods[".brdf blinn-phong"] = record(t, values, base, runs=runs, note="examples/blinn_phong.brdf")
-    except Exception as error:  # noqa: BLE001 — the .brdf issue has not landed yet
-        status = f"not available yet: {error}"
+    from_file = bn.load(str(ROOT / "examples" / "blinn_phong.brdf"), n=cfg.n)
+    t, values, runs = measure(lambda: from_file.eval(L, V)[:, 0], cfg.repeats)
+    methods[".brdf blinn-phong"] = record(t, values, base, runs=runs, note="examples/blinn_phong.brdf")
     hand = P.ggx(0.3)
     t, ggx_base, runs = measure(lambda: hand.vector(L, V), cfg.repeats)
     methods["numpy ggx (by hand)"] = record(t, ggx_base, ggx_base, runs=runs, note="peers.ggx, numpy")
-    try:
-        ggx_file = bn.load(str(ROOT / "examples" / "ggx.brdf"), roughness=0.3)
-        t, values, runs = measure(lambda: ggx_file.eval(L, V)[:, 0], cfg.repeats)
-        methods[".brdf ggx"] = record(t, values, ggx_base, runs=runs, note="examples/ggx.brdf",
-                                      slowdown_vs_numpy=t / methods["numpy ggx (by hand)"]["time_s"])
-    except Exception as error:  # noqa: BLE001
-        status = f"not available yet: {error}"
-    result = add_ratios({"title": title, "status": status, "methods": methods,
+    ggx_file = bn.load(str(ROOT / "examples" / "ggx.brdf"), roughness=0.3)
+    t, values, runs = measure(lambda: ggx_file.eval(L, V)[:, 0], cfg.repeats)
+    methods[".brdf ggx"] = record(t, values, ggx_base, runs=runs, note="examples/ggx.brdf",
+                                  slowdown_vs_numpy=t / methods["numpy ggx (by hand)"]["time_s"])
+    result = add_ratios({"title": title, "status": "ok", "methods": methods,
                          "reference": "the built-in numpy lobe (blinn-phong) / hand-written numpy GGX"},
                         baseline="built-in blinn-phong")
     for line in result["methods"].values():
         line["speedup_of_brdfnorm"] = None  # speed-ups are not the point here: the slowdown is
-    if ".brdf blinn-phong" in methods:
-        methods[".brdf blinn-phong"]["slowdown_vs_numpy"] = (methods[".brdf blinn-phong"]["time_s"]
-                                                           / methods["built-in blinn-phong"]["time_s"])
+    methods[".brdf blinn-phong"]["slowdown_vs_numpy"] = (methods[".brdf blinn-phong"]["time_s"]
+                                                       / methods["built-in blinn-phong"]["time_s"])
     return result
 
 
@@ -512,7 +490,7 @@ def _work_precision_panel(cfg: Config, theta: float, reference: float) -> dict[s
         lines.setdefault(name, []).append({"setting": setting, "time_s": t,
                                            "rel_error": float(rel_errors(value, reference))})
 
-    methods = ["quadrature"] + (["series"] if series_available() else [])
+    methods = ["quadrature", "series"]
     for rtol in cfg.wp_rtols:
         for method in methods:
             point(f"brdfnorm {method}", rtol,
@@ -606,7 +584,7 @@ def w_profile(cfg: Config, refs: References, out_dir: Path) -> dict:
     stats = pstats.Stats(profiler, stream=text)
     stats.sort_stats("tottime").print_stats(15)
     stats.sort_stats("cumulative").print_stats(15)
-    (out_dir / "profile.txt").write_text(text.getvalue())
+    write_file(out_dir / "profile.txt", text.getvalue())
     total = sum(v[2] for v in stats.stats.values())
     rows = sorted(stats.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:15]
     top = [{"function": f"{Path(f).name}:{line}({name})", "ncalls": int(nc), "tottime_s": tt, "cumtime_s": ct}
@@ -781,10 +759,7 @@ def plots(results: dict, out_dir: Path) -> list[str]:
             ax.set_title(name)
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(out_dir / "cost_vs_n.png", dpi=120)
-        plt.close(fig)
-        written.append("cost_vs_n.png")
+        written.append(_save_png(fig, out_dir, "cost_vs_n.png"))
     wp = results["workloads"].get("work-precision")
     if wp and wp.get("status") == "ok":
         panels = wp["panels"]
@@ -799,11 +774,20 @@ def plots(results: dict, out_dir: Path) -> list[str]:
             ax.set_title(f"blinn-phong n={results['meta']['n']:g}, θ_o = {angle}°")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(out_dir / "work_precision.png", dpi=120)
-        plt.close(fig)
-        written.append("work_precision.png")
+        written.append(_save_png(fig, out_dir, "work_precision.png"))
     return written
+
+
+def _save_png(fig, out_dir: Path, name: str) -> str:
+    """Lay out, write atomically (brdfnorm.output.write_file) and close a figure; returns its file name."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=120)
+    plt.close(fig)
+    write_file(out_dir / name, buffer.getvalue())
+    return name
 
 
 def print_tables(results: dict) -> None:
@@ -836,32 +820,33 @@ def print_tables(results: dict) -> None:
     console.print(table)
 
 
+#: The workloads by name (``--only``); each is called as ``workload(cfg, refs, out_dir)``.
+WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("workload", "--only", {
+    "single": lambda c, r, _: w_single(c, r), "table90": lambda c, r, _: w_table90(c, r),
+    "norm-table": lambda c, r, _: w_norm_table(c, r), "ggx-table": lambda c, r, _: w_ggx_table(c, r),
+    "fit": lambda c, r, _: w_fit(c, r), "eval": lambda c, r, _: w_eval(c, r),
+    "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
+    "profile": w_profile,
+})
+
+
 def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None = None) -> dict:
     """Run the benchmarks; returns the results dictionary (also written to ``out_dir``)."""
     cfg = Config.make(quick)
     out_dir = out_dir or (HERE / "results" / ("quick" if quick else ""))
     out_dir.mkdir(parents=True, exist_ok=True)
-    chosen = list(WORKLOADS) if not only else only
-    unknown = [w for w in chosen if w not in WORKLOADS]
-    if unknown:
-        raise SystemExit(f"error: unknown workload(s) {', '.join(unknown)} (known: {', '.join(WORKLOADS)})")
+    chosen = list(WORKLOADS) if not only else [WORKLOADS.validate(w) for w in only]
     refs = References()
     start = time.perf_counter()
-    functions = {"single": w_single, "table90": w_table90, "norm-table": w_norm_table, "ggx-table": w_ggx_table,
-                 "fit": w_fit, "eval": w_eval, "work-precision": w_work_precision, "memory": w_memory,
-                 "profile": lambda c, r: w_profile(c, r, out_dir)}
     workloads = {}
     for name in chosen:
         began = time.perf_counter()
         print(f"[bench] {name} …", file=sys.stderr, flush=True)
-        workloads[name] = functions[name](cfg, refs)
+        workloads[name] = WORKLOADS[name](cfg, refs, out_dir)
         workloads[name]["wall_s"] = time.perf_counter() - began
         print(f"[bench] {name} done in {workloads[name]['wall_s']:.1f} s", file=sys.stderr, flush=True)
-    if series_available():
-        note = ("available: method='auto' picks it for blinn-phong (lines 'brdfnorm' in single, table90, norm-table; "
-                "'brdfnorm series' in work-precision); 'brdfnorm quadrature' is the generic engine")
-    else:
-        note = "not available yet: brdfnorm.albedo.METHODS has no 'series'"
+    note = ("available: method='auto' picks it for blinn-phong (lines 'brdfnorm' in single, table90, norm-table; "
+            "'brdfnorm series' in work-precision); 'brdfnorm quadrature' is the generic engine")
     workloads.setdefault("series", {"title": "blinn-phong `series` method (seed 002's ₂F₁ form)", "status": note})
     results = {
         "meta": {
@@ -878,17 +863,9 @@ def run(quick: bool = False, only: list[str] | None = None, out_dir: Path | None
     }
     results["targets"] = targets(workloads, cfg)
     results["plots"] = plots(results, out_dir)
-    (out_dir / "latest.json").write_text(json.dumps(results, indent=1, default=_jsonable) + "\n")
-    (out_dir / "latest.md").write_text(markdown(results))
+    write_file(out_dir / "latest.json", json.dumps(jsonable(results), indent=1) + "\n")
+    write_file(out_dir / "latest.md", markdown(results))
     return results
-
-
-def _jsonable(x):
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    raise TypeError(type(x))
 
 
 def _cpu_count() -> int:
@@ -913,9 +890,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, help="output folder (default benchmarks/results[/quick])")
     args = parser.parse_args(argv)
     only = [w.strip() for w in args.only.split(",")] if args.only else None
-    results = run(args.quick, only, args.out)
+    try:
+        results = run(args.quick, only, args.out)
+    except BrdfnormError as error:  # an unknown workload, an output folder that cannot be written
+        raise SystemExit(f"error: {error}") from None
     if args.json:
-        print(json.dumps(results, indent=1, default=_jsonable))
+        print(json.dumps(jsonable(results), indent=1))
     else:
         print_tables(results)
 

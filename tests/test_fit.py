@@ -15,7 +15,7 @@ import brdfnorm
 from brdfnorm.closed_forms import blinn_phong_albedo_normal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.fit import METRICS, fit, parse_form
-from brdfnorm.normalize import normalize
+from brdfnorm.normalization import normalize
 
 # -- exact recovery ------------------------------------------------------------------------------------------
 

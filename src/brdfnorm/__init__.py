@@ -12,12 +12,14 @@ Frame: N = +z, X = +x, Y = +y; angles in radians in the API, degrees on the comm
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from .albedo import AlbedoResult, albedo
-from .errors import BrdfnormError, ModelNotFoundError
+from .directional import AlbedoResult, albedo
+from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
-from .normalize import NormalizationResult, normalize
+from .normalization import NormalizationResult, normalize
+from .validate import short_repr
 
 __version__ = "0.1.0"
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
@@ -26,15 +28,23 @@ __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REG
 
 def load(name_or_path: str | Path, **params: object) -> Model:
     """A built-in model by name (``brdfnorm models`` lists them) or a BRDF Explorer ``.brdf`` file by path."""
-    key = str(name_or_path)
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise ArgumentTypeError(f"expected a model name or a path, got {type(name_or_path).__name__}",
+                                where="model")
+    key = os.fspath(name_or_path)
+    if not isinstance(key, str):
+        raise ArgumentTypeError("expected a text path, got bytes", where="model")
     if key in REGISTRY:
         return REGISTRY[key](**params)
     path = Path(key)
     if path.exists():
+        if not path.is_file():  # a directory, FIFO (reading it would block), device or socket
+            kind = "a directory" if path.is_dir() else "not a regular file (a FIFO, device or socket)"
+            raise ModelNotFoundError(f"{kind}, not a .brdf file", where=key)
         from .brdffile import load_brdf  # the GLSL toolchain loads only when a file is asked for
 
         return load_brdf(path, **params)
     if path.suffix == ".brdf" or "/" in key or "\\" in key:
         raise ModelNotFoundError("no such file", where=key)
-    raise ModelNotFoundError(f"unknown model {key!r}: not a built-in ({', '.join(REGISTRY)}) and no such file",
-                             where="model")
+    raise ModelNotFoundError(f"unknown model {short_repr(key)}: not a built-in ({', '.join(REGISTRY)}) and no "
+                             "such file", where="model")

@@ -45,9 +45,17 @@ def ndf_normalization_factor(n: np.ndarray | float) -> np.ndarray:
     return (np.asarray(n, dtype=float) + 2.0) / (2.0 * np.pi)
 
 
-def ndf_projected_integral(n: np.ndarray | float) -> np.ndarray:
-    """∫ (N·H)^n (N·H) dω_h over the hemisphere = 2π/(n+2); the reciprocal of :func:`ndf_normalization_factor`."""
-    return 2.0 * np.pi / (np.asarray(n, dtype=float) + 2.0)
+#: Seed 003's fitted factor of the Gaussian Blinn-Phong lobe, α(n) ≈ 0.17287429 + 0.01388682·n (intercept,
+#: slope), fitted "over range [1;512]" (:data:`SEED_003_RANGE`) by least squares — an approximation.
+SEED_003_LINE = (0.17287429, 0.01388682)
+SEED_003_RANGE = (1.0, 512.0)
+#: The line as seed 003 prints it.
+SEED_003_TEXT = f"{SEED_003_LINE[0]} + {SEED_003_LINE[1]}·n"
+
+
+def seed003_factor(n: np.ndarray | float) -> np.ndarray:
+    """Seed 003's linear normalization factor of the Gaussian Blinn-Phong lobe (an approximation)."""
+    return SEED_003_LINE[0] + SEED_003_LINE[1] * np.asarray(n, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -77,5 +85,7 @@ CLOSED_FORMS: dict[str, ClosedForm] = {
         ),
         ClosedForm("ndf-normalization", "(n+2)/(2π)", "factor", True, "NDF normalization",
                    ndf_normalization_factor),
+        ClosedForm("gaussian-blinn-phong-seed003", SEED_003_TEXT, "factor", False,
+                   "seed 003's least-squares line over n ∈ [1, 512]", seed003_factor),
     )
 }

@@ -9,21 +9,50 @@ range, the metric, the maximum relative error on the samples and the operation c
 
 GLSL and HLSL use ``float``; C uses ``double`` (CPU tools; the tests run it against the Python evaluation);
 Python uses only arithmetic and ``** 0.5`` so it works on floats and numpy arrays alike.
+
+Names from outside (model names, file names, parameter names) are data: identifiers are rebuilt from ASCII
+letters and digits and never a keyword, type or built-in of any target (:func:`identifier`), and text quoted in
+comments is reduced to printable ASCII without quotes or backslashes (:func:`comment_text`), so no name can end
+a comment or a docstring and add code (issue 14, class 1).
 """
 
 from __future__ import annotations
 
+import keyword
 import re
 from dataclasses import dataclass
 
-from .errors import ArgumentError
-from .fit import FitResult, HyperbolaForm, RationalForm
+from .fit import FitResult
+from .forms import HyperbolaForm, RationalForm
+from .registry import Registry
 
-LANGUAGES = ("glsl", "hlsl", "c", "python")
+#: Words no emitted identifier may be, in any target: the keywords and reserved words of C11/C23, GLSL 4.6 and
+#: HLSL (types included — a parameter named ``vec3`` or ``float``), Python's keywords, the built-in functions
+#: the emitted code calls, and the function's own locals (a parameter named ``u`` would collide with the local).
+RESERVED = frozenset(keyword.kwlist) | frozenset("""
+    auto break case char const continue default do double else enum extern float for goto if inline int long
+    register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while
+    bool true false alignas alignof nullptr static_assert thread_local typeof constexpr main
+    attribute uniform varying buffer shared coherent volatile restrict readonly writeonly layout centroid flat
+    smooth noperspective patch sample subroutine in out inout invariant precise discard lowp mediump highp
+    precision uint dvec2 dvec3 dvec4 vec2 vec3 vec4 bvec2 bvec3 bvec4 ivec2 ivec3 ivec4 uvec2 uvec3 uvec4 mat2
+    mat3 mat4 mat2x2 mat2x3 mat2x4 mat3x2 mat3x3 mat3x4 mat4x2 mat4x3 mat4x4 dmat2 dmat3 dmat4 sampler2D
+    common partition active asm class template this resource packed goto interface long input output hvec2
+    hvec3 hvec4 fvec2 fvec3 fvec4 filter sizeof cast namespace using half min16float min10float min16int
+    min12int min16uint float1 float2 float3 float4 float2x2 float3x3 float4x4 double2 double3 double4 int2 int3
+    int4 uint2 uint3 uint4 bool2 bool3 bool4 matrix vector string technique pass cbuffer tbuffer groupshared
+    nointerpolation linear centroid row_major column_major snorm unorm export extern register packoffset
+    sqrt pow abs exp log sin cos tan fma d u v p q
+""".split())
+
+#: Longest piece of outside text (a model name, a file name) quoted in a generated comment.
+COMMENT_QUOTE_LIMIT = 60
 
 
 @dataclass(frozen=True)
-class _Syntax:
+class Syntax:
+    """How one target language spells the few constructs the emitted function uses."""
+
     scalar: str
     comment: str
     declare: str  # how a local is introduced: "float ", "double ", ""
@@ -31,23 +60,42 @@ class _Syntax:
     end: str  # statement terminator
 
 
-_SYNTAX = {
-    "glsl": _Syntax("float", "//", "float ", "sqrt", ";"),
-    "hlsl": _Syntax("float", "//", "float ", "sqrt", ";"),
-    "c": _Syntax("double", "//", "double ", "sqrt", ";"),
-    "python": _Syntax("", "#", "", "", ""),
-}
+#: Target languages (``emit(..., language=)``).
+LANGUAGES: Registry[Syntax] = Registry("language", "language", {
+    "glsl": Syntax("float", "//", "float ", "sqrt", ";"),
+    "hlsl": Syntax("float", "//", "float ", "sqrt", ";"),
+    "c": Syntax("double", "//", "double ", "sqrt", ";"),
+    "python": Syntax("", "#", "", "", ""),
+})
 
 
 def identifier(text: str) -> str:
-    """A C/GLSL/Python identifier from a model or parameter name: non-alphanumerics to ``_``."""
-    name = re.sub(r"[^0-9A-Za-z_]+", "_", text).strip("_").lower() or "x"
-    return "_" + name if name[0].isdigit() else name
+    """A C/GLSL/HLSL/Python identifier from a model or parameter name.
+
+    Runs of anything but ASCII letters and digits become one ``_`` (GLSL reserves names with ``__`` and the
+    prefix ``gl_``); a leading digit gets a ``_`` before it; a :data:`RESERVED` word gets one after it.
+    """
+    name = re.sub(r"[^0-9A-Za-z]+", "_", str(text)).strip("_").lower()[:64].strip("_") or "x"
+    if name[0].isdigit():
+        name = "_" + name
+    if name.startswith("gl_"):
+        name = "v" + name
+    return name + "_" if name in RESERVED else name
 
 
 def function_name(model_name: str) -> str:
     """``blinn-phong-gaussian`` → ``brdfnorm_blinn_phong_gaussian_norm``."""
-    return f"brdfnorm_{identifier(model_name)}_norm"
+    return f"brdfnorm_{identifier(model_name).strip('_')}_norm"
+
+
+def comment_text(text: object) -> str:
+    """Outside text made safe inside any generated comment or docstring: printable ASCII only, without
+    backslashes (a C line continuation), ``?`` (C's trigraph ``??/`` is a backslash) or quotes (a Python
+    docstring's end), cut to :data:`COMMENT_QUOTE_LIMIT` characters; everything else becomes ``_``."""
+    text = str(text)
+    cut = text[:COMMENT_QUOTE_LIMIT]
+    safe = "".join(c if (" " <= c <= "~" and c not in "\\\"'`?") else "_" for c in cut)
+    return safe + ("..." if len(text) > COMMENT_QUOTE_LIMIT else "")
 
 
 def literal(value: float, language: str) -> str:
@@ -73,7 +121,7 @@ def _horner(coefficients: list[str], var: str) -> str:
 
 def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
     form = result.form_object
-    syn = _SYNTAX[language]
+    syn = LANGUAGES[language]
     lit = [literal(c, language) for c in result.coefficients]
     sqrt = (lambda e: f"({e}) ** 0.5") if language == "python" else (lambda e: f"{syn.sqrt}({e})")
     lines: list[str] = []
@@ -111,9 +159,7 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
 def emit(result: FitResult, language: str, model_name: str, *, variable: str | None = None,
          second: str = "cos_theta_o") -> str:
     """Source text of one self-contained function evaluating ``result`` in ``language``."""
-    if language not in LANGUAGES:
-        raise ArgumentError(f"unknown language {language!r} (known: {', '.join(LANGUAGES)})", where="--emit")
-    syn = _SYNTAX[language]
+    syn = LANGUAGES[LANGUAGES.validate(language)]
     x = identifier(variable or result.variables[0])
     t = identifier(second)
     if x == t:
@@ -121,17 +167,18 @@ def emit(result: FitResult, language: str, model_name: str, *, variable: str | N
     two_d = result.form_object.two_d
     name = function_name(model_name)
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
-    ranges = "; ".join(f"{k} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
-    where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
+    ranges = "; ".join(f"{comment_text(k)} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
+    where = ", ".join(f"{comment_text(k)} = {v:.6g}" for k, v in result.argmax.items())
     comment = [
-        f"Normalization factor of {model_name}: {result.form} fit ({result.metric}) over {result.samples} samples,",
+        f"Normalization factor of {comment_text(model_name)}: {result.form} fit ({result.metric}) over "
+        f"{result.samples} samples,",
         f"{ranges}.",
         f"Max relative error {result.max_rel_error:.3g} (at {where}); max absolute error "
         f"{result.max_abs_error:.3g}.",
         f"Operations: {ops or 'none'}. Generated by brdfnorm fit.",
     ]
     if two_d:
-        comment.insert(2, f"Second argument {t}: the fit's variable {result.variables[1]}.")
+        comment.insert(2, f"Second argument {t}: the fit's variable {comment_text(result.variables[1])}.")
     body = _body(result, language, x, t)
     if language == "python":
         args = f"{x}, {t}" if two_d else x

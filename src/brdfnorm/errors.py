@@ -23,12 +23,21 @@ class ParameterError(BrdfnormError, ValueError):
     """A model parameter is unknown, of the wrong type, or outside a hard limit."""
 
 
+class ParameterTypeError(ParameterError, TypeError):
+    """A model parameter of the wrong type (text, complex, a date): both a ValueError and a TypeError."""
+
+
 class ArgumentError(BrdfnormError, ValueError):
     """A command-line or API argument is malformed (``where`` names the argument, e.g. ``--theta``)."""
 
 
-class ModelNotFoundError(BrdfnormError, LookupError):
-    """Neither a built-in model name nor a readable file."""
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An API argument of the wrong type (a list where a name goes, a complex angle): both a ValueError and a
+    TypeError, so callers may catch either."""
+
+
+class ModelNotFoundError(BrdfnormError, LookupError, ValueError):
+    """Neither a built-in model name nor a readable file (a bad value, so also a ValueError)."""
 
 
 class BrdfFileError(BrdfnormError):

@@ -13,7 +13,8 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ParameterError, ParameterTypeError
+from .validate import real_array, short_repr
 
 Kind = Literal["float", "bool", "color"]
 
@@ -69,22 +70,15 @@ class Parameter:
             if isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, float)) and value in (0, 1)):
                 return bool(value)
             raise ParameterError(f"expected 0 or 1, got {value!r}", where=where)
-        try:
-            array = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise ParameterError(f"expected a number, got {value!r}", where=where) from None
+        array = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
         if self.kind == "color" and array.ndim == 0:
             array = np.full(3, float(array))
         if self.kind == "color" and array.shape[-1:] != (3,):
             raise ParameterError(f"expected 3 components (R,G,B), got {value!r}", where=where)
-        if self.kind == "float" and array.ndim == 0:
-            pass
-        if not np.all(np.isfinite(array)):
-            raise ParameterError(f"must be finite, got {value!r}", where=where)
         low = self.minimum is not None and np.any(array < self.minimum)
         high = self.maximum is not None and np.any(array > self.maximum)
         if low or high:
-            message = f"value {value!r} outside {self.describe_range()}"
+            message = f"value {short_repr(value)} outside {self.describe_range()}"
             if self.strict:
                 raise ParameterError(message, where=where)
             warnings.warn(f"{where}: {message} (the file's slider range; evaluating anyway)", stacklevel=3)

@@ -71,7 +71,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import roots_legendre
 
-from .errors import ArgumentError, ParameterError
+from . import validate
+from .errors import ParameterError, ParameterTypeError
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
 _INNER_ORDER = 24
@@ -212,15 +213,13 @@ def _initial_panels(n: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.nd
     return a[keep], b[keep], case[keep]
 
 
-def _check(n: np.ndarray, theta: np.ndarray, rtol: float, atol: float) -> None:
-    if not np.all(np.isfinite(n)) or np.any(n < 0):
+def _check(n: object, theta: object, rtol: object, atol: object) -> tuple[np.ndarray, np.ndarray]:
+    """The exponents (finite, ≥ 0), view angles in [0, π/2] and tolerances (:mod:`brdfnorm.validate`)."""
+    n_arr = validate.real_array(n, "n", error=ParameterError, type_error=ParameterTypeError)
+    if np.any(n_arr < 0):
         raise ParameterError("n must be a finite number ≥ 0", where="n")
-    if not np.all(np.isfinite(theta)) or np.any(theta < 0) or np.any(theta > _HALF_PI):
-        raise ArgumentError("view angles must lie in [0, π/2] radians (0° to 90°)", where="theta")
-    if not (np.isfinite(rtol) and rtol > 0):
-        raise ArgumentError(f"rtol must be a positive number, got {rtol!r}", where="rtol")
-    if not (np.isfinite(atol) and atol >= 0):
-        raise ArgumentError(f"atol must be a number ≥ 0, got {atol!r}", where="atol")
+    validate.tolerances(rtol, atol, floor=0.0)
+    return n_arr, validate.polar_angles(theta, horizon=True)
 
 
 def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.0) -> SeriesResult:
@@ -230,9 +229,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     max(rtol·|E|, atol). The error estimate is an upper bound in practice (the difference
     of a 15-point rule on a panel and on its halves, the finer of which is kept).
     """
-    n_arr = np.asarray(n, dtype=float)
-    theta_arr = np.asarray(theta, dtype=float)
-    _check(n_arr, theta_arr, rtol, atol)
+    n_arr, theta_arr = _check(n, theta, rtol, atol)
     shape = np.broadcast_shapes(n_arr.shape, theta_arr.shape)
     nc = np.broadcast_to(n_arr, shape).ravel()
     tc = np.broadcast_to(theta_arr, shape).ravel()
@@ -255,7 +252,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
 
 
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
-    """``brdfnorm.albedo`` method adapter: the batch of a :class:`brdfnorm.albedo.Problem` for ``blinn-phong``.
+    """``brdfnorm.directional`` method adapter: a :class:`brdfnorm.directional.Problem` batch for ``blinn-phong``.
 
     The lobe is reciprocal, so the light and view integrals coincide and both are (S5) at the fixed direction's
     polar angle. Returns (value (K, 1), error (K, 1), evaluations (K,), converged (K,), None).

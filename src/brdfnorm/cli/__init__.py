@@ -2,20 +2,16 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 import typer
 
-app = typer.Typer(
-    name="brdfnorm",
-    help="Exact energy normalization of analytic BRDFs: albedo, normalization factors, fits, shader code.",
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-    add_completion=False,
-)
+from .application import app
 
-# Command modules register themselves on `app` when imported.
-from . import core, explore, fit, info, report, verify  # noqa: E402,F401
+# isort: split
+# Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
+from . import core, explore, fit, info, report, verify  # noqa: F401
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -24,8 +20,14 @@ def main(argv: list[str] | None = None) -> None:
     try:
         code = command.main(args=argv if argv is not None else sys.argv[1:], prog_name="brdfnorm",
                             standalone_mode=False)
+        sys.stdout.flush()
     except typer.Exit as done:
+        if done.exit_code == 0:
+            _quiet_broken_pipe()
         raise SystemExit(done.exit_code) from None
+    except BrokenPipeError:
+        _quiet_broken_pipe()
+        raise SystemExit(0) from None
     except typer.Abort:
         typer.echo("error: aborted", err=True)
         raise SystemExit(130) from None
@@ -38,3 +40,15 @@ def main(argv: list[str] | None = None) -> None:
         raise SystemExit(getattr(error, "exit_code", 2)) from None
     if isinstance(code, int) and code:
         raise SystemExit(code)
+
+
+def _quiet_broken_pipe() -> None:
+    """After the reader of stdout went away, point stdout at /dev/null so the interpreter's final flush of
+    what is still buffered cannot fail again (the recipe of Python's documentation on SIGPIPE)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        with open(os.devnull, "wb") as devnull:  # noqa: PTH123 — a raw descriptor for dup2
+            os.dup2(devnull.fileno(), sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout is not a real file (captured in tests): nothing to flush
+        pass

@@ -7,30 +7,32 @@ an internal error (with a hint to report it); ``--debug`` shows the traceback in
 from __future__ import annotations
 
 import contextlib
-import json
 import math
-import os
 import sys
-import tempfile
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from enum import Enum
-from pathlib import Path
 
 import numpy as np
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..errors import ArgumentError, BrdfnormError, OutputError
+from .. import validate
+from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
 
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
                             help="Set a model parameter (repeatable), e.g. -p n=512 or -p baseColor=0.5,0.5,0.5.")
+JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
+CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).")
+OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
+                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).")
 
 
 class At(str, Enum):
-    """Normalization conventions (brdfnorm.normalize), as ``--at`` choices."""
+    """Normalization conventions (brdfnorm.normalization), as ``--at`` choices."""
 
     normal = "normal"
     max = "max"
@@ -46,12 +48,22 @@ class Over(str, Enum):
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
-             "over": "--over", "digits": "--digits", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL"}
+             "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
+             "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
+             "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits"}
 
 
-def console() -> Console:
-    """A rich console that never truncates numbers (wide when stdout is not a terminal)."""
-    return Console() if sys.stdout.isatty() else Console(width=160)
+class _Console(Console):
+    def on_broken_pipe(self) -> None:
+        """rich exits 1 when stdout's reader goes away; a closed pipe is the reader's choice, not an error,
+        so it goes the way of every other write (:func:`guarded`: exit 0)."""
+        raise BrokenPipeError
+
+
+def console(*, stderr: bool = False) -> Console:
+    """A rich console on stdout (or stderr) that never truncates numbers (wide when not a terminal)."""
+    stream = sys.stderr if stderr else sys.stdout
+    return _Console(stderr=stderr) if stream.isatty() else _Console(stderr=stderr, width=160)
 
 
 def fail(message: str, code: int = 2) -> typer.Exit:
@@ -72,6 +84,8 @@ def guarded(debug: bool = False) -> Iterator[None]:
         yield
     except typer.Exit:
         raise
+    except BrokenPipeError:  # the reader went away (`brdfnorm info F | head -1`): done, nothing to report
+        raise typer.Exit(0) from None
     except BrdfnormError as error:
         if debug:
             raise
@@ -94,9 +108,9 @@ def _number(text: str, option: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise ArgumentError(f"not a number: {text!r}", where=option) from None
+        raise ArgumentError(f"not a number: {validate.short_repr(text)}", where=option) from None
     if not math.isfinite(value):
-        raise ArgumentError(f"not a finite number: {text!r}", where=option)
+        raise ArgumentError(f"not a finite number: {validate.short_repr(text)}", where=option)
     return value
 
 
@@ -112,12 +126,7 @@ def parse_range(spec: str, option: str, *, allow_log: bool) -> np.ndarray:
             form = "START:STOP:COUNT[:log]" if allow_log else "START:STOP:COUNT"
             raise ArgumentError(f"expected {form}, got {spec!r}", where=option)
         start, stop = _number(parts[0], option), _number(parts[1], option)
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise ArgumentError(f"COUNT must be a whole number, got {parts[2]!r}", where=option) from None
-        if count < 1:
-            raise ArgumentError(f"empty range: COUNT is {count}", where=option)
+        count = validate.count(parts[2].strip(), option)
         if stop < start:
             raise ArgumentError(f"reversed range: STOP {stop:g} < START {start:g}", where=option)
         if count == 1 and stop != start:
@@ -131,18 +140,15 @@ def parse_range(spec: str, option: str, *, allow_log: bool) -> np.ndarray:
 
 
 def parse_angles(spec: str, option: str = "--theta") -> np.ndarray:
-    """Polar angles in degrees, each in [0, 90)."""
+    """Polar angles in degrees, each in [0, 90) (checked in radians by the API's own validator)."""
     degrees = parse_range(spec, option, allow_log=False)
-    bad = degrees[(degrees < 0) | (degrees >= 90)]
-    if bad.size:
-        raise ArgumentError(f"angle {bad[0]:g}° outside [0°, 90°)", where=option)
+    validate.polar_angles(np.radians(degrees), where=option)
     return degrees
 
 
 def parse_azimuth(value: float, option: str = "--phi") -> float:
-    if not math.isfinite(value):
-        raise ArgumentError("azimuth must be finite", where=option)
-    return value
+    """An azimuth in degrees (any finite value)."""
+    return validate.real_number(value, option)
 
 
 def parse_sweep(spec: str, option: str = "--sweep") -> tuple[str, np.ndarray]:
@@ -174,58 +180,26 @@ def load_model(name_or_path: str, params: list[str]) -> Model:
     return model.with_params(**parsed) if parsed else model
 
 
-def jsonable(value):
-    """numpy scalars/arrays to plain Python; non-finite floats to None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    return value
+def result_format(json_output: bool, csv_output: bool) -> str:
+    """The result format (:data:`brdfnorm.output.formats.FORMATS`) that ``--json``/``--csv`` choose."""
+    if json_output and csv_output:
+        raise ArgumentError("choose one of --json and --csv", where="--csv")
+    return "json" if json_output else "csv" if csv_output else "table"
 
 
-def to_json(obj) -> str:
-    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
+@contextlib.contextmanager
+def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable[[int, int], None] | None]:
+    """An ``on_progress(done, total)`` callback drawing a rich bar on stderr — None (no chunking, no bar)
+    unless ``enabled`` and stderr is a terminal."""
+    stderr = Console(stderr=True)
+    if not (enabled and stderr.is_terminal):
+        yield None
+        return
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=stderr, transient=True) as progress:
+        task = progress.add_task(description, total=None)
 
+        def on_progress(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
 
-def print_json(obj) -> None:
-    typer.echo(to_json(obj))
-
-
-def channel_value(values: np.ndarray):
-    """A number for single-channel models, a list for multi-channel ones."""
-    values = np.asarray(values)
-    return float(values[0]) if values.size == 1 else [float(v) for v in values]
-
-
-def write_output_atomically(path: str | Path, data: str | bytes) -> None:
-    """Write a file via a temporary sibling and rename: a failure leaves the previous file as it was."""
-    path = Path(path)
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise OutputError(f"directory {str(directory)!r} does not exist", where=str(path))
-    mode = "wb" if isinstance(data, bytes) else "w"
-    try:
-        fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    except OSError as error:
-        raise OutputError(f"cannot write here: {error.strerror}", where=str(path)) from None
-    try:
-        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8"})) as handle:
-            handle.write(data)
-        os.replace(temporary, path)
-    except OSError as error:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise OutputError(f"cannot write: {error.strerror}", where=str(path)) from None
-
-
-def stdout_is_terminal() -> bool:
-    return sys.stdout.isatty()
+        yield on_progress

@@ -1,6 +1,6 @@
 """``brdfnorm fit``: fit a cheap formula to a model's normalization factor and emit it as shader code (issue 4).
 
-Samples come from :func:`brdfnorm.normalize.normalize` (the factor 1/E over a parameter sweep; with
+Samples come from :func:`brdfnorm.normalization.normalize` (the factor 1/E over a parameter sweep; with
 ``--at view`` also over the polar angles of ``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
 :func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.codegen.emit`. Seed 003's check:
 ``brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form linear --metric abs-lsq --at normal --json``.
@@ -13,13 +13,16 @@ from pathlib import Path
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
-from ..normalize import normalize
-from . import app
+from ..normalization import normalize
+from ..output import STDOUT, write_file
+from ..output.formats import to_json
+from .application import app
 from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
@@ -29,8 +32,7 @@ from .common import (
     load_model,
     parse_angles,
     parse_sweep,
-    print_json,
-    write_output_atomically,
+    progress_bar,
 )
 
 SECOND_VARIABLE = "cos_theta_o"
@@ -87,7 +89,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
     plt.close(fig)
-    write_output_atomically(path, buffer.getvalue())
+    write_file(path, buffer.getvalue())
 
 
 @app.command("fit")
@@ -116,9 +118,10 @@ def fit_command(
 ) -> None:
     """Fit a cheap formula (the fewest coefficients for --target with --form auto) to the normalization factor."""
     with guarded(debug):
-        if emit_language is not None and emit_language not in LANGUAGES:
-            raise ArgumentError(f"unknown language {emit_language!r} (known: {', '.join(LANGUAGES)})",
-                                where="--emit")
+        if emit_language is not None:
+            LANGUAGES.validate(emit_language)
+        if output == STDOUT and json_output:
+            raise ArgumentError("--json prints to stdout: '-o -' would put the code before it", where="--output")
         if output is not None and emit_language is None:
             raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
         if at is At.view and theta is None:
@@ -137,8 +140,9 @@ def fit_command(
         degrees = parse_angles(theta) if theta is not None else None
         m = load_model(model, param)
         m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
-        result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
-                           else np.radians(degrees), rtol=rtol)
+        with progress_bar(f"{m.name}: sampling the factor over {name}", enabled=values.size >= 8) as step:
+            result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
+                               else np.radians(degrees), rtol=rtol, on_progress=step)
         y = _factor_channel(result.factor)
         if not np.all(np.isfinite(y)) or np.any(y <= 0):
             raise EvaluationError("the normalization factor is not finite and positive at every sample "
@@ -154,7 +158,7 @@ def fit_command(
                          max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
         code = emit(fitted, emit_language, m.name, variable=name) if emit_language else None
         if output is not None:
-            write_output_atomically(output, code)
+            write_file(output, code)
         if plot is not None:
             _plot(plot, fitted, x, t, y if t is not None else y[:, 0], name)
         if json_output:
@@ -165,24 +169,26 @@ def fit_command(
             if code is not None:
                 data["language"] = emit_language
                 data["code"] = code
-            print_json(data)
+            write_file(STDOUT, to_json(data) + "\n")
             return
-        _summary(fitted, m.name, at.value, code if output is None else None, output)
+        if code is not None and output is None:
+            write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
+        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT))
 
 
-def _summary(result: FitResult, model: str, at: str, code: str | None, output: str | None) -> None:
-    out = console()
-    out.print(f"[bold]{model}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] ({result.metric}, "
-              f"{result.samples} samples)")
-    out.print(f"  α ≈ {result.expression}", highlight=False)
+def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:
+    out = console(stderr=to_stderr)
+    out.print(f"[bold]{escape(model)}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] "
+              f"({result.metric}, {result.samples} samples)")
+    out.print(f"  α ≈ {result.expression}", highlight=False, markup=False)
     where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
     out.print(f"  max relative error {result.max_rel_error:.4g} at {where}; max absolute error "
-              f"{result.max_abs_error:.4g}")
+              f"{result.max_abs_error:.4g}", markup=False)
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     out.print("  range: " + "; ".join(f"{k} ∈ [{lo:.6g}, {hi:.6g}]" for k, (lo, hi) in result.range.items())
-              + f"; operations: {ops or 'none'}")
+              + f"; operations: {ops or 'none'}", markup=False)
     for warning in result.warnings:
-        out.print(f"  [yellow]warning:[/yellow] {warning}")
+        out.print(f"  [yellow]warning:[/yellow] {escape(warning)}")
     if result.tried:
         table = Table(title="forms tried (auto)")
         for column in ("form", "coefficients", "max rel. error", "pole/degenerate"):
@@ -191,8 +197,6 @@ def _summary(result: FitResult, model: str, at: str, code: str | None, output: s
             table.add_row(entry["form"], str(entry["coefficients"]), f"{entry['max_rel_error']:.3g}",
                           "yes" if entry["pole"] else "")
         out.print(table)
-    if output is not None:
-        out.print(f"  code written to {output}")
-    elif code is not None:
-        out.print(code, markup=False, highlight=False)
+    if output not in (None, STDOUT):
+        console(stderr=True).print(f"code written to {output}", markup=False, highlight=False)
 

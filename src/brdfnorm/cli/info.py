@@ -7,20 +7,16 @@ over the view (``--over``), e.g. not for the original Phong lobe (seed 000: 2π/
 
 from __future__ import annotations
 
-import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..brdffile import BrdfModel, reciprocity_check
 from ..errors import ArgumentError
-from . import app
-from .common import DEBUG_OPTION, PARAM_OPTION, console, guarded, load_model, print_json
-
-
-def _value_text(value: object) -> str:
-    if isinstance(value, bool):
-        return str(int(value))
-    return ",".join(f"{v:g}" for v in np.atleast_1d(np.asarray(value, dtype=float)))
+from ..output import STDOUT, write_file
+from ..output.formats import format_value, to_json
+from .application import app
+from .common import DEBUG_OPTION, PARAM_OPTION, console, guarded, load_model
 
 
 @app.command()
@@ -69,18 +65,19 @@ def info(
             "isFunc": m.has_is_func if is_file else False,
         }
         if json_output:
-            print_json(data)
+            write_file(STDOUT, to_json(data) + "\n")
             return
         out = console()
         title = f"{m.name}" + (f" ({m.source_path})" if is_file else " (built-in)")
-        table = Table(title=title)
+        table = Table(title=escape(title))  # a file name is text, not rich markup
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
         for p in m.parameters:
             kind_range = "R,G,B" if p.kind == "color" else p.describe_range()
             if not p.strict and p.kind == "float":
                 kind_range += " (slider)"
-            table.add_row(p.name, p.kind, kind_range, _value_text(p.default), _value_text(bound[p.name]))
+            table.add_row(escape(p.name), p.kind, kind_range, format_value(p.default, 6),
+                          format_value(bound[p.name], 6))
         out.print(table)
         out.print(f"channels: {m.channels}")
         verdict = "yes" if check.reciprocal else "no"

@@ -6,7 +6,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import app
+from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
 
 
@@ -41,4 +41,4 @@ def report(
                 progress.update(task, description=description, completed=index, total=total)
 
             index = build_report(output, loaded, sweep=swept, on_step=on_step)
-        typer.echo(f"wrote {index}")
+        typer.echo(f"wrote {index}", err=True)

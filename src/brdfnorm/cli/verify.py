@@ -10,8 +10,10 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
-from . import app
-from .common import DEBUG_OPTION, console, guarded, parse_range, print_json
+from ..output import STDOUT, write_file
+from ..output.formats import to_json
+from .application import app
+from .common import DEBUG_OPTION, console, guarded, parse_range
 
 
 @app.command()
@@ -41,7 +43,7 @@ def verify(
                                    else parse_range(exponents, "--n", allow_log=True))
         claims = checks.verify(n, only=claim or None, certified=certified, digits=digits)
         if json_output:
-            print_json({"exponents": n, "claims": [c.as_dict() for c in claims]})
+            write_file(STDOUT, to_json({"exponents": n, "claims": [c.as_dict() for c in claims]}) + "\n")
         else:
             table = Table(title=f"seed claims ({sum(c.ok for c in claims)} of {len(claims)} ok)", show_lines=True)
             for column, justify in (("claim", "left"), ("source", "left"), ("statement", "left"),

@@ -31,7 +31,7 @@ from ..codegen import emit
 from ..errors import ArgumentError, EvaluationError, ParameterError
 from ..fit import fit
 from ..models.base import Model, mirror
-from ..normalize import THETA_MAX
+from ..normalization import THETA_MAX
 
 CONVENTIONS = ("normal", "max", "view")
 FIT_LANGUAGES = ("glsl", "hlsl")

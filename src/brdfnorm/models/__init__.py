@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+from ..registry import Registry
 from .base import Lobe, Model, Over, mirror
 from .blinn_phong import BlinnPhong
 from .blinn_phong_gaussian import BlinnPhongGaussian
 from .lambert import Lambert
 from .phong import PhongModified, PhongOriginal
 
-REGISTRY: dict[str, type[Model]] = {
+REGISTRY: Registry[type[Model]] = Registry("model", "model", {
     cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian)
-}
+})
 
 __all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "BlinnPhong", "BlinnPhongGaussian", "Lambert",
            "PhongModified", "PhongOriginal"]

@@ -16,7 +16,9 @@ from typing import Literal
 
 import numpy as np
 
+from ..errors import ArgumentError, ParameterError
 from ..parameters import Parameter, resolve
+from ..validate import directions, short_repr
 
 Over = Literal["light", "view"]
 
@@ -66,6 +68,8 @@ class Model(ABC):
     channels: int = 1
     #: True when the albedo depends only on θ (not φ) of the fixed direction.
     isotropic: bool = True
+    #: The file the model was read from, as the user gave it (None for built-in lobes); errors name it.
+    source_path: str | None = None
 
     def __init__(self, **values: object) -> None:
         self._params = resolve(self.parameters, values, where=self.name)
@@ -84,12 +88,11 @@ class Model(ABC):
         return clone
 
     def parameter(self, name: str) -> Parameter:
+        """The declared parameter called ``name``."""
         for p in self.parameters:
             if p.name == name:
                 return p
-        from ..errors import ParameterError
-
-        raise ParameterError(f"unknown parameter {name!r}", where=self.name)
+        raise ParameterError(f"unknown parameter {short_repr(name)}", where=self.name)
 
     # -- evaluation -------------------------------------------------------------------------------
     @abstractmethod
@@ -102,9 +105,11 @@ class Model(ABC):
 
     def eval(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
         """f(L, V) at the bound parameters; L and V broadcast against each other: (..., C)."""
-        L = np.asarray(L, dtype=float)
-        V = np.asarray(V, dtype=float)
-        L, V = np.broadcast_arrays(L, V)
+        L, V = directions(L, "L"), directions(V, "V")
+        try:
+            L, V = np.broadcast_arrays(L, V)
+        except ValueError:
+            raise ArgumentError(f"L {L.shape} and V {V.shape} do not broadcast", where="V") from None
         return self.evaluate(L, V, self._params)
 
     # -- facts for the integrator -------------------------------------------------------------------

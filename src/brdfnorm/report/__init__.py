@@ -3,13 +3,13 @@
 With no models, the page studies the seed articles' lobes — phong, modified-phong, blinn-phong and
 blinn-phong-gaussian: normalization factors against seed 000's closed forms, albedo curves with and without
 normalization (seed 002), Blinn-Phong's α(n) against the folklore (n+8)/8π (seed 000), seed 003's linear fit
-against refits (when :mod:`brdfnorm.fit` is installed), polar plots of the lobes, and the table of the seeds'
-claims checked by :mod:`brdfnorm.verify` (when installed). Given models (built-in names or ``.brdf`` files)
+against refits (:mod:`brdfnorm.fit`), polar plots of the lobes, and the table of the seeds' claims checked by
+:mod:`brdfnorm.verify`. Given models (built-in names or ``.brdf`` files)
 get the same study over one float parameter each.
 
 The report is a directory: ``index.html`` and PNG figures beside it. It is built in a temporary sibling
-directory and renamed into place only when complete (:mod:`.output`), and it is deterministic: the same
-inputs give byte-identical files.
+directory and renamed into place only when complete (:mod:`brdfnorm.output.directories`), and it is
+deterministic: the same inputs give byte-identical files.
 
 >>> from brdfnorm.report import build_report, StudyConfig
 >>> build_report("report", config=StudyConfig.quick())  # doctest: +SKIP
@@ -18,20 +18,19 @@ inputs give byte-identical files.
 from __future__ import annotations
 
 import dataclasses
-import importlib
-import importlib.util
 from collections.abc import Callable, Sequence
-from html import escape
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__, load
 from ..errors import ArgumentError
+from ..fit import fit
 from ..models.base import Model
+from ..output.directories import check_target, staged
+from ..verify import verify
 from . import sections
 from .html import page
-from .output import check_target, staged
 from .study import StudyConfig
 
 __all__ = ["StudyConfig", "build_report", "plan"]
@@ -40,43 +39,29 @@ __all__ = ["StudyConfig", "build_report", "plan"]
 OnStep = Callable[[str, int, int], None]
 
 
-def _optional(name: str):
-    """An optional sibling module (fit, verify): None when it is not installed; its own errors propagate."""
-    if importlib.util.find_spec(name) is None:
-        return None
-    return importlib.import_module(name)
-
-
 def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[str, np.ndarray] | None = None,
-         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step], list[str]]:
-    """The configuration, the steps of the page, and notes on what was left out (and why)."""
+         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step]]:
+    """The configuration and the steps of the page."""
     config = config or StudyConfig()
-    notes: list[str] = []
     if not models:
         if sweep is not None:
             name, values = sweep
             if name != "n":
-                raise ArgumentError(f"the default study sweeps the exponent n, not {name!r}", where="--sweep")
+                raise ArgumentError(f"the default study sweeps the exponent n, not {name!r}", where="sweep")
             if np.any(np.asarray(values) <= 0):
-                raise ArgumentError("the default study needs exponents n > 0", where="--sweep")
+                raise ArgumentError("the default study needs exponents n > 0", where="sweep")
             config = dataclasses.replace(config, table_n=tuple(float(v) for v in values))
         steps: list[sections.Step] = [
             ("factors at L = N: closed form vs quadrature; search for the maximum", sections.factor_section),
             ("albedo curves E(θ_o)", sections.albedo_section),
             ("Blinn-Phong α(n) vs (n+8)/8π", sections.folklore_section),
         ]
-        fit = _optional("brdfnorm.fit") if config.extras else None
-        if fit is not None:
-            steps.append(("seed 003: fits of the Gaussian Blinn-Phong factor", sections.fit_section(fit.fit)))
-        elif config.extras:
-            notes.append("Seed 003's fits are left out: brdfnorm.fit is not installed.")
+        if config.extras:
+            steps.append(("seed 003: fits of the Gaussian Blinn-Phong factor", sections.fit_section(fit)))
         steps.append(("polar plots of the lobes", sections.polar_section))
-        verify = _optional("brdfnorm.verify") if config.extras else None
-        if verify is not None:
-            steps.append(("verifying the seeds' claims", sections.verify_section(verify.verify)))
-        elif config.extras:
-            notes.append("The verify table is left out: brdfnorm.verify is not installed.")
-        return config, steps, notes
+        if config.extras:
+            steps.append(("verifying the seeds' claims", sections.verify_section(verify)))
+        return config, steps
     steps = []
     for index, item in enumerate(models, start=1):
         if isinstance(item, tuple):
@@ -87,7 +72,7 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
             model.parameter(sweep[0])  # an unknown name fails now, before any work
         steps.append((f"{label}: factors, albedo curves, polar plots",
                       sections.model_section(model, label, sweep, index)))
-    return config, steps, notes
+    return config, steps
 
 
 def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, Model]] = (), *,
@@ -95,7 +80,7 @@ def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, 
                  on_step: OnStep | None = None) -> Path:
     """Compute the study, write ``out_dir/index.html`` with its figures atomically; returns the index path."""
     check_target(out_dir)  # a bad -o fails before minutes of work
-    config, steps, notes = plan(models, sweep, config)
+    config, steps = plan(models, sweep, config)
     report = (lambda *args: None) if on_step is None else on_step
     with staged(out_dir, f"brdfnorm {__version__}\n") as stage:
         ctx = sections.Context(config, stage)
@@ -106,11 +91,11 @@ def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, 
         report("done", len(steps), len(steps))
         title = ("brdfnorm: energy normalization of the seed lobes" if not models
                  else "brdfnorm: " + ", ".join(s.title for s in built))
-        stage.write("index.html", page(title, _intro(models, config, ctx.findings, notes), built, _footer()))
+        stage.write("index.html", page(title, _intro(models, config, ctx.findings), built, _footer()))
     return Path(out_dir) / "index.html"
 
 
-def _intro(models, config: StudyConfig, findings: list[str], notes: list[str]) -> str:
+def _intro(models, config: StudyConfig, findings: list[str]) -> str:
     what = ("the seed articles' lobes (Phong, modified Phong, Blinn-Phong and seed 003's Gaussian Blinn-Phong)"
             if not models else "the models given on the command line")
     parts = [
@@ -121,8 +106,6 @@ def _intro(models, config: StudyConfig, findings: list[str], notes: list[str]) -
         "<h2>Findings</h2>",
         '<ul class="findings">' + "".join(f"<li>{f}</li>" for f in findings) + "</ul>",
     ]
-    if notes:
-        parts.append('<p class="note">' + " ".join(escape(n) for n in notes) + "</p>")
     if models:
         tolerances = (f"factors at L = N rtol {config.model_rtol:g}, maximum search {config.model_search_rtol:g} "
                       f"on {config.model_search_points} view angles then golden section")

@@ -23,8 +23,10 @@ from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 #: pixel, sharp on HiDPI screens).
 DPI = 144
 CSS_PER_INCH = 96
+#: ``text.parse_math`` off: model names and file names are drawn as text — a name such as ``a$\foo{$b`` is not
+#: mathtext (the figures spell their symbols in Unicode).
 STYLE = {"font.size": 9.0, "axes.titlesize": 10.0, "legend.fontsize": 8.0, "axes.grid": True,
-         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white"}
+         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white", "text.parse_math": False}
 CHANNEL_NAMES = ("R", "G", "B")
 
 
@@ -43,6 +45,13 @@ def _new(width: float, height: float) -> Figure:
     figure = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(figure)
     return figure
+
+
+def _side_by_side(width: float, height: float):
+    """A figure with two axes side by side: (figure, left, right)."""
+    figure = _new(width, height)
+    left, right = figure.subplots(1, 2)
+    return figure, left, right
 
 
 def render(name: str, alt: str, draw) -> Image:
@@ -100,18 +109,23 @@ def albedo_figure(curves: AlbedoCurves, name: str) -> Image:
     return render(name, "Directional albedo against view angle, raw and normalized at L = N", draw)
 
 
+def _label(axis, xlabel: str, ylabel: str, title: str, legend: str | None = None) -> None:
+    """Axis labels and title, and a legend at ``legend`` (a matplotlib location) if given."""
+    axis.set_xlabel(xlabel)
+    axis.set_ylabel(ylabel)
+    axis.set_title(title)
+    if legend is not None:
+        axis.legend(loc=legend)
+
+
 def folklore_figure(data: Folklore, name: str) -> Image:
     def draw() -> Figure:
-        figure = _new(10.0, 3.8)
-        left, right = figure.subplots(1, 2)
+        figure, left, right = _side_by_side(10.0, 3.8)
         left.loglog(data.n, data.exact, color="C0", label="exact α(n) = (n+2)(n+4) / 8π(2^(−n/2)+n)")
         left.loglog(data.n, data.folklore, "--", color="C3", label="folklore (n+8) / 8π")
         left.loglog(data.table_n, data.quadrature, "o", color="C0", markersize=4, mfc="none",
                     label="quadrature (L = N)")
-        left.set_xlabel("exponent n")
-        left.set_ylabel("normalization factor α(n)")
-        left.set_title("Blinn-Phong normalization at L = N")
-        left.legend(loc="upper left")
+        _label(left, "exponent n", "normalization factor α(n)", "Blinn-Phong normalization at L = N", "upper left")
         right.semilogx(data.n, 100.0 * data.relative_error, color="C3")
         right.axhline(0.0, color="0.3", linewidth=0.8)
         worst = int(np.argmax(np.abs(data.relative_error)))
@@ -119,9 +133,7 @@ def folklore_figure(data: Folklore, name: str) -> Image:
         right.annotate(f"{100 * data.relative_error[worst]:+.1f} % at n = {data.n[worst]:.3g}",
                        (data.n[worst], 100.0 * data.relative_error[worst]), textcoords="offset points",
                        xytext=(8, -4), fontsize=8)
-        right.set_xlabel("exponent n")
-        right.set_ylabel("(n+8)/8π relative to α(n)  (%)")
-        right.set_title("Error of the folklore factor")
+        _label(right, "exponent n", "(n+8)/8π relative to α(n)  (%)", "Error of the folklore factor")
         return figure
 
     return render(name, "Blinn-Phong normalization factor against the folklore (n+8)/8π", draw)
@@ -129,8 +141,7 @@ def folklore_figure(data: Folklore, name: str) -> Image:
 
 def fit_figure(data: Seed003Fits, name: str) -> Image:
     def draw() -> Figure:
-        figure = _new(10.0, 3.8)
-        left, right = figure.subplots(1, 2)
+        figure, left, right = _side_by_side(10.0, 3.8)
         left.loglog(data.n, data.factor, color="k", linewidth=3.0, alpha=0.25, label="quadrature factor")
         for k, fit in enumerate(data.fits):
             # The least-squares refit reproduces the seed's line: drawn dashed over it, so both stay visible.
@@ -138,14 +149,9 @@ def fit_figure(data: Seed003Fits, name: str) -> Image:
                          alpha=0.6 if k == 0 else 1.0, label=fit.label)
             left.loglog(data.n, fit.prediction, **style)
             right.loglog(data.n, np.abs(data.relative_error(fit)), **style)
-        left.set_xlabel("exponent n")
-        left.set_ylabel("factor 1 / E(L = N)")
-        left.set_title("Gaussian Blinn-Phong (seed 003): factor and fits")
-        left.legend(loc="upper left")
-        right.set_xlabel("exponent n")
-        right.set_ylabel("|relative error|")
-        right.set_title("Error of each fit")
-        right.legend(loc="best")
+        _label(left, "exponent n", "factor 1 / E(L = N)", "Gaussian Blinn-Phong (seed 003): factor and fits",
+               "upper left")
+        _label(right, "exponent n", "|relative error|", "Error of each fit", "best")
         return figure
 
     return render(name, "Seed 003's linear fit against refits, with their relative errors", draw)
@@ -184,8 +190,7 @@ def factor_figure(study: ModelStudy, name: str) -> Image:
     """Factors at L = N and at the maximum over directions against the swept parameter."""
 
     def draw() -> Figure:
-        figure = _new(10.0, 3.6)
-        left, right = figure.subplots(1, 2)
+        figure, left, right = _side_by_side(10.0, 3.6)
         x = study.values
         with np.errstate(divide="ignore"):
             normal, highest = 1.0 / study.normal_albedo, 1.0 / study.max_albedo
@@ -203,14 +208,9 @@ def factor_figure(study: ModelStudy, name: str) -> Image:
             right.set_xscale("log")
         if _wide(normal[np.isfinite(normal)]):
             left.set_yscale("log")
-        left.set_xlabel(study.parameter)
-        left.set_ylabel("normalization factor 1/E")
-        left.set_title("Factor over the sweep")
-        left.legend(loc="best")
-        right.set_xlabel(study.parameter)
-        right.set_ylabel("θ of the largest albedo (degrees)")
+        _label(left, study.parameter, "normalization factor 1/E", "Factor over the sweep", "best")
+        _label(right, study.parameter, "θ of the largest albedo (degrees)", "Where the albedo is largest")
         right.set_ylim(-2, 92)
-        right.set_title("Where the albedo is largest")
         return figure
 
     return render(name, f"Normalization factor of {study.label} over {study.parameter}", draw)

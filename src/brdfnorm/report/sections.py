@@ -12,10 +12,11 @@ from html import escape
 import numpy as np
 
 from .. import closed_forms
+from ..output.directories import Stage
+from ..output.formats import format_value
 from . import figures, study
 from .figures import Image
 from .html import Cell, Section, figure, number, percent, relative, table, text
-from .output import Stage
 
 #: Quadrature against a closed form is flagged when the relative difference exceeds this many × rtol.
 AGREEMENT = 10.0
@@ -41,10 +42,6 @@ class Context:
 
 
 Step = tuple[str, Callable[[Context], Section]]
-
-
-def _degrees(value: float) -> str:
-    return f"{value:.4g}°"
 
 
 # -- default study -----------------------------------------------------------------------------------------
@@ -195,12 +192,12 @@ def fit_section(fit: Callable) -> Callable[[Context], Section]:
         seed, best = data.fits[0], min(data.fits[1:], key=lambda f: np.abs(data.relative_error(f)).max())
         seed_error = np.abs(data.relative_error(seed))
         ctx.findings.append(
-            f"Seed 003's line 0.17287429 + 0.01388682·n misses the Gaussian Blinn-Phong factor by up to "
+            f"Seed 003's line {closed_forms.SEED_003_TEXT} misses the Gaussian Blinn-Phong factor by up to "
             f"{100 * seed_error.max():.1f} % over n ∈ [1, 512] ({100 * seed_error[steep].max():.2f} % for "
             f"n ≥ 16); the {best.label} <code>{escape(best.expression)}</code> stays within "
             f"{100 * np.abs(data.relative_error(best)).max():.2g} %.")
         body = (
-            "<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by 0.17287429 + 0.01388682·n, a line "
+            f"<p>Seed 003 normalizes its Gaussian Blinn-Phong lobe by {closed_forms.SEED_003_TEXT}, a line "
             "fitted numerically over n ∈ [1, 512] (\"not accurate for small specular power values\"); a "
             "commenter suggests a scaled hyperbola √(x² + 1) instead. Here the factor 1/E(L = N) is computed "
             f"by quadrature at {data.n.size} values of n in that range (rtol {ctx.config.table_rtol:g}) and "
@@ -317,7 +314,7 @@ def model_section(model, label: str, sweep, index: int) -> Callable[[Context], S
                       f"{data.values.min():.4g} to {data.values.max():.4g})" if data.parameter else
                       "its bound parameters (no float parameter to sweep)")
         formula = f"<p><code>{escape(model.formula)}</code></p>" if getattr(model, "formula", "") else ""
-        params = ", ".join(f"{k} = {_param_text(v)}" for k, v in model.params.items()) or "none"
+        params = ", ".join(f"{k} = {format_value(v, 6)}" for k, v in model.params.items()) or "none"
         body = (
             f"{formula}<p>{escape(model.name)} ({escape(label)}; parameters {escape(params)}) over {sweep_text}. "
             "Factors 1/E at L = N and at the maximum of E over directions (<code>normalize(at=\"max\")</code>: the "
@@ -341,9 +338,3 @@ def _channel_cell(values: np.ndarray) -> Cell:
     return Cell(", ".join(number(v).text for v in values), None, "num")
 
 
-def _param_text(value) -> str:
-    if isinstance(value, bool):
-        return str(int(value))
-    if isinstance(value, tuple):
-        return ",".join(f"{v:g}" for v in value)
-    return f"{value:g}"

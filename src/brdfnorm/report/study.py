@@ -26,18 +26,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import closed_forms, load
-from ..albedo import METHODS, albedo
+from ..directional import METHODS, albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..normalize import normalize
+from ..normalization import normalize
 
 #: The seed lobes of the default study, in page order.
 SEED_LOBES = ("phong", "modified-phong", "blinn-phong", "blinn-phong-gaussian")
 #: Seed 000's closed-form albedo at L = N for each lobe that has one (over the light, as the albedo is defined).
 CLOSED_FORM_OF = {"phong": "phong-original", "modified-phong": "phong-modified", "blinn-phong": "blinn-phong-normal"}
-#: Seed 003's fitted normalization of the Gaussian Blinn-Phong lobe: 0.17287429 + 0.01388682·n over [1, 512].
-SEED003_COEFFICIENTS = (0.17287429, 0.01388682)
-SEED003_RANGE = (1.0, 512.0)
 
 
 @dataclass(frozen=True)
@@ -212,13 +209,14 @@ def seed003_fits(config: StudyConfig, fit: Callable) -> Seed003Fits:
     the seed did, and so should reproduce the seed's coefficients. The minimax fits (the commenter's hyperbola
     and the automatic choice) see only a geometrically spaced subset; their errors are shown on the whole grid.
     """
-    n = np.linspace(*SEED003_RANGE, config.fit_count)
+    n = np.linspace(*closed_forms.SEED_003_RANGE, config.fit_count)
     result = normalize(load("blinn-phong-gaussian"), "normal", sweep={"n": n}, rtol=config.table_rtol,
                        method="quadrature")
     factor = result.factor[:, 0, 0]
-    subset = np.unique(np.abs(n[:, None] - np.geomspace(*SEED003_RANGE, config.fit_samples)).argmin(axis=0))
-    a, b = SEED003_COEFFICIENTS
-    fits = [FitCurve("seed 003 line", f"{a} + {b}·n", a + b * n, SEED003_COEFFICIENTS)]
+    spaced = np.geomspace(*closed_forms.SEED_003_RANGE, config.fit_samples)
+    subset = np.unique(np.abs(n[:, None] - spaced).argmin(axis=0))
+    fits = [FitCurve("seed 003 line", closed_forms.SEED_003_TEXT, closed_forms.seed003_factor(n),
+                     closed_forms.SEED_003_LINE)]
     for label, form, metric, points in (
         ("least-squares line", "linear", "abs-lsq", slice(None)),
         ("hyperbola (minimax)", "hyperbola", "minimax-rel", subset),
@@ -307,7 +305,7 @@ def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, 
         name, values = sweep
         parameter = model.parameter(name)
         if parameter.kind != "float":
-            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="--sweep")
+            raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
         values = np.asarray(values, dtype=float)
     else:
         name = first_float(model)

@@ -8,20 +8,27 @@ Conventions (``at=``):
   maximum is at normal incidence ("I have no proof"); here it is searched: a coarse grid evaluated in one batch,
   then a vectorized golden-section refinement of every sweep point's bracket (θ, then φ, alternately).
 * ``"view"`` — per direction on a θ grid (seed 002's open problem): a factor for every (parameter, θ).
+
+(The module is ``brdfnorm.normalization`` so that the function ``brdfnorm.normalize`` does not shadow it.)
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
+import dataclasses
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .albedo import albedo, sweep_model
+from . import validate
+from .directional import albedo, sweep_model
 from .errors import ArgumentError
 from .models.base import Model, Over
+from .output.formats import Column, Records, channel_value, degrees
 
 AT = ("normal", "max", "view")
+#: Batches a sweep is split into when progress is reported (``on_progress``).
+PROGRESS_CHUNKS = 16
 #: Largest polar angle searched by ``at="max"`` (the integrand degenerates at exactly 90°).
 THETA_MAX = np.radians(89.9)
 _GOLDEN = (np.sqrt(5.0) - 1.0) / 2.0
@@ -42,6 +49,36 @@ class NormalizationResult:
     method: str
     over: Over
     converged: np.ndarray  # (S, T)
+    model: str = ""  # the model's name
+    params: dict = field(default_factory=dict)  # the model's bound parameter values (the swept one overridden)
+    rtol: float = 0.0
+
+    def records(self) -> Records:
+        """One row per (sweep value, direction), for :mod:`brdfnorm.output.formats`."""
+        rows = []
+        S, T = self.theta.shape
+        for s in range(S):
+            params = dict(self.params)
+            if self.parameter:
+                params[self.parameter] = float(self.values[s])
+            for t in range(T):
+                rows.append({
+                    "params": params, "theta_deg": degrees(self.theta[s, t]),
+                    "phi_deg": degrees(self.phi[s, t]), "albedo": channel_value(self.albedo[s, t]),
+                    "error_estimate": channel_value(self.error[s, t]), "factor": channel_value(self.factor[s, t]),
+                    "method": self.method, "at": self.at, "converged": bool(self.converged[s, t]),
+                })
+        columns = tuple(Column(f"params.{name}", name, 12, in_table=name == self.parameter) for name in self.params)
+        return Records(
+            title=f"{self.model}: normalization factor 1/E at {self.at} (over the {self.over})",
+            meta={"model": self.model, "params": self.params, "at": self.at, "over": self.over, "rtol": self.rtol},
+            columns=columns + (Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6),
+                               Column("albedo", "albedo"), Column("error_estimate", "error estimate", 3),
+                               Column("factor", "factor"), Column("method", "method", None),
+                               Column("at", "at", None, in_table=False),
+                               Column("converged", "converged", None, in_table=False)),
+            rows=rows,
+        )
 
 
 def normalize(
@@ -55,10 +92,18 @@ def normalize(
     rtol: float = 1e-10,
     method: str = "auto",
     search_points: int = 46,
+    on_progress: Callable[[int, int], None] | None = None,
 ) -> NormalizationResult:
-    """Normalization factor(s) of ``model``; see the module docstring for the conventions."""
-    if at not in AT:
-        raise ArgumentError(f"unknown convention {at!r} (known: {', '.join(AT)})", where="at")
+    """Normalization factor(s) of ``model``; see the module docstring for the conventions.
+
+    ``on_progress(done, total)``, if given, is called with the number of sweep values finished: the sweep then
+    runs in up to :data:`PROGRESS_CHUNKS` batches (each still vectorized) instead of one.
+    """
+    validate.choice(at, AT, "at")
+    validate.count(search_points, "search_points", minimum=2, maximum=10_000)
+    if on_progress is not None:
+        return _in_chunks(model, sweep, on_progress, dict(at=at, theta=theta, phi=phi, over=over, rtol=rtol,
+                                                          method=method, search_points=search_points))
     swept, name, values = sweep_model(model, sweep)
     kwargs = dict(over=over, rtol=rtol, method=method)
     if at == "normal":
@@ -66,8 +111,8 @@ def normalize(
     elif at == "view":
         if theta is None:
             raise ArgumentError("at='view' needs the polar angles (theta)", where="theta")
-        theta = np.atleast_1d(np.asarray(theta, dtype=float)).ravel()
-        result = albedo(swept, theta[None, :], np.asarray(phi, dtype=float), **kwargs)
+        theta = np.atleast_1d(validate.polar_angles(theta)).ravel()
+        result = albedo(swept, theta[None, :], validate.real_array(phi, "phi"), **kwargs)
     else:
         theta_best, phi_best = _search_max(swept, values.size, search_points, kwargs)
         result = albedo(swept, theta_best[:, None], phi_best[:, None], **kwargs)
@@ -79,8 +124,27 @@ def normalize(
         at=at, parameter=name, values=values,
         theta=np.broadcast_to(result.theta, value.shape[:2]), phi=np.broadcast_to(result.phi, value.shape[:2]),
         albedo=value, error=np.broadcast_to(result.error, value.shape), factor=factor, method=result.method,
-        over=over, converged=np.broadcast_to(result.converged, value.shape[:2]),
+        over=over, converged=np.broadcast_to(result.converged, value.shape[:2]), model=model.name,
+        params=model.params if name is None else {**model.params, name: values}, rtol=rtol,
     )
+
+
+def _in_chunks(model: Model, sweep, on_progress: Callable[[int, int], None], kwargs: dict) -> NormalizationResult:
+    """:func:`normalize` over the sweep in batches, reporting progress after each; the same numbers."""
+    swept, name, values = sweep_model(model, sweep)
+    total = values.size
+    on_progress(0, total)
+    if name is None:
+        result = normalize(model, **kwargs)
+        on_progress(total, total)
+        return result
+    parts = []
+    for chunk in np.array_split(values, min(total, PROGRESS_CHUNKS)):
+        parts.append(normalize(model, sweep={name: chunk}, **kwargs))
+        on_progress(sum(p.values.size for p in parts), total)
+    fields = ("theta", "phi", "albedo", "error", "factor", "converged")
+    return dataclasses.replace(parts[0], values=values, params={**parts[0].params, name: values},
+                               **{f: np.concatenate([getattr(p, f) for p in parts]) for f in fields})
 
 
 def _search_max(model: Model, S: int, points: int, kwargs: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -9,6 +9,11 @@ Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.int
 ``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
 substituted silently), and those registered by other modules (``"series"`` for Blinn-Phong, seed 002's
 hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER`.
+
+A BRDF whose values are finite but near float64's limit (2e307) is integrated divided by a power of two, so
+that the sums do not overflow; a BRDF that is NaN or infinite is reported at a real (L, V) pair.
+
+(The module is ``brdfnorm.directional`` so that the function ``brdfnorm.albedo`` does not shadow it.)
 """
 
 from __future__ import annotations
@@ -19,9 +24,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ArgumentError, EvaluationError
-from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, integrate_hemisphere
+from . import validate
+from .errors import ArgumentError, ArgumentTypeError, EvaluationError
+from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
 from .models.base import Model, Over
+from .output.formats import Column, Records, channel_value, degrees, format_value
+from .registry import Registry
 
 
 @dataclass(frozen=True)
@@ -40,6 +48,35 @@ class AlbedoResult:
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
     lower: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed lower bound (method "certified")
     upper: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed upper bound (method "certified")
+    model: str = ""  # the model's name
+    bound: dict = field(default_factory=dict)  # the model's parameter values as bound (before broadcasting)
+    rtol: float = 0.0
+
+    def records(self) -> Records:
+        """One row per direction (θ, φ in degrees), for :mod:`brdfnorm.output.formats`."""
+        rows = [
+            {"theta_deg": degrees(self.theta[i]), "phi_deg": degrees(self.phi[i]),
+             "albedo": channel_value(self.value[i]), "error_estimate": channel_value(self.error[i]),
+             "method": self.method, "evaluations": int(self.evaluations[i]), "converged": bool(self.converged[i])}
+            | ({} if self.lower is None else {"lower": _decimals(self.lower[i]), "upper": _decimals(self.upper[i])})
+            for i in np.ndindex(self.converged.shape)
+        ]
+        bounds = () if self.lower is None else (Column("lower", "lower", None), Column("upper", "upper", None))
+        params = ", ".join(f"{k}={format_value(v, 6)}" for k, v in self.bound.items())
+        return Records(
+            title=f"{self.model} albedo over the {self.over} ({params})",
+            meta={"model": self.model, "params": self.bound, "over": self.over, "rtol": self.rtol},
+            columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"),
+                     Column("error_estimate", "error estimate", 3), Column("method", "method", None),
+                     Column("evaluations", "evaluations", None), Column("converged", "converged", None))
+            + bounds,
+            rows=rows,
+        )
+
+
+def _decimals(values: np.ndarray) -> str | list[str]:
+    """Certified bounds (decimal strings): a string for single-channel models, a list for multi-channel ones."""
+    return str(values.ravel()[0]) if values.size == 1 else [str(v) for v in values.ravel()]
 
 
 @dataclass(frozen=True)
@@ -75,37 +112,29 @@ def _directions(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return np.stack([st * np.cos(phi), st * np.sin(phi), np.cos(theta)], axis=-1)
 
 
-def check_angles(theta, phi) -> tuple[np.ndarray, np.ndarray]:
-    """Validate polar angles in [0, π/2) and any finite azimuth (radians)."""
-    theta = np.asarray(theta, dtype=float)
-    phi = np.asarray(phi, dtype=float)
-    if not np.all(np.isfinite(theta)) or np.any(theta < 0) or np.any(theta >= np.pi / 2):
-        raise ArgumentError("polar angles must lie in [0°, 90°) (radians [0, π/2) in the API)", where="theta")
-    if not np.all(np.isfinite(phi)):
-        raise ArgumentError("azimuths must be finite", where="phi")
-    return theta, phi
-
-
-def check_tolerance(rtol: float, atol: float) -> None:
-    if not (np.isfinite(rtol) and np.isfinite(atol)) or rtol < 0 or atol < 0 or (rtol == 0 and atol == 0):
-        raise ArgumentError("tolerances must be finite, ≥ 0 and not both 0", where="rtol")
-    if rtol and rtol < 1e-14:
-        raise ArgumentError(f"rtol {rtol:g} is below what float64 quadrature can honour (≥ 1e-14)", where="rtol")
-    if rtol >= 1:
-        raise ArgumentError(f"rtol {rtol:g} is absurd (must be < 1)", where="rtol")
+def check_model(model: object) -> Model:
+    """``model`` if it is a :class:`Model` (what :func:`brdfnorm.load` returns)."""
+    if not isinstance(model, Model):
+        raise ArgumentTypeError(f"expected a model (brdfnorm.load(...)), got {type(model).__name__}", where="model")
+    return model
 
 
 def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     """Broadcast angles and (possibly array-valued) parameters into a flat batch of cases."""
-    if over not in ("light", "view"):
-        raise ArgumentError(f"over must be 'light' or 'view', got {over!r}", where="over")
-    theta, phi = check_angles(theta, phi)
+    check_model(model)
+    validate.choice(over, ("light", "view"), "over")
+    theta, phi = validate.angles(theta, phi)
     bound = model.params
     batch_shapes = []
     for p in model.parameters:
         value = np.asarray(bound[p.name])
         batch_shapes.append(value.shape[:-1] if p.kind == "color" else value.shape)
-    shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
+    try:
+        shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
+    except ValueError:
+        raise ArgumentError(f"shapes do not broadcast: theta {theta.shape}, phi {phi.shape}, parameters "
+                            f"{', '.join(str(b) for b in batch_shapes)}", where="theta") from None
+    validate.batch_size(shape)
     theta_b, phi_b = np.broadcast_to(theta, shape), np.broadcast_to(phi, shape)
     params, broadcast = {}, {}
     for p, batch in zip(model.parameters, batch_shapes, strict=True):
@@ -132,27 +161,92 @@ class Method:
     options: tuple[str, ...] = ()
 
 
+#: An integrand whose sampled values exceed this is integrated divided by a power of two (the sums of values near
+#: float64's limit, such as a BRDF of 2e307, overflow although the albedo itself is finite).
+LARGE_VALUE = 1e150
+#: Directions per case sampled to find that power of two (only after an overflow), as many as the lobe search.
+SCALE_SAMPLES = 1024
+
+
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
                 max_evaluations: int):
+    options = dict(rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    where = problem.model.source_path or problem.model.name
+    # Overflow in the lobe search or the sums is handled here, never shown as numpy's warning.
+    with np.errstate(all="ignore"):
+        try:
+            outcome = _integrate(problem, None, **options)
+            overflowed = not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1])))
+        except NonFiniteIntegrand as bad:
+            if np.all(np.isfinite(bad.direction)):  # the BRDF itself is NaN or infinite there
+                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
+            overflowed = True
+        if overflowed:
+            try:
+                scale = _scales(problem, nonfinite)  # raises at a real (L, V) pair where the BRDF is not finite
+                if not np.any(scale > 1.0):
+                    raise EvaluationError("the integration overflowed, yet no sampled BRDF value is large",
+                                          where=where)
+                outcome = _integrate(problem, scale, **options)
+            except NonFiniteIntegrand as bad:
+                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
+            if not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1]))):
+                raise EvaluationError("the albedo or its error estimate exceeds float64's range", where=where)
+    return outcome
+
+
+def _integrate(problem: Problem, scale: np.ndarray | None, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
+               max_evaluations: int):
+    """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case."""
     K = problem.fixed.shape[0]
+    if scale is None:
+        integrand, scale = problem.integrand, np.ones(K)
+    else:
+        def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+            return problem.integrand(omega, case) / scale[case, None]
     lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
     if lobe is None:
-        poles, widths, supports = estimate_lobe(problem.integrand, K)
+        poles, widths, supports = estimate_lobe(integrand, K)
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-    try:
-        result = integrate_hemisphere(problem.integrand, poles, widths, supports, rtol=rtol, atol=atol,
-                                      nonfinite=nonfinite, max_evaluations=max_evaluations)
-    except NonFiniteIntegrand as bad:
-        fixed = problem.fixed[bad.case]
-        L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
-        raise EvaluationError(
-            f"BRDF is not finite (value {np.array2string(bad.value, precision=6)}) at "
-            f"L={_fmt(L)}, V={_fmt(V)}; pass nonfinite='zero' (--nonfinite zero) to count such values as 0",
-            where=problem.model.name,
-        ) from None
-    return result.value, result.error, result.evaluations, result.converged, result.nonfinite_fraction
+    result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
+                                  nonfinite=nonfinite, max_evaluations=max_evaluations)
+    return (result.value * scale[:, None], result.error * scale[:, None], result.evaluations, result.converged,
+            result.nonfinite_fraction)
+
+
+def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:
+    """Per case, 2^k ≥ the largest |integrand| on a Fibonacci lattice where that exceeds :data:`LARGE_VALUE`,
+    else 1 (a power of two: dividing by it is exact). With ``nonfinite="raise"``, a lattice direction where the
+    integrand is not finite raises :class:`NonFiniteIntegrand` there."""
+    K = problem.fixed.shape[0]
+    probe = fibonacci_hemisphere(SCALE_SAMPLES)
+    peak = np.zeros(K)
+    step = max(1, 1_000_000 // SCALE_SAMPLES)  # bounded memory whatever the number of cases
+    for start in range(0, K, step):
+        cases = np.repeat(np.arange(start, min(K, start + step)), SCALE_SAMPLES)
+        omega = np.tile(probe, (cases.size // SCALE_SAMPLES, 1))
+        values = problem.integrand(omega, cases)
+        finite = np.all(np.isfinite(values), axis=-1)
+        if nonfinite == "raise" and not finite.all():
+            first = int(np.argmin(finite))
+            raise NonFiniteIntegrand(int(cases[first]), omega[first], values[first])
+        magnitude = np.where(finite, np.abs(values).max(axis=-1), 0.0).reshape(-1, SCALE_SAMPLES)
+        peak[start:start + magnitude.shape[0]] = magnitude.max(axis=1)
+    return np.where(peak > LARGE_VALUE, np.exp2(np.ceil(np.log2(np.maximum(peak, 1.0)))), 1.0)
+
+
+def _nonfinite_message(problem: Problem, bad: NonFiniteIntegrand) -> str:
+    """Where the BRDF was not finite: its value and the (L, V) pair — or, where the direction itself is not (the
+    lobe search's sums overflowed even after scaling), that the values are too large to integrate."""
+    fixed = problem.fixed[bad.case]
+    hint = "pass nonfinite='zero' (--nonfinite zero) to count such values as 0"
+    if not np.all(np.isfinite(bad.direction)):
+        return f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow)"
+    L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
+    value = np.array2string(bad.value, precision=6)
+    return f"BRDF is not finite (value {value}) at L={_fmt(L)}, V={_fmt(V)}; {hint}"
 
 
 def _fmt(direction: np.ndarray) -> str:
@@ -175,29 +269,29 @@ def _has_closed_form(model: Model, over: Over) -> bool:
     return type(model).closed_form_albedo is not Model.closed_form_albedo
 
 
-METHODS: dict[str, Method] = {
+METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
     "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
-}
+})
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
 AUTO_ORDER: list[str] = ["quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:
     """Add an albedo method; with ``auto_priority`` it is also tried by ``method="auto"`` at that position."""
-    METHODS[method.name] = method
+    METHODS.register(method.name, method)
     if auto_priority is not None and method.name not in AUTO_ORDER:
         AUTO_ORDER.insert(auto_priority, method.name)
 
 
 def resolve_method(model: Model, over: Over, method: str) -> Method:
+    """The method named (``"auto"``: the first applicable of :data:`AUTO_ORDER`), refused where it does not apply."""
+    METHODS.validate(method, extra=("auto",))
     if method == "auto":
         for name in AUTO_ORDER:
             if METHODS[name].applies(model, over):
                 return METHODS[name]
-    if method not in METHODS:
-        raise ArgumentError(f"unknown method {method!r} (known: auto, {', '.join(METHODS)})", where="method")
     chosen = METHODS[method]
     if not chosen.applies(model, over):
         raise ArgumentError(f"method {method!r} does not apply to {model.name} over the {over}", where="method")
@@ -225,9 +319,9 @@ def albedo(
     ``digits`` (method ``"certified"`` only, default 30) is the number of significant digits asked of the
     enclosure; the result then also carries ``lower`` and ``upper``.
     """
-    check_tolerance(rtol, atol)
-    if nonfinite not in ("raise", "zero"):
-        raise ArgumentError(f"nonfinite must be 'raise' or 'zero', got {nonfinite!r}", where="nonfinite")
+    rtol, atol = validate.tolerances(rtol, atol)
+    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
+    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
     chosen = resolve_method(model, over, method)
     options = {"digits": digits}
@@ -251,20 +345,28 @@ def albedo(
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
         **{name: bound.reshape(S + (C,)) for name, bound in bounds.items()},
+        model=model.name, bound=model.params, rtol=rtol,
     )
 
 
 def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model, str | None, np.ndarray]:
     """Bind a one-parameter sweep to the model as an array of shape (S, 1) (broadcasting against angles)."""
+    check_model(model)
+    if sweep is None:
+        return model, None, np.zeros(1)
+    if not isinstance(sweep, Mapping):
+        raise ArgumentTypeError(f"expected a mapping {{name: values}}, got {type(sweep).__name__}", where="sweep")
     if not sweep:
         return model, None, np.zeros(1)
     if len(sweep) != 1:
         raise ArgumentError("sweep one parameter at a time", where="sweep")
     (name, values), = sweep.items()
+    if not isinstance(name, str):
+        raise ArgumentTypeError(f"a parameter name is text, got {type(name).__name__}", where="sweep")
     parameter = model.parameter(name)
     if parameter.kind != "float":
         raise ArgumentError(f"only float parameters can be swept; {name} is {parameter.kind}", where="sweep")
-    values = np.asarray(values, dtype=float).ravel()
+    values = validate.real_array(values, "sweep").ravel()
     if values.size == 0:
         raise ArgumentError(f"the sweep over {name} is empty", where="sweep")
     return model.with_params(**{name: values[:, None]}), name, values

@@ -1,0 +1,160 @@
+"""Result formats — ``table``, ``json``, ``csv`` — and the one value formatter of the product.
+
+A result (:class:`~brdfnorm.directional.AlbedoResult`, :class:`~brdfnorm.normalization.NormalizationResult`)
+describes itself as :class:`Records`: a title, top-level fields (model, parameters, tolerances), the columns
+and one row per point. Each format of :data:`FORMATS` renders Records to text, so the command line, the report
+and the benchmarks print the same numbers the same way:
+
+* ``json`` — one object, the top-level fields plus ``results`` (the rows); non-finite floats become ``null``.
+* ``csv`` — a header row and one row per point; parameters get one column each; full precision (``repr``).
+* ``table`` — a rich table for people: 12 significant digits for values, 3 for error estimates.
+
+:func:`format_value` is the one formatter of a parameter or result value (bools as 0/1, colors and channels
+comma-joined), used by the tables, ``brdfnorm info`` and the report.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..registry import Registry
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column: ``key`` in every row (``params.NAME`` for a parameter), its header and its precision."""
+
+    key: str
+    header: str
+    digits: int | None = 12  # significant digits in a table; None: the value's own text
+    in_table: bool = True
+
+
+@dataclass(frozen=True)
+class Records:
+    """What every format needs of a result: see the module docstring."""
+
+    title: str
+    meta: dict
+    columns: tuple[Column, ...]
+    rows: list[dict] = field(default_factory=list)
+
+    def cell(self, row: dict, column: Column):
+        """The row's value for ``column`` (``params.NAME`` looks into the row's parameters)."""
+        if column.key.startswith("params."):
+            return row["params"][column.key[len("params."):]]
+        return row[column.key]
+
+
+def format_value(value: object, digits: int | None = None) -> str:
+    """A parameter or result value as text: ``digits`` significant digits (None: full precision, ``repr``);
+    bools as 0/1; sequences (colors, channels) comma-joined; text as it is."""
+    if isinstance(value, (bool, np.bool_)):
+        return str(int(value))
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (Sequence, np.ndarray)):
+        return ",".join(format_value(v, digits) for v in np.ravel(np.asarray(value, dtype=object)))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    number = float(value)  # type: ignore[arg-type]
+    return repr(number) if digits is None else f"{number:.{digits}g}"
+
+
+def degrees(radians: float) -> float:
+    """An angle in degrees for output, to 12 significant digits: an angle given in degrees on the command line
+    (60) comes back as given, not as its round trip through radians (59.99999999999999)."""
+    return float(f"{np.degrees(float(radians)):.12g}")
+
+
+def channel_value(values: np.ndarray) -> float | list[float]:
+    """A number for a single-channel value, a list for a multi-channel one (rows of JSON, CSV and tables)."""
+    values = np.asarray(values)
+    return float(values.ravel()[0]) if values.size == 1 else [float(v) for v in values.ravel()]
+
+
+def jsonable(value):
+    """numpy scalars/arrays to plain Python; non-finite floats to None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    return value
+
+
+def to_json(obj) -> str:
+    """Indented JSON text of ``obj`` (through :func:`jsonable`)."""
+    return json.dumps(jsonable(obj), indent=2, ensure_ascii=False)
+
+
+def _json(records: Records) -> str:
+    return to_json({**records.meta, "results": records.rows}) + "\n"
+
+
+def _csv(records: Records) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow([c.key.removeprefix("params.") for c in records.columns])
+    for row in records.rows:
+        writer.writerow([format_value(records.cell(row, c)) for c in records.columns])
+    return buffer.getvalue()
+
+
+def _table(records: Records) -> str:
+    from rich.console import Console  # rich loads only when a table is drawn, not with the library
+    from rich.markup import escape
+    from rich.table import Table
+
+    # Names from outside (a file called "[bold]x.brdf") are text, never rich markup.
+    table = Table(title=escape(records.title))
+    shown = [c for c in records.columns if c.in_table]
+    for column in shown:
+        table.add_column(escape(column.header), justify="right")
+    for row in records.rows:
+        table.add_row(*(escape(format_value(records.cell(row, c), c.digits)) for c in shown))
+    buffer = io.StringIO()
+    Console(file=buffer, width=160).print(table)
+    return buffer.getvalue()
+
+
+@dataclass(frozen=True)
+class Format:
+    """A result format: renders :class:`Records` to text."""
+
+    name: str
+    render: Callable[[Records], str]
+    description: str
+
+
+#: Result formats by name (``--json`` and ``--csv`` on the command line pick ``json`` and ``csv``).
+FORMATS: Registry[Format] = Registry("format", "format", {
+    "table": Format("table", _table, "a table for people (rich)"),
+    "json": Format("json", _json, "one JSON object: the result's fields and `results`, one entry per point"),
+    "csv": Format("csv", _csv, "a header row and one row per point, full precision"),
+})
+
+
+def validate_format(name: object) -> Format:
+    """The format called ``name``, or an ArgumentError listing the known ones."""
+    return FORMATS[FORMATS.validate(name)]
+
+
+def render(records: Records, format_name: str = "table") -> str:
+    """``records`` as text in the named format."""
+    return validate_format(format_name).render(records)

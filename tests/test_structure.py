@@ -1,0 +1,112 @@
+"""The package's shape (issue 11): no import cycles in src/ (lazy imports inside functions included), no module
+over ~600 lines, and no module shadowed by a function of the same name exported by its package."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import pkgutil
+from pathlib import Path
+
+import pytest
+
+import brdfnorm
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PACKAGE = SRC / "brdfnorm"
+#: Being split into a package by the GLSL engineer (issue 11, item 4).
+LONG_FILES_ALLOWED = {"brdfnorm/glsl/compiler.py"}
+MAX_LINES = 600
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(path): path for path in PACKAGE.rglob("*.py")}
+
+
+def _imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
+    """The package modules ``name`` imports, anywhere in its body; ``from P import N`` counts as P.N where
+    P.N is a module (a submodule), else as P."""
+    is_package = path.name == "__init__.py"
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = name.split(".") if is_package else name.split(".")[:-1]
+                base = base[: len(base) - (node.level - 1)]
+                prefix = ".".join(base + ([node.module] if node.module else []))
+            else:
+                prefix = node.module or ""
+            targets = [f"{prefix}.{alias.name}" if f"{prefix}.{alias.name}" in known else prefix
+                       for alias in node.names]
+        else:
+            continue
+        found.update(t for t in targets if t in known and t != name)
+    return found
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan's algorithm)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for target in sorted(graph[node]):
+            if target not in index:
+                visit(target)
+                low[node] = min(low[node], low[target])
+            elif target in on_stack:
+                low[node] = min(low[node], index[target])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                top = stack.pop()
+                on_stack.discard(top)
+                component.append(top)
+                if top == node:
+                    break
+            if len(component) > 1:
+                components.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return components
+
+
+def test_the_import_graph_of_src_has_no_cycles():
+    known = _modules()
+    graph = {name: _imports(name, path, known) for name, path in known.items()}
+    assert graph["brdfnorm.cli.core"] >= {"brdfnorm.output.formats"}  # the parser sees real imports
+    assert _cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_module_is_longer_than_600_lines():
+    long = {str(path.relative_to(SRC)): n for path in PACKAGE.rglob("*.py")
+            if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+    assert set(long) <= LONG_FILES_ALLOWED, long
+
+
+@pytest.mark.parametrize("module", sorted(m.name for m in pkgutil.walk_packages(brdfnorm.__path__, "brdfnorm.")
+                                          if m.name != "brdfnorm.__main__"))
+def test_every_module_imports_as_a_module(module):
+    """``import brdfnorm.X`` gives the module X, never a function that the package re-exports under its name."""
+    imported = importlib.import_module(module)
+    parent, _, leaf = module.rpartition(".")
+    assert getattr(importlib.import_module(parent), leaf) is imported
