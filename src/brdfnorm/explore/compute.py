@@ -28,10 +28,11 @@ import numpy as np
 
 from .. import albedo, normalize
 from ..codegen import emit
-from ..errors import ArgumentError, EvaluationError, ParameterError
+from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, ParameterError, ParameterTypeError
 from ..fit import fit
 from ..models.base import Model, mirror
 from ..normalization import THETA_MAX
+from ..validate import choice, count, real_array, real_number, short_repr
 
 CONVENTIONS = ("normal", "max", "view")
 FIT_LANGUAGES = ("glsl", "hlsl")
@@ -91,51 +92,40 @@ def _plain(value: object) -> object:
 
 
 def bind_parameters(model: Model, raw: object) -> Model:
-    """The model bound to the page's values: JSON numbers, booleans, [R, G, B] lists or choice names only."""
+    """The model bound to the page's values: one number per float, [R, G, B] per colour, true/false, a choice's
+    name. Arrays are refused where one number is meant (a sweep from a request would multiply the work); the
+    ranges, colour components and choices are checked by the parameters themselves."""
     if raw is None:
         return model
     if not isinstance(raw, dict):
-        raise ArgumentError("params must be an object of name: value", where="params")
+        raise ArgumentTypeError("params must be an object of name: value", where="params")
     values: dict[str, object] = {}
     for name, value in raw.items():
         p = model.parameter(str(name)[:80])
         where = f"parameter {p.name}"
-        if p.kind == "bool":
-            if not isinstance(value, bool):
-                raise ParameterError(f"expected true or false, got {str(value)[:40]!r}", where=where)
+        if p.kind == "float":
+            number = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
+            if number.ndim:
+                raise ParameterTypeError(f"expected one number, got {short_repr(value)}", where=where)
+            value = float(number)
         elif p.kind == "color":
-            if not (isinstance(value, list) and len(value) == 3 and all(_is_finite(v) for v in value)):
-                raise ParameterError(f"expected [R, G, B] (finite numbers), got {str(value)[:60]!r}", where=where)
-            value = [float(v) for v in value]
-        elif p.kind == "float":
-            if not _is_finite(value):
-                raise ParameterError(f"expected a finite number, got {str(value)[:40]!r}", where=where)
-            value = float(value)  # type: ignore[arg-type]
-        elif not isinstance(value, str):  # a choice (or a kind this page does not know): its name
-            raise ParameterError(f"expected one of the choices, got {str(value)[:40]!r}", where=where)
-        values[p.name] = tuple(value) if p.kind == "color" else value
+            if not (isinstance(value, list) and len(value) == 3):
+                raise ParameterTypeError(f"expected [R, G, B], got {short_repr(value)}", where=where)
+            value = tuple(real_array(value, where, error=ParameterError, type_error=ParameterTypeError).tolist())
+        elif p.kind == "bool" and not isinstance(value, bool):
+            raise ParameterTypeError(f"expected true or false, got {short_repr(value)}", where=where)
+        elif p.kind not in ("float", "color", "bool") and not isinstance(value, str):  # a choice: its name
+            raise ParameterTypeError(f"expected one of the choices, got {short_repr(value)}", where=where)
+        values[p.name] = value
     return model.with_params(**values)
-
-
-def _is_number(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _is_finite(value: object) -> bool:
-    """A JSON number that is a finite float (an integer of 400 digits is not)."""
-    if not _is_number(value):
-        return False
-    try:
-        return math.isfinite(float(value))  # type: ignore[arg-type]
-    except OverflowError:
-        return False
 
 
 def view_angle(raw: object) -> float:
     """The page's view angle θ_o in degrees, checked: [0°, 89.9°]."""
-    if not _is_finite(raw) or not 0.0 <= float(raw) <= VIEW_MAX_DEG:  # type: ignore[arg-type]
-        raise ArgumentError(f"view angle must be a number in [0, {VIEW_MAX_DEG:g}] degrees", where="view")
-    return float(raw)  # type: ignore[arg-type]
+    degrees = real_number(raw, "view")
+    if not 0.0 <= degrees <= VIEW_MAX_DEG:
+        raise ArgumentError(f"view angle must be in [0, {VIEW_MAX_DEG:g}] degrees, got {degrees:g}", where="view")
+    return degrees
 
 
 # -- cancellation -------------------------------------------------------------------------------------------
@@ -240,11 +230,8 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
     ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
     outside a file's slider range) are reported with the computation's own.
     """
-    if convention not in CONVENTIONS:
-        raise ArgumentError(f"unknown convention {str(convention)[:40]!r} (known: {', '.join(CONVENTIONS)})",
-                            where="convention")
-    if quality not in QUALITIES:
-        raise ArgumentError(f"quality must be 'coarse' or 'fine', got {str(quality)[:40]!r}", where="quality")
+    choice(convention, CONVENTIONS, "convention")
+    choice(quality, tuple(QUALITIES), "quality")
     q = QUALITIES[quality]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -343,7 +330,7 @@ def _lobes(model: Model, theta_v: float, alpha: np.ndarray) -> tuple[dict, dict]
 
 # -- the fit panel ------------------------------------------------------------------------------------------
 
-def fit_factor(model: Model, parameter: object, low: object, high: object, count: object, at: object,
+def fit_factor(model: Model, parameter: object, low: object, high: object, samples: object, at: object,
                language: object, scale: object = "linear", form: object = "auto",
                check: Callable[[], None] = lambda: None, params: object = None) -> dict:
     """Fit α(x) = 1/E over a float parameter's range (:func:`brdfnorm.fit.fit`, ``auto`` form by default) and
@@ -351,19 +338,18 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, count
     p = model.parameter(str(parameter)[:80])
     if p.kind != "float":
         raise ArgumentError(f"only float parameters can be fitted; {p.name} is {p.kind}", where="parameter")
-    if not (_is_finite(low) and _is_finite(high) and low < high):  # type: ignore[operator]
-        raise ArgumentError("the range needs finite numbers low < high", where="range")
-    if not (isinstance(count, int) and not isinstance(count, bool) and 4 <= count <= 64):
-        raise ArgumentError("samples must be a whole number in [4, 64]", where="samples")
-    if at not in ("normal", "max"):
-        raise ArgumentError("the fitted factor is at 'normal' or 'max'", where="at")
-    if language not in FIT_LANGUAGES:
-        raise ArgumentError(f"language must be one of {', '.join(FIT_LANGUAGES)}", where="language")
-    if scale not in ("linear", "log") or (scale == "log" and low <= 0):
-        raise ArgumentError("scale is 'linear', or 'log' with low > 0", where="scale")
+    low, high = real_number(low, "low"), real_number(high, "high")
+    if not low < high:
+        raise ArgumentError(f"the range needs low < high, got [{low:g}, {high:g}]", where="range")
+    samples = count(samples, "samples", minimum=4, maximum=64)
+    choice(at, ("normal", "max"), "at")
+    choice(language, FIT_LANGUAGES, "language")
+    choice(scale, ("linear", "log"), "scale")
+    if scale == "log" and low <= 0:
+        raise ArgumentError("a log scale needs low > 0", where="scale")
     if not isinstance(form, str) or len(form) > 40:
         raise ArgumentError("form must be a form name such as auto or rational:2/1", where="form")
-    values = np.geomspace(low, high, count) if scale == "log" else np.linspace(low, high, count)
+    values = np.geomspace(low, high, samples) if scale == "log" else np.linspace(low, high, samples)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         m = cancellable(bind_parameters(model, params), check)

@@ -23,7 +23,6 @@ import contextlib
 import ipaddress
 import json
 import logging
-import math
 import os
 import signal
 import socket
@@ -45,6 +44,7 @@ from starlette.responses import FileResponse, JSONResponse, Response, StreamingR
 from starlette.routing import Route
 
 from ..errors import ArgumentError, BrdfnormError, ModelNotFoundError
+from ..output.formats import jsonable
 from .catalog import Catalog, Entry
 from .compute import (
     CONVENTIONS,
@@ -93,17 +93,6 @@ class RequestError(Exception):
     def __init__(self, status: int, message: str) -> None:
         super().__init__(message)
         self.status = status
-
-
-def plain_json(value: object) -> object:
-    """Non-finite floats to null (JSON has no NaN or Infinity)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: plain_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain_json(v) for v in value]
-    return value
 
 
 class Explorer:
@@ -258,7 +247,7 @@ class Explorer:
     async def respond(self, work: Callable[[], object]) -> Response:
         """Run a handler body; map every failure to a JSON error so one bad request never stops the server."""
         try:
-            return JSONResponse(plain_json(await work()))
+            return JSONResponse(jsonable(await work()))
         except Superseded:
             return JSONResponse({"stale": True}, status_code=409)
         except RequestError as error:
@@ -288,7 +277,7 @@ class Explorer:
                         continue
                     if message is None:  # the server is stopping
                         return
-                    yield f"data: {json.dumps(plain_json(message))}\n\n"
+                    yield f"data: {json.dumps(jsonable(message))}\n\n"
             finally:
                 self.subscribers.discard(queue)
 
