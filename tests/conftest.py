@@ -63,6 +63,57 @@ def nquad_albedo(model, theta_o: float, theta_points, *, epsabs: float = 0.0, li
     return value
 
 
+def ggx_albedo_reference(alpha: float, mu: float, order: int = 24) -> float:
+    """E(μ) of GGX with height-correlated Smith G2 (Heitz 2014, eq. 99) and F = 1, by Gauss–Legendre in
+    half-vector coordinates — never forming 1 − (N·H)², so exact in float64 at any α.
+
+    With tan²θ_h = α²t, D(H)(N·H) dω_h = dt/(1+t)² dφ/(2π) and dL = 4(V·H) dω_h, so
+    E = ∫∫ G2(L, V)(V·H)/(μ (N·H)) dt/(1+t)² dφ/(2π) over the half vectors whose mirror L = 2(V·H)H − V lies
+    above the horizon. For each φ node the horizon's t is found by bisection; u = ln t runs from ln 1e-40 to
+    it on 60 panels and 30 more graded geometrically towards the horizon (where G2's masking layer is ~α wide
+    in u), φ on 8 panels over [0, π] (the integrand is even in φ).
+    """
+    x, w = np.polynomial.legendre.leggauss(order)
+    sin_o = np.sqrt(1.0 - mu * mu)
+    a2 = alpha * alpha
+
+    def smith_lambda(c):
+        return 0.5 * (-1.0 + np.sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)))
+
+    def panels(edges):
+        lo, hi = edges[:-1, None], edges[1:, None]
+        return (lo + (hi - lo) * (x + 1) / 2).ravel(), (w * (hi - lo) / 2).ravel()
+
+    phi, w_phi = panels(np.linspace(0.0, np.pi, 9))
+
+    def light_z(theta_h):
+        v_dot_h = sin_o * np.sin(theta_h) * np.cos(phi) + mu * np.cos(theta_h)
+        return 2.0 * v_dot_h * np.cos(theta_h) - mu
+
+    lo, hi = np.zeros_like(phi), np.full_like(phi, np.pi / 2)
+    for _ in range(200):
+        mid = (lo + hi) / 2
+        above = light_z(mid) > 0
+        lo, hi = np.where(above, mid, lo), np.where(above, hi, mid)
+    t_horizon = np.tan(lo) ** 2 / a2
+    total = 0.0
+    for k in range(phi.size):
+        # Panels graded towards the horizon, where the masking layer (μ_L ≲ α) is ~α wide in u.
+        top = np.log(t_horizon[k])
+        edges = np.concatenate([np.linspace(np.log(1e-40), top - 1.0, 60), top - np.geomspace(0.5, 1e-9, 30), [top]])
+        u, w_u = panels(edges)
+        t = np.exp(u)
+        tan_h = alpha * np.sqrt(t)
+        cos_h = 1.0 / np.sqrt(1.0 + tan_h**2)
+        v_dot_h = sin_o * tan_h * cos_h * np.cos(phi[k]) + mu * cos_h
+        mu_l = 2.0 * v_dot_h * cos_h - mu
+        above = mu_l > 0
+        g2 = 1.0 / (1.0 + smith_lambda(np.where(above, mu_l, 1.0)) + smith_lambda(mu))
+        f = np.where(above, g2 * v_dot_h / (mu * cos_h), 0.0) * t / (1.0 + t) ** 2 / (2.0 * np.pi)
+        total += 2.0 * w_phi[k] * np.dot(f, w_u)
+    return float(total)
+
+
 def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
     """Run the brdfnorm command line in-process: (exit code, stdout, stderr)."""
     from brdfnorm.cli import main

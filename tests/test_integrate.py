@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+import json
+import warnings
 from pathlib import Path
 
 import mpmath
 import numpy as np
 import pytest
-from conftest import nquad_albedo, phong_like_reference
+from conftest import ggx_albedo_reference, nquad_albedo, phong_like_reference, run_cli
 
 import brdfnorm as bn
 from brdfnorm import closed_forms
-from brdfnorm.integrate import fibonacci_hemisphere, integrate_hemisphere, lobe_frame
+from brdfnorm.integrate import REASONS, fibonacci_hemisphere, integrate_hemisphere, lobe_frame
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+NAIVE_GGX = Path(__file__).resolve().parent / "fixtures" / "ggx_naive.brdf"
 
 EXPONENTS = [0.0, 1.0, 3.5, 100.0, 512.0, 1e4]
 
@@ -203,3 +206,84 @@ def test_error_estimate_covers_the_grazing_sliver(n, rtol):
     result = bn.albedo(model, np.radians(89.9), method="quadrature", rtol=rtol)
     assert result.error[0] >= abs(result.value[0] - exact)
     assert abs(result.value[0] - exact) <= rtol * exact
+
+
+# -- float64's limit (issue 13 item 1, issue 14 item 5): honest estimates, a reason, and no budget burnt ------
+
+#: A point that cannot converge must stop long before the 2e7-evaluation budget (issue 13 item 2).
+FAIL_FAST_EVALUATIONS = 1_000_000
+
+
+def _quiet_albedo(model, theta, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bn.albedo(model, theta, **kwargs)
+
+
+def _check_honest(result, reference: float, index=()) -> str:
+    """Estimate ≥ true error, a reason exactly where unconverged, and no budget burnt there; the reason."""
+    value = float(np.asarray(result.value)[index].ravel()[0])
+    assert float(np.asarray(result.error)[index].ravel()[0]) >= abs(value - reference)
+    reason = str(np.asarray(result.reason)[index])
+    assert (reason == "") == bool(np.asarray(result.converged)[index])
+    assert reason in ("", *REASONS)
+    if reason:
+        assert int(np.asarray(result.evaluations)[index]) <= FAIL_FAST_EVALUATIONS
+    return reason
+
+
+def test_naive_ggx_fixture_cancels_as_shaders_do():
+    assert "float d = NdotH * NdotH * (a2 - 1.0) + 1.0;" in NAIVE_GGX.read_text()
+
+
+@pytest.mark.parametrize("mu", [1.0, 0.5, 0.03])
+def test_ggx_reference_agrees_with_quadrature_where_float64_suffices(mu):
+    model = bn.load(str(NAIVE_GGX), alpha=0.3)
+    result = bn.albedo(model, np.arccos(mu), rtol=1e-12)
+    assert abs(result.value[0] / ggx_albedo_reference(0.3, mu) - 1) < 1e-10
+
+
+@pytest.mark.parametrize("mu", [1.0, 0.5, 0.03])
+@pytest.mark.parametrize("alpha", [1e-8, 1e-6, 1e-4])
+def test_naive_ggx_estimate_covers_the_true_error_at_float64s_limit(alpha, mu):
+    # Issue 13: at alpha 1e-8 this returned 3.08 ± 0.027 (truth 1.0) after 14 s; at 1e-6, 1.00019 ± 2.3e-5.
+    model = bn.load(str(NAIVE_GGX), alpha=alpha)
+    result = _quiet_albedo(model, np.arccos(mu), rtol=1e-9)
+    reason = _check_honest(result, ggx_albedo_reference(alpha, mu))
+    if alpha <= 1e-6:
+        assert reason == "rounding-limited"
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-9])
+def test_blinn_phong_brdf_at_n_1e7_is_honest_at_every_angle(rtol):
+    # The lobe (9e-4 rad) underflows to 0 at every point of the sampling lattice: it was integrated to 0 ± 0.
+    with pytest.warns(UserWarning, match="slider range"):
+        model = bn.load(str(EXAMPLES / "blinn_phong.brdf"), n=1e7)
+    theta = np.radians([0.0, 30.0, 60.0, 85.0, 89.0])
+    exact = bn.albedo(bn.load("blinn-phong", n=1e7), theta, method="series", rtol=1e-13)
+    assert abs(exact.value[0, 0] / closed_forms.blinn_phong_albedo_normal(1e7) - 1) < 1e-13
+    result = _quiet_albedo(model, theta, rtol=rtol)
+    for i in range(theta.size):
+        _check_honest(result, float(exact.value[i, 0]), i)
+
+
+@pytest.mark.parametrize("n", [1e8, 1e10, 1e12, 1e14, 1e16, 1e18, 1e20])
+@pytest.mark.parametrize(("model", "closed"), [
+    ("phong", closed_forms.phong_original_albedo_normal),
+    ("modified-phong", closed_forms.phong_modified_albedo_normal),
+    ("blinn-phong", closed_forms.blinn_phong_albedo_normal),
+])
+def test_huge_exponents_are_reported_unconverged_with_honest_estimates(model, closed, n):
+    # Issue 14 item 5: phong at n = 1e16 was 10 % off with estimate 7.5e-11 and converged; at 1e20, 5 500× off.
+    result = _quiet_albedo(bn.load(model, n=n), 0.0, method="quadrature", rtol=1e-10)
+    reason = _check_honest(result, float(closed(n)))
+    assert reason == "rounding-limited"
+
+
+def test_cli_reports_the_reason_per_point(capsys):
+    code, out, err = run_cli(capsys, "albedo", "phong", "-p", "n=1e16", "--theta", "0", "--json")
+    assert code == 0
+    (row,) = json.loads(out)["results"]
+    assert row["converged"] is False and row["reason"] == "rounding-limited"
+    assert row["error_estimate"] >= abs(row["albedo"] - 2 * np.pi / (1e16 + 1))
+    assert "rounding-limited" in err

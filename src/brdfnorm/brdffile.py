@@ -19,10 +19,13 @@ Gaussian Blinn-Phong lobe, on a single line). The format, as BRDF Explorer reads
 
 The reader works on whitespace-separated tokens, so the one-line form of seed 003 (every token on one line,
 the shader starting mid-line) reads the same as the multi-line form; a parameter declaration must lie on one
-line. Every problem is a :class:`~brdfnorm.errors.BrdfFileError` at ``FILE:LINE:COL`` in the file's own
-numbering (1-based, columns in characters). Parsing is a single linear scan, so megabytes of comments cost
-milliseconds. The shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy
-operations; nothing from the file is ever executed as Python.
+line. A parameter name must be a GLSL identifier that is no keyword, reserved word, type name, built-in
+function or ``BRDF`` (it becomes a uniform of the shader). Every problem is a
+:class:`~brdfnorm.errors.BrdfFileError` at ``FILE:LINE:COL`` in the file's own numbering (1-based, columns in
+characters). Parsing is a single linear scan, so megabytes of comments cost milliseconds; files over
+:data:`MAX_BYTES` are refused unread, and the shader's own bounds are in :mod:`brdfnorm.glsl.limits`. The
+shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy operations;
+nothing from the file is ever executed as Python.
 """
 
 from __future__ import annotations
@@ -30,18 +33,25 @@ from __future__ import annotations
 import bisect
 import re
 import warnings
+from array import array
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .errors import BrdfFileError, ModelNotFoundError
+from .glsl.names import ENTRY_POINT, reserved_kind
 from .models.base import Model
 from .parameters import Parameter
 
-#: Refuse files larger than this before reading them whole (a .brdf is a few kilobytes).
-MAX_BYTES = 64 * 1024 * 1024
+#: Refuse files larger than this before reading them whole (a .brdf is a few kilobytes; 16 MiB leaves room
+#: for megabytes of comments while the reader's memory stays far below 1 GB).
+MAX_BYTES = 16 * 1024 * 1024
+
+#: Most parameters a file may declare (each is a slider in BRDF Explorer and a uniform of the shader; the
+#: examples declare 1–8).
+MAX_PARAMETERS = 256
 
 SECTIONS = ("parameters", "shader", "isFunc")
 #: Parameter kind -> (number of values after NAME, GLSL uniform type, what the values are).
@@ -81,6 +91,8 @@ class BrdfFile:
     parameters: tuple[Parameter, ...]
     shader: SourceText
     is_func: SourceText | None = None
+    #: The whole text as parsed (what a model sent to another process is rebuilt from).
+    text: str = field(default="", repr=False)
 
     @property
     def uniforms(self) -> dict[str, str]:
@@ -102,7 +114,8 @@ class _Scanner:
         self.text = text
         self.path = path
         self.pos = 0
-        self._newlines = [m.start() for m in re.finditer("\n", text)]
+        # 8 bytes per line (a list of ints would take 36): a file of newlines stays small in memory.
+        self._newlines = array("q", (m.start() for m in re.finditer("\n", text)))
 
     def where(self, offset: int) -> tuple[int, int]:
         index = bisect.bisect_left(self._newlines, offset)  # newlines strictly before offset
@@ -231,6 +244,8 @@ def _parse_parameters(scanner: _Scanner, begin: _Token) -> list[Parameter]:
                 message = f"expected a parameter declaration (float, bool or color), got {token.text!r}"
             raise scanner.error(message, token.start)
         kind = token
+        if len(parameters) == MAX_PARAMETERS:
+            raise scanner.error(f"too many parameters: at most {MAX_PARAMETERS}", kind.start)
         count, _, shape = KINDS[kind.text]
         line = scanner.line_of(kind.start)
         fields: list[_Token] = []
@@ -247,8 +262,12 @@ def _parse_parameters(scanner: _Scanner, begin: _Token) -> list[Parameter]:
                 kind.start,
             )
         name = fields[0]
-        if not _IDENTIFIER.match(name.text) or name.text.startswith("gl_"):
-            raise scanner.error(f"parameter name {name.text!r} is not a GLSL identifier", name.start)
+        if not _IDENTIFIER.match(name.text):
+            raise scanner.error(f"parameter name {name.text[:40]!r} is not a GLSL identifier", name.start)
+        reserved = reserved_kind(name.text)
+        if reserved is not None or name.text == ENTRY_POINT:
+            what = reserved or "the shader's entry point BRDF"
+            raise scanner.error(f"parameter name {name.text!r} is {what}: it cannot name a uniform", name.start)
         if name.text in declared:
             raise scanner.error(
                 f"duplicate parameter {name.text!r} (first declared on line {declared[name.text]})",
@@ -329,7 +348,7 @@ def parse_brdf(text: str, path: str = "<string>") -> BrdfFile:
             path,
             *scanner.where(len(text)),
         )
-    return BrdfFile(path, tuple(parameters), shader, sections.get("isFunc"))
+    return BrdfFile(path, tuple(parameters), shader, sections.get("isFunc"), text)
 
 
 def read_brdf(path: str | Path) -> BrdfFile:
@@ -409,6 +428,8 @@ class BrdfModel(Model):
             uniforms[p.name] = value
             shape = np.broadcast_shapes(shape, value.shape[:-1] if p.kind == "color" else value.shape)
         result = self.program.brdf(L, V, N, X, Y, uniforms)
+        if result.shape == shape + (3,):
+            return result  # a new C-contiguous float64 array of the program's: the caller owns it
         # A shader whose result does not depend on the directions (e.g. a constant) comes back smaller.
         # A writable array the caller owns (broadcast_to alone would give a read-only view).
         return np.require(np.broadcast_to(result, shape + (3,)), dtype=float, requirements=["C", "W"])
@@ -420,7 +441,11 @@ def load_brdf(path: str | Path, **params: object) -> BrdfModel:
     Parameter values outside a file's slider range are accepted with a warning; a value of the wrong type
     raises :class:`~brdfnorm.errors.ParameterError`.
     """
-    brdf = read_brdf(path)
+    return compile_brdf(read_brdf(path), **params)
+
+
+def compile_brdf(brdf: BrdfFile, **params: object) -> BrdfModel:
+    """The model of a parsed file (:func:`parse_brdf` on a text sent elsewhere, or :func:`read_brdf`)."""
     from .glsl import compile_shader  # the GLSL toolchain (tree-sitter) loads only for a readable file
 
     program = compile_shader(

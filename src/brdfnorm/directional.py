@@ -27,7 +27,7 @@ import numpy as np
 from . import validate
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
-from .models.base import Model, Over
+from .models.base import Model, Over, mirror
 from .output.formats import Column, Records, channel_value, degrees, format_value
 from .registry import Registry
 
@@ -48,6 +48,9 @@ class AlbedoResult:
     nonfinite_fraction: np.ndarray | None = None  # (*S,) share of the hemisphere zeroed (nonfinite="zero")
     lower: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed lower bound (method "certified")
     upper: np.ndarray | None = None  # (*S, C) decimal strings, a guaranteed upper bound (method "certified")
+    #: (*S,) str: "" where converged, else why not — "rounding-limited" (the integrand's float64 noise exceeds
+    #: the tolerance), "stalled" (the estimate stopped improving) or "budget" (max_evaluations ran out).
+    reason: np.ndarray | None = None
     model: str = ""  # the model's name
     bound: dict = field(default_factory=dict)  # the model's parameter values as bound (before broadcasting)
     rtol: float = 0.0
@@ -57,7 +60,8 @@ class AlbedoResult:
         rows = [
             {"theta_deg": degrees(self.theta[i]), "phi_deg": degrees(self.phi[i]),
              "albedo": channel_value(self.value[i]), "error_estimate": channel_value(self.error[i]),
-             "method": self.method, "evaluations": int(self.evaluations[i]), "converged": bool(self.converged[i])}
+             "method": self.method, "evaluations": int(self.evaluations[i]), "converged": bool(self.converged[i]),
+             "reason": "" if self.reason is None else str(self.reason[i])}
             | ({} if self.lower is None else {"lower": _decimals(self.lower[i]), "upper": _decimals(self.upper[i])})
             for i in np.ndindex(self.converged.shape)
         ]
@@ -68,7 +72,8 @@ class AlbedoResult:
             meta={"model": self.model, "params": self.bound, "over": self.over, "rtol": self.rtol},
             columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"),
                      Column("error_estimate", "error estimate", 3), Column("method", "method", None),
-                     Column("evaluations", "evaluations", None), Column("converged", "converged", None))
+                     Column("evaluations", "evaluations", None), Column("converged", "converged", None),
+                     Column("reason", "reason", None))
             + bounds,
             rows=rows,
         )
@@ -128,7 +133,7 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     batch_shapes = []
     for p in model.parameters:
         value = np.asarray(bound[p.name])
-        batch_shapes.append(value.shape[:-1] if p.kind == "color" else value.shape)
+        batch_shapes.append(() if p.kind == "choice" else value.shape[:-1] if p.kind == "color" else value.shape)
     try:
         shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
     except ValueError:
@@ -139,6 +144,9 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     params, broadcast = {}, {}
     for p, batch in zip(model.parameters, batch_shapes, strict=True):
         value = bound[p.name]
+        if p.kind == "choice":  # a choice is one value for the whole batch (never swept)
+            params[p.name] = broadcast[p.name] = value
+            continue
         tail = (3,) if p.kind == "color" else ()
         broadcast[p.name] = np.broadcast_to(np.asarray(value, dtype=float), shape + tail)
         params[p.name] = broadcast[p.name].reshape((-1,) + tail) if batch else value
@@ -155,7 +163,10 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    run: Callable[..., tuple]  # (value, error, evaluations, converged, nonfinite share[, bounds])
+    #: (value, error, evaluations, converged, nonfinite share[, extra]): ``extra`` maps further result fields
+    #: to arrays — ``reason`` (K,) (without one an unconverged point's reason is "budget"), or the certified
+    #: ``lower``/``upper`` bounds (K, C).
+    run: Callable[..., tuple]
     description: str = ""
     #: Keyword options of :func:`albedo` this method takes besides the tolerances (e.g. ``digits``).
     options: tuple[str, ...] = ()
@@ -206,14 +217,16 @@ def _integrate(problem: Problem, scale: np.ndarray | None, *, rtol: float, atol:
             return problem.integrand(omega, case) / scale[case, None]
     lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
     if lobe is None:
-        poles, widths, supports = estimate_lobe(integrand, K)
+        normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
+        candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
+        poles, widths, supports = estimate_lobe(integrand, K, candidates=candidates)
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
     result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
                                   nonfinite=nonfinite, max_evaluations=max_evaluations)
     return (result.value * scale[:, None], result.error * scale[:, None], result.evaluations, result.converged,
-            result.nonfinite_fraction)
+            result.nonfinite_fraction, {"reason": result.reason})
 
 
 def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:
@@ -328,15 +341,16 @@ def albedo(
     for name, given in options.items():
         if given is not None and name not in chosen.options:
             raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
-    value, error, evaluations, converged, bad, *bounds = chosen.run(
+    value, error, evaluations, converged, bad, *extra = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})
-    bounds = bounds[0] if bounds else {}
+    extra = dict(extra[0]) if extra else {}
+    reason = np.asarray(extra.pop("reason", np.where(converged, "", "budget")), dtype=str)
     S, C = problem.shape, value.shape[-1]
     if not np.all(converged):
+        why = ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged]))
         warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
-                      f"reach rtol={rtol:g} within {max_evaluations} evaluations; see the error estimates",
-                      stacklevel=2)
+                      f"reach rtol={rtol:g} ({why}); see the error estimates", stacklevel=2)
     if bad is not None and np.any(bad > 0):
         warnings.warn(f"{model.name}: non-finite BRDF values counted as 0 on up to {100 * bad.max():.3g}% of "
                       "the hemisphere's solid angle", stacklevel=2)
@@ -344,7 +358,7 @@ def albedo(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
         params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
-        **{name: bound.reshape(S + (C,)) for name, bound in bounds.items()},
+        reason=reason.reshape(S), **{name: bound.reshape(S + (C,)) for name, bound in extra.items()},
         model=model.name, bound=model.params, rtol=rtol,
     )
 
@@ -379,6 +393,14 @@ from .series import albedo_method as _series  # noqa: E402
 
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
+
+# Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
+# (brdfnorm.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates fail.
+from .halfvector import albedo_method as _microfacet  # noqa: E402
+from .models.microfacet import MicrofacetModel  # noqa: E402
+
+register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
+                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=0)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).

@@ -18,6 +18,18 @@ class BrdfnormError(Exception):
     def __str__(self) -> str:
         return f"{self.where}: {self.message}" if self.where else self.message
 
+    def __reduce__(self):
+        # Errors raised in a worker process (brdfnorm.parallel) travel back pickled; the subclasses' own
+        # __init__ signatures differ, so rebuild from the attributes rather than by calling __init__.
+        return _rebuild, (type(self), self.args, dict(self.__dict__))
+
+
+def _rebuild(cls: type[BrdfnormError], args: tuple, state: dict) -> BrdfnormError:
+    error = cls.__new__(cls)
+    error.args = args
+    error.__dict__.update(state)
+    return error
+
 
 class ParameterError(BrdfnormError, ValueError):
     """A model parameter is unknown, of the wrong type, or outside a hard limit."""

@@ -40,6 +40,14 @@ bisected along their worse direction, largest errors first, until the summed est
 below max(atol, rtol·|E|) for every case and channel, or the evaluation budget runs out (then
 ``converged`` is False and the estimate still says how far off the value may be).
 
+At float64's limit the integrand itself is noise: a lobe written with a cosine near 1 (cos^n, (N·H)^n,
+1 − (N·H)²) sees that cosine only to within ε, which at n = 1e16 or GGX α = 1e-8 is a staircase as wide as
+the lobe. Before the first round :func:`rounding_noise` measures each case's noise by fourth differences
+along rays from the peak, and :func:`noise_bound` adds it (times the |g|-integral) to the estimate. A case
+whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
+one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
+``converged`` is False and ``reason`` says why.
+
 Every round evaluates all panels of all unconverged cases in one vectorized call to the integrand; there is
 no Python loop per node or per case. ``scipy.integrate.cubature`` implements the same idea for a single
 integrand; it cannot share rounds across thousands of integrals or use lobe-aligned coordinates, which is
@@ -53,6 +61,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+
+from .rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -105,6 +115,12 @@ class HemisphereResult:
     evaluations: np.ndarray  # (K,) integrand evaluations
     converged: np.ndarray  # (K,) bool
     nonfinite_fraction: np.ndarray  # (K,) share of the hemisphere's solid angle zeroed (nonfinite="zero")
+    reason: np.ndarray  # (K,) str: "" where converged, else why not (one of :data:`REASONS`)
+
+
+#: Why a case ends unconverged: its integrand's float64 rounding noise exceeds the tolerance
+#: ("rounding-limited"), its estimate stopped improving ("stalled"), or the evaluation budget ran out ("budget").
+REASONS = ("rounding-limited", "stalled", "budget")
 
 
 @dataclass
@@ -120,9 +136,10 @@ class _Panels:
     err_b: np.ndarray | None = None  # (R, C)
     err_u: np.ndarray | None = None  # (R, C)
     bad: np.ndarray | None = None  # (R,) solid angle where the integrand was non-finite
+    magnitude: np.ndarray | None = None  # (R, C) K15⊗K15 integral of |g| (the scale of rounding noise)
     inherited: np.ndarray | None = None  # (R, C) share of |parent − children| from the split that made it
 
-    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "inherited")
+    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "magnitude", "inherited")
 
     def take(self, index) -> _Panels:
         return _Panels(*(None if (a := getattr(self, f)) is None else a[index] for f in self.FIELDS))
@@ -215,7 +232,7 @@ def _estimate(values: np.ndarray, jacobian: np.ndarray):
     kg = np.einsum("rbc,b->rc", over_u_g, KRONROD)
     magnitude = np.einsum("rbuc,b,u->rc", np.abs(weighted), KRONROD, KRONROD)
     floor = 50.0 * _EPS * magnitude  # rounding noise: QUADPACK's floor on |K − G|
-    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor)
+    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor), magnitude
 
 
 def integrate_hemisphere(
@@ -249,7 +266,7 @@ def integrate_hemisphere(
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
-    widths = np.broadcast_to(np.clip(np.asarray(widths, dtype=float), 1e-6, 4.0), (K,)).copy()
+    widths = np.broadcast_to(np.clip(np.asarray(widths, dtype=float), 1e-12, 4.0), (K,)).copy()
     supports = np.broadcast_to(np.clip(np.asarray(supports, dtype=float), 1e-6, np.pi), (K,)).copy()
     frame = lobe_frame(poles)
 
@@ -271,7 +288,11 @@ def integrate_hemisphere(
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
     confirmed = np.zeros(K, dtype=bool)
+    reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
+    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call)
+    evaluations += PROBE_EVALUATIONS
+    history = []  # total error estimate per case and round (for the stall check)
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
     parent_value = None  # values of the panels whose halves ``fresh`` holds
@@ -288,21 +309,21 @@ def integrate_hemisphere(
             change = _refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
             fresh.inherited = np.concatenate([change, change])
         pool = fresh if pool is None else _Panels.join(pool, fresh)
-        panel_error = pool.error()
         if value.shape[1] != pool.value.shape[1]:
             value = np.zeros((K, pool.value.shape[1]))
             error = np.zeros_like(value)
+            noise_amplitude = np.broadcast_to(noise_amplitude, value.shape).copy()
 
-        # Totals per unfinished case over all its panels.
+        # Totals per unfinished case over all its panels; the rounding-noise bound joins the error.
         total_value = np.zeros_like(value)
-        total_error = np.zeros_like(value)
+        magnitude = np.zeros_like(value)
         np.add.at(total_value, pool.case, pool.value)
-        np.add.at(total_error, pool.case, panel_error)
+        np.add.at(magnitude, pool.case, pool.magnitude)
+        noise = noise_bound(noise_amplitude, magnitude)
         tolerance = np.maximum(atol, rtol * np.abs(total_value))
-        ratio = _normalized(total_error, tolerance)
         present = np.zeros(K, dtype=bool)
         present[pool.case] = True
-        within = present & np.all(ratio <= 1.0, axis=1)
+        panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         # A case within tolerance for the first time is confirmed: every panel is recomputed as two halves
         # by the G7⊗G7 rule (new nodes, a quarter of the cost of K15 halves), and the difference joins its
         # error — a check that the embedded rules cannot pass together when a feature falls between all
@@ -313,20 +334,27 @@ def integrate_hemisphere(
             change = _check_by_halves(pool.take(checked), integrand, frame, widths, supports, max_nodes_per_call)
             np.add.at(evaluations, pool.case[checked], 2 * GAUSS_NODES.size**2)
             pool.inherited[checked] = np.maximum(pool.inherited[checked], change)
-            panel_error = pool.error()
-            total_error = np.zeros_like(value)
-            np.add.at(total_error, pool.case, panel_error)
-            ratio = _normalized(total_error, tolerance)
-            within = present & np.all(ratio <= 1.0, axis=1)
+            panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         confirmed |= confirming
         case_ok = within & confirmed
-        out_of_budget = evaluations + 2 * nodes_per_panel > max_evaluations
         converged |= case_ok
-        active = present & ~(case_ok | out_of_budget)
+        # Fail fast where more nodes cannot help: the rounding noise alone exceeds the tolerance and the
+        # quadrature error is already below it, or the estimate stopped improving (see _stalled).
+        rounding_limited = present & ~case_ok & np.any(_normalized(noise, tolerance) > 1.0, axis=1)
+        history.append((evaluations.copy(), np.where(present, (quadrature_error + noise).max(axis=1), np.nan)))
+        stop = rounding_limited & np.all(quadrature_error <= noise, axis=1)
+        stalled = present & ~case_ok & ~stop & _stalled(history, evaluations)
+        out_of_budget = present & ~case_ok & (evaluations + 2 * nodes_per_panel > max_evaluations)
+        reason[out_of_budget] = "budget"
+        reason[stalled] = "stalled"
+        reason[rounding_limited & (stop | stalled | out_of_budget)] = "rounding-limited"
+        active = present & ~(case_ok | stop | stalled | out_of_budget)
 
-        # Within an active case, split the panels carrying the largest (tolerance-normalized) errors: all but
-        # the smallest ones whose errors together stay under half the tolerance.
-        share = _normalized(panel_error, tolerance[pool.case]).max(axis=1)
+        # Within an active case, split the panels carrying the largest errors, normalized by what the
+        # quadrature may still spend (the tolerance less the noise bound, or the noise bound where that exceeds
+        # the tolerance): all but the smallest ones whose errors together stay under half of it.
+        target = np.where(noise < tolerance, tolerance - noise, noise)
+        share = _normalized(panel_error, target[pool.case]).max(axis=1)
         order = np.lexsort((share, pool.case))
         sorted_case = pool.case[order]
         cumulative = np.cumsum(share[order])
@@ -338,23 +366,58 @@ def integrate_hemisphere(
         split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
 
         finished = ~active[pool.case]
+        done = present & ~active
         np.add.at(value, pool.case[finished], pool.value[finished])
         np.add.at(error, pool.case[finished], panel_error[finished])
         np.add.at(bad_total, pool.case[finished], pool.bad[finished])
+        error[done] += noise[done]
         parents = pool.take(split)
         pool = pool.take(~split & ~finished)
         fresh = parents.halves(parents.err_b.max(axis=1) >= parents.err_u.max(axis=1))
         parent_value = parents.value
         if not fresh.case.size and pool.case.size:
             # Active cases whose every panel is too thin to split: finish them unconverged.
+            left = np.zeros(K, dtype=bool)
+            left[pool.case] = True
+            reason[left] = np.where(rounding_limited[left], "rounding-limited", "stalled")
             np.add.at(value, pool.case, pool.value)
             np.add.at(error, pool.case, pool.error())
             np.add.at(bad_total, pool.case, pool.bad)
+            error[left] += noise[left]
 
     if value.shape[1] == 0:
         value = np.zeros((K, 1))
         error = np.zeros((K, 1))
-    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi))
+    reason[converged] = ""
+    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
+
+
+def _case_errors(pool: _Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):
+    """Panel errors (R, C), their sums per case (K, C), and which present cases meet the tolerance with the
+    rounding-noise bound added."""
+    panel_error = pool.error()
+    summed = np.zeros_like(noise)
+    np.add.at(summed, pool.case, panel_error)
+    return panel_error, summed, present & np.all(_normalized(summed + noise, tolerance) <= 1.0, axis=1)
+
+
+#: Evaluations after which a case whose error estimate no longer halves when its evaluations double stops.
+_STALL_EVALUATIONS = 50_000
+
+
+def _stalled(history: list[tuple[np.ndarray, np.ndarray]], evaluations: np.ndarray) -> np.ndarray:
+    """Cases whose error estimate shrank by less than 2× since they had half their evaluations, once past
+    a modest budget: refining further only spends evaluations (rounding noise, a singularity). ``history``
+    holds (evaluations, error estimate) per round."""
+    stalled = np.zeros(evaluations.size, dtype=bool)
+    compared = np.zeros(evaluations.size, dtype=bool)
+    current = history[-1][1]
+    for spent, estimate in reversed(history[:-1]):  # the latest round with at most half the evaluations
+        latest = (spent <= evaluations / 2) & ~compared
+        with np.errstate(invalid="ignore"):
+            stalled |= latest & (current > 0.5 * estimate)
+        compared |= latest
+    return stalled & (evaluations > _STALL_EVALUATIONS)
 
 
 def _refinement_change(whole: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
@@ -409,7 +472,8 @@ def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, ma
             values = np.where(finite[..., None], values, 0.0)
             bad = np.einsum("rbu,b,u->r", jacobian * ~finite, KRONROD, KRONROD)
         parts.append((*_estimate(values, jacobian), bad))
-    panels.value, panels.err_b, panels.err_u, panels.bad = (np.concatenate(p) for p in zip(*parts, strict=True))
+    panels.value, panels.err_b, panels.err_u, panels.magnitude, panels.bad = (
+        np.concatenate(p) for p in zip(*parts, strict=True))
 
 
 def fibonacci_hemisphere(count: int) -> np.ndarray:
@@ -421,16 +485,21 @@ def fibonacci_hemisphere(count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
-def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024,
-                  max_nodes_per_call: int = 1_500_000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024, max_nodes_per_call: int = 1_500_000,
+                  candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Find the peak direction and angular width of each case's integrand by sampling (no model hint).
 
     A Fibonacci lattice of ``samples`` directions locates the maximum of |g| to within the lattice spacing
-    h ≈ √(2π/samples), and the |g|-weighted RMS angle about it estimates the width. A lobe narrower than the
-    lattice (RMS < 2h) is then zoomed into: a polar lattice on a cap of radius 3h around the peak relocates it
-    and measures it again, and the cap shrinks threefold until the lobe spans several of its points (GGX at
-    roughness 0.01 is 1e-4 rad wide). Only the efficiency of :func:`integrate_hemisphere` depends on these
-    numbers — its adaptivity and error estimate do not.
+    h ≈ √(2π/samples), together with ``candidates`` (K, m, 3), directions where a peak is likely (the mirror
+    direction: a lobe narrower than h, Blinn-Phong at n = 1e7, underflows to 0 at every lattice point, and an
+    integrand that is 0 at every sample would be integrated to 0 with a zero error estimate). The
+    |g|-weighted RMS angle about the maximum estimates the width. A lobe narrower than the
+    lattice (the RMS, or twice the RMS angle of the samples above half the peak, < 2h) is then zoomed into: a
+    polar lattice on a cap of radius 3h around the peak relocates it and measures it again, and the cap shrinks
+    threefold until the lobe spans several of its points (GGX at roughness 0.01 is 1e-4 rad wide; at α = 1e-8,
+    1e-8 rad). The width is the smaller of the two RMS measures. The quadrature's efficiency
+    depends on these numbers, and so does where :func:`rounding_noise` looks for noise (which is why the core,
+    not the tails, must be found); the adaptivity and the quadrature error estimate do not.
     """
     spacing = np.sqrt(2.0 * np.pi / samples)
 
@@ -445,30 +514,44 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = 1024,
                 g = np.abs(np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float))
             g = np.where(np.isfinite(g), g, 0.0).max(axis=-1).reshape(omega.shape[:2])
             best = omega[np.arange(case.size), np.argmax(g, axis=1)]
-            angle = np.arccos(np.clip(np.einsum("kmi,ki->km", omega, best), -1.0, 1.0))
+            # atan2(|ω × P|, ω·P): arccos would not resolve angles below √ε.
+            angle = np.arctan2(np.linalg.norm(np.cross(omega, best[:, None, :]), axis=-1),
+                               np.einsum("kmi,ki->km", omega, best))
             total = g.sum(axis=1)
             with np.errstate(invalid="ignore", divide="ignore"):
                 rms = np.sqrt((g * angle**2).sum(axis=1) / total)
+            # The RMS angle of the samples above half the peak measures the core: heavy tails (GGX at grazing
+            # views) make the RMS angle of all samples far wider than the core that rounding noise lives in.
+            # (0 where only the peak sample is above half: the core is unresolved, and zoomed into.)
+            core = g >= 0.5 * g.max(axis=1, keepdims=True)
+            core_rms = np.sqrt(np.where(core, angle**2, 0.0).sum(axis=1) / np.maximum(core.sum(axis=1), 1))
             peaks.append(best)
-            widths.append(np.where(total > 0, rms, 1.0))
+            widths.append(np.where(total > 0, np.minimum(rms, 2.0 * core_rms), 1.0))
         return np.concatenate(peaks), np.concatenate(widths)
 
     grid = fibonacci_hemisphere(samples)
-    peak, width = sample(lambda case: np.broadcast_to(grid, (case.size,) + grid.shape), samples, np.arange(cases))
+    extra = np.zeros((cases, 0, 3)) if candidates is None else np.asarray(candidates, dtype=float)
+
+    def lattice(case: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.broadcast_to(grid, (case.size,) + grid.shape), extra[case]], axis=1)
+
+    peak, width = sample(lattice, samples + extra.shape[1], np.arange(cases))
 
     cap = fibonacci_hemisphere(256)
-    cap_angle = np.arccos(cap[:, 2]) / (np.pi / 2)  # polar angle on a cap of unit radius
-    cap_phi = np.arctan2(cap[:, 1], cap[:, 0])
+    # Polar angles on a cap of unit radius, and the cap's centre (the peak so far: a zoom that finds nothing
+    # else above 0 must keep it rather than move to an arbitrary point).
+    cap_angle = np.concatenate([[0.0], np.arccos(cap[:, 2]) / (np.pi / 2)])
+    cap_phi = np.concatenate([[0.0], np.arctan2(cap[:, 1], cap[:, 0])])
     cap_spacing = np.sqrt(np.pi / cap.shape[0])  # mean spacing on that cap (area ≈ π)
     radius = np.full(cases, 3.0 * spacing)
     unresolved = np.flatnonzero(width < 2.0 * spacing)
-    while unresolved.size and radius[unresolved].max() > 1e-7:
+    while unresolved.size and radius[unresolved].max() > 1e-10:
         around_peak = _cap_lattice(peak, unresolved, radius, cap_angle, cap_phi)
-        peak[unresolved], width[unresolved] = sample(around_peak, cap.shape[0], unresolved)
+        peak[unresolved], width[unresolved] = sample(around_peak, cap_angle.size, unresolved)
         resolved = width[unresolved] >= 2.0 * cap_spacing * radius[unresolved]
         radius[unresolved] /= 3.0
         unresolved = unresolved[~resolved]
-    return peak, np.clip(width, 1e-6, 1.0), np.full(cases, np.pi)
+    return peak, np.clip(width, 1e-12, 1.0), np.full(cases, np.pi)
 
 
 def _cap_lattice(peak: np.ndarray, cases: np.ndarray, radius: np.ndarray, cap_angle: np.ndarray,

@@ -49,6 +49,7 @@ class NormalizationResult:
     method: str
     over: Over
     converged: np.ndarray  # (S, T)
+    reason: np.ndarray | None = None  # (S, T) str: "" where converged, else why not (AlbedoResult.reason)
     model: str = ""  # the model's name
     params: dict = field(default_factory=dict)  # the model's bound parameter values (the swept one overridden)
     rtol: float = 0.0
@@ -67,6 +68,7 @@ class NormalizationResult:
                     "phi_deg": degrees(self.phi[s, t]), "albedo": channel_value(self.albedo[s, t]),
                     "error_estimate": channel_value(self.error[s, t]), "factor": channel_value(self.factor[s, t]),
                     "method": self.method, "at": self.at, "converged": bool(self.converged[s, t]),
+                    "reason": "" if self.reason is None else str(self.reason[s, t]),
                 })
         columns = tuple(Column(f"params.{name}", name, 12, in_table=name == self.parameter) for name in self.params)
         return Records(
@@ -76,7 +78,8 @@ class NormalizationResult:
                                Column("albedo", "albedo"), Column("error_estimate", "error estimate", 3),
                                Column("factor", "factor"), Column("method", "method", None),
                                Column("at", "at", None, in_table=False),
-                               Column("converged", "converged", None, in_table=False)),
+                               Column("converged", "converged", None, in_table=False),
+                               Column("reason", "reason", None)),
             rows=rows,
         )
 
@@ -124,7 +127,8 @@ def normalize(
         at=at, parameter=name, values=values,
         theta=np.broadcast_to(result.theta, value.shape[:2]), phi=np.broadcast_to(result.phi, value.shape[:2]),
         albedo=value, error=np.broadcast_to(result.error, value.shape), factor=factor, method=result.method,
-        over=over, converged=np.broadcast_to(result.converged, value.shape[:2]), model=model.name,
+        over=over, converged=np.broadcast_to(result.converged, value.shape[:2]),
+        reason=np.broadcast_to(result.reason, value.shape[:2]), model=model.name,
         params=model.params if name is None else {**model.params, name: values}, rtol=rtol,
     )
 
@@ -142,7 +146,7 @@ def _in_chunks(model: Model, sweep, on_progress: Callable[[int, int], None], kwa
     for chunk in np.array_split(values, min(total, PROGRESS_CHUNKS)):
         parts.append(normalize(model, sweep={name: chunk}, **kwargs))
         on_progress(sum(p.values.size for p in parts), total)
-    fields = ("theta", "phi", "albedo", "error", "factor", "converged")
+    fields = ("theta", "phi", "albedo", "error", "factor", "converged", "reason")
     return dataclasses.replace(parts[0], values=values, params={**parts[0].params, name: values},
                                **{f: np.concatenate([getattr(p, f) for p in parts]) for f in fields})
 

@@ -16,7 +16,7 @@ import numpy as np
 from .errors import ParameterError, ParameterTypeError
 from .validate import real_array, short_repr
 
-Kind = Literal["float", "bool", "color"]
+Kind = Literal["float", "bool", "color", "choice"]
 
 
 @dataclass(frozen=True)
@@ -25,15 +25,18 @@ class Parameter:
 
     name: str
     kind: Kind = "float"
-    default: float | bool | tuple[float, float, float] = 0.0
+    default: float | bool | tuple[float, float, float] | str = 0.0
     minimum: float | None = None
     maximum: float | None = None
     description: str = ""
     strict: bool = True  # True: range is a hard limit; False: slider range, warn only
+    choices: tuple[str, ...] = ()  # the allowed values of a ``kind="choice"`` parameter
 
     def describe_range(self) -> str:
         if self.kind == "bool":
             return "0 or 1"
+        if self.kind == "choice":
+            return "|".join(self.choices)
         lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
         hi = "inf" if self.maximum is None else f"{self.maximum:g}"
         return f"[{lo}, {hi}]"
@@ -41,6 +44,8 @@ class Parameter:
     def parse(self, text: str) -> float | bool | tuple[float, float, float]:
         """Parse a command-line value (``n=512``, ``normalized=0``, ``baseColor=0.5,0.5,0.5``)."""
         text = text.strip()
+        if self.kind == "choice":
+            return self._choose(text)
         try:
             if self.kind == "bool":
                 lowered = text.lower()
@@ -64,6 +69,8 @@ class Parameter:
     def validate(self, value: object) -> float | bool | tuple[float, float, float] | np.ndarray:
         """Check type and range; returns the value in canonical form (arrays allowed for sweeps)."""
         where = f"parameter {self.name}"
+        if self.kind == "choice":
+            return self._choose(value)
         if isinstance(value, str):
             value = self.parse(value)
         if self.kind == "bool":
@@ -87,6 +94,21 @@ class Parameter:
         if self.kind == "color" and array.ndim == 1:
             return tuple(float(c) for c in array)  # type: ignore[return-value]
         return array
+
+
+    def _choose(self, value: object) -> str:
+        if isinstance(value, str) and value.strip() in self.choices:
+            return value.strip()
+        raise ParameterError(f"expected one of {', '.join(self.choices)}; got {short_repr(value)}",
+                             where=f"parameter {self.name}")
+
+    def describe_default(self) -> str:
+        """The default as the command line would spell it."""
+        if self.kind == "choice":
+            return str(self.default)
+        if self.kind == "bool":
+            return str(int(bool(self.default)))
+        return ",".join(f"{v:g}" for v in np.atleast_1d(np.asarray(self.default, dtype=float)))
 
 
 def resolve(parameters: tuple[Parameter, ...], values: Mapping[str, object], *, where: str = "") -> dict:

@@ -46,11 +46,25 @@ class Over(str, Enum):
     view = "view"
 
 
+WORKERS_OPTION = typer.Option(None, "--workers", min=1, metavar="N",
+                              help="Local processes computing the table's cells (default: all cores; 1: this "
+                              "process).")
+SCHEDULER_OPTION = typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
+                                help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
+                                "instead of local processes.")
+CHECKPOINT_OPTION = typer.Option(None, "--checkpoint", metavar="DIR",
+                                 help="Save each finished chunk of cells in DIR; rerunning the same command "
+                                 "resumes, computing only what is missing.")
+CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
+                                  help="Cells per chunk (part of the job's definition; default: sized by a short "
+                                  "probe so that a chunk takes about a second).")
+
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
              "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
              "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
-             "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits"}
+             "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits", "workers": "--workers",
+             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells"}
 
 
 class _Console(Console):
@@ -92,8 +106,9 @@ def guarded(debug: bool = False) -> Iterator[None]:
         if error.where in CLI_NAMES:
             error.where = CLI_NAMES[error.where]
         raise fail(str(error).replace("\n", " ")) from None
-    except KeyboardInterrupt:
-        raise fail("interrupted", 130) from None
+    except KeyboardInterrupt as interrupt:  # Ctrl-C, or SIGTERM while a table's cells run (brdfnorm.parallel)
+        signal_name = f" by {interrupt.args[0]}" if interrupt.args else ""
+        raise fail(f"interrupted{signal_name}", 143 if signal_name else 130) from None
     except Exception as error:  # noqa: BLE001 — the contract: no traceback without --debug
         if debug:
             raise
@@ -203,3 +218,22 @@ def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable
             progress.update(task, completed=done, total=total)
 
         yield on_progress
+
+
+def compute_cells(job, label: str, *, workers: int | None, scheduler: str | None, checkpoint: str | None):
+    """:func:`brdfnorm.parallel.albedo_cells` with a progress bar on stderr when it is a terminal, then a
+    one-line summary there (for more than one cell)."""
+    from ..parallel import albedo_cells
+
+    with progress_bar(label, enabled=job.size > 1) as on_progress:
+        record = albedo_cells(job, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
+                              on_progress=on_progress)
+    if job.size > 1:
+        reused = record.chunks - record.chunks_computed
+        typer.echo(f"{label}: {job.size} cells in {_count(record.chunks, 'chunk')} ({reused} from the checkpoint) "
+                   f"on {_count(record.workers, 'worker')} ({record.executor}) in {record.seconds:.2f} s", err=True)
+    return record
+
+
+def _count(number: int, noun: str) -> str:
+    return f"{number} {noun}{'' if number == 1 else 's'}"

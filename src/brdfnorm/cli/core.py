@@ -8,27 +8,33 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..directional import albedo as compute_albedo
+from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize
 from ..output import STDOUT, write_file
 from ..output.formats import render
+from ..parallel import CellsJob
+from ..parallel.results import albedo_result, normalization_result, sweep_job
 from .application import app
 from .common import (
+    CHECKPOINT_OPTION,
+    CHUNK_CELLS_OPTION,
     CSV_OPTION,
     DEBUG_OPTION,
     JSON_OPTION,
     OUTPUT_OPTION,
     PARAM_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
     At,
     Over,
+    compute_cells,
     console,
     guarded,
     load_model,
     parse_angles,
     parse_azimuth,
     parse_sweep,
-    progress_bar,
     result_format,
 )
 
@@ -41,7 +47,8 @@ class NonFinite(str, Enum):
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
 METHOD_OPTION = typer.Option("auto", "--method",
-                             help="auto | quadrature | closed-form | series | certified (where it applies).")
+                             help="auto | quadrature | closed-form | series | microfacet | certified (where it "
+                                  "applies; microfacet: ggx and beckmann, over the half vector).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
@@ -54,7 +61,7 @@ def models(debug: bool = DEBUG_OPTION) -> None:
         for column in ("name", "formula", "parameters", "closed form"):
             table.add_column(column)
         for name, cls in REGISTRY.items():
-            params = ", ".join(f"{p.name}={p.default:g} {p.describe_range()}" for p in cls.parameters)
+            params = ", ".join(f"{p.name}={p.describe_default()} {p.describe_range()}" for p in cls.parameters)
             has_closed = "normal incidence" if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
             table.add_row(name, cls.formula, params, has_closed)
         console().print(table)
@@ -77,6 +84,10 @@ def albedo(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
@@ -89,9 +100,10 @@ def albedo(
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
-        result = compute_albedo(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol,
-                                method=method, nonfinite=nonfinite.value, digits=digits)
-        write_file(output or STDOUT, render(result.records(), chosen))
+        job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
+                          nonfinite=nonfinite.value, digits=digits, chunk_cells=chunk_cells)
+        cells = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+        write_file(output or STDOUT, render(albedo_result(job, cells).records(), chosen))
 
 
 @app.command("normalize")
@@ -110,6 +122,10 @@ def normalize_command(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
@@ -121,9 +137,16 @@ def normalize_command(
             m.parameter(name)  # unknown names fail before any work
         degrees = parse_angles(theta) if at == At.view else None
         azimuth = parse_azimuth(phi)
-        with progress_bar(f"{m.name}: sweeping {name}", enabled=values is not None and values.size >= 8) as step:
-            result = compute_normalize(m, at=at.value, sweep=None if name is None else {name: values},
-                                       theta=None if degrees is None else np.radians(degrees),
-                                       phi=np.radians(azimuth), over=over.value, rtol=rtol, method=method,
-                                       on_progress=step)
+        kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
+                      over=over.value, rtol=rtol, method=method)
+        if name is None:
+            if workers or scheduler or checkpoint or chunk_cells:
+                raise ArgumentError("--workers, --scheduler, --checkpoint and --chunk-cells spread a --sweep's "
+                                    "cells; there is no sweep", where="--sweep")
+            result = compute_normalize(m, at=at.value, **kwargs)
+        else:
+            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=chunk_cells)
+            cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
+                                  checkpoint=checkpoint)
+            result = normalization_result(job, at.value, name, cells)
         write_file(output or STDOUT, render(result.records(), chosen))

@@ -1,7 +1,8 @@
 """``brdfnorm fit``: fit a cheap formula to a model's normalization factor and emit it as shader code (issue 4).
 
-Samples come from :func:`brdfnorm.normalization.normalize` (the factor 1/E over a parameter sweep; with
-``--at view`` also over the polar angles of ``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
+Samples are the normalization factor 1/E over a parameter sweep (as :func:`brdfnorm.normalization.normalize` computes
+it, spread over cores or a Dask cluster by :mod:`brdfnorm.parallel`; with ``--at view`` also over the polar angles of
+``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
 :func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.codegen.emit`. Seed 003's check:
 ``brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form linear --metric abs-lsq --at normal --json``.
 """
@@ -19,20 +20,24 @@ from rich.table import Table
 from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..fit import METRICS, FitResult, fit, parse_form
-from ..normalization import normalize
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
+from ..parallel.results import normalization_result, sweep_job
 from .application import app
 from .common import (
+    CHECKPOINT_OPTION,
+    CHUNK_CELLS_OPTION,
     DEBUG_OPTION,
     PARAM_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
     At,
+    compute_cells,
     console,
     guarded,
     load_model,
     parse_angles,
     parse_sweep,
-    progress_bar,
 )
 
 SECOND_VARIABLE = "cos_theta_o"
@@ -114,6 +119,10 @@ def fit_command(
     output: str = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the emitted code here."),
     plot: str = typer.Option(None, "--plot", metavar="FILE.png", help="Plot α, the fit and its error."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
+    chunk_cells: int = CHUNK_CELLS_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Fit a cheap formula (the fewest coefficients for --target with --form auto) to the normalization factor."""
@@ -140,9 +149,11 @@ def fit_command(
         degrees = parse_angles(theta) if theta is not None else None
         m = load_model(model, param)
         m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
-        with progress_bar(f"{m.name}: sampling the factor over {name}", enabled=values.size >= 8) as step:
-            result = normalize(m, at=at.value, sweep={name: values}, theta=None if degrees is None
-                               else np.radians(degrees), rtol=rtol, on_progress=step)
+        job = sweep_job(m, at.value, name, values, None if degrees is None else np.radians(degrees), rtol=rtol,
+                        chunk_cells=chunk_cells)
+        samples = compute_cells(job, f"{m.name}: sampling the factor over {name}", workers=workers,
+                                scheduler=scheduler, checkpoint=checkpoint)
+        result = normalization_result(job, at.value, name, samples)
         y = _factor_channel(result.factor)
         if not np.all(np.isfinite(y)) or np.any(y <= 0):
             raise EvaluationError("the normalization factor is not finite and positive at every sample "

@@ -73,7 +73,7 @@ def info(
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
         for p in m.parameters:
-            kind_range = "R,G,B" if p.kind == "color" else p.describe_range()
+            kind_range = "R,G,B" if p.kind == "color" else p.describe_range()  # choices are listed as a|b|c
             if not p.strict and p.kind == "float":
                 kind_range += " (slider)"
             table.add_row(escape(p.name), p.kind, kind_range, format_value(p.default, 6),

@@ -99,6 +99,7 @@ def _atan2_mesa(y, x):
 
 
 def atan2(y, x):
+    """GLSL ``atan(y, x)`` with Mesa's results at zeros and NaN (see the module docstring)."""
     result = np.arctan2(y, x)
     special = ((x == 0) & (y == 0)) | (x != x) | (y != y)
     if np.any(special):
@@ -352,10 +353,6 @@ def _resolve_geometric(name: str, args: Sequence[Type], reusable: Sequence[bool]
 # --- matrices --------------------------------------------------------------------------------------------
 
 
-def _columns(m: Components, rows: int) -> list[Components]:
-    return [m[j : j + rows] for j in range(0, len(m), rows)]
-
-
 def determinant_of(m: Components, n: int):
     """Determinant of an n×n column-major matrix by cofactor expansion along the first column."""
     if n == 1:
@@ -536,6 +533,7 @@ FRESH = frozenset(_COMPONENTWISE) - {"pow"} | {
 
 
 def is_builtin(name: str) -> bool:
+    """Whether ``name`` is a supported built-in function."""
     return name in _RESOLVERS or name == "modf"
 
 

@@ -9,25 +9,38 @@ length-preserving rewrites of the text before parsing, so every position stays t
 * precision qualifiers (``highp``, ``mediump``, ``lowp`` and ``precision ...;`` statements) have no
   effect in desktop GLSL (§4.7), nor ``#pragma`` lines here: they are blanked out.
 * the parameter qualifiers ``const in`` are swapped to ``in const``, the order the grammar knows.
+* the constructors ``int(``, ``bool(`` and ``float(`` become identifiers of the same length (``__i(``,
+  ``__bo(``, ``__flo(``): as C primitive types the grammar reads ``(float(x) + 1.0)`` as a cast and fails.
+  :meth:`Source.text_of` gives the original name back at those places.
 
-Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree.
+Syntax errors are the first ``ERROR`` or ``MISSING`` node of the tree. Parsing is bounded
+(:mod:`.limits`): the text's size, and the parser's work through tree-sitter's progress callback, which
+cancels the parse — error recovery on junk can otherwise take far more time and memory than its size.
 """
 
 from __future__ import annotations
 
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import tree_sitter
 import tree_sitter_glsl
 
 from ..errors import BrdfFileError
+from .limits import MAX_SHADER_BYTES, PARSE_BYTES_PER_REPORT, PARSE_REPORTS
 
 with warnings.catch_warnings():
     # tree-sitter 0.2x warns about the int handle that tree-sitter-glsl's binding returns.
     warnings.simplefilter("ignore", DeprecationWarning)
     LANGUAGE = tree_sitter.Language(tree_sitter_glsl.language())
+
+#: Node types of preprocessor lines (``#define``, ``#if``, ...), from the grammar itself.
+PREPROCESSOR_NODES = frozenset(
+    LANGUAGE.node_kind_for_id(i)
+    for i in range(LANGUAGE.node_kind_count)
+    if LANGUAGE.node_kind_for_id(i).startswith("preproc")
+)
 
 _PRECISION = re.compile(
     rb"\bprecision\s+(?:lowp|mediump|highp)\s+\w+\s*;|\b(?:lowp|mediump|highp)\b"
@@ -38,6 +51,9 @@ _PRECISION = re.compile(
 
 # The grammar accepts `in const float a` but not the equally valid `const in float a`: swap the two words.
 _CONST_IN = re.compile(rb"\bconst(\s+)in\b")
+# Constructors named by a C primitive type, and the same-length identifiers they are parsed as.
+_PRIMITIVE_CONSTRUCTOR = re.compile(rb"\b(int|bool|float)(?=[ \t\r\n]*\()")
+_CONSTRUCTOR_ALIASES = {b"int": b"__i", b"bool": b"__bo", b"float": b"__flo"}
 
 
 def _blank(match: re.Match) -> bytes:
@@ -53,6 +69,8 @@ class Source:
     first_line: int
     first_column: int
     xor_offsets: frozenset[int]
+    original: bytes = b""  # the text before the length-preserving rewrites
+    constructors: dict[int, str] = field(default_factory=dict)  # offset -> constructor name rewritten there
 
     def position(self, node: tree_sitter.Node) -> tuple[int, int]:
         """File (line, column), both 1-based, of a node's first character."""
@@ -69,7 +87,15 @@ class Source:
         return BrdfFileError(message, self.path, line, column)
 
     def text_of(self, node: tree_sitter.Node) -> str:
+        """The text of ``node`` as parsed (a rewritten constructor name is given back as written)."""
+        name = self.constructors.get(node.start_byte)
+        if name is not None and node.end_byte - node.start_byte == len(name):
+            return name
         return self.text[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
+
+    def original_text_of(self, node: tree_sitter.Node) -> str:
+        """The text of ``node`` as written in the file, before any rewrite (macro bodies are parsed anew)."""
+        return self.original[node.start_byte : node.end_byte].decode("utf-8", errors="replace")
 
 
 def _first_error(root: tree_sitter.Node) -> tree_sitter.Node | None:
@@ -90,14 +116,45 @@ def _first_error(root: tree_sitter.Node) -> tree_sitter.Node | None:
     return None
 
 
+def _parse_bounded(text: bytes) -> tree_sitter.Tree | None:
+    """tree-sitter's parse of ``text``, or None when cancelled after the work :mod:`.limits` allows (older
+    py-tree-sitter returns None itself, newer raises ValueError).
+
+    The progress callback is only called when the text is read through a callback, not from bytes.
+    """
+    allowed = PARSE_REPORTS + len(text) // PARSE_BYTES_PER_REPORT
+    reports = 0
+
+    def read(offset: int, _point) -> bytes:
+        return text[offset : offset + 65536]
+
+    def progress(_offset: int, _has_error: bool) -> bool:
+        nonlocal reports
+        reports += 1
+        return reports > allowed  # True cancels the parse
+
+    try:
+        return tree_sitter.Parser(LANGUAGE).parse(read, progress_callback=progress)
+    except ValueError:  # py-tree-sitter 0.25+ raises "Parsing failed" when the callback cancels
+        if reports > allowed:
+            return None
+        raise
+
+
 def parse(source: str, path: str, first_line: int = 1, first_column: int = 1) -> tuple[tree_sitter.Tree, Source]:
     """Parse shader text; raise :class:`BrdfFileError` at the first syntax error."""
     raw = source.encode("utf-8", errors="replace")  # a lone surrogate becomes '?': a syntax error, located
     xor_offsets = frozenset(m.start() for m in re.finditer(rb"\^\^", raw))
     text = _PRECISION.sub(_blank, raw.replace(b"^^", b"||"))
     text = _CONST_IN.sub(lambda m: b"in" + m.group(1) + b"const", text)
-    src = Source(text, path, first_line, first_column, xor_offsets)
-    tree = tree_sitter.Parser(LANGUAGE).parse(text)
+    constructors = {m.start(): m.group(1).decode() for m in _PRIMITIVE_CONSTRUCTOR.finditer(text)}
+    text = _PRIMITIVE_CONSTRUCTOR.sub(lambda m: _CONSTRUCTOR_ALIASES[m.group(1)], text)
+    src = Source(text, path, first_line, first_column, xor_offsets, raw, constructors)
+    if len(text) > MAX_SHADER_BYTES:
+        raise src.error(f"shader too large: {len(text)} bytes (at most {MAX_SHADER_BYTES})", None)
+    tree = _parse_bounded(text)
+    if tree is None:
+        raise src.error("shader too complex to parse: the parser's work limit was reached (is this GLSL?)", None)
     bad = _first_error(tree.root_node)
     if bad is not None:
         if bad.is_missing:
@@ -114,8 +171,9 @@ def parse_expression(text: str, source: Source, node: tree_sitter.Node) -> tuple
     """Parse the body of an object-like ``#define`` as an expression located at ``node`` in the file."""
     line, column = source.position(node)
     prefix = "void f(){("
-    # The prefix shifts the first line's columns; the macro body never spans lines (no continuation).
-    tree, src = parse(prefix + text + ");}", source.path, line, column - len(prefix))
+    # The prefix shifts the first line's columns; the macro body never spans lines (no continuation). The
+    # suffix starts a new line, so that a '//' comment ending the macro's line stays a comment.
+    tree, src = parse(prefix + text + "\n);}", source.path, line, column - len(prefix))
     function = tree.root_node.children[0]
     body = function.child_by_field_name("body")
     statement = body.named_children[0]

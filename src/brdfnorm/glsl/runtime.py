@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-Mask = "None | bool | np.ndarray"
-
 
 def normalize_mask(mask):
     """``None`` when every lane is set, ``False`` when none is, the array otherwise."""
@@ -73,8 +71,8 @@ def blend(mask, new: tuple, old: tuple) -> tuple:
 def select(index, options: list[tuple], default: tuple) -> tuple:
     """Per-lane choice ``options[index]`` (``default`` where the index is out of range)."""
     if is_uniform(index):
-        i = int(index)
-        return options[i] if 0 <= i < len(options) else default
+        # an int from an overflowing conversion or a NaN uniform is no index: the default, as out of range
+        return options[int(index)] if np.isfinite(index) and 0 <= index < len(options) else default
     out = default
     for i, option in enumerate(options):
         out = tuple(np.where(index == i, o, d) for o, d in zip(option, out, strict=False))
@@ -98,7 +96,8 @@ class Frame:
 
     ``slots`` holds the local variables (indices assigned at compile time), ``globals`` the shared
     global variables and uniforms, ``mask`` the active lanes, ``ret`` the return value gathered so far
-    and ``loops`` the enclosing loops' states. ``budget`` is shared by all frames of one evaluation.
+    and ``loops`` the enclosing loops' states. ``budget`` (loop iterations, nodes run in loops) is shared by
+    all frames of one evaluation.
     """
 
     __slots__ = ("slots", "globals", "mask", "ret", "loops", "budget")

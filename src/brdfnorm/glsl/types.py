@@ -34,6 +34,7 @@ class Type:
 
     @property
     def is_array(self) -> bool:
+        """An array type."""
         return self.length is not None
 
     @property
@@ -43,28 +44,28 @@ class Type:
 
     @property
     def is_scalar(self) -> bool:
+        """A single bool, int, uint or float."""
         return self.rows == 1 and self.cols == 1 and self.length is None and self.base != "void"
 
     @property
     def is_vector(self) -> bool:
+        """A vector of 2 to 4 components."""
         return self.rows > 1 and self.cols == 1 and self.length is None
 
     @property
     def is_matrix(self) -> bool:
+        """A float matrix."""
         return self.cols > 1 and self.length is None
 
     @property
     def is_numeric(self) -> bool:
+        """An int, uint or float scalar, vector or matrix (not an array)."""
         return self.base in ("int", "uint", "float") and self.length is None
 
     @property
     def is_integer(self) -> bool:
+        """Of base type int or uint."""
         return self.base in ("int", "uint")
-
-    @property
-    def element_size(self) -> int:
-        """Components of one element (of the type itself when not an array)."""
-        return self.rows * self.cols
 
     @property
     def size(self) -> int:
@@ -72,6 +73,7 @@ class Type:
         return self.rows * self.cols * (self.length or 1)
 
     def with_base(self, base: str) -> Type:
+        """The same shape with another base type."""
         return Type(base, self.rows, self.cols, self.length)
 
     def column(self) -> Type:

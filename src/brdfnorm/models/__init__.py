@@ -4,14 +4,16 @@ from __future__ import annotations
 
 from ..registry import Registry
 from .base import Lobe, Model, Over, mirror
+from .beckmann import Beckmann
 from .blinn_phong import BlinnPhong
 from .blinn_phong_gaussian import BlinnPhongGaussian
+from .ggx import GGX
 from .lambert import Lambert
 from .phong import PhongModified, PhongOriginal
 
 REGISTRY: Registry[type[Model]] = Registry("model", "model", {
-    cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian)
+    cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann)
 })
 
-__all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "BlinnPhong", "BlinnPhongGaussian", "Lambert",
-           "PhongModified", "PhongOriginal"]
+__all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BlinnPhong", "BlinnPhongGaussian", "GGX",
+           "Lambert", "PhongModified", "PhongOriginal"]

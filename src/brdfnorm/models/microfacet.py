@@ -1,0 +1,343 @@
+"""The microfacet BRDF shared by the ``ggx`` and ``beckmann`` lobes: distributions, Smith shadowing, Fresnel.
+
+Walter et al. 2007 ("Microfacet models for refraction through rough surfaces", eq. 20):
+
+    f(L, V) = D(H) G2(L, V) F(V·H) / (4 (N·L)(N·V)),   H = normalize(L + V).
+
+Distributions are written in slope space (Heitz 2014, "Understanding the masking-shadowing function in
+microfacet-based BRDFs", §5.2): a microfacet normal m has slopes x = −m_x/m_z, y = −m_y/m_z, and
+D(m) = P22(x/α_x, y/α_y) / (α_x α_y cos⁴θ_m) with a standardized slope density P22 (α = 1):
+
+    GGX (Trowbridge-Reitz):  P22(r²) = 1 / (π (1 + r²)²)        Λ(ω) = (−1 + √(1 + a²)) / 2
+    Beckmann:                P22(r²) = exp(−r²) / π              Λ(ω) = (erf(b) − 1)/2 + exp(−b²)/(2b√π)
+
+with a² = (α_x² ω_x² + α_y² ω_y²)/ω_z² = 1/b² (Heitz 2014 eqs. 72, 86 — the exact Λ, not the rational fit
+of Walter et al.). Smith shadowing is ``height-correlated`` G2 = 1/(1 + Λ(L) + Λ(V)) (Heitz eq. 99) or
+``separable`` G2 = G1(L) G1(V), G1 = 1/(1 + Λ). Fresnel: ``none`` (F = 1), ``schlick`` f0 + (f90 − f0)(1 − c)⁵,
+``dielectric`` (exact unpolarized, Walter et al. eq. 22, η = interior/exterior) and ``conductor`` (exact
+unpolarized for a complex index η + ik, e.g. Lazányi & Szirmay-Kalos 2005 / pbrt-v4 FrComplex).
+
+Channels: ``fresnel=none`` is one channel; every other Fresnel takes colours (f0, f90, eta, k; one number means
+grey) and makes the lobe three-channel.
+
+Multiple scattering (``ms=kulla-conty``, Kulla & Conty 2017, "Revisiting physically based shading at
+Imageworks"): f_ms(L, V) = (1 − E(μ_L))(1 − E(μ_V)) / (π (1 − E_avg)) with E(μ, α) the lobe's own albedo and
+E_avg(α) = 2∫₀¹ E(μ) μ dμ, computed by :mod:`brdfnorm.halfvector`. With ``ms_table=N`` the renderer's way —
+E on an N × N node grid over (μ, α) ∈ [0, 1]², interpolated bilinearly, E_avg on N nodes in α, linearly (the
+μ = 0 row is evaluated at μ = 1e-4); with ``ms_table=0`` exact values at every evaluation (slow: an albedo
+integral per direction — meant for checks). It is defined for F = 1 and isotropic α ≤ 1 only: with F ≠ 1 the
+compensation needs Kulla & Conty's Fresnel-average term, which is not implemented (refused, not approximated).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+from scipy.special import erfcx
+
+from ..errors import EvaluationError, ParameterError
+from ..parameters import Parameter
+from .base import Lobe, Model, mirror
+
+_SQRT_PI = np.sqrt(np.pi)
+#: Smallest roughness: below it D overflows float64 in ``evaluate`` (the albedo method itself works at α = 0).
+ALPHA_MIN = 1e-12
+
+
+class Distribution:
+    """A slope distribution P22 with its Smith Λ and the radial coordinates the half-vector integral uses.
+
+    The half-vector integral (:mod:`brdfnorm.halfvector`) runs over the distribution's radial CDF u(s) of the
+    standardized slope radius s in three pieces, each in its own coordinate t: ``pole(t)`` and ``tail(t)``
+    return (s, du/dt), ``pole_coordinate(s)`` and ``tail_coordinate(s)`` invert them; the piece next to the
+    horizon is linear in s with du/ds = ``slope_density(s)``.
+    """
+
+    name = ""
+
+    def density(self, r2: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def smith_lambda(self, a2: np.ndarray) -> np.ndarray:
+        """Λ as a function of a² = α_ω² tan²θ_ω."""
+        raise NotImplementedError
+
+    def slope_density(self, s: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def pole_coordinate(self, s: np.ndarray) -> np.ndarray:
+        return s
+
+    def pole(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return t, self.slope_density(t)
+
+    def tail_coordinate(self, s: np.ndarray) -> np.ndarray:
+        return s
+
+    def tail(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return t, self.slope_density(t)
+
+    def cap(self, s: np.ndarray) -> np.ndarray:
+        """Slope radii beyond which the mass is dropped (bounded by ``truncated_moments``); none by default."""
+        return s
+
+    def truncated_moments(self) -> tuple[float, float]:
+        """(∫ dP, ∫ s dP) over the slope radii dropped by ``cap``: what bounds the dropped part of the integral."""
+        return 0.0, 0.0
+
+
+class GGXDistribution(Distribution):
+    """Trowbridge-Reitz: u(s) = s²/(1 + s²).
+
+    Pole piece (s ≤ 1): t = atan s, u = sin²t, du/dt = sin 2t — flat, and analytic at the pole (in u itself
+    the slope would be √u). Tail piece: t = asinh s, u = tanh²t, du/dt = 2 tanh t/cosh²t — the heavy tail
+    decays like e^{−2t}, and the integrand, analytic in the real slope α s within a radius R ~ 1, stays
+    analytic in a strip of half-width ~π/2 about the whole half-line (α sinh t = ±iR at t ≈ ln(2R/α) ± iπ/2),
+    so the region where the reflected direction changes is an O(1)-wide bump in t whatever α is.
+    """
+
+    name = "ggx"
+
+    def density(self, r2):
+        return 1.0 / (np.pi * (1.0 + r2) ** 2)
+
+    def smith_lambda(self, a2):
+        return 0.5 * a2 / (1.0 + np.sqrt(1.0 + a2))  # (−1 + √(1 + a²))/2 without cancellation
+
+    def slope_density(self, s):
+        return 2.0 * s / (1.0 + s * s) ** 2
+
+    def pole_coordinate(self, s):
+        return np.arctan(s)
+
+    def pole(self, t):
+        return np.tan(t), np.sin(2.0 * t)
+
+    def tail_coordinate(self, s):
+        return np.arcsinh(s)
+
+    def tail(self, t):
+        e2 = np.exp(-2.0 * t)  # 2 tanh t / cosh²t = 8e^{−2t}(1 − e^{−2t})/(1 + e^{−2t})³, without overflow
+        return np.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
+
+
+class BeckmannDistribution(Distribution):
+    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²) — linear s in every piece (the Gaussian has no
+    heavy tail), truncated at s = 8 (dropped mass e⁻⁶⁴ ≈ 1.6e-28, bounded in the error estimate)."""
+
+    name = "beckmann"
+    CAP = 8.0
+
+    def density(self, r2):
+        return np.exp(-r2) / np.pi
+
+    def smith_lambda(self, a2):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            b = 1.0 / np.sqrt(a2)
+            # (erf(b) − 1)/2 + e^{−b²}/(2b√π) = e^{−b²}(1/(b√π) − erfcx(b))/2, stable for large b.
+            value = 0.5 * np.exp(-b * b) * (1.0 / (b * _SQRT_PI) - erfcx(b))
+        return np.where(a2 == 0.0, 0.0, np.where(np.isinf(a2), np.inf, value))
+
+    def slope_density(self, s):
+        return 2.0 * s * np.exp(-s * s)
+
+    def cap(self, s):
+        return np.minimum(s, self.CAP)
+
+    def truncated_moments(self):
+        # ∫_S^∞ 2s e^{−s²} ds = e^{−S²};  ∫_S^∞ 2s² e^{−s²} ds = S e^{−S²} + (√π/2) erfc S ≤ (S + 1) e^{−S²}.
+        mass = float(np.exp(-self.CAP**2))
+        return mass, (self.CAP + 1.0) * mass
+
+
+# -- Fresnel -----------------------------------------------------------------------------------------------
+
+def fresnel_schlick(cos: np.ndarray, f0: np.ndarray, f90: np.ndarray) -> np.ndarray:
+    return f0 + (f90 - f0) * (1.0 - cos) ** 5
+
+
+def fresnel_dielectric(cos: np.ndarray, eta: np.ndarray) -> np.ndarray:
+    """Exact unpolarized reflectance of a dielectric interface (Walter et al. 2007 eq. 22); 1 under TIR."""
+    g2 = eta * eta - 1.0 + cos * cos
+    g = np.sqrt(np.maximum(g2, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (g - cos) / (g + cos)
+        b = (cos * (g + cos) - 1.0) / (cos * (g - cos) + 1.0)
+        value = 0.5 * a * a * (1.0 + b * b)
+    return np.where(g2 <= 0.0, 1.0, value)
+
+
+def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Exact unpolarized reflectance for the complex index η + ik: (R_s + R_p)/2 with a² + b² = |n̂² − sin²θ|."""
+    c2 = cos * cos
+    s2 = 1.0 - c2
+    t = eta * eta - k * k - s2
+    a2b2 = np.sqrt(t * t + 4.0 * eta * eta * k * k)
+    a = np.sqrt(np.maximum(0.5 * (a2b2 + t), 0.0))
+    rs = (a2b2 - 2.0 * a * cos + c2) / (a2b2 + 2.0 * a * cos + c2)
+    rp = rs * (c2 * a2b2 - 2.0 * a * cos * s2 + s2 * s2) / (c2 * a2b2 + 2.0 * a * cos * s2 + s2 * s2)
+    return 0.5 * (rs + rp)
+
+
+# -- the model ---------------------------------------------------------------------------------------------
+
+#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer (brdfnorm.halfvector), which
+#: registers its provider here when it is imported: ``provider(distribution, shadowing, size)`` -> an object with
+#: ``energies(mu_l, mu_v, alpha)``. Models stay below the integrator in the import graph.
+_COMPENSATION: Callable | None = None
+
+
+def register_compensation(provider: Callable) -> None:
+    global _COMPENSATION
+    _COMPENSATION = provider
+
+
+SHADOWING = ("height-correlated", "separable")
+FRESNEL = ("none", "schlick", "dielectric", "conductor")
+MULTIPLE_SCATTERING = ("none", "kulla-conty")
+
+
+def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
+    return (
+        Parameter("alpha", "float", default_alpha, ALPHA_MIN, 100.0, "roughness α (slope width), isotropic"),
+        Parameter("alpha_x", "float", 0.0, 0.0, 100.0, "roughness along X (0: alpha)"),
+        Parameter("alpha_y", "float", 0.0, 0.0, 100.0, "roughness along Y (0: alpha)"),
+        Parameter("shadowing", "choice", "height-correlated", choices=SHADOWING,
+                  description="Smith G2: 1/(1+Λ(L)+Λ(V)) or G1(L)G1(V)"),
+        Parameter("fresnel", "choice", "none", choices=FRESNEL, description="F(V·H); none is F = 1"),
+        Parameter("f0", "color", (0.04, 0.04, 0.04), 0.0, 1.0, "Schlick reflectance at normal incidence"),
+        Parameter("f90", "color", (1.0, 1.0, 1.0), 0.0, 1.0, "Schlick reflectance at grazing incidence"),
+        Parameter("eta", "color", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
+        Parameter("k", "color", (0.0, 0.0, 0.0), 0.0, 1e3, "extinction coefficient (conductor)"),
+        Parameter("ms", "choice", "none", choices=MULTIPLE_SCATTERING,
+                  description="multiple-scattering compensation (Kulla & Conty 2017)"),
+        Parameter("ms_table", "float", 32.0, 0.0, 1024.0, "kulla-conty table size N (0: exact, slow)"),
+    )
+
+
+def roughness(params: Mapping[str, object]) -> tuple[np.ndarray, np.ndarray]:
+    """(α_x, α_y): ``alpha_x``/``alpha_y`` where given (non-zero), ``alpha`` otherwise."""
+    alpha = np.asarray(params["alpha"], dtype=float)
+    ax = np.asarray(params["alpha_x"], dtype=float)
+    ay = np.asarray(params["alpha_y"], dtype=float)
+    for name, value in (("alpha_x", ax), ("alpha_y", ay)):
+        if np.any((value > 0) & (value < ALPHA_MIN)):
+            raise ParameterError(f"must be 0 (use alpha) or ≥ {ALPHA_MIN:g}", where=f"parameter {name}")
+    return np.where(ax > 0, ax, alpha), np.where(ay > 0, ay, alpha)
+
+
+def smith_a2(omega: np.ndarray, ax: np.ndarray, ay: np.ndarray) -> np.ndarray:
+    """a² = (α_x² ω_x² + α_y² ω_y²)/ω_z² for directions (..., 3)."""
+    with np.errstate(divide="ignore"):
+        return ((ax * omega[..., 0]) ** 2 + (ay * omega[..., 1]) ** 2) / omega[..., 2] ** 2
+
+
+def shadowing_masking(kind: str, lambda_l: np.ndarray, lambda_v: np.ndarray) -> np.ndarray:
+    if kind == "separable":
+        return 1.0 / ((1.0 + lambda_l) * (1.0 + lambda_v))
+    return 1.0 / (1.0 + lambda_l + lambda_v)
+
+
+def fresnel(params: Mapping[str, object], cos: np.ndarray) -> np.ndarray:
+    """F(V·H) with a trailing channel axis: (..., 1) for ``none``, (..., 3) otherwise."""
+    kind = params["fresnel"]
+    if kind == "none":
+        return np.ones(np.shape(cos) + (1,))
+    c = np.asarray(cos)[..., None]
+    if kind == "schlick":
+        return fresnel_schlick(c, np.asarray(params["f0"], dtype=float), np.asarray(params["f90"], dtype=float))
+    eta = np.asarray(params["eta"], dtype=float)
+    if kind == "dielectric":
+        return fresnel_dielectric(c, eta)
+    return fresnel_conductor(c, eta, np.asarray(params["k"], dtype=float))
+
+
+class MicrofacetModel(Model):
+    """Walter et al.'s microfacet BRDF over a slope distribution (subclasses name the distribution)."""
+
+    distribution: Distribution = GGXDistribution()
+
+    def __init__(self, **values: object) -> None:
+        super().__init__(**values)
+        self._check()
+
+    def with_params(self, **values: object) -> Model:
+        clone = super().with_params(**values)
+        clone._check()
+        return clone
+
+    def _check(self) -> None:
+        p = self._params
+        roughness(p)
+        if p["ms"] == "none":
+            return
+        table = float(np.asarray(p["ms_table"]).max())
+        if np.ndim(p["ms_table"]) or (table != 0 and (table < 2 or table != int(table))):
+            raise ParameterError("must be 0 (exact) or one whole number ≥ 2", where="parameter ms_table")
+        if p["fresnel"] != "none":
+            raise ParameterError("ms=kulla-conty needs fresnel=none: the Fresnel-average term is not implemented",
+                                 where="parameter ms")
+        if not self.isotropic or np.any(np.asarray(p["alpha"]) > 1.0):
+            raise ParameterError("ms=kulla-conty tables cover isotropic alpha ≤ 1 only", where="parameter ms")
+
+    @property
+    def channels(self) -> int:  # type: ignore[override]
+        return 1 if self._params["fresnel"] == "none" else 3
+
+    @property
+    def isotropic(self) -> bool:  # type: ignore[override]
+        return not (np.any(np.asarray(self._params["alpha_x"]) > 0) or np.any(np.asarray(self._params["alpha_y"]) > 0))
+
+    def single_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """D G2 F / (4 N·V): f·(N·L) of the single-scattering lobe, (..., C); 0 below either horizon."""
+        ax, ay = roughness(params)
+        S = L + V
+        with np.errstate(divide="ignore", invalid="ignore"):
+            # Slopes of H = normalize(L + V) scaled by the roughness: r² = (x/α_x)² + (y/α_y)².
+            r2 = (S[..., 0] / (S[..., 2] * ax)) ** 2 + (S[..., 1] / (S[..., 2] * ay)) ** 2
+            hz2 = S[..., 2] ** 2 / np.einsum("...i,...i->...", S, S)
+            D = self.distribution.density(r2) / (ax * ay * hz2 * hz2)
+            shadow = self.distribution.smith_lambda
+            G2 = shadowing_masking(params["shadowing"], shadow(smith_a2(L, ax, ay)), shadow(smith_a2(V, ax, ay)))
+            cos_vh = np.einsum("...i,...i->...", V, S) / np.sqrt(np.einsum("...i,...i->...", S, S))
+            value = (D * G2 / (4.0 * V[..., 2]))[..., None] * fresnel(params, np.clip(cos_vh, 0.0, 1.0))
+        upper = (L[..., 2] > 0) & (V[..., 2] > 0)
+        return np.where(upper[..., None], value, 0.0)
+
+    def projected(self, L, V, params):
+        value = self.single_scattering(L, V, params)
+        if params["ms"] == "kulla-conty":
+            value = value + self.multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
+        return value
+
+    def evaluate(self, L, V, params):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value = self.single_scattering(L, V, params) / L[..., 2:3]
+        value = np.where(L[..., 2:3] > 0, value, 0.0)
+        if params["ms"] == "kulla-conty":
+            value = value + self.multiple_scattering(L, V, params)
+        return value
+
+    def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1); 0 at α = 0 (a mirror
+        loses no energy: E = E_avg = 1)."""
+        if _COMPENSATION is None:
+            raise EvaluationError("ms=kulla-conty needs the half-vector integrator (import brdfnorm)", where=self.name)
+        shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
+        alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), shape)
+        mu_l = np.broadcast_to(L[..., 2], shape)
+        mu_v = np.broadcast_to(V[..., 2], shape)
+        table = _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+        e_l, e_v, e_avg = table.energies(mu_l, mu_v, alpha)
+        lossy = (mu_l > 0) & (mu_v > 0) & (e_avg < 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value = (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg))
+        return np.where(lossy, value, 0.0)[..., None]
+
+    def lobe(self, fixed, params, over):
+        ax, ay = roughness(params)
+        shape = np.broadcast_shapes(np.shape(fixed)[:-1], np.shape(ax), np.shape(ay))
+        # The reflected lobe is about twice as wide as the slope distribution (θ_L ≈ 2θ_H near the mirror).
+        width = np.broadcast_to(np.clip(2.0 * np.maximum(ax, ay), 1e-6, 1.0), shape)
+        return Lobe(np.broadcast_to(mirror(fixed), shape + (3,)), width, np.full(shape, np.pi))

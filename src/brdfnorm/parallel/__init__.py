@@ -1,0 +1,167 @@
+"""Tables of albedo cells spread over all local cores or a Dask cluster, with resumable checkpoints (issue #17).
+
+What scales is the number of cells: each cell is one independent albedo integral, so a table of many cells
+splits into chunks that run anywhere. A single integral does not get faster — it stays one vectorized batch
+in one process.
+
+>>> import numpy as np, brdfnorm as bn
+>>> from brdfnorm.parallel import CellsJob, albedo_cells
+>>> job = CellsJob.of(bn.load("phong"), np.radians([0.0, 30.0, 60.0]), values={"n": [10.0, 100.0, 1000.0]},
+...                   rtol=1e-9)
+>>> table = albedo_cells(job, workers=1)
+>>> table.value.shape, bool(table.converged.all())
+((3, 1), True)
+
+:class:`CellsJob` is the definition (model source, settings, cells; :mod:`.job`), :func:`albedo_cells`
+computes it: chunks fixed by the job (so the result is bit-for-bit the same in one process, N local processes
+or on Dask workers), computed in-process (``workers=1``), by a local process pool (default: all cores) or on
+a Dask cluster (``scheduler="tcp://HOST:PORT"``), each finished chunk written to ``checkpoint`` (a directory)
+when one is given, and only the missing chunks computed when it already holds some.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArgumentError
+from .checkpoint import Checkpoint
+from .executors import TEXT_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
+from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
+
+__all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "albedo_cells",
+           "chunk_plan", "local_cores", "run_chunk"]
+
+
+@dataclass(frozen=True)
+class CellsResult:
+    """A computed job: arrays of the job's shape S (``value``/``error`` (*S, C)) and what the run did."""
+
+    digest: str  # the job's hash
+    value: np.ndarray  # (*S, C)
+    error: np.ndarray  # (*S, C) absolute error estimate
+    evaluations: np.ndarray  # (*S,) integrand evaluations per cell (-1: not counted, task "max")
+    converged: np.ndarray  # (*S,)
+    nonfinite_fraction: np.ndarray | None  # (*S,) with nonfinite="zero", else None
+    theta: np.ndarray  # (*S,) radians: the cell's direction (the argmax for task "max")
+    phi: np.ndarray  # (*S,)
+    method: str
+    chunks: int  # chunks in the job
+    chunks_computed: int  # by this run (the rest came from the checkpoint)
+    evaluations_computed: int  # integrand evaluations this run spent
+    workers: int
+    executor: str  # "in-process", "local processes" or "dask tcp://…"
+    seconds: float
+    lower: np.ndarray | None = None  # (*S, C) decimal strings: guaranteed bounds (method "certified")
+    upper: np.ndarray | None = None
+    reason: np.ndarray | None = None  # (*S,) why a cell did not converge ("" where it did), where albedo says
+
+
+def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | None = None,
+                 checkpoint: str | Path | None = None,
+                 on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
+    """Compute every cell of ``job``.
+
+    ``workers``: local processes (default: all cores of this machine; 1 computes in this process);
+    ``scheduler``: a Dask scheduler address (then the cluster's workers compute, and ``workers`` must be None);
+    ``checkpoint``: a directory to save finished chunks in and resume from; ``on_progress(done, total)`` is
+    called with cell counts as chunks finish (anywhere). SIGTERM stops the run like Ctrl-C
+    (:class:`KeyboardInterrupt`), losing at most the chunks in flight.
+    """
+    start = time.perf_counter()
+    if scheduler is not None and workers is not None:
+        raise ArgumentError("give either workers (a local process pool) or a Dask scheduler (on the command line "
+                            "also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
+    if workers is not None and (int(workers) != workers or workers < 1):
+        raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
+    model = job.source.load()  # refuses a bad source here, once, with its own warnings
+    job.settings.validate(model)
+    if checkpoint is not None:
+        store = Checkpoint.open(checkpoint, job, lambda: chunk_plan(job, model))
+        plan = store.plan
+    else:
+        store, plan = None, chunk_plan(job, model)
+    done = store.finished() if store is not None else {}
+    missing = [k for k in range(plan.count) if k not in done]
+    count = workers if workers is not None else local_cores()
+    if scheduler:
+        executor, count = f"dask {scheduler}", dask_workers(scheduler)
+        if count == 0 and missing:  # tasks would wait for a worker forever
+            raise ArgumentError(f"the Dask scheduler at {scheduler} has no workers (start some with `dask worker "
+                                f"{scheduler}`)", where="scheduler")
+    elif count <= 1 or len(missing) <= 1:
+        executor, count = "in-process", 1
+    else:
+        executor, count = "local processes", min(count, len(missing))
+    cells_done = sum(plan.chunk(k).size for k in done)
+    if on_progress is not None:
+        on_progress(cells_done, job.size)
+    spent = 0
+    # closing(): stop the workers as soon as anything here fails, not when the generator is collected
+    with _sigterm_as_interrupt(), contextlib.closing(execute(job, plan, missing, workers=count,
+                                                              scheduler=scheduler)) as results:
+        for result in results:
+            if store is not None:
+                store.save(result)
+            done[result.index] = result
+            spent += int(np.maximum(result.evaluations, 0).sum())
+            cells_done += result.value.shape[0]
+            if on_progress is not None:
+                on_progress(cells_done, job.size)
+    return _assemble(job, plan, done, len(missing), spent, count, executor, time.perf_counter() - start)
+
+
+def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], computed: int, spent: int,
+              workers: int, executor: str, seconds: float) -> CellsResult:
+    """Scatter the chunks back into the job's cell order and shape; warn once for the whole table."""
+    parts = [done[k] for k in range(plan.count)]  # concatenated, they follow plan.order
+    channels = parts[0].value.shape[1]
+
+    def gather(name: str, tail: tuple = ()) -> np.ndarray:
+        out = np.empty((job.size, *tail), dtype=getattr(parts[0], name).dtype)  # text bounds: object arrays
+        out[plan.order] = np.concatenate([getattr(p, name) for p in parts])
+        return out.reshape(job.shape + tail)
+
+    methods = sorted({p.method for p in parts})
+    converged = gather("converged")
+    fraction = gather("nonfinite_fraction") if job.settings.nonfinite == "zero" else None
+    name = job.source.name
+    if not np.all(converged):
+        warnings.warn(f"{name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not reach "
+                      f"rtol={job.settings.rtol:g} within {job.settings.max_evaluations} evaluations; see the error "
+                      "estimates", stacklevel=3)
+    if fraction is not None and np.any(fraction > 0):
+        warnings.warn(f"{name}: non-finite BRDF values counted as 0 on up to {100 * fraction.max():.3g}% of the "
+                      "hemisphere's solid angle", stacklevel=3)
+    return CellsResult(
+        digest=job.digest, value=gather("value", (channels,)), error=gather("error", (channels,)),
+        evaluations=gather("evaluations"), converged=converged, nonfinite_fraction=fraction,
+        theta=gather("theta"), phi=gather("phi"), method="+".join(methods), chunks=plan.count,
+        chunks_computed=computed, evaluations_computed=spent, workers=workers, executor=executor, seconds=seconds,
+        **{name: gather(name, (channels,) if tail == "channels" else ())
+           for name, tail in TEXT_FIELDS.items() if getattr(parts[0], name) is not None})
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """Turn SIGTERM into KeyboardInterrupt while chunks run, so workers are stopped and files stay whole."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt("SIGTERM")
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

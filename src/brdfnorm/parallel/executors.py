@@ -1,0 +1,187 @@
+"""Where chunks run: in this process, in a local process pool, or on a Dask cluster — the same chunk task each time.
+
+:func:`run_chunk` is the one task: it receives the job's header (JSON text: the model's source and the albedo
+settings) and one chunk's cells (plain arrays), rebuilds the model from its source (cached per process), and
+computes the chunk as one vectorized batch. Nothing else crosses a process boundary — no closure, no model
+object — so a worker on another machine only needs the same brdfnorm version (checked).
+
+Executors (:func:`execute`) yield :class:`ChunkResult` objects as chunks finish, in completion order:
+
+* in-process (``workers=1``);
+* a local :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver`` start method (``spawn`` where
+  there is none): fresh interpreters, never a fork of a process that may hold threads or a Dask client;
+* ``dask.distributed`` (``scheduler="tcp://HOST:PORT"``): one task per chunk with a key derived from the job's
+  hash, ``retries`` for failures inside a task; a worker lost mid-chunk is rescheduled by Dask itself.
+
+Stopping early (an exception, SIGTERM turned into :class:`KeyboardInterrupt`) cancels the chunks not started
+and stops local workers at once: at most the chunks in flight are lost.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import multiprocessing
+import time
+import warnings
+from collections.abc import Iterator, Mapping
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..models import Model
+from .job import CellsJob, ChunkPlan, ModelSource, canonical_json
+
+#: Dask re-runs a chunk task that raised this many more times (an unexpected failure on one worker).
+DASK_RETRIES = 2
+#: Seconds to wait for a Dask scheduler to answer.
+DASK_CONNECT_TIMEOUT = 10
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """One chunk's results, cells in the chunk's order (``value``/``error`` (n, C), the rest (n,))."""
+
+    index: int
+    value: np.ndarray
+    error: np.ndarray
+    evaluations: np.ndarray  # integrand evaluations per cell; -1 where not counted (task "max")
+    converged: np.ndarray
+    nonfinite_fraction: np.ndarray  # 0 unless nonfinite="zero" zeroed some of the hemisphere
+    theta: np.ndarray  # the direction the value belongs to (the argmax for task "max")
+    phi: np.ndarray
+    method: str
+    seconds: float
+    lower: np.ndarray | None = None  # (n, C) decimal strings: guaranteed bounds (method "certified")
+    upper: np.ndarray | None = None
+    reason: np.ndarray | None = None  # (n,) why a cell did not converge ("" where it did), where albedo says
+
+
+#: Per-cell text an AlbedoResult may carry (object arrays of str), with the trailing shape of one cell.
+TEXT_FIELDS = {"lower": "channels", "upper": "channels", "reason": "cell"}
+
+
+@functools.lru_cache(maxsize=8)
+def _model(source_json: str) -> Model:
+    """The model of a source, built once per process (a .brdf shader compiles once, not once per chunk)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # slider-range warnings were shown where the job was made
+        return ModelSource.from_json(json.loads(source_json)).load()
+
+
+def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
+              values: Mapping[str, np.ndarray]) -> ChunkResult:
+    """Compute chunk ``index`` of a job (the task every executor runs; importable by any worker)."""
+    from .. import __version__
+    from ..directional import albedo
+    from ..normalization import normalize
+
+    header = json.loads(header_json)
+    if header["brdfnorm"] != __version__:
+        raise ArgumentError(f"this worker runs brdfnorm {__version__}, the job needs {header['brdfnorm']}",
+                            where="scheduler")
+    model = _model(canonical_json(header["source"]))
+    settings = header["settings"]
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the caller reports unconverged and non-finite cells once, for the table
+        if header["task"] == "albedo":
+            result = albedo(model.with_params(**values), theta, phi, **settings)
+            n = theta.size
+            fraction = result.nonfinite_fraction
+            text = {name: np.asarray(getattr(result, name), dtype=object).reshape((n, -1) if tail == "channels" else n)
+                    for name, tail in TEXT_FIELDS.items() if getattr(result, name, None) is not None}
+            return ChunkResult(index, result.value.reshape(n, -1), result.error.reshape(n, -1),
+                               result.evaluations.reshape(n), result.converged.reshape(n),
+                               np.zeros(n) if fraction is None else fraction.reshape(n),
+                               theta, phi, result.method, time.perf_counter() - start, **text)
+        (name, sweep), = values.items() if values else ((None, np.zeros(1)),)
+        found = normalize(model, at="max", sweep=None if name is None else {name: sweep}, over=settings["over"],
+                          rtol=settings["rtol"], method=settings["method"])
+        n = found.values.size
+        return ChunkResult(index, found.albedo.reshape(n, -1), found.error.reshape(n, -1),
+                           np.full(n, -1, dtype=np.int64), found.converged.reshape(n), np.zeros(n),
+                           found.theta.reshape(n), found.phi.reshape(n), found.method, time.perf_counter() - start)
+
+
+def local_cores() -> int:
+    """Cores this process may run on (the default number of local workers)."""
+    import os
+
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def execute(job: CellsJob, plan: ChunkPlan, missing: list[int], *, workers: int,
+            scheduler: str | None) -> Iterator[ChunkResult]:
+    """Compute the ``missing`` chunks, yielding each as it finishes."""
+    header = canonical_json(job.header())
+    tasks = [(header, k, *job.cells(plan.chunk(k))) for k in missing]
+    if scheduler:
+        return _on_dask(tasks, scheduler, job.digest)
+    if workers <= 1 or len(tasks) <= 1:
+        return (run_chunk(*task) for task in tasks)
+    return _in_pool(tasks, min(workers, len(tasks)))
+
+
+def _in_pool(tasks: list[tuple], workers: int) -> Iterator[ChunkResult]:
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    try:
+        pending = {pool.submit(run_chunk, *task) for task in tasks}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield future.result()
+    finally:
+        # Stopped early: drop what has not started and end the workers now rather than after their chunks.
+        if hasattr(pool, "terminate_workers"):  # Python ≥ 3.14
+            pool.terminate_workers()
+        else:  # no public way before 3.14
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                if process.is_alive():
+                    process.terminate()
+
+
+def dask_client(scheduler: str):
+    """A ``distributed.Client`` connected to ``scheduler``, or a one-line error naming the address."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ArgumentError("a Dask scheduler needs the 'distributed' package (pip install 'brdfnorm[dask]')",
+                            where="scheduler") from None
+    try:
+        return Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as error:
+        detail = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ArgumentError(f"cannot reach the Dask scheduler at {scheduler}: {detail}", where="scheduler") from None
+
+
+def dask_workers(scheduler: str) -> int:
+    """How many workers a scheduler has now (for the summary)."""
+    client = dask_client(scheduler)
+    try:
+        return len(client.scheduler_info().get("workers", {}))
+    finally:
+        client.close()
+
+
+def _on_dask(tasks: list[tuple], scheduler: str, digest: str) -> Iterator[ChunkResult]:
+    from distributed import as_completed
+
+    client = dask_client(scheduler)
+    futures = []
+    try:
+        futures = [client.submit(run_chunk, *task, key=f"brdfnorm-{digest[:16]}-chunk-{task[1]}",
+                                 retries=DASK_RETRIES, pure=False) for task in tasks]
+        for future in as_completed(futures, loop=client.loop):
+            yield future.result()
+    finally:
+        client.cancel(futures)
+        client.close()
