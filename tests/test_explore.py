@@ -159,6 +159,26 @@ def test_parameters_from_the_page_are_checked_by_kind():
     assert bind_parameters(ggx, {"roughness": 0.5}).params["roughness"] == 0.5
 
 
+def test_choice_parameters_become_menus_and_are_checked():
+    from brdfnorm.explore.compute import describe_parameters
+
+    model = bn.load("ggx")
+    described = {p["name"]: p for p in describe_parameters(model)}
+    assert described["fresnel"]["kind"] == "choice" and "schlick" in described["fresnel"]["choices"]
+    slider = described["alpha"]["slider"]
+    assert slider["log"] and slider["high"] == 100.0 and slider["low"] == pytest.approx(1e-4)
+    schlick = bind_parameters(model, {"fresnel": "schlick", "f0": [0.5, 0.5, 0.5]})
+    assert schlick.params["fresnel"] == "schlick"
+    with pytest.raises(ParameterError, match="fresnel"):
+        bind_parameters(model, {"fresnel": "glass"})
+    with pytest.raises(ParameterError, match="fresnel"):
+        bind_parameters(model, {"fresnel": 1})
+    data = evaluate_view(model, 30.0, "normal", "coarse", params={"fresnel": "schlick", "f0": [0.5, 0.5, 0.5]})
+    reference = bn.albedo(schlick, math.radians(30.0), rtol=1e-6)
+    readout = data["readouts"]["albedo"]
+    assert abs(readout["value"][0] - reference.value[0]) <= readout["error"][0] + reference.error[0]
+
+
 def test_fit_panel_code_reproduces_the_exact_factor():
     model = bn.load("blinn-phong-gaussian")
     result = fit_factor(model, "n", 10.0, 200.0, 12, "normal", "glsl", "log")

@@ -78,7 +78,9 @@ def describe_parameters(model: Model) -> list[dict]:
             low = p.minimum if p.minimum is not None else min(0.0, float(p.default))
             high = p.maximum if p.maximum is not None else max(UNBOUNDED_SLIDER_MAX, float(p.default))
             log = high > 0 and (p.maximum is None or (low > 0 and high / low >= 1e3))
-            entry["slider"] = {"low": max(low, 1.0) if log and low <= 0 else low, "high": high, "log": log}
+            if log:  # a slider spans at most six decades (α ≥ 1e-12 is a limit, not a useful place to drag to)
+                low = max(low, high * 1e-6) if low > 0 else max(1.0, high * 1e-6)
+            entry["slider"] = {"low": low, "high": high, "log": log}
         described.append(entry)
     return described
 
