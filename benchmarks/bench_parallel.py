@@ -49,7 +49,7 @@ def w_parallel(cfg, refs=None) -> dict:
             start = time.perf_counter()
             runs[name] = (albedo_cells(job, **kwargs), time.perf_counter() - start)
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                          dashboard_address=None, silence_logs=logging.CRITICAL) as cluster:
+                          dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
             start = time.perf_counter()
             runs["dask, 2 workers"] = (albedo_cells(job, scheduler=cluster.scheduler_address),
                                        time.perf_counter() - start)

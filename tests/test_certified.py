@@ -310,7 +310,7 @@ def test_microfacet_normal_incidence_against_mpmath(distribution, alpha, eta):
     params = {"alpha": alpha, "fresnel": "none" if eta is None else "dielectric", "eta": eta}
     work = certified._Integrator(25)
     with _precision(work.bits):
-        (ball,) = certified.REDUCTIONS[distribution].compute(work, arb(0), params, "light")
+        ball = certified.REDUCTIONS[distribution].compute(work, arb(0), params, "light")[0]
         reference = _microfacet_reference(alpha, distribution, eta)
         assert float(ball.rad()) < 1e-24
         assert abs(float(ball.mid()) - reference) <= 1e-14 * reference
@@ -334,3 +334,30 @@ def test_mirror_like_microfacet_lobes_reflect_everything():
         with _precision(work.bits):
             (ball,) = certified.REDUCTIONS[distribution].compute(work, arb(0), {"alpha": 1e-8}, "light")
             assert abs(float(ball.mid()) - 1.0) < 1e-15 and float(ball.rad()) < 1e-24
+
+
+MICROFACET_CASES = [
+    dict(alpha=0.3), dict(alpha=1e-6), dict(alpha=1.0, shadowing="separable"),
+    dict(alpha=0.3, fresnel="dielectric", eta=1.5), dict(alpha=0.5, fresnel="dielectric", eta=(0.6, 1.5, 0.9)),
+    dict(alpha=0.4, fresnel="schlick", f0=(0.04, 0.5, 0.9), f90=(1.0, 0.8, 1.0)),
+]
+
+
+@pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
+@pytest.mark.parametrize("params", MICROFACET_CASES, ids=lambda p: ",".join(f"{k}={v}" for k, v in p.items()))
+def test_microfacet_models_certified_at_normal_incidence_cover_the_half_vector_engine(distribution, params):
+    m = bn.load(distribution, **params)
+    certified = bn.albedo(m, 0.0, method="certified", digits=25)
+    engine = bn.albedo(m, 0.0, rtol=1e-12)  # the half-vector cubature (method "microfacet")
+    assert engine.method != "certified" and certified.converged.all()
+    off = np.abs(engine.value - certified.value) - certified.error
+    assert np.all(off <= engine.error) and np.all(np.abs(engine.value - certified.value) <= 1e-12)
+
+
+def test_microfacet_certified_route_refuses_what_it_cannot_enclose():
+    with pytest.raises(ArgumentError, match="normal incidence only"):
+        bn.albedo(bn.load("ggx", alpha=0.3), 0.5, method="certified")
+    with pytest.raises(ArgumentError, match="isotropic"):
+        bn.albedo(bn.load("ggx", alpha=0.3, alpha_x=0.1), 0.0, method="certified")
+    with pytest.raises(ArgumentError, match="conductor"):
+        bn.albedo(bn.load("beckmann", alpha=0.3, fresnel="conductor", eta=0.2, k=3.0), 0.0, method="certified")

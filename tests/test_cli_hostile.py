@@ -184,3 +184,13 @@ def test_file_names_are_text_not_rich_markup(tmp_path, monkeypatch, capsys, argv
     assert "a]b" in out + err and "internal error" not in err
     if argv[0] == "info":
         assert "[a]x[/a]b.brdf" in out
+
+
+def test_three_concurrent_reports_to_one_directory_all_succeed_and_leave_nothing_behind(tmp_path):
+    argv = [sys.executable, "-m", "brdfnorm", "report", "lambert", "--sweep", "reflectance=0.5,1", "-o", "same"]
+    runs = [subprocess.Popen(argv, cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for _ in range(3)]
+    errors = [run.communicate(timeout=300)[1] for run in runs]
+    assert [run.returncode for run in runs] == [0, 0, 0], errors
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["same"]
+    assert (tmp_path / "same" / "index.html").is_file()

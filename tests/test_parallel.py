@@ -172,7 +172,7 @@ def test_an_error_in_a_worker_arrives_whole(tmp_path):
     job = CellsJob.of(bn.load(path), np.radians([0.0, 10, 20, 30]), chunk_cells=2)
     with pytest.raises(EvaluationError, match="not finite") as caught:
         albedo_cells(job, workers=2)
-    assert caught.value.where == "infinite"
+    assert "infinite" in caught.value.where  # the where survives the trip back from the worker
 
 
 # -- Dask: a real scheduler and two worker processes -----------------------------------------------------------
@@ -377,7 +377,7 @@ def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
     distributed = pytest.importorskip("distributed")
     monkeypatch.setattr("brdfnorm.parallel.executors.DASK_CONNECT_TIMEOUT", 1)
     with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
-                                  dashboard_address=None) as empty:
+                                  dashboard_address=":0") as empty:
         with pytest.raises(ArgumentError, match="no workers"):
             albedo_cells(_ggx_job(), scheduler=empty.scheduler_address)
     with pytest.raises(ArgumentError, match="cannot reach the Dask scheduler"):

@@ -341,23 +341,34 @@ def _microfacet(work: _Integrator, alpha, distribution: str, fresnel: Callable, 
     return total
 
 
+def _dielectric(work: _Integrator, alpha, distribution: str, eta):
+    critical = (1 - eta * eta).sqrt() if eta < 1 else None
+
+    def exact(c, analytic, beyond):  # Walter et al. 2007, Eq. 22; beyond the critical angle F = 1
+        if beyond:
+            return 1
+        g = (eta * eta - 1 + c * c).sqrt(analytic=analytic)
+        ratio = (c * (g + c) - 1) / (c * (g - c) + 1)
+        return (g - c) ** 2 / (2 * (g + c) ** 2) * (1 + ratio * ratio)
+
+    return _microfacet(work, alpha, distribution, exact, critical)
+
+
 def _microfacet_route(distribution: str):
     def compute(work, theta, params, over):
         arb = work.arb
         if theta != 0:
             raise ArgumentError(f"{distribution}: the certified route is at normal incidence only (theta 0), where "
                                 "the lobe is axisymmetric", where="theta")
-        alpha = params.get("alpha")
-        # alpha_x / alpha_y of 0 (or absent) mean alpha (brdfnorm.models.microfacet.roughness).
-        ax, ay = (np.where(np.asarray(params.get(name, 0.0), dtype=float) > 0, params.get(name, 0.0), alpha)
-                  for name in ("alpha_x", "alpha_y"))
-        if alpha is None or np.ndim(ax) or float(ax) != float(ay):
-            raise ArgumentError(f"{distribution}: the certified route needs an isotropic alpha", where="method")
-        alpha = float(ax)
+        alpha = float(params["alpha"])
+        ax, ay = (float(params.get(name, 0.0)) or alpha for name in ("alpha_x", "alpha_y"))
+        if ax != ay:
+            raise ArgumentError(f"{distribution}: the certified route needs an isotropic alpha (alpha_x = alpha_y)",
+                                where="method")
         if params.get("ms", "none") != "none":
             raise ArgumentError(f"{distribution}: ms={params['ms']} uses interpolated tables; no certified route",
                                 where="method")
-        alpha = arb(float(alpha))
+        alpha = arb(ax)
         kind = params.get("fresnel", "none")
         if kind == "none":
             return [_microfacet(work, alpha, distribution, lambda c, analytic, beyond: 1)]
@@ -367,22 +378,9 @@ def _microfacet_route(distribution: str):
             f0, f90 = (np.broadcast_to(np.asarray(params[name], dtype=float), (3,)) for name in ("f0", "f90"))
             return [arb(float(a)) * (whole - weight) + arb(float(b)) * weight for a, b in zip(f0, f90, strict=True)]
         if kind == "dielectric":
-            def channel(eta):
-                critical = (1 - eta * eta).sqrt() if eta < 1 else None
-
-                def exact(c, analytic, beyond):  # Walter et al. 2007, Eq. 22; beyond the critical angle F = 1
-                    if beyond:
-                        return 1
-                    g = (eta * eta - 1 + c * c).sqrt(analytic=analytic)
-                    ratio = (c * (g + c) - 1) / (c * (g - c) + 1)
-                    return (g - c) ** 2 / (2 * (g + c) ** 2) * (1 + ratio * ratio)
-
-                return _microfacet(work, alpha, distribution, exact, critical)
-
-            etas = np.atleast_1d(np.asarray(params["eta"], dtype=float))  # a colour for the built-in lobes
-            if np.all(etas == etas[0]):
-                return [channel(arb(float(etas[0])))]
-            return [channel(arb(float(eta))) for eta in etas]
+            etas = np.broadcast_to(np.asarray(params["eta"], dtype=float), (3,))
+            balls = {value: _dielectric(work, alpha, distribution, arb(float(value))) for value in set(etas)}
+            return [balls[value] for value in etas]
         raise ArgumentError(f"{distribution}: fresnel={kind} has no certified route (the conductor's complex "
                             "square root is not enclosed here)", where="method")
     return compute

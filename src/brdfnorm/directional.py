@@ -27,7 +27,7 @@ import numpy as np
 from . import validate
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
-from .models.base import Model, Over, mirror
+from .models.base import Lobe, Model, Over, mirror
 from .output.formats import Column, Records, channel_value, degrees, format_value
 from .registry import Registry
 
@@ -51,6 +51,8 @@ class AlbedoResult:
     #: (*S,) str: "" where converged, else why not — "rounding-limited" (the integrand's float64 noise exceeds
     #: the tolerance), "stalled" (the estimate stopped improving) or "budget" (max_evaluations ran out).
     reason: np.ndarray | None = None
+    reflected: np.ndarray | None = None  # (*S, C) the upper hemisphere's share, for models that transmit (BSDFs)
+    transmitted: np.ndarray | None = None  # (*S, C) the lower hemisphere's share; value = reflected + transmitted
     model: str = ""  # the model's name
     bound: dict = field(default_factory=dict)  # the model's parameter values as bound (before broadcasting)
     rtol: float = 0.0
@@ -62,16 +64,21 @@ class AlbedoResult:
              "albedo": channel_value(self.value[i]), "error_estimate": channel_value(self.error[i]),
              "method": self.method, "evaluations": int(self.evaluations[i]), "converged": bool(self.converged[i]),
              "reason": "" if self.reason is None else str(self.reason[i])}
+            | ({} if self.reflected is None else {"reflected": channel_value(self.reflected[i]),
+                                                  "transmitted": channel_value(self.transmitted[i])})
             | ({} if self.lower is None else {"lower": _decimals(self.lower[i]), "upper": _decimals(self.upper[i])})
             for i in np.ndindex(self.converged.shape)
         ]
         bounds = () if self.lower is None else (Column("lower", "lower", None), Column("upper", "upper", None))
+        parts = () if self.reflected is None else (Column("reflected", "reflected"),
+                                                   Column("transmitted", "transmitted"))
         params = ", ".join(f"{k}={format_value(v, 6)}" for k, v in self.bound.items())
         return Records(
             title=f"{self.model} albedo over the {self.over} ({params})",
             meta={"model": self.model, "params": self.bound, "over": self.over, "rtol": self.rtol},
-            columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"),
-                     Column("error_estimate", "error estimate", 3), Column("method", "method", None),
+            columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"))
+            + parts
+            + (Column("error_estimate", "error estimate", 3), Column("method", "method", None),
                      Column("evaluations", "evaluations", None), Column("converged", "converged", None),
                      Column("reason", "reason", None))
             + bounds,
@@ -182,11 +189,28 @@ SCALE_SAMPLES = 1024
 def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
                 max_evaluations: int):
     options = dict(rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
+    upper = _quadrature_hemisphere(problem, False, options)
+    if not getattr(problem.model, "transmits", False):
+        return upper
+    # A BSDF: the lower hemisphere as a second hemisphere integral, mirrored into the upper one (ω_z → −ω_z),
+    # about its own peak, the refraction direction.
+    lower = _quadrature_hemisphere(problem, True, options)
+    reason = np.where(upper[5]["reason"] != "", upper[5]["reason"], lower[5]["reason"])
+    bad = None if upper[4] is None else upper[4] + lower[4]
+    return (upper[0] + lower[0], upper[1] + lower[1], upper[2] + lower[2], upper[3] & lower[3], bad,
+            {"reason": reason, "reflected": upper[0], "transmitted": lower[0]})
+
+
+#: ω_z → −ω_z: the lower hemisphere of a BSDF integrated as an upper one.
+FLIP = np.array([1.0, 1.0, -1.0])
+
+
+def _quadrature_hemisphere(problem: Problem, lower: bool, options: dict):
     where = problem.model.source_path or problem.model.name
     # Overflow in the lobe search or the sums is handled here, never shown as numpy's warning.
     with np.errstate(all="ignore"):
         try:
-            outcome = _integrate(problem, None, **options)
+            outcome = _integrate(problem, None, lower, **options)
             overflowed = not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1])))
         except NonFiniteIntegrand as bad:
             if np.all(np.isfinite(bad.direction)):  # the BRDF itself is NaN or infinite there
@@ -194,11 +218,11 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
             overflowed = True
         if overflowed:
             try:
-                scale = _scales(problem, nonfinite)  # raises at a real (L, V) pair where the BRDF is not finite
+                scale = _scales(problem, options["nonfinite"])  # raises where the BRDF is not finite
                 if not np.any(scale > 1.0):
                     raise EvaluationError("the integration overflowed, yet no sampled BRDF value is large",
                                           where=where)
-                outcome = _integrate(problem, scale, **options)
+                outcome = _integrate(problem, scale, lower, **options)
             except NonFiniteIntegrand as bad:
                 raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
             if not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1]))):
@@ -206,16 +230,22 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
     return outcome
 
 
-def _integrate(problem: Problem, scale: np.ndarray | None, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
-               max_evaluations: int):
-    """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case."""
+def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, *, rtol: float, atol: float,
+               nonfinite: NonFinitePolicy, max_evaluations: int):
+    """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case; with
+    ``lower``, of the lower hemisphere mirrored into the upper one."""
     K = problem.fixed.shape[0]
+    side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
     if scale is None:
-        integrand, scale = problem.integrand, np.ones(K)
+        integrand, scale = side, np.ones(K)
     else:
         def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
-            return problem.integrand(omega, case) / scale[case, None]
-    lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+            return side(omega, case) / scale[case, None]
+    if lower:
+        refracted = problem.model.transmission_lobe(problem.fixed, problem.case_params(np.arange(K)))
+        lobe = Lobe(refracted.direction * FLIP, refracted.width, refracted.support)
+    else:
+        lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
     if lobe is None:
         normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
         candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
@@ -336,6 +366,10 @@ def albedo(
     validate.count(max_evaluations, "max_evaluations", maximum=10**12)
     validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
+    if over == "view" and getattr(model, "transmits", False):
+        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
+                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
+                            where="over")
     chosen = resolve_method(model, over, method)
     options = {"digits": digits}
     for name, given in options.items():
@@ -400,7 +434,16 @@ from .halfvector import albedo_method as _microfacet  # noqa: E402
 from .models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
-                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=0)
+                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=1)
+
+# Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
+# (brdfnorm.transmission); the result reports both parts.
+from .models.dielectric import MicrofacetDielectric  # noqa: E402
+from .transmission import albedo_method as _dielectric  # noqa: E402
+
+register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
+                       "reflection + refraction over the facet normal, the slope distribution as measure"),
+                auto_priority=2)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).

@@ -19,6 +19,9 @@ def report(
                               help="Parameter to study: V,V,..., START:STOP:COUNT or START:STOP:COUNT:log "
                                    "(default: each model's first float parameter over its range; with no "
                                    "models, the exponents n of the factor table)."),
+    audit: list[str] = typer.Option([], "--audit", metavar="FILE_OR_DIR",
+                                    help="Add a section auditing these .brdf files (a directory: all its .brdf "
+                                         "files) with `brdfnorm check`, one row each (repeatable)."),
     output: str = typer.Option("report", "--output", "-o", metavar="DIR",
                                help="Report directory: DIR/index.html and its figures, replaced atomically."),
     debug: bool = DEBUG_OPTION,
@@ -40,5 +43,5 @@ def report(
             def on_step(description: str, index: int, total: int) -> None:
                 progress.update(task, description=description, completed=index, total=total)
 
-            index = build_report(output, loaded, sweep=swept, on_step=on_step)
+            index = build_report(output, loaded, sweep=swept, on_step=on_step, audit=audit)
         typer.echo(f"wrote {index}", err=True)

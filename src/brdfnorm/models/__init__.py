@@ -5,15 +5,18 @@ from __future__ import annotations
 from ..registry import Registry
 from .base import Lobe, Model, Over, mirror
 from .beckmann import Beckmann
+from .beckmann_dielectric import BeckmannDielectric
 from .blinn_phong import BlinnPhong
 from .blinn_phong_gaussian import BlinnPhongGaussian
 from .ggx import GGX
+from .ggx_dielectric import GGXDielectric
 from .lambert import Lambert
 from .phong import PhongModified, PhongOriginal
 
 REGISTRY: Registry[type[Model]] = Registry("model", "model", {
-    cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann)
+    cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann,
+                              GGXDielectric, BeckmannDielectric)
 })
 
-__all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BlinnPhong", "BlinnPhongGaussian", "GGX",
-           "Lambert", "PhongModified", "PhongOriginal"]
+__all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BeckmannDielectric", "BlinnPhong",
+           "BlinnPhongGaussian", "GGX", "GGXDielectric", "Lambert", "PhongModified", "PhongOriginal"]

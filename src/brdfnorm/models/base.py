@@ -73,6 +73,7 @@ class Model(ABC):
 
     def __init__(self, **values: object) -> None:
         self._params = resolve(self.parameters, values, where=self.name)
+        self._check()
 
     @property
     def params(self) -> dict:
@@ -85,7 +86,11 @@ class Model(ABC):
         clone.__dict__.update(self.__dict__)
         merged = {**self._params, **values}
         clone._params = resolve(self.parameters, merged, where=self.name)
+        clone._check()
         return clone
+
+    def _check(self) -> None:  # noqa: B027 - a hook: most lobes have nothing to check across their parameters
+        """Checks across parameters, after each binding (a ParameterError for values that do not go together)."""
 
     def parameter(self, name: str) -> Parameter:
         """The declared parameter called ``name``."""

@@ -258,15 +258,6 @@ class MicrofacetModel(Model):
 
     distribution: Distribution = GGXDistribution()
 
-    def __init__(self, **values: object) -> None:
-        super().__init__(**values)
-        self._check()
-
-    def with_params(self, **values: object) -> Model:
-        clone = super().with_params(**values)
-        clone._check()
-        return clone
-
     def _check(self) -> None:
         p = self._params
         roughness(p)

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from .checkpoint import Checkpoint
-from .executors import TEXT_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
+from .executors import OPTIONAL_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
 
 __all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "albedo_cells",
@@ -63,6 +63,8 @@ class CellsResult:
     lower: np.ndarray | None = None  # (*S, C) decimal strings: guaranteed bounds (method "certified")
     upper: np.ndarray | None = None
     reason: np.ndarray | None = None  # (*S,) why a cell did not converge ("" where it did), where albedo says
+    reflected: np.ndarray | None = None  # (*S, C) the parts of a BSDF's albedo (models that transmit)
+    transmitted: np.ndarray | None = None
 
 
 def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | None = None,
@@ -147,7 +149,7 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
         theta=gather("theta"), phi=gather("phi"), method="+".join(methods), chunks=plan.count,
         chunks_computed=computed, evaluations_computed=spent, workers=workers, executor=executor, seconds=seconds,
         **{name: gather(name, (channels,) if tail == "channels" else ())
-           for name, tail in TEXT_FIELDS.items() if getattr(parts[0], name) is not None})
+           for name, (tail, _) in OPTIONAL_FIELDS.items() if getattr(parts[0], name) is not None})
 
 
 @contextlib.contextmanager

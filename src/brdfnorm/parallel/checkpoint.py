@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, OutputError
-from .executors import TEXT_FIELDS, ChunkResult
+from .executors import OPTIONAL_FIELDS, ChunkResult
 from .job import CellsJob, ChunkPlan, canonical_json, chunk_plan_order
 
 JOB_FILE = "job.json"
@@ -106,8 +106,8 @@ class Checkpoint:
         buffer = io.BytesIO()
         arrays = {name: getattr(result, name) for name in _RESULT_ARRAYS}
         # text (certified bounds, reasons) is held as Python strings; stored as fixed-width text, never pickled
-        arrays |= {name: np.asarray(getattr(result, name), dtype=str) for name in TEXT_FIELDS
-                   if getattr(result, name) is not None}
+        arrays |= {name: np.asarray(getattr(result, name), dtype=str if dtype is object else dtype)
+                   for name, (_, dtype) in OPTIONAL_FIELDS.items() if getattr(result, name) is not None}
         np.savez(buffer, digest=np.array(self.job.digest), cells=self.plan.chunk(result.index),
                  method=np.array(result.method), seconds=np.array(result.seconds), **arrays)
         self._write(self.chunk_path(result.index).name, buffer.getvalue())
@@ -118,7 +118,8 @@ class Checkpoint:
                 if str(data["digest"]) != self.job.digest or not np.array_equal(data["cells"], self.plan.chunk(index)):
                     raise ValueError("it belongs to another job")
                 arrays = {name: data[name] for name in _RESULT_ARRAYS}
-                arrays |= {name: data[name].astype(object) for name in TEXT_FIELDS if name in data}
+                arrays |= {name: data[name].astype(dtype) for name, (_, dtype) in OPTIONAL_FIELDS.items()
+                           if name in data}
                 method, seconds = str(data["method"]), float(data["seconds"])
         except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as error:
             raise ArgumentError(f"{path} is unreadable or damaged ({error}); delete it to recompute that chunk",

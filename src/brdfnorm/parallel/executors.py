@@ -57,10 +57,14 @@ class ChunkResult:
     lower: np.ndarray | None = None  # (n, C) decimal strings: guaranteed bounds (method "certified")
     upper: np.ndarray | None = None
     reason: np.ndarray | None = None  # (n,) why a cell did not converge ("" where it did), where albedo says
+    reflected: np.ndarray | None = None  # (n, C) the parts of a BSDF's albedo (models that transmit)
+    transmitted: np.ndarray | None = None
 
 
-#: Per-cell text an AlbedoResult may carry (object arrays of str), with the trailing shape of one cell.
-TEXT_FIELDS = {"lower": "channels", "upper": "channels", "reason": "cell"}
+#: Per-cell fields an AlbedoResult may carry: name -> (trailing shape of one cell, dtype); text is held as object
+#: arrays of str (certified bounds, reasons).
+OPTIONAL_FIELDS = {"lower": ("channels", object), "upper": ("channels", object), "reason": ("cell", object),
+                   "reflected": ("channels", float), "transmitted": ("channels", float)}
 
 
 @functools.lru_cache(maxsize=8)
@@ -91,8 +95,8 @@ def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
             result = albedo(model.with_params(**values), theta, phi, **settings)
             n = theta.size
             fraction = result.nonfinite_fraction
-            text = {name: np.asarray(getattr(result, name), dtype=object).reshape((n, -1) if tail == "channels" else n)
-                    for name, tail in TEXT_FIELDS.items() if getattr(result, name, None) is not None}
+            text = {name: np.asarray(getattr(result, name), dtype=dtype).reshape((n, -1) if tail == "channels" else n)
+                    for name, (tail, dtype) in OPTIONAL_FIELDS.items() if getattr(result, name, None) is not None}
             return ChunkResult(index, result.value.reshape(n, -1), result.error.reshape(n, -1),
                                result.evaluations.reshape(n), result.converged.reshape(n),
                                np.zeros(n) if fraction is None else fraction.reshape(n),

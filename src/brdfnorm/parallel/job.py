@@ -74,6 +74,9 @@ class ModelSource:
         params = {}
         for p in model.parameters:
             value = model.params[p.name]
+            if p.kind == "choice":  # a name (e.g. shadowing=separable) travels as itself
+                params[p.name] = str(value)
+                continue
             array = np.asarray(value, dtype=float)
             if array.ndim > (1 if p.kind == "color" else 0):
                 raise ArgumentError(f"parameter {p.name} is bound to an array; give per-cell values as the job's "
@@ -174,6 +177,7 @@ class CellsJob:
         shape = np.broadcast_shapes(theta.shape, phi.shape, *(v.shape for v in per_cell.values()))
         if math.prod(shape) == 0:
             raise ArgumentError("the table has no cells", where="theta")
+        validate.batch_size(shape)  # bounded memory: refused before any array of the table's size is made
         flat = {name: np.ascontiguousarray(np.broadcast_to(v, shape), dtype="<f8").ravel()
                 for name, v in per_cell.items()}
         unknown = sorted(set(settings) - set(AlbedoSettings.__dataclass_fields__))

@@ -69,6 +69,8 @@ def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
     for name, value in job.source.params.items():
         if name in job.values:
             params[name] = job.values[name].reshape(job.shape)
+        elif isinstance(value, str):  # a choice parameter: the same name for every cell
+            params[name] = value
         else:  # as brdfnorm.albedo reports bound values: broadcast to the cells (colours keep their 3)
             array = np.asarray(value, dtype=float)
             params[name] = np.broadcast_to(array, job.shape + array.shape)
@@ -76,6 +78,7 @@ def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
                         converged=cells.converged, method=cells.method, theta=cells.theta, phi=cells.phi,
                         over=job.settings.over, params=params,  # type: ignore[arg-type]
                         nonfinite_fraction=cells.nonfinite_fraction, lower=cells.lower, upper=cells.upper,
+                        reason=cells.reason, reflected=cells.reflected, transmitted=cells.transmitted,
                         model=_model_name(job), bound=_bound(job), rtol=job.settings.rtol)
 
 

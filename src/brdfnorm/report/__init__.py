@@ -77,10 +77,17 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
 
 def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, Model]] = (), *,
                  sweep: tuple[str, np.ndarray] | None = None, config: StudyConfig | None = None,
-                 on_step: OnStep | None = None) -> Path:
-    """Compute the study, write ``out_dir/index.html`` with its figures atomically; returns the index path."""
+                 on_step: OnStep | None = None, audit: Sequence[str | Path] = ()) -> Path:
+    """Compute the study, write ``out_dir/index.html`` with its figures atomically; returns the index path.
+
+    ``audit``: ``.brdf`` files or directories to audit with ``brdfnorm check`` (:mod:`.audit`), one row each.
+    """
     check_target(out_dir)  # a bad -o fails before minutes of work
     config, steps = plan(models, sweep, config)
+    if audit:
+        from .audit import audit_section
+
+        steps.append(("auditing the .brdf files (brdfnorm check)", audit_section(audit)))
     report = (lambda *args: None) if on_step is None else on_step
     with staged(out_dir, f"brdfnorm {__version__}\n") as stage:
         ctx = sections.Context(config, stage)

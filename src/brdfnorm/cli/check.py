@@ -1,0 +1,212 @@
+"""``brdfnorm check MODEL...``: the white-furnace and physics audit of :mod:`brdfnorm.check`.
+
+The table (one row per check for one model, one summary row per model for several) or ``--json`` goes to
+stdout; what each audit covered goes to stderr. Exit code 1 when a check fails, 0 otherwise (an inconclusive
+verdict is reported but does not fail), 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from ..check import CHECKS, DEFAULT_CHECKS, Budget, CheckReport
+from ..check import check as run_check
+from ..errors import ArgumentError
+from ..output import STDOUT, write_file
+from ..output.formats import to_json
+from .application import app
+from .common import (
+    DEBUG_OPTION,
+    PARAM_OPTION,
+    At,
+    Over,
+    console,
+    guarded,
+    load_model,
+    parse_params,
+    parse_sweep,
+)
+
+_BUDGET = re.compile(r"\s*([0-9.eE+-]+)\s*(s|sec|seconds|evals|evaluations)?\s*\Z")
+VERDICT = {"pass": "pass", "fail": "FAIL", "inconclusive": "inconclusive"}
+
+
+def parse_budget(spec: str) -> Budget:
+    """``SECONDS``, ``SECONDSs`` or ``COUNTevals`` (integrand and BRDF evaluations)."""
+    match = _BUDGET.match(spec)
+    try:
+        amount = float(match.group(1)) if match else float("nan")
+    except ValueError:
+        amount = float("nan")
+    if not match or not np.isfinite(amount) or amount <= 0:
+        raise ArgumentError(f"expected SECONDS (e.g. 20 or 20s) or COUNTevals (e.g. 5e7evals), got {spec!r}",
+                            where="--budget")
+    if match.group(2) in ("evals", "evaluations"):
+        return Budget(seconds=None, evaluations=int(amount))
+    return Budget(seconds=amount)
+
+
+def parse_only(spec: str) -> tuple[str, ...]:
+    names = tuple(dict.fromkeys(part.strip() for part in spec.split(",") if part.strip()))
+    unknown = [n for n in names if n not in CHECKS]
+    if unknown or not names:
+        raise ArgumentError(f"unknown check {unknown[0]!r}" if unknown else "no check named"
+                            f" (known: {','.join(CHECKS)})", where="--only")
+    return names
+
+
+@app.command("check")
+def check_command(
+    models: list[str] = typer.Argument(..., metavar="MODEL...", help="Built-in model names or .brdf files."),
+    param: list[str] = PARAM_OPTION,
+    sweep: list[str] = typer.Option([], "--sweep", metavar="NAME=SPEC",
+                                    help="Values of a float parameter instead of its declared range (repeatable): "
+                                         "V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
+    only: str = typer.Option(None, "--only", metavar="CHECK,...",
+                             help=f"Run only these checks ({','.join(CHECKS)}); default: "
+                                  f"{','.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
+    normalized: bool = typer.Option(False, "--normalized", help="The lobe is meant to be normalized: also check "
+                                    "that its albedo at the --at direction is 1 across the parameters."),
+    at: At = typer.Option(At.normal, "--at", help="Normalization convention for --normalized: normal (fixed "
+                          "direction at N), max (largest over directions) or view (every direction)."),
+    over: Over = typer.Option(Over.light, "--over", help="Albedo over the light (view fixed, default) or the view."),
+    tolerance: float = typer.Option(1e-6, "--tolerance", help="Allowed energy gain, |E − 1| for --normalized, "
+                                    "and relative asymmetry for reciprocity."),
+    budget: str = typer.Option("20", "--budget", metavar="SECONDS|COUNTevals",
+                               help="Work per model: seconds (default 20) or evaluations, e.g. 5e7evals."),
+    points: int = typer.Option(48, "--points", help="Parameter points of the coarse grid (per bool combination "
+                               "and swept value)."),
+    json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    debug: bool = DEBUG_OPTION,
+) -> None:
+    """Audit BRDFs: energy conservation (largest albedo), reciprocity, positivity, finiteness, normalization.
+
+    Every float parameter with a declared range is searched over it (open ranges up to min + 1e4), bools take
+    both values; -p NAME=VALUE holds a parameter, --sweep gives its values. Exit code 1 when a check fails.
+    """
+    with guarded(debug):
+        checks = parse_only(only) if only else DEFAULT_CHECKS + (("normalization",) if normalized else ())
+        if normalized and "normalization" not in checks:
+            checks = checks + ("normalization",)
+        if not (np.isfinite(tolerance) and tolerance >= 0):
+            raise ArgumentError(f"must be finite and ≥ 0, got {tolerance!r}", where="--tolerance")
+        if points < 1:
+            raise ArgumentError(f"need at least 1 point, got {points}", where="--points")
+        limit = parse_budget(budget)
+        sweeps = dict(parse_sweep(s) for s in sweep)
+        held = list(parse_params(param))
+        loaded = [load_model(name, param) for name in models]  # every file is read before any work
+        for m in loaded:
+            for name in sweeps:
+                m.parameter(name)
+        reports = []
+        for name, m in zip(models, loaded, strict=True):
+            try:
+                report = run_check(m, checks=checks, sweep=sweeps, fixed=held, tolerance=tolerance, at=at.value,
+                                   over=over.value, budget=limit, points=points)
+            except ArgumentError as error:
+                flags = {"sweep": "--sweep", "checks": "--only", "budget": "--budget", "points": "--points"}
+                error.where = flags.get(error.where, error.where)
+                raise
+            reports.append(report)
+            typer.echo(f"{name}: {report.status}{_failed(report)} — {coverage_text(report)}", err=True)
+        if json_output:
+            write_file(STDOUT, to_json({"tolerance": tolerance, "over": over.value, "checks": list(checks),
+                                        "status": _overall(reports),
+                                        "reports": [report_json(r) for r in reports]}) + "\n")
+        elif len(reports) == 1:
+            console().print(detail_table(reports[0]))
+        else:
+            out = console()
+            out.print(summary_table(reports))
+            if any(r.failed for r in reports):
+                out.print(failures_table(reports))
+        if any(r.failed for r in reports):
+            raise typer.Exit(1)
+
+
+def _failed(report: CheckReport) -> str:
+    return f" ({', '.join(report.failed)})" if report.failed else ""
+
+
+def _overall(reports: list[CheckReport]) -> str:
+    statuses = [r.status for r in reports]
+    return "fail" if "fail" in statuses else "inconclusive" if "inconclusive" in statuses else "pass"
+
+
+def coverage_text(report: CheckReport) -> str:
+    """What was searched, in one line (the coverage half of the product's 'honest error bar')."""
+    c = report.coverage
+    parts = []
+    if "energy" in c:
+        e = c["energy"]
+        refined = ("refinement finished" if e["refinement_finished"]
+                   else f"refinement stopped by the budget after {e['refinement_rounds']} rounds")
+        azimuths = f" (and 8 azimuths at the best {e['full_azimuth_points']})" if e["full_azimuth_points"] else ""
+        parts.append(f"energy: {e['parameter_points']} of {e['parameter_points_planned']} parameter points × "
+                     f"{e['directions']} directions{azimuths}, {refined}")
+    if "pairs" in c:
+        p = c["pairs"]
+        parts.append(f"{p['pairs_per_point']} direction pairs at {p['parameter_points']} parameter points")
+    parts.append(f"{c['evaluations']:.3g} evaluations in {c['elapsed_s']:.1f} s (budget {c['budget']})")
+    return "; ".join(parts)
+
+
+def report_json(report: CheckReport) -> dict:
+    return {
+        "model": report.model, "source": report.source, "status": report.status, "failed": report.failed,
+        "tolerance": report.tolerance, "over": report.over,
+        "checks": {name: {"status": r.status, "value": r.value, "error_estimate": r.error, "message": r.message,
+                          "params": r.params, "L": r.L, "V": r.V, "theta_deg": r.theta_deg, "phi_deg": r.phi_deg,
+                          "channel": r.channel, "share": r.share, "sampled": r.sampled}
+                   for name, r in report.results.items()},
+        "coverage": report.coverage,
+    }
+
+
+def detail_table(report: CheckReport) -> Table:
+    # Names and messages come from outside (file names, parameter names): text, never rich markup.
+    table = Table(title=escape(f"{report.source or report.model}: {VERDICT[report.status]} "
+                               f"(tolerance {report.tolerance:g})"))
+    for column in ("check", "verdict", "value", "details"):
+        table.add_column(column, overflow="fold")
+    for name, r in report.results.items():
+        table.add_row(name, VERDICT[r.status], cell(r), escape(r.message))
+    return table
+
+
+def cell(result) -> str:
+    """The headline number of one check, as the summary table shows it."""
+    if result.name in ("energy", "normalization"):
+        label = "max E " if result.name == "energy" else "|E−1| "
+        return f"{label}{result.value:.8g} ± {result.error:.1g}"
+    if result.name == "reciprocity":
+        return f"{result.value:.2g} of scale"
+    return f"{100 * result.share:.3g}% of domain" if result.share else "none found"
+
+
+def summary_table(reports: list[CheckReport]) -> Table:
+    names = [n for n in CHECKS if any(n in r.results for r in reports)]
+    table = Table(title=f"brdfnorm check: {len(reports)} models")
+    for column in ("model", "verdict", *names, "time (s)"):
+        table.add_column(column, overflow="fold")
+    for r in reports:
+        cells = [f"{VERDICT[r.results[n].status]}: {cell(r.results[n])}" if n in r.results else "—" for n in names]
+        table.add_row(escape(r.source or r.model), VERDICT[r.status], *cells, f"{r.coverage['elapsed_s']:.1f}")
+    return table
+
+
+def failures_table(reports: list[CheckReport]) -> Table:
+    """Where each failing check fails: parameter values and directions."""
+    table = Table(title="failures")
+    for column in ("model", "check", "details"):
+        table.add_column(column, overflow="fold")
+    for r in reports:
+        for name in r.failed:
+            table.add_row(escape(r.source or r.model), name, escape(r.results[name].message))
+    return table

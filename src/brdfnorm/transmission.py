@@ -1,0 +1,251 @@
+"""Albedo of rough dielectrics (:mod:`brdfnorm.models.dielectric`): reflection plus refraction, over the
+microfacet normal with the slope distribution as the measure, exact from rough interfaces down to mirrors.
+
+Reflection is the microfacet BRDF with the exact dielectric Fresnel: its F = 1 albedo by
+:func:`brdfnorm.halfvector.single_scattering_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
+critical angle (:data:`PARTS`), so that the Fresnel kink at total internal reflection (η < 1) is an edge of
+the domain rather than inside it. Refraction follows the same route (Walter et al. 2007,
+§5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's weight is
+|V·m| G2 (1 − F)/(|N·V| |N·m|), the same form as the reflected one with F → 1 − F), so in the energy form
+
+    E_T(V) = (1/2π) ∫₀^{2π} ∫ G2(L, V) (1 − F(V·m)) (1 + c·x) du dφ,    L = refract(V, m, η),        (T1)
+
+in the slope coordinates of :mod:`brdfnorm.halfvector` (m ∝ (x, y, 1), x = s d(φ), c = V_xy/V_z, u(s) the
+distribution's radial CDF), with G2 the refraction shadowing (Heitz's B(1 + Λ_V, 1 + Λ_L) when
+height-correlated).
+
+Where refraction exists along a ray. With β the facet's polar angle (tan β = s|d|), V·m = A cos(β − β₀)
+(A = √(V_z² + (V·d̂)²)): refraction needs V·m > c* (c* = √(1 − η²) for η < 1, the critical cosine, else 0),
+an interval of β in closed form; within it the refracted L must also point below the surface (L_z < 0), whose
+ends are found by bisection to float64's resolution. The ray's piece [s_a, s_b] is then integrated in three
+parts as the reflection is (pole coordinate, tail coordinate, and a last part next to s_b where G2's boundary
+layer at L_z → 0 lives), with quadratic grading at both ends: 1 − F vanishes like a square root at the
+critical angle, and the grading makes that analytic. Where refraction reaches the horizontal facet (s_b = ∞),
+the heavy GGX tail is cut at s = 1e16 and the dropped share bounded in the error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .halfvector import CubatureResult, _Panels, adaptive_rectangles, single_scattering_albedo
+from .models.dielectric import MicrofacetDielectric, refraction_shadowing
+from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
+
+_TWO_PI = 2.0 * np.pi
+#: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
+_S_CAP = 1e16
+#: Samples of L_z along a ray's β-interval before its sign changes are located by bisection.
+_SAMPLES = 17
+_BISECTIONS = 48
+#: The last part of a ray spans the band where Λ(L) turns on: |L_z| ≲ LAYER·α.
+_LAYER = 4.0
+
+
+#: The window integrals: over the facets with V·m above the critical cosine c* (c* = 0 for η > 1), where
+#: 1 − F is analytic, "refraction" is ∫ G2_t (1 − F)(1 + c·x) and "reflection-loss" ∫ G2_r (1 − F)(1 + c·x) with
+#: the reflected direction's G2. The reflection is the lobe's F = 1 albedo (the half-vector integral of
+#: :mod:`brdfnorm.halfvector`) less that loss: R = ∫ G2_r F = ∫ G2_r − ∫_window G2_r (1 − F), since F = 1 outside
+#: the window (total internal reflection). Both integrands vanish continuously at the window's edge.
+PARTS = ("refraction", "reflection-loss")
+
+
+def _window(V, eta, angle, part):
+    """The β-window on each ray: [lo, hi] ⊂ [0, π/2] (V·m > c*, and for reflection the reflected L above the
+    surface), and a mask of empty windows."""
+    vx, vy, vz = V
+    w = vx * np.cos(angle) + vy * np.sin(angle)  # V·d̂
+    amplitude = np.hypot(vz, w)
+    beta0 = np.arctan2(w, vz)
+    critical = np.sqrt(np.maximum(1.0 - eta * eta, 0.0))
+    half = np.arccos(np.clip(critical / amplitude, -1.0, 1.0))  # 0 where even the best facet is past c*
+    lo, hi = beta0 - half, beta0 + half  # V·m = A cos(β − β₀) > c*
+    if part != "refraction":
+        # The reflected L_z = 2(V·m) cos β − V_z = A cos(2β − β₀) (as A cos β₀ = V_z) is positive exactly for
+        # |2β − β₀| < π/2: the horizon, in closed form.
+        lo, hi = np.maximum(lo, (beta0 - np.pi / 2) / 2), np.minimum(hi, (beta0 + np.pi / 2) / 2)
+    lo, hi = np.clip(lo, 0.0, np.pi / 2), np.clip(hi, 0.0, np.pi / 2)
+    return lo, hi, hi <= lo
+
+
+def _scattered_z(part, vx, vy, vz, eta, cos_a, sin_a, beta):
+    """L_z of V scattered by the facet (sin β cos a, sin β sin a, cos β): refracted or reflected."""
+    sb, cb = np.sin(beta), np.cos(beta)
+    cos_i = (vx * cos_a + vy * sin_a) * sb + vz * cb
+    if part != "refraction":
+        return 2.0 * cos_i * cb - vz
+    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
+    cos_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
+    return -vz / eta + cb * (cos_i / eta - cos_t)
+
+
+def _ray(V, alpha, eta, angle, part):
+    """Per ray (broadcast arrays): the direction d and the β-interval [b_lo, b_hi] of the part's window where
+    the scattered L lies on its side of the surface (in closed form for reflection; located by sampling and
+    bisection for refraction)."""
+    dx, dy = alpha * np.cos(angle), alpha * np.sin(angle)
+    vx, vy, vz = V
+    lo, hi, empty = _window(V, eta, angle, part)
+    # The window is exact already for reflection, and for refraction into a denser medium: there
+    # L_z = −V_z/η + m_z(V·m/η − cos θ_t) < 0 always, as cos θ_t > V·m/η when η > 1.
+    if part != "refraction" or np.all(eta > 1.0):
+        return dx, dy, np.where(empty, 0.0, lo), np.where(empty, 0.0, hi), empty
+
+    def on_side(beta):  # β may carry one more axis than the ray quantities
+        extra = (...,) + (None,) * (np.ndim(beta) - np.ndim(angle))
+        args = (vx, vy, vz, eta, np.cos(angle), np.sin(angle))
+        z = _scattered_z(part, *(np.broadcast_to(q, np.shape(angle))[extra] for q in args), beta)
+        return z < 0
+
+    # Sample the side on [lo, hi]; the interval runs from the first to the last sample on it, its ends located
+    # between neighbouring samples by bisection.
+    grid = lo[..., None] + (hi - lo)[..., None] * np.linspace(0.0, 1.0, _SAMPLES)
+    inside = on_side(grid) & ~empty[..., None]
+    first = np.argmax(inside, axis=-1)
+    last = _SAMPLES - 1 - np.argmax(inside[..., ::-1], axis=-1)
+    none = ~np.any(inside, axis=-1)
+    take = np.take_along_axis
+    b_lo = take(grid, first[..., None], -1)[..., 0]
+    b_hi = take(grid, last[..., None], -1)[..., 0]
+    a = take(grid, np.maximum(first - 1, 0)[..., None], -1)[..., 0]
+    d = take(grid, np.minimum(last + 1, _SAMPLES - 1)[..., None], -1)[..., 0]
+    b, c = b_lo.copy(), b_hi.copy()
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (a + b)
+        ok = on_side(mid)
+        a, b = np.where(ok, a, mid), np.where(ok, mid, b)
+        mid = 0.5 * (c + d)
+        ok = on_side(mid)
+        c, d = np.where(ok, mid, c), np.where(ok, d, mid)
+    b_lo = np.where(first > 0, b, b_lo)
+    b_hi = np.where(last < _SAMPLES - 1, c, b_hi)
+    return dx, dy, np.where(none, 0.0, b_lo), np.where(none, 0.0, b_hi), none
+
+
+def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, alpha: np.ndarray,
+                    eta: np.ndarray, part: str):
+    lam = distribution.smith_lambda
+    lambda_v = lam(alpha**2 * (V[:, 0] ** 2 + V[:, 1] ** 2) / V[:, 2] ** 2)
+    refraction = part == "refraction"
+
+    def integrand(case, phi, v, piece):
+        k = case[:, None, None]
+        a, e = alpha[k], eta[k]
+        vx, vy, vz = V[k, 0], V[k, 1], V[k, 2]
+        # Ray quantities per (panel, azimuth node), then broadcast over the radial nodes.
+        ray = _ray((vx[..., 0], vy[..., 0], vz[..., 0]), a[..., 0], e[..., 0], phi[..., 0], part)
+        dx, dy, b_lo, b_hi, none = (q[..., None] for q in ray)
+        d = a  # |d| for an isotropic distribution
+        s_lo = np.tan(b_lo) / d
+        s_hi = np.where(b_hi >= np.pi / 2, _S_CAP, np.minimum(np.tan(b_hi) / d, _S_CAP))
+        # The last part: the band next to s_hi where |L_z| < LAYER·α (linearized through the slope of L_z).
+        step = 1e-6 * (s_hi - s_lo)
+        z_end = _scattered_z(part, vx, vy, vz, e, np.cos(phi), np.sin(phi), np.arctan((s_hi - step) * d))
+        slope = np.maximum(np.abs(z_end) / np.maximum(step, 1e-300), 1e-300)
+        s_split = np.clip(s_hi - _LAYER * a / slope, s_lo, s_hi)
+        s_middle = np.clip(s_split / (1.0 + s_split), s_lo, s_split)
+        # Beckmann's truncation (its dropped mass is bounded below); GGX has none.
+        s_lo, s_middle, s_split, s_hi = (distribution.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
+        local = v - piece[:, None, None]
+        # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle) and towards s_hi
+        # in the last part (the boundary layer and the square root alike).
+        first_map, first_jac = local * local, 2.0 * local
+        last_map, last_jac = 1.0 - (1.0 - local) ** 2, 2.0 * (1.0 - local)
+        t_lo, t_mid = distribution.pole_coordinate(s_lo), distribution.pole_coordinate(s_middle)
+        s_pole, density_pole = distribution.pole(t_lo + first_map * (t_mid - t_lo))
+        t_start, t_stop = distribution.tail_coordinate(s_middle), distribution.tail_coordinate(s_split)
+        s_tail, density_tail = distribution.tail(t_start + local * (t_stop - t_start))
+        s_near = s_split + last_map * (s_hi - s_split)
+        pole, tail = (piece == 0)[:, None, None], (piece == 1)[:, None, None]
+        s = np.where(pole, s_pole, np.where(tail, s_tail, s_near))
+        density = np.where(pole, density_pole, np.where(tail, density_tail, distribution.slope_density(s_near)))
+        length = np.where(pole, (t_mid - t_lo) * first_jac, np.where(tail, t_stop - t_start,
+                                                                       (s_hi - s_split) * last_jac))
+        x, y = s * dx, s * dy
+        n = np.sqrt(1.0 + x * x + y * y)
+        one_sp = 1.0 + (vx * x + vy * y) / vz
+        cos_i = vz * one_sp / n
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if refraction:
+                sin2_t = (1.0 - cos_i * cos_i) / (e * e)
+                cos_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
+                scale = (cos_i / e - cos_t) / n
+                Lx, Ly, Lz = -vx / e + scale * x, -vy / e + scale * y, -vz / e + scale
+            else:
+                scale = 2.0 * cos_i / n
+                Lx, Ly, Lz = scale * x - vx, scale * y - vy, scale - vz
+            lambda_l = lam(a * a * (Lx * Lx + Ly * Ly) / (Lz * Lz))
+            G2 = (refraction_shadowing if refraction else shadowing_masking)(shadowing, lambda_l, lambda_v[k])
+            factor = G2 * (1.0 - fresnel_dielectric(np.clip(cos_i, 0.0, 1.0), e))
+            weight = factor * one_sp * density * length / _TWO_PI
+        side = (Lz < 0) if refraction else (Lz > 0)
+        valid = side & (cos_i > 0) & ~none & np.isfinite(weight)
+        return np.where(valid, weight, 0.0)[..., None]
+
+    return integrand
+
+
+def _azimuth_edges(V: np.ndarray, eta: float) -> np.ndarray:
+    """Initial azimuth panel edges: eight even ones, and (η < 1) the rays on which the window V·m > c* opens
+    (A(φ) = c*), where every part's ray integral has a square-root onset — on a panel edge, never inside one,
+    where the cubature's nodes could step over it."""
+    edges = [np.linspace(0.0, _TWO_PI, 9)]
+    critical2 = max(1.0 - eta * eta, 0.0)
+    vxy = np.hypot(V[0], V[1])
+    if critical2 > V[2] ** 2 and vxy > 0:
+        ratio = np.sqrt(critical2 - V[2] ** 2) / vxy
+        if ratio <= 1.0:
+            phi_v = np.arctan2(V[1], V[0])
+            spread = np.array([np.arccos(ratio), np.arccos(-ratio)])
+            edges.append(np.mod(phi_v + np.concatenate([spread, -spread]), _TWO_PI))
+    edges = np.unique(np.concatenate(edges))
+    return edges[np.concatenate([[True], np.diff(edges) > 1e-12])]
+
+
+def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shadowing: str, part: str, *,
+                rtol: float = 1e-10, atol: float = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
+    """One part (:data:`PARTS`) of E(V) for fixed directions (K, 3) (upper hemisphere) and per-case α, η."""
+    fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
+    K = fixed.shape[0]
+    alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (K,)).copy()
+    eta = np.broadcast_to(np.asarray(eta, dtype=float), (K,)).copy()
+    cases, a0, a1 = [], [], []
+    for k in range(K):
+        edges = _azimuth_edges(fixed[k], eta[k])
+        cases += [k] * (edges.size - 1)
+        a0.append(edges[:-1])
+        a1.append(edges[1:])
+    cases, a0, a1 = np.repeat(cases, 3), np.repeat(np.concatenate(a0), 3), np.repeat(np.concatenate(a1), 3)
+    b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
+    initial = _Panels(cases, a0, a1, b0, b0 + 1.0)
+    result = adaptive_rectangles(_part_integrand(distribution, shadowing, fixed, alpha, eta, part), initial, K,
+                                 rtol=rtol, atol=atol, max_evaluations=max_evaluations)
+    # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight, p = |c|α), and
+    # Beckmann's cap, where the weight (1 − F) G2 (1 + c·x) ≤ 1 + |c| α s over the dropped slope radii.
+    p = alpha * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2]
+    mass, moment = distribution.truncated_moments()
+    dropped = 1.0 / _S_CAP**2 + 2.0 * p / _S_CAP + mass + moment * p
+    return CubatureResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
+
+
+def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+    """``brdfnorm.albedo`` method ``"dielectric"``: R = (F = 1 albedo) − reflection loss, and T, each integral to
+    ``rtol`` of itself (the loss and T are ≤ the total; the F = 1 albedo ≤ 1, near the total but for R + T)."""
+    model: MicrofacetDielectric = problem.model
+    K = problem.fixed.shape[0]
+    params = problem.case_params(np.arange(K))
+    alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
+    eta = np.broadcast_to(np.asarray(params["eta"], dtype=float), (K,))
+    budget = max_evaluations // 3
+    results = {part: part_albedo(model.distribution, problem.fixed, alpha, eta, params["shadowing"], part,
+                                 rtol=rtol, atol=atol / 3, max_evaluations=budget) for part in PARTS}
+    white = {"alpha": alpha, "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": params["shadowing"], "fresnel": "none",
+             "f0": 0.0, "f90": 1.0, "eta": 1.0, "k": 0.0}
+    results["white"] = single_scattering_albedo(model.distribution, problem.fixed, white, rtol=rtol, atol=atol / 3,
+                                                max_evaluations=budget)
+    t = results["refraction"].value
+    r = results["white"].value - results["reflection-loss"].value
+    error = sum(result.error for result in results.values())
+    evaluations = sum(result.evaluations for result in results.values())
+    converged = np.logical_and.reduce([result.converged for result in results.values()])
+    return r + t, error, evaluations, converged, None, {"reflected": r, "transmitted": t}

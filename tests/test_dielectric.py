@@ -1,0 +1,134 @@
+"""Rough dielectrics (issue: BSDFs over the whole sphere): the smooth limit, reciprocity in the energy form,
+the refracted albedo against an independent 1-D mpmath route, and the generic sphere quadrature."""
+
+from __future__ import annotations
+
+import mpmath as mp
+import numpy as np
+import pytest
+from conftest import run_cli
+
+import brdfnorm as bn
+from brdfnorm.errors import ArgumentError, ParameterError
+
+DIELECTRICS = ["ggx-dielectric", "beckmann-dielectric"]
+
+
+@pytest.mark.parametrize("name", DIELECTRICS)
+@pytest.mark.parametrize("eta", [1.5, 1 / 1.5, 2.4])
+def test_smooth_limit_conserves_energy_at_every_angle(name, eta):
+    """α → 0: R + T = 1, past the critical angle from inside too (where T → 0)."""
+    theta = np.radians([0.0, 20.0, 40.0, 41.5, 42.5, 60.0, 85.0, 89.0])
+    r = bn.albedo(bn.load(name, alpha=1e-7, eta=eta), theta, rtol=1e-10)
+    assert r.method == "dielectric" and r.converged.all()
+    assert np.all(np.abs(r.value[:, 0] - 1.0) <= 1e-9)
+    assert np.allclose(r.reflected + r.transmitted, r.value, rtol=0, atol=1e-15)
+    if eta < 1:  # total internal reflection beyond asin(η)
+        past = theta > np.arcsin(eta) + 1e-3
+        assert np.all(r.transmitted[past, 0] < 1e-9) and np.all(r.reflected[past, 0] > 1 - 1e-9)
+
+
+def _fresnel(c, eta):
+    g = mp.sqrt(eta * eta - 1 + c * c)
+    a, b = (g - c) / (g + c), (c * (g + c) - 1) / (c * (g - c) + 1)
+    return a * a * (1 + b * b) / 2
+
+
+def _transmitted_at_normal_incidence(alpha: float, eta: float) -> float:
+    """E_T(V = N) of the GGX dielectric by mpmath over the facet CDF P (1-D: the lobe is axisymmetric), straight
+    from Walter's refraction and Heitz's G2 = B(1 + Λ_L, 1) = 1/(1 + Λ_L)."""
+    with mp.workdps(25):
+        a, eta = mp.mpf(alpha), mp.mpf(eta)
+
+        def f(P):
+            t2 = a * a * P / (1 - P)
+            c = 1 / mp.sqrt(1 + t2)
+            s2t = (1 - c * c) / eta**2
+            if s2t >= 1:
+                return 0
+            k = c / eta - mp.sqrt(1 - s2t)
+            Lz, Lx = -1 / eta + c * k, mp.sqrt(1 - c * c) * k
+            if Lz >= 0:
+                return 0
+            lam = (-1 + mp.sqrt(1 + a * a * Lx * Lx / Lz**2)) / 2
+            return (1 - _fresnel(c, eta)) / (1 + lam)
+
+        # Beyond the critical facet angle (η < 1) nothing refracts: the range ends there, on the kink of 1 − F.
+        end = mp.mpf(1)
+        if eta < 1:
+            t2 = 1 / (1 - eta**2) - 1
+            end = t2 / (a * a + t2)
+        last = end - (end if eta < 1 else 1) * mp.mpf(10) ** -20
+        points = [end * x for x in (0, 0.25, 0.5, 0.75, 0.9, 0.99)] + [last]
+        return float(mp.quad(f, points))
+
+
+@pytest.mark.parametrize(("alpha", "eta"), [(0.3, 1.5), (0.05, 1.33), (0.8, 1.5), (0.3, 1 / 1.5)])
+def test_transmitted_albedo_at_normal_incidence_against_mpmath(alpha, eta):
+    r = bn.albedo(bn.load("ggx-dielectric", alpha=alpha, eta=eta), 0.0, rtol=1e-11)
+    reference = _transmitted_at_normal_incidence(alpha, eta)
+    assert abs(r.transmitted[0] - reference) <= max(r.error[0], 1e-12)
+    assert abs(r.transmitted[0] - reference) <= 1e-10
+
+
+@pytest.mark.parametrize("name", DIELECTRICS)
+def test_reflected_part_is_the_microfacet_brdf_with_dielectric_fresnel(name):
+    theta = np.radians([0.0, 45.0, 80.0])
+    r = bn.albedo(bn.load(name, alpha=0.2, eta=1.5), theta, rtol=1e-10)
+    brdf = bn.albedo(bn.load(name.split("-")[0], alpha=0.2, fresnel="dielectric", eta=1.5), theta, rtol=1e-10)
+    assert np.allclose(r.reflected[:, 0], brdf.value[:, 0], rtol=1e-9, atol=0)
+
+
+@pytest.mark.parametrize("name", DIELECTRICS)
+def test_half_vector_method_agrees_with_the_generic_sphere_quadrature(name):
+    """Two routes that share nothing but the BSDF: lobe-aligned polar cubature of f·|N·L| over both hemispheres
+    (evaluated through the model's own f), and the facet-normal integrals."""
+    m = bn.load(name, alpha=0.4, eta=1.5)
+    theta = np.radians([0.0, 60.0])
+    exact = bn.albedo(m, theta, rtol=1e-10)
+    generic = bn.albedo(m, theta, method="quadrature", rtol=1e-6, max_evaluations=3_000_000)
+    assert np.all(np.abs(exact.value - generic.value) <= generic.error + exact.error)
+    assert np.all(np.abs(exact.transmitted - generic.transmitted) <= generic.error + exact.error)
+
+
+def test_inside_view_past_the_critical_angle_against_the_generic_sphere_quadrature():
+    """η < 1 at a grazing view: the window where facets are below the critical angle opens at azimuths where
+    every part's ray integral has a square-root onset (a case a cubature node can step over)."""
+    m = bn.load("ggx-dielectric", alpha=0.3, eta=1 / 1.5)
+    exact = bn.albedo(m, 1.3, rtol=1e-10)
+    generic = bn.albedo(m, 1.3, method="quadrature", rtol=1e-5, max_evaluations=3_000_000)
+    assert abs(exact.reflected[0] - generic.reflected[0]) <= generic.error[0] + exact.error[0]
+    assert abs(exact.value[0] - generic.value[0]) <= generic.error[0] + exact.error[0]
+
+
+@pytest.mark.parametrize("name", DIELECTRICS)
+@pytest.mark.parametrize("eta", [1.5, 0.7])
+def test_reciprocity_in_the_energy_form(name, eta, rng):
+    """f(L, V)/η_L² = f(V, L)/η_V² (η of each direction's side: 1 above, eta below) on random pairs."""
+    m = bn.load(name, alpha=0.3, eta=eta)
+    v = rng.normal(size=(4000, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    L, V = v[:2000], v[2000:]
+    side_l, side_v = np.where(L[:, 2] > 0, 1.0, eta), np.where(V[:, 2] > 0, 1.0, eta)
+    forward, backward = m.eval(L, V)[:, 0] / side_l**2, m.eval(V, L)[:, 0] / side_v**2
+    assert np.count_nonzero(forward) > 1000
+    assert np.allclose(forward, backward, rtol=1e-7, atol=1e-300)
+
+
+def test_bad_parameters_and_readings_are_refused():
+    with pytest.raises(ParameterError, match="eta"):
+        bn.load("ggx-dielectric", eta=1.0)
+    with pytest.raises(ArgumentError, match="transmits"):
+        bn.albedo(bn.load("ggx-dielectric"), 0.0, over="view")
+
+
+def test_cli_reports_both_parts(capsys):
+    import json
+
+    code, out, err = run_cli(capsys, "albedo", "ggx-dielectric", "-p", "alpha=0.3", "-p", "eta=1.5", "--theta",
+                             "0,60", "--json")
+    assert code == 0, err
+    rows = json.loads(out)["results"]
+    for row in rows:
+        assert abs(row["reflected"] + row["transmitted"] - row["albedo"]) < 1e-15
+    assert abs(rows[0]["transmitted"] - _transmitted_at_normal_incidence(0.3, 1.5)) < 1e-9
