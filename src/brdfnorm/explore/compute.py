@@ -1,0 +1,373 @@
+"""What the explorer computes for one view of one model, at a coarse or a fine tolerance, cancellably.
+
+For a model bound to the page's parameter values and a view direction V at polar angle θ_o (azimuth 0, the
+X–N plane), :func:`evaluate_view` returns, as JSON-ready data:
+
+* the albedo curve E(θ_o) = ∫ f(L, V)(N·L) dL over θ_o ∈ [0°, 89.9°] with its error estimate
+  (:func:`brdfnorm.albedo`), and the normalized curve α·E(θ_o) — the energy kept under the chosen convention;
+* the readouts: E at the current view, the factors α = 1/E at ``normal``, ``max`` and ``view``
+  (:func:`brdfnorm.normalize`), and an energy verdict (does max E exceed 1 beyond its error?);
+* the normalized lobe α·f(L, V)(N·L) for L in the plane of incidence (a polar plot) and over the hemisphere
+  (a 3-D surface, in polar coordinates about the mirror direction so a narrow lobe is resolved).
+
+The coarse pass (``quality="coarse"``) is what a slider move waits for; the fine pass refines every number in the
+background. Both are *cancellable*: the model's ``evaluate``/``projected`` are wrapped on a private copy so that
+the integrator's next batch raises :class:`Superseded` once the client has moved on (``check``).
+
+Errors of factors: with |E − Ê| ≤ ε, |1/E − 1/Ê| ≤ ε/(Ê(Ê − ε)) — a bound, not a first-order estimate.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import albedo, normalize
+from ..codegen import emit
+from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, ParameterError, ParameterTypeError
+from ..fit import fit
+from ..models.base import Model, mirror
+from ..normalization import THETA_MAX
+from ..validate import choice, count, real_array, real_number, short_repr
+
+CONVENTIONS = ("normal", "max", "view")
+FIT_LANGUAGES = ("glsl", "hlsl")
+#: Tolerance of the factors the fit panel samples: far below the fit's 1e-3 target, and reachable in float64
+#: even for the narrowest lobes (GGX at roughness 0.01 cannot reach 1e-9).
+FIT_RTOL = 1e-7
+#: Slider upper end for a parameter declared without one (the built-in exponents: n ≥ 0, usable to 1e5).
+UNBOUNDED_SLIDER_MAX = 1e4
+#: A view angle of 90° is the horizon, where the albedo integral degenerates (as in ``normalize``).
+VIEW_MAX_DEG = float(np.degrees(THETA_MAX))
+
+
+class Superseded(Exception):  # noqa: N818 — not an error: the client asked for something newer
+    """The client has sent a newer request; this computation is abandoned."""
+
+
+@dataclass(frozen=True)
+class Quality:
+    curve_points: int
+    curve_rtol: float
+    point_rtol: float
+    max_rtol: float | None  # None: the max is the curve's grid maximum (a lower bound), not searched
+    max_evaluations: int
+
+
+QUALITIES = {
+    "coarse": Quality(curve_points=19, curve_rtol=1e-3, point_rtol=1e-6, max_rtol=None, max_evaluations=2_000_000),
+    "fine": Quality(curve_points=61, curve_rtol=1e-8, point_rtol=1e-10, max_rtol=1e-8, max_evaluations=2_000_000),
+}
+
+
+# -- parameters ---------------------------------------------------------------------------------------------
+
+def describe_parameters(model: Model) -> list[dict]:
+    """Declared parameters with the slider each gets (log scale where the range spans decades)."""
+    described = []
+    for p in model.parameters:
+        entry = {"name": p.name, "kind": p.kind, "default": _plain(p.default), "minimum": p.minimum,
+                 "maximum": p.maximum, "strict": p.strict, "description": p.description}
+        if getattr(p, "choices", None):
+            entry["choices"] = [str(c) for c in p.choices]
+        if p.kind == "float":
+            low = p.minimum if p.minimum is not None else min(0.0, float(p.default))
+            high = p.maximum if p.maximum is not None else max(UNBOUNDED_SLIDER_MAX, float(p.default))
+            log = high > 0 and (p.maximum is None or (low > 0 and high / low >= 1e3))
+            if log:  # a slider spans at most six decades (α ≥ 1e-12 is a limit, not a useful place to drag to)
+                low = max(low, high * 1e-6) if low > 0 else max(1.0, high * 1e-6)
+            entry["slider"] = {"low": low, "high": high, "log": log}
+        described.append(entry)
+    return described
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, tuple):
+        return [float(v) for v in value]
+    if isinstance(value, (bool, str)):
+        return value
+    return float(value)  # type: ignore[arg-type]
+
+
+def bind_parameters(model: Model, raw: object) -> Model:
+    """The model bound to the page's values: one number per float, [R, G, B] per colour, true/false, a choice's
+    name. Arrays are refused where one number is meant (a sweep from a request would multiply the work); the
+    ranges, colour components and choices are checked by the parameters themselves."""
+    if raw is None:
+        return model
+    if not isinstance(raw, dict):
+        raise ArgumentTypeError("params must be an object of name: value", where="params")
+    values: dict[str, object] = {}
+    for name, value in raw.items():
+        p = model.parameter(str(name)[:80])
+        where = f"parameter {p.name}"
+        if p.kind == "float":
+            number = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
+            if number.ndim:
+                raise ParameterTypeError(f"expected one number, got {short_repr(value)}", where=where)
+            value = float(number)
+        elif p.kind == "color":
+            if not (isinstance(value, list) and len(value) == 3):
+                raise ParameterTypeError(f"expected [R, G, B], got {short_repr(value)}", where=where)
+            value = tuple(real_array(value, where, error=ParameterError, type_error=ParameterTypeError).tolist())
+        elif p.kind == "bool" and not isinstance(value, bool):
+            raise ParameterTypeError(f"expected true or false, got {short_repr(value)}", where=where)
+        elif p.kind not in ("float", "color", "bool") and not isinstance(value, str):  # a choice: its name
+            raise ParameterTypeError(f"expected one of the choices, got {short_repr(value)}", where=where)
+        values[p.name] = value
+    return model.with_params(**values)
+
+
+def view_angle(raw: object) -> float:
+    """The page's view angle θ_o in degrees, checked: [0°, 89.9°]."""
+    degrees = real_number(raw, "view")
+    if not 0.0 <= degrees <= VIEW_MAX_DEG:
+        raise ArgumentError(f"view angle must be in [0, {VIEW_MAX_DEG:g}] degrees, got {degrees:g}", where="view")
+    return degrees
+
+
+# -- cancellation -------------------------------------------------------------------------------------------
+
+def cancellable(model: Model, check: Callable[[], None]) -> Model:
+    """A private copy of ``model`` whose evaluations first call ``check`` (which raises :class:`Superseded`).
+
+    The wrappers are instance attributes, so the copy keeps its class (method selection such as Blinn-Phong's
+    ``series`` is unchanged) and ``with_params`` copies carry them along.
+    """
+    copy = model.with_params()
+    evaluate, projected = copy.evaluate, copy.projected
+
+    def checked_evaluate(L, V, params):
+        check()
+        return evaluate(L, V, params)
+
+    def checked_projected(L, V, params):
+        check()
+        return projected(L, V, params)
+
+    copy.evaluate = checked_evaluate  # type: ignore[method-assign]
+    copy.projected = checked_projected  # type: ignore[method-assign]
+    return copy
+
+
+# -- numbers as text ----------------------------------------------------------------------------------------
+
+def round_up_error(error: float) -> float:
+    """The error to one significant digit, rounded *up* (a shown error is never smaller than the estimate)."""
+    if not (math.isfinite(error) and error > 0):
+        return error
+    exponent = math.floor(math.log10(error))
+    mantissa = math.ceil(error / 10.0**exponent * (1 - 1e-12))
+    return mantissa * 10.0**exponent
+
+
+def format_with_error(value: float, error: float) -> str:
+    """``value ± error`` with the value's digits down to the error's first significant digit."""
+    if not math.isfinite(value):
+        return "not finite"
+    if not (math.isfinite(error) and error > 0):
+        return f"{value:.12g}" + ("" if error == 0 else " ± ?")
+    shown = round_up_error(error)
+    leading = math.floor(math.log10(abs(value))) if value else math.floor(math.log10(shown))
+    digits = min(15, max(1, leading - math.floor(math.log10(shown)) + 1))
+    # '#' keeps trailing zeros (they are digits shown); a bare trailing point is dropped.
+    return f"{value:#.{digits}g}".replace(".e", "e").rstrip(".") + f" ± {shown:.1g}"
+
+
+def _readout(values: np.ndarray, errors: np.ndarray) -> dict:
+    """Per-channel numbers and one text (a single number where the channels agree)."""
+    values, errors = np.atleast_1d(values).astype(float), np.atleast_1d(errors).astype(float)
+    same = bool(np.all(values == values[0]))
+    if same:
+        text = format_with_error(float(values[0]), float(errors.max()))
+    else:
+        text = " · ".join(f"{c} {format_with_error(float(v), float(e))}" for c, v, e in zip("RGB", values, errors,
+                                                                                                 strict=False))
+    return {"value": values.tolist(), "error": errors.tolist(), "text": text}
+
+
+def factor_bound(E: np.ndarray, error: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """α = 1/E and a bound on its error (infinite where the error could reach E)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        factor = 1.0 / E
+        bound = np.where(E > error, error / (np.abs(E) * (np.abs(E) - error)), np.inf)
+    return factor, bound
+
+
+# -- the view -----------------------------------------------------------------------------------------------
+
+def _direction(theta_rad: float) -> np.ndarray:
+    return np.array([math.sin(theta_rad), 0.0, math.cos(theta_rad)])
+
+
+def _finite(values: np.ndarray) -> list:
+    return [None if not math.isfinite(v) else v for v in np.asarray(values, dtype=float).ravel().tolist()]
+
+
+def energy_verdict(E_max: float, error: float, theta_deg: float, searched: bool) -> dict:
+    """Does the lobe reflect more than it receives? max E against 1, beyond its error estimate.
+
+    The hook for ``brdfnorm check``'s verdict once that module exists; until then, the albedo maximum decides.
+    """
+    where = f"max E = {format_with_error(E_max, error)} at θ_o = {theta_deg:.3g}°"
+    if E_max - error > 1.0:
+        verdict = "gains energy"
+    elif not searched:
+        verdict = "pending"
+    elif E_max + error <= 1.0:
+        verdict = "conserves energy"
+    else:
+        verdict = "at the limit (max E within its error of 1)"
+    return {"verdict": verdict, "text": f"{verdict}: {where}" + ("" if searched else " (grid, refining)")}
+
+
+def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
+                  check: Callable[[], None] = lambda: None, params: object = None) -> dict:
+    """Everything the page shows for one state; see the module docstring.
+
+    ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
+    outside a file's slider range) are reported with the computation's own.
+    """
+    choice(convention, CONVENTIONS, "convention")
+    choice(quality, tuple(QUALITIES), "quality")
+    q = QUALITIES[quality]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = bind_parameters(model, params)
+        m = cancellable(model, check)
+        kwargs = dict(max_evaluations=q.max_evaluations)
+        theta_v = math.radians(view_deg)
+        points = albedo(m, np.array([theta_v, 0.0]), rtol=q.point_rtol, **kwargs)
+        grid_deg = np.linspace(0.0, VIEW_MAX_DEG, q.curve_points)
+        curve = albedo(m, np.radians(grid_deg), rtol=q.curve_rtol, **kwargs)
+        E_view, err_view = points.value[0], points.error[0]
+        E_normal, err_normal = points.value[1], points.error[1]
+        if q.max_rtol is None:  # the grid's maximum: a lower bound on the true one
+            energy = curve.value.max(axis=-1)
+            i = int(np.argmax(energy))
+            E_max, err_max, theta_max, searched = curve.value[i], curve.error[i], float(grid_deg[i]), False
+        else:
+            result = normalize(m, at="max", rtol=q.max_rtol)
+            E_max, err_max = result.albedo[0, 0], result.error[0, 0]
+            theta_max, searched = float(np.degrees(result.theta[0, 0])), True
+        check()
+        chosen = {"normal": (E_normal, err_normal), "max": (E_max, err_max), "view": (E_view, err_view)}
+        alpha = factor_bound(*chosen[convention])[0] if convention != "view" else None
+        lobe_alpha = alpha if alpha is not None else factor_bound(E_view, err_view)[0]
+        plane, surface = _lobes(m, theta_v, lobe_alpha)
+    readouts = {"albedo": {**_readout(E_view, err_view), "theta_deg": view_deg}}
+    for name, (E, err) in (("normal", (E_normal, err_normal)), ("max", (E_max, err_max)),
+                           ("view", (E_view, err_view))):
+        readouts[f"factor_{name}"] = _readout(*factor_bound(E, err))
+    max_channel = int(np.argmax(E_max))
+    if not searched:  # the grid's largest channel is a lower bound of the true maximum: its factor an upper one
+        lower = float(E_max[max_channel] - err_max[max_channel])
+        channel = f"{'RGB'[max_channel]}, " if len(set(np.atleast_1d(E_max).tolist())) > 1 else ""
+        readouts["factor_max"]["text"] = (f"≤ {1.0 / lower:.6g} ({channel}grid max, refining)" if lower > 0
+                                          else "refining…")
+    readouts["factor_max"]["theta_deg"] = theta_max
+    readouts["energy"] = energy_verdict(float(E_max[max_channel]), float(err_max[max_channel]), theta_max, searched)
+    normalized = (curve.value * alpha) if alpha is not None else np.ones_like(curve.value)
+    messages = sorted({str(w.message).splitlines()[0] for w in caught})
+    return {
+        "quality": quality, "convention": convention, "view_deg": view_deg, "channels": model.channels,
+        "method": curve.method,
+        "curve": {"theta_deg": grid_deg.tolist(), "value": _columns(curve.value), "error": _columns(curve.error),
+                  "normalized": _columns(normalized), "rtol": q.curve_rtol},
+        "readouts": readouts, "lobe": plane, "surface": surface, "warnings": messages,
+    }
+
+
+def _columns(values: np.ndarray) -> list[list]:
+    """(T, C) to one list per channel (a single one where all channels are equal)."""
+    values = np.asarray(values, dtype=float)
+    if values.ndim == 1:
+        values = values[:, None]
+    if np.all(values == values[:, :1]):
+        values = values[:, :1]
+    return [_finite(values[:, c]) for c in range(values.shape[1])]
+
+
+def _lobes(model: Model, theta_v: float, alpha: np.ndarray) -> tuple[dict, dict]:
+    """α·f(L, V)(N·L) (largest channel) in the plane of incidence and over the hemisphere.
+
+    The plane's samples are uniform plus geometrically graded about the mirror direction (t = −θ_o), so a lobe
+    a hundredth of a degree wide is still drawn; the surface uses polar coordinates (a, b) about the mirror
+    direction with a ∝ (i/N)², for the same reason.
+    """
+    V = _direction(theta_v)
+    offsets = np.geomspace(1e-4, np.pi, 90)
+    t = np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, 241), -theta_v + offsets, -theta_v - offsets, [-theta_v]])
+    t = np.unique(t[(t >= -np.pi / 2) & (t <= np.pi / 2)])
+    L = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+    with np.errstate(all="ignore"):
+        r = (model.eval(L, V) * np.asarray(alpha)).max(axis=-1) * np.cos(t)
+    plane = {"t_deg": np.degrees(t).tolist(), "r": _finite(np.where(np.cos(t) > 0, r, 0.0))}
+    P = mirror(V)
+    e1 = np.cross(P, [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(P, e1)
+    a = np.pi * np.linspace(0.0, 1.0, 25) ** 2
+    b = np.linspace(0.0, 2 * np.pi, 49)
+    A, B = np.meshgrid(a, b, indexing="ij")
+    L3 = (np.cos(A)[..., None] * P + np.sin(A)[..., None] * (np.cos(B)[..., None] * e1 + np.sin(B)[..., None] * e2))
+    with np.errstate(all="ignore"):
+        cos_l = L3[..., 2]
+        r3 = (model.eval(L3, np.broadcast_to(V, L3.shape)) * np.asarray(alpha)).max(axis=-1) * cos_l
+        r3 = np.where(cos_l > 0, r3, 0.0)
+    xyz = r3[..., None] * L3
+    # A drawing needs ~5 digits: rounding to 1e-5 of the lobe's size keeps the page's JSON small.
+    finite = np.isfinite(xyz)
+    scale = float(np.max(np.abs(xyz[finite]), initial=0.0)) or 1.0
+    step = 10.0 ** (math.floor(math.log10(scale)) - 5)
+    xyz = np.where(finite, np.round(xyz / step) * step, np.nan)
+    surface = {axis: [_finite(row) for row in xyz[..., k]] for k, axis in enumerate("xyz")}
+    surface["view"] = V.tolist()
+    return plane, surface
+
+
+# -- the fit panel ------------------------------------------------------------------------------------------
+
+def fit_factor(model: Model, parameter: object, low: object, high: object, samples: object, at: object,
+               language: object, scale: object = "linear", form: object = "auto",
+               check: Callable[[], None] = lambda: None, params: object = None) -> dict:
+    """Fit α(x) = 1/E over a float parameter's range (:func:`brdfnorm.fit.fit`, ``auto`` form by default) and
+    emit it (:func:`brdfnorm.codegen.emit`); the other parameters at the page's values ``params``."""
+    p = model.parameter(str(parameter)[:80])
+    if p.kind != "float":
+        raise ArgumentError(f"only float parameters can be fitted; {p.name} is {p.kind}", where="parameter")
+    low, high = real_number(low, "low"), real_number(high, "high")
+    if not low < high:
+        raise ArgumentError(f"the range needs low < high, got [{low:g}, {high:g}]", where="range")
+    samples = count(samples, "samples", minimum=4, maximum=64)
+    choice(at, ("normal", "max"), "at")
+    choice(language, FIT_LANGUAGES, "language")
+    choice(scale, ("linear", "log"), "scale")
+    if scale == "log" and low <= 0:
+        raise ArgumentError("a log scale needs low > 0", where="scale")
+    if not isinstance(form, str) or len(form) > 40:
+        raise ArgumentError("form must be a form name such as auto or rational:2/1", where="form")
+    values = np.geomspace(low, high, samples) if scale == "log" else np.linspace(low, high, samples)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = cancellable(bind_parameters(model, params), check)
+        result = normalize(m, at=at, sweep={p.name: values}, rtol=FIT_RTOL)
+        factor = result.factor[:, 0, :]
+        if not np.allclose(factor, factor[:, :1], rtol=1e-12, atol=0.0):
+            raise ArgumentError("the channels have different factors; set the colour parameters equal to fit",
+                                where="parameter")
+        y = factor[:, 0]
+        if not np.all(np.isfinite(y)) or np.any(y <= 0):
+            raise EvaluationError("the factor is not finite and positive at every sample (an albedo of 0?)",
+                                  where="range")
+        check()
+        fitted = fit(values, y, form=form, metric="minimax-rel", target=1e-3, names=(p.name, "cos_theta_o"))
+        code = emit(fitted, language, model.name, variable=p.name)
+    return {"code": code, "form": fitted.form, "expression": fitted.expression,
+            "max_rel_error": fitted.max_rel_error, "samples": fitted.samples, "at": at, "parameter": p.name,
+            "range": [float(values[0]), float(values[-1])], "language": language,
+            "warnings": fitted.warnings + sorted({str(w.message).splitlines()[0] for w in caught})}

@@ -1,0 +1,419 @@
+"""The explorer's web server: a Starlette application served by uvicorn on a socket bound before start-up.
+
+Routes (nothing else is served, and no path from a request is ever opened):
+
+* ``GET /`` the page; ``GET /static/{app.js,style.css,plotly.min.js}`` its assets — plotly.js is the copy the
+  ``plotly`` Python package ships, so the page needs no network.
+* ``GET /api/models`` the catalog (:mod:`.catalog`); ``GET /api/models/{id}`` one model's declared parameters.
+* ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`), ``POST /api/fit`` the fit panel.
+* ``GET /api/events`` server-sent events: a watched ``.brdf`` file was reloaded (or failed to compile).
+
+Heavy work runs in worker threads, one computation at a time in each of two lanes — the coarse passes a slider
+move waits for, and the background (refinements, fits) — so a move never queues behind a long refinement.
+Each request carries the client's id and a *generation* number; a request with a newer generation makes the
+running one raise :class:`.compute.Superseded` at its next integrand batch (and so does a client that hangs
+up), so stale work never holds a lane. A bad request gets a JSON ``{"error": ...}`` with status 4xx; an
+unexpected exception a 500 — the server keeps serving either way.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import json
+import logging
+import os
+import signal
+import socket
+import threading
+import time
+from collections import OrderedDict
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import anyio
+import anyio.to_thread
+import uvicorn
+import watchfiles
+from starlette.applications import Starlette
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
+from starlette.routing import Route
+
+from ..errors import ArgumentError, BrdfnormError, ModelNotFoundError
+from ..output.formats import jsonable
+from .catalog import Catalog, Entry
+from .compute import (
+    CONVENTIONS,
+    FIT_LANGUAGES,
+    VIEW_MAX_DEG,
+    Superseded,
+    describe_parameters,
+    evaluate_view,
+    fit_factor,
+    view_angle,
+)
+
+STATIC = Path(__file__).with_name("static")
+#: Largest request body accepted (a page request is well under 1 KiB).
+MAX_BODY = 64 * 1024
+#: Clients whose generation numbers are remembered (the oldest are forgotten first).
+MAX_CLIENTS = 1024
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1", "[::1]")
+#: The page runs only its own two scripts (plotly's WebGL layer, regl, compiles its draw calls with
+#: ``new Function``, hence 'unsafe-eval'; plotly sets inline styles) and talks only to this server.
+PAGE_POLICY = ("default-src 'none'; script-src 'self' 'unsafe-eval'; style-src 'self' 'unsafe-inline'; "
+               "img-src 'self' data: blob:; connect-src 'self'; font-src 'self' data:; base-uri 'none'; "
+               "form-action 'none'; frame-ancestors 'none'")
+log = logging.getLogger("brdfnorm.explore")
+
+
+def plotly_js() -> Path:
+    """plotly.min.js from the ``plotly`` package's data (the same file ``plotly.offline`` embeds)."""
+    import plotly
+
+    return Path(plotly.__file__).with_name("package_data") / "plotly.min.js"
+
+
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
+class RequestError(Exception):
+    """A request the server refuses before any model is involved (status and message)."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class Explorer:
+    """The application state: the catalog, the clients' generations, the event subscribers, the watcher."""
+
+    def __init__(self, catalog: Catalog, *, loopback_only: bool = True, host: str = "127.0.0.1") -> None:
+        self.catalog = catalog
+        self.generations: OrderedDict[tuple[str, str], int] = OrderedDict()
+        self.subscribers: set[asyncio.Queue] = set()
+        self.lanes: dict[str, anyio.CapacityLimiter] = {}
+        self.stop_watching = asyncio.Event()
+        routes = [
+            Route("/", self.page),
+            Route("/static/{name}", self.static),
+            Route("/api/models", self.models),
+            Route("/api/models/{model_id:path}", self.model),
+            Route("/api/evaluate", self.evaluate, methods=["POST"]),
+            Route("/api/fit", self.fit, methods=["POST"]),
+            Route("/api/events", self.events),
+        ]
+        # Against DNS rebinding: a page from another site that resolves its name to 127.0.0.1 is refused.
+        allowed = [*LOOPBACK_NAMES, host, f"[{host}]"]
+        middleware = [Middleware(TrustedHostMiddleware, allowed_hosts=allowed)] if loopback_only else []
+        self.app = Starlette(routes=routes, middleware=middleware, lifespan=self.lifespan)
+        self.static_files = {"app.js": (STATIC / "app.js", "text/javascript"),
+                             "style.css": (STATIC / "style.css", "text/css"),
+                             "plotly.min.js": (plotly_js(), "text/javascript")}
+
+    @contextlib.asynccontextmanager
+    async def lifespan(self, app: Starlette):
+        # Two lanes of one computation each: a slider's coarse pass never queues behind a refinement or a fit
+        # (another tab's, say, which may take seconds); a client's own stale work is cancelled anyway.
+        self.lanes = {"coarse": anyio.CapacityLimiter(1), "background": anyio.CapacityLimiter(1)}
+        self.stop_watching = asyncio.Event()
+        watcher = asyncio.create_task(self.watch())
+        try:
+            yield
+        finally:
+            self.stop_watching.set()
+            watcher.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await watcher
+
+    # -- pages and assets ---------------------------------------------------------------------------------------
+    async def page(self, request: Request) -> Response:
+        return FileResponse(STATIC / "index.html", media_type="text/html; charset=utf-8",
+                            headers={"Cache-Control": "no-cache", "Content-Security-Policy": PAGE_POLICY,
+                                     "X-Content-Type-Options": "nosniff"})
+
+    async def static(self, request: Request) -> Response:
+        name = request.path_params["name"]
+        if name not in self.static_files:
+            return JSONResponse({"error": "not found"}, status_code=404)
+        path, media_type = self.static_files[name]
+        return FileResponse(path, media_type=media_type, headers={"Cache-Control": "no-cache"})
+
+    async def models(self, request: Request) -> Response:
+        return JSONResponse({"models": [entry.describe() for entry in self.catalog.entries()],
+                             "conventions": list(CONVENTIONS), "languages": list(FIT_LANGUAGES),
+                             "view_max_deg": VIEW_MAX_DEG})
+
+    async def model(self, request: Request) -> Response:
+        async def describe() -> dict:
+            entry = self.catalog.entry(request.path_params["model_id"])
+            model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
+            return {**entry.describe(), "name": model.name, "formula": model.formula, "channels": model.channels,
+                    "parameters": describe_parameters(model), "error": entry.error}
+
+        return await self.respond(describe)
+
+    # -- computations -------------------------------------------------------------------------------------------
+    async def evaluate(self, request: Request) -> Response:
+        async def run() -> dict:
+            body = await read_json(request)
+            check = self.claim("view", body, request)  # first: a newer move must cancel older work at once
+            entry, model = await self.model_of(body)
+            view = view_angle(body.get("view"))
+            received = time.perf_counter()
+            started = []
+
+            def timed() -> dict:
+                started.append(time.perf_counter())
+                return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
+                                     check, params=body.get("params"))
+
+            lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
+            result = await self.compute(request, check, timed, lane)
+            finished = time.perf_counter()
+            timing = {"queued_ms": 1e3 * (started[0] - received), "compute_ms": 1e3 * (finished - started[0])}
+            return {**result, "model": {"id": entry.id, "version": entry.version, "error": entry.error},
+                    "generation": body["generation"], "timing": timing}
+
+        return await self.respond(run)
+
+    async def fit(self, request: Request) -> Response:
+        async def run() -> dict:
+            body = await read_json(request)
+            check = self.claim("fit", body, request)
+            entry, model = await self.model_of(body)
+            result = await self.compute(request, check, lambda: fit_factor(
+                model, body.get("parameter"), body.get("low"), body.get("high"), body.get("samples"), body.get("at"),
+                body.get("language"), body.get("scale", "linear"), body.get("form", "auto"), check,
+                params=body.get("params")), "background")
+            return {**result, "generation": body["generation"]}
+
+        return await self.respond(run)
+
+    async def model_of(self, body: dict) -> tuple[Entry, object]:
+        """The entry and its model; a first use compiles it (in a thread, outside the computation queue)."""
+        entry = self.catalog.entry(body.get("model"))
+        model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
+        return entry, model
+
+    async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict], lane: str) -> dict:
+        """Run ``work`` in a worker thread, one at a time per lane; a client that hangs up cancels it (``check``)."""
+
+        async def watch_disconnect() -> None:
+            while (await request.receive())["type"] != "http.disconnect":
+                pass
+            check.gone.set()  # type: ignore[attr-defined]
+
+        watcher = asyncio.create_task(watch_disconnect())
+        try:
+            return await anyio.to_thread.run_sync(work, limiter=self.lanes[lane])
+        finally:
+            watcher.cancel()
+
+    def claim(self, kind: str, body: dict, request: Request | None = None) -> Callable[[], None]:
+        """Record the request's generation for its client; the returned check raises once a newer one arrives
+        or the client has gone."""
+        client, generation = body.get("client"), body.get("generation")
+        if not isinstance(client, str) or not 0 < len(client) <= 64:
+            raise ArgumentError("client must be a short string", where="client")
+        if not isinstance(generation, int) or isinstance(generation, bool) or not 0 <= generation < 2**53:
+            raise ArgumentError("generation must be a whole number", where="generation")
+        key = (kind, client)
+        if generation < self.generations.get(key, -1):
+            raise Superseded
+        self.generations[key] = generation
+        self.generations.move_to_end(key)
+        while len(self.generations) > MAX_CLIENTS:
+            self.generations.popitem(last=False)
+        gone = threading.Event()
+
+        def check() -> None:
+            if gone.is_set() or self.generations.get(key, generation) != generation:
+                raise Superseded
+
+        check.gone = gone  # type: ignore[attr-defined]
+        return check
+
+    async def respond(self, work: Callable[[], object]) -> Response:
+        """Run a handler body; map every failure to a JSON error so one bad request never stops the server."""
+        try:
+            return JSONResponse(jsonable(await work()))
+        except Superseded:
+            return JSONResponse({"stale": True}, status_code=409)
+        except RequestError as error:
+            return JSONResponse({"error": str(error)}, status_code=error.status)
+        except ModelNotFoundError as error:
+            return JSONResponse({"error": str(error)}, status_code=404)
+        except BrdfnormError as error:
+            return JSONResponse({"error": str(error).replace("\n", " ")}, status_code=400)
+        except Exception as error:  # noqa: BLE001 — logged, answered, and the server goes on
+            log.exception("internal error")
+            detail = str(error).splitlines()[0] if str(error) else ""
+            return JSONResponse({"error": f"internal error: {type(error).__name__}: {detail}"}, status_code=500)
+
+    # -- live files ---------------------------------------------------------------------------------------------
+    async def events(self, request: Request) -> Response:
+        queue: asyncio.Queue = asyncio.Queue(maxsize=64)
+        self.subscribers.add(queue)
+
+        async def stream():
+            try:
+                yield "retry: 1000\n\n"
+                while True:
+                    try:
+                        message = await asyncio.wait_for(queue.get(), timeout=10.0)
+                    except TimeoutError:
+                        yield ": keep-alive\n\n"
+                        continue
+                    if message is None:  # the server is stopping
+                        return
+                    yield f"data: {json.dumps(jsonable(message))}\n\n"
+            finally:
+                self.subscribers.discard(queue)
+
+        return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache"})
+
+    def close_streams(self) -> None:
+        """End every event stream (at shutdown, so that no connection holds the server open)."""
+        for queue in list(self.subscribers):
+            with contextlib.suppress(asyncio.QueueFull):
+                queue.put_nowait(None)
+
+    def publish(self, entry: Entry) -> None:
+        message = {"model": entry.id, "version": entry.version, "error": entry.error}
+        for queue in list(self.subscribers):
+            with contextlib.suppress(asyncio.QueueFull):  # a client that stopped reading misses events, no more
+                queue.put_nowait(message)
+
+    async def watch(self) -> None:
+        """Reload a watched file when it changes (its directory is watched: editors save by renaming)."""
+        watched = self.catalog.watched()
+        if not watched:
+            return
+        directories = sorted({path.parent for path in watched}, key=str)
+        async for changes in watchfiles.awatch(*directories, debounce=100, step=30, recursive=False,
+                                               stop_event=self.stop_watching, watch_filter=None):
+            touched = {os.path.realpath(path) for _, path in changes}
+            for path, entry in watched.items():
+                if str(path) in touched:
+                    await anyio.to_thread.run_sync(self.catalog.reload, entry)
+                    self.publish(entry)
+
+
+async def read_json(request: Request) -> dict:
+    """The request's JSON object, at most :data:`MAX_BODY` bytes.
+
+    Only ``Content-Type: application/json`` from this server's own pages: another site's page cannot send
+    that cross-origin without a CORS preflight, which this server never grants (no computing on its behalf).
+    """
+    origin = request.headers.get("origin")
+    if origin is not None and origin != f"{request.url.scheme}://{request.headers.get('host', '')}":
+        raise RequestError(403, "requests from other sites are refused")
+    if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
+        raise RequestError(415, "the request body must be JSON (Content-Type: application/json)")
+    length = request.headers.get("content-length")
+    if length is not None and (not length.isdigit() or int(length) > MAX_BODY):
+        raise RequestError(413, f"request body over {MAX_BODY} bytes")
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_BODY:
+            raise RequestError(413, f"request body over {MAX_BODY} bytes")
+    try:
+        body = json.loads(data)
+    except (ValueError, RecursionError):
+        raise RequestError(400, "the request body is not valid JSON") from None
+    if not isinstance(body, dict):
+        raise RequestError(400, "the request body must be a JSON object")
+    return body
+
+
+# -- serving --------------------------------------------------------------------------------------------------
+
+class _Server(uvicorn.Server):
+    """uvicorn's server, ending the explorer's event streams first at shutdown, and without re-raising the
+    signal that stopped it: Ctrl-C ends ``serve`` normally."""
+
+    def __init__(self, config: uvicorn.Config, explorer: Explorer) -> None:
+        super().__init__(config)
+        self.explorer = explorer
+
+    async def shutdown(self, sockets: list[socket.socket] | None = None) -> None:
+        self.explorer.close_streams()
+        await super().shutdown(sockets=sockets)
+
+    @contextlib.contextmanager
+    def capture_signals(self) -> Iterator[None]:
+        if threading.current_thread() is not threading.main_thread():
+            yield
+            return
+        previous = {sig: signal.signal(sig, self.handle_exit) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            yield
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening socket on (host, port); port 0 picks a free one."""
+    family = socket.AF_INET6 if ":" in host.strip("[]") else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host.strip("[]"), port))
+    except OSError as error:
+        sock.close()
+        where = "--port" if port else "--host"
+        raise ArgumentError(f"cannot listen on {host}:{port}: {error.strerror}", where=where) from None
+    sock.listen(128)
+    sock.set_inheritable(True)
+    return sock
+
+
+def url_of(sock: socket.socket) -> str:
+    host, port = sock.getsockname()[:2]
+    return f"http://[{host}]:{port}/" if ":" in host else f"http://{host}:{port}/"
+
+
+def make_server(catalog: Catalog, host: str) -> _Server:
+    explorer = Explorer(catalog, loopback_only=is_loopback(host), host=host.strip("[]"))
+    config = uvicorn.Config(explorer.app, log_level="warning", access_log=False, lifespan="on",
+                            timeout_graceful_shutdown=2)
+    return _Server(config, explorer)
+
+
+def serve(catalog: Catalog, sock: socket.socket) -> None:
+    """Serve until Ctrl-C (SIGINT) or SIGTERM."""
+    make_server(catalog, sock.getsockname()[0]).run(sockets=[sock])
+
+
+@contextlib.contextmanager
+def background(catalog: Catalog, host: str = "127.0.0.1", port: int = 0) -> Iterator[str]:
+    """Serve in a thread (tests, benchmarks); yields the URL and stops the server on exit."""
+    sock = bind(host, port)
+    server = make_server(catalog, host)
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    try:
+        for _ in range(400):
+            if server.started or not thread.is_alive():
+                break
+            threading.Event().wait(0.025)
+        if not server.started:
+            raise RuntimeError("the explorer server did not start")
+        yield url_of(sock)
+    finally:
+        server.should_exit = True
+        thread.join(timeout=10)
+        sock.close()
