@@ -132,3 +132,21 @@ def test_cli_reports_both_parts(capsys):
     for row in rows:
         assert abs(row["reflected"] + row["transmitted"] - row["albedo"]) < 1e-15
     assert abs(rows[0]["transmitted"] - _transmitted_at_normal_incidence(0.3, 1.5)) < 1e-9
+
+
+def test_glass_table_over_f0_reports_both_parts(tmp_path):
+    """`lut ggx-dielectric --axis f0=…`: the f0 axis sets η = (1 + √F0)/(1 − √F0); E = E_R + E_T per cell, and each
+    cell is the albedo at that η (an independent call)."""
+    from brdfnorm import lut
+
+    table = lut.compute(bn.load("ggx-dielectric"), {"mu": [0.2, 1.0], "alpha": [0.1, 0.6], "f0": [0.04, 0.1]},
+                        rtol=1e-9, average=False)
+    assert {"E", "E_R", "E_T"} <= set(table)
+    assert np.array_equal(table["E_R"] + table["E_T"], table["E"])
+    for k, f0 in enumerate([0.04, 0.1]):
+        eta = (1 + np.sqrt(f0)) / (1 - np.sqrt(f0))
+        direct = bn.albedo(bn.load("ggx-dielectric", alpha=0.6, eta=eta), np.arccos(0.2), rtol=1e-9)
+        assert abs(table["E"][0, 1, k] - direct.value[0]) <= 2e-9
+        assert abs(table["E_T"][0, 1, k] - direct.transmitted[0]) <= 2e-9
+    with pytest.raises(ArgumentError, match="f0"):
+        lut.compute(bn.load("ggx-dielectric"), {"mu": [1.0], "f0": [1.5]})

@@ -12,7 +12,7 @@ import typer
 
 from ..errors import ArgumentError, OutputError
 from ..lut import formats
-from ..lut.table import DIRECTION_AXES, GRIDS, compute, grid_values
+from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
 from ..output import write_file
 from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_range, progress_bar
@@ -98,7 +98,7 @@ def lut_command(
         m = load_model(model, param)
         for axis_name in axes:
             if axis_name not in DIRECTION_AXES:
-                m.parameter(axis_name)  # an unknown axis is a one-line error before any work
+                m.parameter(axis_parameter(m, axis_name, np.array([0.5]))[0])  # unknown: one line, before any work
         if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
             raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
         table_names = table or None

@@ -83,6 +83,8 @@ class CellResult:
     error: np.ndarray
     evaluations: np.ndarray
     converged: np.ndarray
+    reflected: np.ndarray | None = None  # (K, C) the parts of a BSDF's albedo (models that transmit)
+    transmitted: np.ndarray | None = None
 
 
 def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarray], *, rtol: float,
@@ -101,7 +103,9 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
             warnings.simplefilter("ignore", UserWarning)
             parts.append(albedo(bound, theta[cells], over=over, rtol=rtol, method=method))
     return CellResult(*(np.concatenate([getattr(r, key) for r in parts])
-                        for key in ("value", "error", "evaluations", "converged")))
+                        for key in ("value", "error", "evaluations", "converged")),
+                      *(None if parts[0].reflected is None else np.concatenate([getattr(r, key) for r in parts])
+                        for key in ("reflected", "transmitted")))
 
 
 class SchlickWeighted(Model):
@@ -158,6 +162,18 @@ def _single_channel(value: np.ndarray, error: np.ndarray, model: Model) -> tuple
 ProgressCallback = Callable[[int, int], None]
 
 
+def axis_parameter(model: Model, name: str, values: np.ndarray) -> tuple[str, np.ndarray]:
+    """The model parameter an axis sets, and its values. An ``f0`` axis sets ``eta`` on a model that has an
+    index but no ``f0`` (the dielectrics): η = (1 + √F0)/(1 − √F0), F0 the reflectance at normal incidence —
+    it spreads η where materials are."""
+    if name == "f0" and "f0" not in {p.name for p in model.parameters} and "eta" in {p.name for p in model.parameters}:
+        if np.any(values <= 0) or np.any(values >= 1):
+            raise ArgumentError("f0 must lie in (0, 1) (η = (1 + √F0)/(1 − √F0))", where="axes")
+        root = np.sqrt(values)
+        return "eta", (1.0 + root) / (1.0 - root)
+    return name, values
+
+
 def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapping[str, float]):
     if not axes:
         raise ArgumentError("give at least one axis", where="axes")
@@ -172,7 +188,7 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
         if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
             raise ArgumentError(f"axis {name!r} needs a non-empty list of finite numbers", where="axes")
         if name not in DIRECTION_AXES:
-            parameter = model.parameter(name)
+            parameter = model.parameter(axis_parameter(model, name, np.array([0.5]))[0])
             if parameter.kind != "float":
                 raise ArgumentError(f"only float parameters can be axes; {name} is {parameter.kind}", where="axes")
         values[name] = array
@@ -194,7 +210,7 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
             raise ArgumentError("theta must lie in [0, π/2) radians ([0°, 90°) on the command line)", where="axes")
     for name, array in evaluated.items():
         if name not in DIRECTION_AXES:
-            resolve(model.parameters, {name: array}, where=f"axis {name}")  # range check before any work
+            resolve(model.parameters, dict([axis_parameter(model, name, array)]), where=f"axis {name}")  # before work
     return values, evaluated, dname
 
 
@@ -208,18 +224,23 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
     theta_flat = np.broadcast_to(theta_grid, shape).ravel()
     flat = {n: np.broadcast_to(g, shape).ravel() for n, g in param_grids.items()}
     value, error = np.empty(K), np.empty(K)
+    # A BSDF's parts: reflection (E_R) and transmission (E_T), E = E_R + E_T.
+    parts = {"E_R": np.empty(K), "E_T": np.empty(K)} if getattr(model, "transmits", False) else {}
     converged, evaluations = np.empty(K, dtype=bool), np.empty(K, dtype=np.int64)
     for start in range(0, K, CHUNK_CELLS):
         cells = slice(start, min(K, start + CHUNK_CELLS))
         result = compute_cells(model, theta_flat[cells], {n: v[cells] for n, v in flat.items()}, rtol=rtol,
                                method=method)
         value[cells], error[cells] = _single_channel(result.value, result.error, model)
+        if parts:
+            parts["E_R"][cells] = result.reflected[:, 0]
+            parts["E_T"][cells] = result.transmitted[:, 0]
         converged[cells], evaluations[cells] = result.converged, result.evaluations
         done += cells.stop - cells.start
         if progress is not None:
             progress(done, total)
     return (value.reshape(shape), error.reshape(shape), converged.reshape(shape), evaluations.reshape(shape),
-            done)
+            done, {name: part.reshape(shape) for name, part in parts.items()})
 
 
 def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
@@ -315,19 +336,20 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         return values.reshape(index)
 
     theta_grid = along(direction, _theta_of(direction, evaluated[direction]), names)
-    param_grids = {n: along(n, evaluated[n], names) for n in names if n != direction}
+    param_grids = dict(axis_parameter(model, n, along(n, evaluated[n], names)) for n in names if n != direction)
     others = [n for n in names if n != direction]
     avg_shape = tuple(len(evaluated[n]) for n in others)
     cells = int(np.prod(shape))
     total = cells * (1 + 2 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
-    E, E_error, converged, evaluations, done = _tabulate(model, shape, theta_grid, param_grids, rtol, method,
-                                                         done, total, progress)
-    tables = {"E": E, "E_error": E_error}
-    table_axes: dict[str, tuple[str, ...]] = {"E": tuple(names), "E_error": tuple(names)}
+    E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
+                                                                method, done, total, progress)
+    tables = {"E": E, "E_error": E_error, **parts}
+    table_axes: dict[str, tuple[str, ...]] = {name: tuple(names) for name in tables}
     avg_converged = None
     if average:
-        combos = {n: np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel() for n in others}
+        combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
+                      for n in others)
         avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
@@ -341,8 +363,8 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     if "dfg" in channels:
         dfg_models, dfg = split_sum_models(model)
         for name, weighted in dfg_models.items():
-            value, error, ok, count, done = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
-                                                      done, total, progress)
+            value, error, ok, count, done, _ = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
+                                                         done, total, progress)
             tables[name], tables[f"{name}_error"] = value, error
             table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
             converged &= ok
