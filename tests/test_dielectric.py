@@ -150,3 +150,17 @@ def test_glass_table_over_f0_reports_both_parts(tmp_path):
         assert abs(table["E_T"][0, 1, k] - direct.transmitted[0]) <= 2e-9
     with pytest.raises(ArgumentError, match="f0"):
         lut.compute(bn.load("ggx-dielectric"), {"mu": [1.0], "f0": [1.5]})
+
+
+def test_report_glass_numbers_are_the_albedo():
+    """The report's rough-glass sentence quotes min E of each table: those minima against direct albedo calls."""
+    from brdfnorm.lut import compute, grid_values
+    from brdfnorm.report import microfacet
+
+    grid = grid_values(0.0, 1.0, microfacet.QUICK_GLASS_GRID, "texel")
+    for eta in microfacet.GLASS_ETAS:
+        table = compute(bn.load("ggx-dielectric", eta=eta), {"mu": grid, "alpha": grid}, rtol=1e-6, average=False,
+                        grid="texel")
+        i, j = np.unravel_index(np.argmin(table["E"]), table["E"].shape)
+        direct = bn.albedo(bn.load("ggx-dielectric", eta=eta, alpha=grid[j]), np.arccos(grid[i]), rtol=1e-9)
+        assert abs(table["E"][i, j] - direct.value[0]) <= table["E_error"][i, j] + direct.error[0]

@@ -134,7 +134,7 @@ def test_default_study_sections_and_images(default_report):
     assert page.section_ids == ["factors", "albedo", "folklore", "fits", "polar", "microfacet", "verify"]
     sources = [image["src"] for image in page.images]
     assert sources == ["albedo.png", "folklore.png", "fits.png", "polar.png", "microfacet-e.png",
-                       "microfacet-eavg.png", "microfacet-dfg.png"]
+                       "microfacet-eavg.png", "microfacet-dfg.png", "microfacet-glass.png"]
     for image in page.images:
         data = (default_report / image["src"]).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n"

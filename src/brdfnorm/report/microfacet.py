@@ -5,7 +5,8 @@ scattering microfacet lobe loses with f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (�
 E(μ, α) and its average E_avg(α) = 2∫ E(μ) μ dμ; Karis (2013) splits the Schlick-Fresnel lobe's integral into
 the "DFG" pair. This section shows E and 1 − E over (μ, α), E_avg(α), the DFG pair, and the white-furnace
 residual max |1 − E_total| of GGX with ``ms=kulla-conty`` as the tables it interpolates grow (16, 32, 64, and
-exact). It runs when the built-in ``ggx`` model is registered.
+exact), and the rough-glass albedo E = R + T of ``ggx-dielectric`` for η = 1.5 and 1/1.5. It runs when the
+built-in ``ggx`` model is registered.
 """
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ from .html import Section, figure, number, relative, table
 
 #: Table grid (μ × α) of the full report, and of the quick configuration (tests).
 GRID, QUICK_GRID = 32, 8
+#: The rough-glass tables (ggx-dielectric, reflection + transmission) seen from outside and from inside.
+GLASS_ETAS = (1.5, 1 / 1.5)
+GLASS_GRID, QUICK_GLASS_GRID, GLASS_RTOL = 10, 4, 1e-6
 #: Kulla–Conty table sizes whose furnace residual is shown (0: exact E and E_avg, no interpolation).
 FURNACE_TABLES = (16, 32, 64, 0)
 FURNACE_ALPHAS = (0.1, 0.5, 1.0)
@@ -87,6 +91,15 @@ def section(ctx) -> Section:
     dfg = ctx.image(_image_panels("microfacet-dfg.png", "the split-sum DFG pair of GGX", mu, alpha,
                                   [("DFG f0 term", lut["DFG_f0"]), ("DFG f90 term", lut["DFG_f90"])]))
     avg = ctx.image(_avg_figure(alpha, lut["E_avg"]))
+    glass_size = QUICK_GLASS_GRID if quick else GLASS_GRID
+    g_mu, g_alpha = grid_values(0.0, 1.0, glass_size, "texel"), grid_values(0.0, 1.0, glass_size, "texel")
+    glass = {eta: compute(load("ggx-dielectric", eta=eta), {"mu": g_mu, "alpha": g_alpha},
+                          clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=GLASS_RTOL, average=False, grid="texel")
+             for eta in GLASS_ETAS}
+    glass_image = ctx.image(_image_panels(
+        "microfacet-glass.png", "E = R + T of rough glass (ggx-dielectric) seen from outside and inside", g_mu,
+        g_alpha, [(f"E(μ, α), η = {eta:.4g}", glass[eta]["E"]) for eta in GLASS_ETAS]
+        + [(f"T(μ, α), η = {GLASS_ETAS[0]:.4g}", glass[GLASS_ETAS[0]]["E_T"])]))
     residuals = furnace_residuals(quick)
     rows = [["exact" if n == 0 else f"{n}×{n}", relative(value)] for n, value in residuals.items()]
     worst_loss = float(np.max(lut["1-E"]))
@@ -109,5 +122,12 @@ def section(ctx) -> Section:
         + ", ".join(f"{a:g}" for a in FURNACE_ALPHAS)
         + "} of GGX with <code>ms=kulla-conty</code>, by the size of the E and E_avg tables it interpolates.</p>\n"
         + table([["tables", "max |1 − E_total|"]], rows, table_id="microfacet-furnace")
+        + f"<p>Rough glass: the albedo E = R + T of the GGX dielectric interface (<code>brdfnorm lut "
+        f"ggx-dielectric</code>, energy form, {glass_size}×{glass_size} texels, rtol {GLASS_RTOL:g}) seen from "
+        "outside (η = 1.5) and from inside (η = 1/1.5, where total internal reflection sends everything past "
+        f"41.8° back), and the transmitted share T from outside. The energy single scattering loses is largest "
+        f"at grazing views and high roughness: min E = {float(np.min(glass[GLASS_ETAS[0]]['E'])):.4f} (η = 1.5), "
+        f"{float(np.min(glass[GLASS_ETAS[1]]['E'])):.4f} (η = 1/1.5).</p>\n"
+        + figure(glass_image, "E(μ, α) of rough glass from outside and inside, and T from outside.")
     )
     return Section("microfacet", "Microfacet energy: GGX's compensation tables", body)
