@@ -57,7 +57,7 @@ def normalization_result(job: CellsJob, at: str, name: str, cells: CellsResult) 
     return NormalizationResult(at=at, parameter=name, values=values, theta=cells.theta, phi=cells.phi,
                                albedo=cells.value, error=cells.error, factor=factor, method=cells.method,
                                over=job.settings.over, converged=cells.converged,  # type: ignore[arg-type]
-                               model=_model_name(job), params={**_bound(job), name: values},
+                               reason=cells.reason, model=_model_name(job), params={**_bound(job), name: values},
                                rtol=job.settings.rtol)
 
 
@@ -79,6 +79,7 @@ def albedo_result(job: CellsJob, cells: CellsResult) -> AlbedoResult:
                         converged=cells.converged, method=cells.method, theta=cells.theta, phi=cells.phi,
                         over=job.settings.over, params=params,  # type: ignore[arg-type]
                         nonfinite_fraction=cells.nonfinite_fraction, lower=cells.lower, upper=cells.upper,
+                        reason=cells.reason,
                         reflected=cells.reflected, transmitted=cells.transmitted,
                         model=_model_name(job), bound=_bound(job), rtol=job.settings.rtol)
 
