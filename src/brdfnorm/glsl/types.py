@@ -6,8 +6,8 @@ conversions: int → uint → float, componentwise for vectors) and §5.4 (const
 Every value is held at run time as a flat tuple of components, column-major for matrices and
 element after element for arrays, each component a Python scalar or a float64 / bool numpy array over
 the batch of direction pairs. Integers are held as float64 holding integral values (exact up to 2^53),
-so an int → float conversion costs nothing at run time; the 32-bit wrap-around of overflowing int/uint
-arithmetic is not imitated (conversions and ``%`` do follow 32-bit two's complement).
+so an int → float conversion costs nothing at run time; integer results wrap to 32 bits as GLSL's do
+(``-1u`` is 4294967295; see :func:`.compiler.components.wrap`).
 """
 
 from __future__ import annotations

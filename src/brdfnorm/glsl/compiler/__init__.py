@@ -23,24 +23,13 @@ The compiler is one class assembled from the parts a reader looks for:
 * :mod:`.lvalues` — assignments, ``++``/``--`` and what they assign to;
 * :mod:`.calls` — user and built-in function calls, constructors;
 * :mod:`.folds` — Mesa's constant folds; :mod:`.components` — run-time component arithmetic;
-* :mod:`.program` — :class:`Program` and :func:`compile_shader`.
+* :mod:`.program` — :class:`Compiler` (the parts assembled), :class:`Program` and :func:`compile_shader`.
 
 Every bound on the work and memory a shader may cost is in :mod:`..limits`.
 """
 
 from __future__ import annotations
 
-from .calls import CallsMixin
-from .declarations import DeclarationsMixin
-from .expressions import ExpressionsMixin
-from .lvalues import LValuesMixin
-from .operators import OperatorsMixin
-from .program import Program, compile_shader
-from .statements import StatementsMixin
-
-
-class Compiler(DeclarationsMixin, StatementsMixin, ExpressionsMixin, OperatorsMixin, LValuesMixin, CallsMixin):
-    """A GLSL shader compiled to closures: construct with the text, then :meth:`compile`."""
-
+from .program import Compiler, Program, compile_shader
 
 __all__ = ["Compiler", "Program", "compile_shader"]

@@ -1,4 +1,5 @@
-"""The compiled shader and the entry point: :func:`compile_shader` and :class:`Program`.
+"""The compiler assembled from its parts, the compiled shader and the entry point: :class:`Compiler`,
+:class:`Program` and :func:`compile_shader`.
 
 ``Program.brdf`` evaluates ``vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`` over arrays of direction
 pairs (lanes). Lanes are evaluated in chunks of at most :data:`..limits.LANE_COMPONENTS` divided by the
@@ -18,11 +19,21 @@ from ...errors import BrdfFileError, EvaluationError
 from ..limits import LANE_COMPONENTS
 from ..runtime import Frame
 from ..types import VEC3, Type
+from .calls import CallsMixin
+from .declarations import DeclarationsMixin
+from .expressions import ExpressionsMixin
+from .lvalues import LValuesMixin
+from .operators import OperatorsMixin
+from .statements import StatementsMixin
 from .values import Function
 
 SIGNATURE = "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"
 #: Components per lane assumed at least (temporaries of the expressions come on top of the variables).
 _MIN_COMPONENTS = 64
+
+
+class Compiler(DeclarationsMixin, StatementsMixin, ExpressionsMixin, OperatorsMixin, LValuesMixin, CallsMixin):
+    """A GLSL shader compiled to closures: construct with the text, then :meth:`compile`."""
 
 
 class Program:
@@ -32,7 +43,7 @@ class Program:
     functions called and uniforms read by the shader; ``chunk`` is the number of lanes evaluated at once.
     """
 
-    def __init__(self, compiler, entry: Function) -> None:
+    def __init__(self, compiler: Compiler, entry: Function) -> None:
         self._entry = entry
         self._inits = compiler.global_inits
         self._global_defaults = [compiler.global_defaults.get(slot) for slot in range(compiler.globals_count)]
@@ -146,8 +157,6 @@ def compile_shader(
     :class:`~brdfnorm.errors.BrdfFileError` for any problem in the text, a bound of :mod:`..limits` hit
     included.
     """
-    from . import Compiler  # the parts of the compiler, assembled in the package
-
     # The compiler allocates a few objects per node, all alive until it returns: the cyclic garbage collector
     # would rescan them again and again (compile time growing faster than the shader), so it pauses.
     collecting = gc.isenabled()
