@@ -137,11 +137,12 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
     fraction = gather("nonfinite_fraction") if job.settings.nonfinite == "zero" else None
     name = job.source.name
     if not np.all(converged):
-        # The same words as brdfnorm.albedo's warning: how many, and why (the reasons the integrals gave).
-        reason = gather("reason") if parts[0].reason is not None else np.where(converged, "", "budget")
-        why = ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged]))
+        # Why, as brdfnorm.albedo says it (rounding-limited, stalled, budget), where the method gives reasons.
+        reason = gather("reason").astype(str) if getattr(parts[0], "reason", None) is not None else None
+        why = (f"within {job.settings.max_evaluations} evaluations" if reason is None else
+               "(" + ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged])) + ")")
         warnings.warn(f"{name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not reach "
-                      f"rtol={job.settings.rtol:g} ({why}); see the error estimates", stacklevel=3)
+                      f"rtol={job.settings.rtol:g} {why}; see the error estimates", stacklevel=3)
     if fraction is not None and np.any(fraction > 0):
         warnings.warn(f"{name}: non-finite BRDF values counted as 0 on up to {100 * fraction.max():.3g}% of the "
                       "hemisphere's solid angle", stacklevel=3)

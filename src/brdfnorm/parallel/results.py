@@ -57,7 +57,7 @@ def normalization_result(job: CellsJob, at: str, name: str, cells: CellsResult) 
     return NormalizationResult(at=at, parameter=name, values=values, theta=cells.theta, phi=cells.phi,
                                albedo=cells.value, error=cells.error, factor=factor, method=cells.method,
                                over=job.settings.over, converged=cells.converged,  # type: ignore[arg-type]
-                               model=_model_name(job), params={**_bound(job), name: values},
+                               reason=cells.reason, model=_model_name(job), params={**_bound(job), name: values},
                                rtol=job.settings.rtol)
 
 
