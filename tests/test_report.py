@@ -383,7 +383,7 @@ def test_every_image_loads_in_chromium(default_report, tmp_path):
     assert probe is not None, "the probe script did not run"
     lines = probe.group(1).strip().splitlines()
     expected = [image["src"] for image in Page(index.read_text(encoding="utf-8")).images]
-    assert [line.split()[0] for line in lines] == expected and len(expected) == 4
+    assert [line.split()[0] for line in lines] == expected and len(expected) == 8
     for line in lines:
         src, complete, width, height = line.split()
         assert complete == "true" and int(width) > 0 and int(height) > 0, line

@@ -7,7 +7,7 @@ import webbrowser
 
 import typer
 
-from . import app
+from .application import app
 from .common import DEBUG_OPTION, guarded
 
 
