@@ -15,7 +15,17 @@ from ..lut import formats
 from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
 from ..output import write_file
 from .application import app
-from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_range, progress_bar
+from .common import (
+    CHECKPOINT_OPTION,
+    DEBUG_OPTION,
+    PARAM_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    guarded,
+    load_model,
+    parse_range,
+    progress_bar,
+)
 
 AXIS_HELP = ("An axis NAME=SPEC (repeatable; the tables are indexed in this order): mu (cos θ_o), theta "
              "(degrees) or a float parameter; SPEC is START:STOP:COUNT (spaced by --grid) or V,V,...")
@@ -65,6 +75,9 @@ def lut_command(
                                     "; - writes a text format to stdout (with --format)."),
     fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
     half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
+    workers: int = WORKERS_OPTION,
+    scheduler: str = SCHEDULER_OPTION,
+    checkpoint: str = CHECKPOINT_OPTION,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Energy-compensation tables: E, its error, E_avg and 1 − E (and DFG) over the axes, one file."""
@@ -104,7 +117,8 @@ def lut_command(
         table_names = table or None
         with progress_bar(f"{m.name}: table cells") as progress:
             result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
-                             average=not no_average, grid=grid, source=model, progress=progress)
+                             average=not no_average, grid=grid, source=model, progress=progress, workers=workers,
+                             scheduler=scheduler, checkpoint=checkpoint)
         data = formats.dumps(result, name, tables=table_names, half=half)
         unconverged = result.meta["unconverged"]
         if unconverged and not allow_unconverged:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -218,14 +219,39 @@ def _theta_of(direction_axis: str, values: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(values, -1.0, 1.0)) if direction_axis == "mu" else values
 
 
-def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, total, progress):
-    """E, its error, convergence and evaluation counts over the full grid, CHUNK_CELLS cells per call."""
+def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, total, progress, spread=None,
+              name="E"):
+    """E, its error, convergence and evaluation counts over the full grid (and a BSDF's parts E_R, E_T).
+
+    With ``spread`` (``workers``, ``scheduler``, ``checkpoint``) the cells go to :mod:`brdfnorm.parallel` — local
+    processes or a Dask cluster, each table resumable in its own checkpoint directory — where the model has a
+    source to travel as (built-ins and ``.brdf`` files; the split-sum weightings stay in this process).
+    Otherwise CHUNK_CELLS cells per call in this process. The values are the same either way."""
     K = int(np.prod(shape))
     theta_flat = np.broadcast_to(theta_grid, shape).ravel()
     flat = {n: np.broadcast_to(g, shape).ravel() for n, g in param_grids.items()}
+    transmits = getattr(model, "transmits", False)
+    job = None
+    if spread is not None:
+        from ..parallel import CellsJob, albedo_cells
+
+        try:
+            job = CellsJob.of(model, theta_flat, 0.0, flat, rtol=rtol, method=method)
+        except ArgumentError:
+            job = None
+    if job is not None:
+        checkpoint = spread.get("checkpoint")
+        cells = albedo_cells(job, workers=spread.get("workers"), scheduler=spread.get("scheduler"),
+                             checkpoint=None if checkpoint is None else Path(checkpoint) / name,
+                             on_progress=None if progress is None else (lambda d, t: progress(done + d, total)))
+        value, error = _single_channel(cells.value.reshape(K, -1), cells.error.reshape(K, -1), model)
+        parts = {"E_R": cells.reflected.reshape(K, -1)[:, 0], "E_T": cells.transmitted.reshape(K, -1)[:, 0]} \
+            if transmits else {}
+        return (value.reshape(shape), error.reshape(shape), cells.converged.reshape(shape),
+                cells.evaluations.reshape(shape), done + K, {n: p.reshape(shape) for n, p in parts.items()})
     value, error = np.empty(K), np.empty(K)
     # A BSDF's parts: reflection (E_R) and transmission (E_T), E = E_R + E_T.
-    parts = {"E_R": np.empty(K), "E_T": np.empty(K)} if getattr(model, "transmits", False) else {}
+    parts = {"E_R": np.empty(K), "E_T": np.empty(K)} if transmits else {}
     converged, evaluations = np.empty(K, dtype=bool), np.empty(K, dtype=np.int64)
     for start in range(0, K, CHUNK_CELLS):
         cells = slice(start, min(K, start + CHUNK_CELLS))
@@ -320,7 +346,8 @@ class Computed:
 
 def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
                    rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (),
-                   average: bool = True, progress: ProgressCallback | None = None) -> Computed:
+                   average: bool = True, progress: ProgressCallback | None = None,
+                   spread: Mapping[str, object] | None = None) -> Computed:
     """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors)."""
     clamp = dict(clamp or {})
     for channel in channels:
@@ -343,7 +370,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     total = cells * (1 + 2 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
     E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
-                                                                method, done, total, progress)
+                                                                method, done, total, progress, spread, "E")
     tables = {"E": E, "E_error": E_error, **parts}
     table_axes: dict[str, tuple[str, ...]] = {name: tuple(names) for name in tables}
     avg_converged = None
@@ -364,7 +391,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         dfg_models, dfg = split_sum_models(model)
         for name, weighted in dfg_models.items():
             value, error, ok, count, done, _ = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
-                                                         done, total, progress)
+                                                         done, total, progress, spread, name)
             tables[name], tables[f"{name}_error"] = value, error
             table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
             converged &= ok
@@ -420,11 +447,14 @@ class Lut(Mapping):
 
 def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
             rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
-            grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None) -> Lut:
+            grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None,
+            workers: int | None = 1, scheduler: str | None = None, checkpoint: str | None = None) -> Lut:
     """The energy tables of ``model`` over ``axes`` (name -> values; ``mu`` = cos θ_o or ``theta`` in radians,
     plus any float parameters), indexed in the order of ``axes``; ``source`` names the model as the user gave it
     (a built-in name or a ``.brdf`` path) in ``meta``. ``clamp`` raises axis values below a minimum
     before evaluation (μ ≥ 1e-4, α ≥ 1e-8 are the usual ones); ``grid`` only records how the values were made.
+    ``workers`` (None: all cores), ``scheduler`` (a Dask address) and ``checkpoint`` (a directory) spread the
+    cells as :func:`brdfnorm.parallel.albedo_cells` does; the default computes in this process.
 
     >>> import brdfnorm as bn
     >>> lut = compute(bn.load("blinn-phong"), {"mu": [0.5, 1.0], "n": [10.0, 100.0]}, rtol=1e-8)
@@ -433,8 +463,10 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     """
     from .. import __version__
 
+    spread = None if (workers == 1 and scheduler is None and checkpoint is None) else \
+        {"workers": workers, "scheduler": scheduler, "checkpoint": checkpoint}
     result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
-                            average=average, progress=progress)
+                            average=average, progress=progress, spread=spread)
     unconverged = int(np.count_nonzero(~result.converged))
     if result.avg_converged is not None:
         unconverged += int(np.count_nonzero(~result.avg_converged))
