@@ -329,6 +329,16 @@ def _read_code(data: bytes, path: str) -> Lut:
 
 # -- OpenEXR -----------------------------------------------------------------------------------------------
 
+def _openexr():
+    """The OpenEXR package (an optional extra), or a one-line error saying how to install it."""
+    try:
+        import OpenEXR
+    except ImportError:
+        raise ArgumentError("the .exr format needs the OpenEXR package: pip install 'brdfnorm[exr]' (or write .npz)",
+                            where="format") from None
+    return OpenEXR
+
+
 def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:
     if len(shape) == 0:
         return 1, 1
@@ -336,7 +346,7 @@ def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:
 
 
 def _write_exr(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
-    import OpenEXR
+    OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
 
     shape = tuple(len(v) for v in lut.axes.values())
     dtype = np.float16 if half else np.float32
@@ -358,7 +368,7 @@ def _write_exr(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
 
 
 def _read_exr(data: bytes, path: str) -> Lut:
-    import OpenEXR
+    OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
 
     if data[:4] != b"\x76\x2f\x31\x01":
         raise TableFileError("not an OpenEXR file", path)
