@@ -341,6 +341,20 @@ def resolve_method(model: Model, over: Over, method: str) -> Method:
     return chosen
 
 
+def warn_about(name: str, rtol: float, converged: np.ndarray, reason: np.ndarray | None,
+               nonfinite_fraction: np.ndarray | None, *, stacklevel: int) -> None:
+    """The warnings of a batch of albedos, once for the batch: how many did not converge and why (the reasons
+    the integrals gave; "budget" where a method gives none), and the share of non-finite values counted as 0."""
+    if not np.all(converged):
+        reason = np.where(converged, "", "budget") if reason is None else np.asarray(reason, dtype=str)
+        why = ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged]))
+        warnings.warn(f"{name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
+                      f"reach rtol={rtol:g} ({why}); see the error estimates", stacklevel=stacklevel)
+    if nonfinite_fraction is not None and np.any(nonfinite_fraction > 0):
+        warnings.warn(f"{name}: non-finite BRDF values counted as 0 on up to {100 * nonfinite_fraction.max():.3g}% "
+                      "of the hemisphere's solid angle", stacklevel=stacklevel)
+
+
 def albedo(
     model: Model,
     theta,
@@ -381,13 +395,7 @@ def albedo(
     extra = dict(extra[0]) if extra else {}
     reason = np.asarray(extra.pop("reason", np.where(converged, "", "budget")), dtype=str)
     S, C = problem.shape, value.shape[-1]
-    if not np.all(converged):
-        why = ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged]))
-        warnings.warn(f"{model.name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not "
-                      f"reach rtol={rtol:g} ({why}); see the error estimates", stacklevel=2)
-    if bad is not None and np.any(bad > 0):
-        warnings.warn(f"{model.name}: non-finite BRDF values counted as 0 on up to {100 * bad.max():.3g}% of "
-                      "the hemisphere's solid angle", stacklevel=2)
+    warn_about(model.name, rtol, converged, reason, bad, stacklevel=3)
     return AlbedoResult(
         value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
         converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,

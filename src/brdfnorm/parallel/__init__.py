@@ -25,13 +25,13 @@ import contextlib
 import signal
 import threading
 import time
-import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..directional import warn_about
 from ..errors import ArgumentError
 from .checkpoint import Checkpoint
 from .executors import OPTIONAL_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
@@ -135,17 +135,8 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
     methods = sorted({p.method for p in parts})
     converged = gather("converged")
     fraction = gather("nonfinite_fraction") if job.settings.nonfinite == "zero" else None
-    name = job.source.name
-    if not np.all(converged):
-        # Why, as brdfnorm.albedo says it (rounding-limited, stalled, budget), where the method gives reasons.
-        reason = gather("reason").astype(str) if getattr(parts[0], "reason", None) is not None else None
-        why = (f"within {job.settings.max_evaluations} evaluations" if reason is None else
-               "(" + ", ".join(f"{np.count_nonzero(reason == r)} {r}" for r in np.unique(reason[~converged])) + ")")
-        warnings.warn(f"{name}: {np.count_nonzero(~converged)} of {converged.size} albedo integrals did not reach "
-                      f"rtol={job.settings.rtol:g} {why}; see the error estimates", stacklevel=3)
-    if fraction is not None and np.any(fraction > 0):
-        warnings.warn(f"{name}: non-finite BRDF values counted as 0 on up to {100 * fraction.max():.3g}% of the "
-                      "hemisphere's solid angle", stacklevel=3)
+    reason = gather("reason") if getattr(parts[0], "reason", None) is not None else None
+    warn_about(job.source.name, job.settings.rtol, converged, reason, fraction, stacklevel=4)
     return CellsResult(
         digest=job.digest, value=gather("value", (channels,)), error=gather("error", (channels,)),
         evaluations=gather("evaluations"), converged=converged, nonfinite_fraction=fraction,
