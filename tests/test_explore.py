@@ -17,8 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("starlette", reason="the explore extra (starlette, uvicorn, watchfiles, plotly) is not installed")
-pytest.importorskip("plotly", reason="the explore extra (plotly) is not installed")
+pytest.importorskip("starlette", reason="the explore extra (starlette, uvicorn, watchfiles) is not installed")
 httpx = pytest.importorskip("httpx", reason="httpx is not installed")
 
 from conftest import phong_like_reference, run_cli  # noqa: E402
@@ -316,7 +315,45 @@ def test_dns_rebinding_is_refused(server_url):
     page = httpx.get(server_url)
     assert page.status_code == 200 and 'data-testid="view-angle"' in page.text
     assert "script-src 'self'" in page.headers["content-security-policy"]
-    assert httpx.get(server_url + "static/plotly.min.js").status_code == 200
+    assert httpx.get(server_url + "static/plotly-basic.min.js").status_code == 200
+
+
+def test_assets_are_gzipped_hashed_and_cached(server_url):
+    """The page names each asset by its content hash; the asset comes gzipped (decompressing to the file on
+    disk), cached for a year under that hash, revalidated by ETag otherwise."""
+    import gzip
+    import hashlib
+    import re
+
+    static = ROOT / "src" / "brdfnorm" / "explore" / "static"
+    page = httpx.get(server_url).text
+    for name in ("app.js", "style.css", "plotly-basic.min.js"):
+        on_disk = (static / name).read_bytes()
+        tag = re.search(rf'"/static/{re.escape(name)}\?v=([0-9a-f]+)"', page).group(1)
+        assert hashlib.sha256(on_disk).hexdigest().startswith(tag)
+        url = f"{server_url}static/{name}?v={tag}"
+        with httpx.stream("GET", url, headers={"Accept-Encoding": "gzip"}) as raw:
+            sent = b"".join(raw.iter_raw())  # as sent: httpx would decompress .content
+        assert raw.headers["content-encoding"] == "gzip" and "immutable" in raw.headers["cache-control"]
+        assert gzip.decompress(sent) == on_disk and len(sent) < len(on_disk)
+        plain = httpx.get(url, headers={"Accept-Encoding": "gzip;q=0, identity"})
+        assert "content-encoding" not in plain.headers and plain.content == on_disk
+        unversioned = httpx.get(f"{server_url}static/{name}")
+        assert unversioned.headers["cache-control"] == "no-cache"
+        again = httpx.get(url, headers={"If-None-Match": raw.headers["etag"]})
+        assert again.status_code == 304 and again.content == b""
+
+
+def test_vendored_plotly_bundle_is_the_recorded_one():
+    """static/VENDORED.md records the npm package, version and sha256 of the vendored bundle."""
+    import hashlib
+
+    static = ROOT / "src" / "brdfnorm" / "explore" / "static"
+    bundle = (static / "plotly-basic.min.js").read_bytes()
+    record = (static / "VENDORED.md").read_text()
+    assert f"`{hashlib.sha256(bundle).hexdigest()}`" in record
+    assert bundle.startswith(b"/**\n* plotly.js (basic - minified) v4.1.1\n") and "@4.1.1" in record
+    assert "MIT License" in (static / "plotly-basic.LICENSE").read_text()
 
 
 def test_saving_the_watched_file_reloads_it_and_a_bad_save_reports_the_line(tmp_path):

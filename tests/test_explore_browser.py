@@ -14,8 +14,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("starlette", reason="the explore extra (starlette, uvicorn, watchfiles, plotly) is not installed")
-pytest.importorskip("plotly", reason="the explore extra (plotly) is not installed")
+pytest.importorskip("starlette", reason="the explore extra (starlette, uvicorn, watchfiles) is not installed")
 playwright_api = pytest.importorskip("playwright.sync_api", reason="playwright (python package) is not installed")
 CHROMIUM = "/usr/bin/chromium"
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(), reason=f"{CHROMIUM} is missing (Debian package chromium)")
@@ -50,6 +49,9 @@ def page(watched):
         page = browser.new_page(viewport={"width": 1440, "height": 1280})
         errors: list[str] = []
         page.on("pageerror", lambda error: errors.append(str(error)))
+        # The page's policy allows no eval: a script that needs it would be refused, and say so here.
+        page.on("console", lambda message: errors.append(message.text)
+                if "Content Security Policy" in message.text else None)
         page.goto(url)
         page.errors = errors
         yield page
@@ -164,7 +166,7 @@ def test_fit_panel_and_model_picker(page):
     page.get_by_test_id("fit-samples").fill("8")
     page.get_by_test_id("fit-run").click()
     code = page.get_by_test_id("fit-code")
-    page.wait_for_function("document.querySelector('[data-testid=fit-code]').textContent.includes('return')",
+    page.wait_for_function("() => document.querySelector('[data-testid=fit-code]').textContent.includes('return')",
                            timeout=TIMEOUT_MS)
     assert "float brdfnorm_ggx_norm(float roughness)" in code.inner_text()
     assert "max relative error" in page.get_by_test_id("fit-summary").inner_text()
