@@ -28,6 +28,8 @@ from brdfnorm.explore import Catalog, background  # noqa: E402
 from brdfnorm.explore.compute import (  # noqa: E402
     Superseded,
     bind_parameters,
+    cancellable,
+    energy_check,
     evaluate_view,
     factor_bound,
     fit_factor,
@@ -141,6 +143,65 @@ def test_cancellation_stops_a_running_view_at_the_next_integrand_batch():
     with pytest.raises(Superseded):
         evaluate_view(bn.load(str(GGX)), 30.0, "max", "fine", check)
     assert len(calls) == 4  # no evaluation after the check failed
+
+
+def test_cancellation_reaches_into_the_energy_check():
+    """The check searches copies of the page's model (``with_params``): they keep the cancellation hook."""
+    calls = []
+
+    def check():
+        calls.append(1)
+        if len(calls) > 5:
+            raise Superseded
+
+    with pytest.raises(Superseded):
+        energy_check(cancellable(bn.load(str(GGX)), check), str(GGX))
+    assert len(calls) == 6
+
+
+def shown_check(text: str) -> tuple[str, float, float, str]:
+    """(status, max E, its error, direction text) from the energy readout's text."""
+    status, rest = text.split(" — ", 1)
+    numbers = rest.split("max E = ", 1)[1]
+    value, error_and_where = numbers.split(" ± ", 1)
+    error, where = error_and_where.split(" at ", 1)
+    return status, value, float(error), where.split(";")[0]
+
+
+@pytest.mark.parametrize("path, params, expected_status", [
+    (GGX, {"roughness": 0.3}, "pass"),
+    (ROOT / "examples" / "blinn_phong_gaussian.brdf", {"n": 100.0, "normalized": True}, "fail"),  # ~0.66 % gained
+    (ROOT / "examples" / "anisotropic_ggx.brdf", {"alpha_x": 0.2}, "pass"),  # φ searched too
+])
+def test_energy_readout_is_what_brdfnorm_check_prints(capsys, path, params, expected_status):
+    """The fine pass's energy readout against the command line's ``check --json`` (arguments built here, not
+    taken from the page): same verdict, max E to the digits shown, an error never smaller, the same direction."""
+    model = bn.load(str(path))
+    fine = evaluate_view(model, 30.0, "normal", "fine", params=params, source=str(path))["readouts"]["energy"]
+    bound = model.with_params(**params)
+    held = []
+    for p in bound.parameters:
+        value = bound.params[p.name]
+        text = (("1" if value else "0") if p.kind == "bool" else
+                ",".join(repr(float(c)) for c in value) if p.kind == "color" else repr(float(value)))
+        held += ["-p", f"{p.name}={text}"]
+    argv = ["check", str(path), "--only", "energy", *held, "--budget", "2e7evals"]
+    assert fine["command"] == " ".join(["brdfnorm", *argv])
+    code, out, err = run_cli(capsys, *argv, "--json")
+    assert code == (1 if expected_status == "fail" else 0), err
+    cli = json.loads(out)["reports"][0]["checks"]["energy"]
+    status, value, error, where = shown_check(fine["text"])
+    assert status == fine["status"] == cli["status"] == expected_status
+    assert abs(Decimal(value) - Decimal(repr(cli["value"]))) <= Decimal(10) ** Decimal(value).as_tuple().exponent / 2
+    assert cli["error_estimate"] <= error <= 10 * cli["error_estimate"]
+    assert where.startswith(f"θ_o = {cli['theta_deg']:.4g}°")
+    assert ("φ_o" in where) == (not model.isotropic)
+    if not model.isotropic:
+        assert where.endswith(f"φ_o = {cli['phi_deg']:.4g}°")
+    # The coarse pass only says what the albedo grid shows: a pending verdict (certain only when it gains).
+    coarse = evaluate_view(model, 30.0, "normal", "coarse", params=params)["readouts"]["energy"]
+    assert coarse["source"] == "grid" and coarse["status"] is None
+    assert coarse["verdict"] == ("gains energy" if expected_status == "fail" else "pending")
 
 
 def test_parameters_from_the_page_are_checked_by_kind():

@@ -184,3 +184,33 @@ def test_fit_panel_and_model_picker(page):
     page.get_by_test_id("error").wait_for(state="hidden", timeout=TIMEOUT_MS)
     refined(page)
     assert page.errors == []
+
+
+def test_energy_readout_is_brdfnorm_checks_verdict(page, capsys):
+    """The page's energy readout is what ``brdfnorm check --only energy`` prints at the page's values: the
+    verdict, max E to the digits shown (its error never smaller than the check's) and the direction."""
+    path = ROOT / "examples" / "blinn_phong_gaussian.brdf"
+    page.get_by_test_id("model-picker").select_option("example:blinn_phong_gaussian.brdf")
+    page.get_by_test_id("param-normalized").wait_for(timeout=TIMEOUT_MS)
+    page.get_by_test_id("param-n-value").fill("150")
+    page.get_by_test_id("param-n-value").press("Enter")
+    for normalized, status in ((True, "fail"), (False, "pass")):
+        page.get_by_test_id("param-normalized").set_checked(normalized)
+        refined(page)
+        readout = page.get_by_test_id("readout-energy")
+        assert readout.get_attribute("data-status") == status
+        argv = ["check", str(path), "--only", "energy", "-p", "n=150.0", "-p", f"normalized={int(normalized)}",
+                "--budget", "2e7evals"]
+        assert page.get_by_test_id("readout-energy-command").inner_text() == "same as: brdfnorm " + " ".join(argv)
+        code, out, err = run_cli(capsys, *argv, "--json")
+        assert code == (1 if status == "fail" else 0), err
+        cli = json.loads(out)["reports"][0]["checks"]["energy"]
+        assert cli["status"] == status
+        text = readout.inner_text()
+        assert text.startswith(f"{status} — ")
+        number, rest = text.split("max E = ", 1)[1].split(" ± ", 1)
+        unit = Decimal(10) ** Decimal(number).as_tuple().exponent
+        assert abs(Decimal(number) - Decimal(repr(cli["value"]))) <= unit / 2, (text, cli["value"])
+        assert float(rest.split()[0]) >= cli["error_estimate"]
+        assert f" at θ_o = {cli['theta_deg']:.4g}°" in text
+    assert page.errors == []

@@ -6,7 +6,9 @@ X–N plane), :func:`evaluate_view` returns, as JSON-ready data:
 * the albedo curve E(θ_o) = ∫ f(L, V)(N·L) dL over θ_o ∈ [0°, 89.9°] with its error estimate
   (:func:`brdfnorm.albedo`), and the normalized curve α·E(θ_o) — the energy kept under the chosen convention;
 * the readouts: E at the current view, the factors α = 1/E at ``normal``, ``max`` and ``view``
-  (:func:`brdfnorm.normalize`), and an energy verdict (does max E exceed 1 beyond its error?);
+  (:func:`brdfnorm.normalize`), and the energy verdict of :func:`brdfnorm.check.check` (``checks=("energy",)``,
+  every parameter held at the page's value, so only directions are searched) — in the fine pass; the coarse pass
+  shows the albedo grid's maximum as a pending verdict;
 * the normalized lobe α·f(L, V)(N·L) for L in the plane of incidence (a polar plot) and over the hemisphere
   (a 3-D surface, in polar coordinates about the mirror direction so a narrow lobe is resolved).
 
@@ -20,6 +22,8 @@ Errors of factors: with |E − Ê| ≤ ε, |1/E − 1/Ê| ≤ ε/(Ê(Ê − ε))
 from __future__ import annotations
 
 import math
+import shlex
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -27,6 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import albedo, normalize
+from ..check import Budget
+from ..check import check as check_model
 from ..codegen import emit
 from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, ParameterError, ParameterTypeError
 from ..fit import fit
@@ -41,6 +47,11 @@ FIT_LANGUAGES = ("glsl", "hlsl")
 FIT_RTOL = 1e-7
 #: Slider upper end for a parameter declared without one (the built-in exponents: n ≥ 0, usable to 1e5).
 UNBOUNDED_SLIDER_MAX = 1e4
+#: The energy check's work bound, in integrand evaluations rather than seconds: a time budget caps the integrals
+#: by the rate measured so far, so its verdict would vary with the machine's load; this one is reproducible —
+#: the page shows what ``brdfnorm check MODEL --only energy -p … --budget 2e7evals`` prints. The built-ins and
+#: examples/ take at most 3.5e6 at their defaults (measured), so it rarely binds; a stale check is cancelled.
+ENERGY_EVALUATIONS = 20_000_000
 #: A view angle of 90° is the horizon, where the albedo integral degenerates (as in ``normalize``).
 VIEW_MAX_DEG = float(np.degrees(THETA_MAX))
 
@@ -208,29 +219,60 @@ def _finite(values: np.ndarray) -> list:
     return [None if not math.isfinite(v) else v for v in np.asarray(values, dtype=float).ravel().tolist()]
 
 
-def energy_verdict(E_max: float, error: float, theta_deg: float, searched: bool) -> dict:
-    """Does the lobe reflect more than it receives? max E against 1, beyond its error estimate.
+ENERGY_VERDICTS = {"pass": "conserves energy", "fail": "gains energy",
+                   "inconclusive": "at the limit (max E within its error of 1 + tolerance)"}
 
-    The hook for ``brdfnorm check``'s verdict once that module exists; until then, the albedo maximum decides.
-    """
-    where = f"max E = {format_with_error(E_max, error)} at θ_o = {theta_deg:.3g}°"
-    if E_max - error > 1.0:
-        verdict = "gains energy"
-    elif not searched:
-        verdict = "pending"
-    elif E_max + error <= 1.0:
-        verdict = "conserves energy"
-    else:
-        verdict = "at the limit (max E within its error of 1)"
-    return {"verdict": verdict, "text": f"{verdict}: {where}" + ("" if searched else " (grid, refining)")}
+
+def grid_verdict(E_max: float, error: float, theta_deg: float) -> dict:
+    """The coarse pass's pending verdict: the albedo grid's maximum, a lower bound on max E (gains energy for
+    sure when even that exceeds 1 beyond its error; otherwise the check in the fine pass decides)."""
+    where = f"grid max E = {format_with_error(E_max, error)} at θ_o = {theta_deg:.3g}°"
+    verdict = "gains energy" if E_max - error > 1.0 else "pending"
+    return {"verdict": verdict, "status": None, "source": "grid",
+            "text": f"{verdict}: {where} (brdfnorm check runs in the refined pass)"}
+
+
+def check_command(source: str, model: Model) -> str:
+    """The command line whose energy verdict the page shows: every parameter held at its bound value."""
+    held = []
+    for p in model.parameters:
+        value = model.params[p.name]
+        if p.kind == "float":
+            text = repr(float(value))
+        elif p.kind == "bool":
+            text = "1" if value else "0"
+        elif p.kind == "color":
+            text = ",".join(repr(float(c)) for c in np.atleast_1d(value))
+        else:
+            text = str(value)
+        held += ["-p", f"{p.name}={text}"]
+    return shlex.join(["brdfnorm", "check", source, "--only", "energy", *held,
+                       "--budget", f"{ENERGY_EVALUATIONS:.0e}".replace("e+0", "e") + "evals"])
+
+
+def energy_check(model: Model, source: str) -> dict:
+    """The verdict of :func:`brdfnorm.check.check` (energy only) for the lobe as bound, and where max E is."""
+    started = time.perf_counter()
+    report = check_model(model, checks=("energy",), fixed="all",
+                         budget=Budget(seconds=None, evaluations=ENERGY_EVALUATIONS))
+    r = report.results["energy"]
+    where = f"θ_o = {r.theta_deg:.4g}°" + ("" if model.isotropic else f", φ_o = {r.phi_deg:.4g}°")
+    # The check's notes (non-finite values, a search cut short by the budget) follow its headline after "; ".
+    notes = "".join(f"; {note}" for note in r.message.split("; ")[1:])
+    text = f"{r.status} — {ENERGY_VERDICTS[r.status]}: max E = {format_with_error(r.value, r.error)} at {where}"
+    return {"verdict": ENERGY_VERDICTS[r.status], "status": r.status, "source": "check", "text": text + notes,
+            "value": [r.value], "error": [r.error], "theta_deg": r.theta_deg, "phi_deg": r.phi_deg,
+            "message": r.message, "tolerance": report.tolerance, "command": check_command(source, model),
+            "evaluations": report.coverage["evaluations"], "elapsed_ms": 1e3 * (time.perf_counter() - started)}
 
 
 def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
-                  check: Callable[[], None] = lambda: None, params: object = None) -> dict:
+                  check: Callable[[], None] = lambda: None, params: object = None, source: str | None = None) -> dict:
     """Everything the page shows for one state; see the module docstring.
 
     ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
-    outside a file's slider range) are reported with the computation's own.
+    outside a file's slider range) are reported with the computation's own; ``source`` is how the command line
+    names the model (a built-in's name or the file's path; the model's name if not given).
     """
     choice(convention, CONVENTIONS, "convention")
     choice(quality, tuple(QUALITIES), "quality")
@@ -259,6 +301,8 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
         alpha = factor_bound(*chosen[convention])[0] if convention != "view" else None
         lobe_alpha = alpha if alpha is not None else factor_bound(E_view, err_view)[0]
         plane, surface = _lobes(m, theta_v, lobe_alpha)
+        # Last: the lobe's numbers are all computed when the (longer) search starts, and a move cancels it.
+        energy = energy_check(m, source or model.name) if searched else None
     readouts = {"albedo": {**_readout(E_view, err_view), "theta_deg": view_deg}}
     for name, (E, err) in (("normal", (E_normal, err_normal)), ("max", (E_max, err_max)),
                            ("view", (E_view, err_view))):
@@ -270,7 +314,7 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
         readouts["factor_max"]["text"] = (f"≤ {1.0 / lower:.6g} ({channel}grid max, refining)" if lower > 0
                                           else "refining…")
     readouts["factor_max"]["theta_deg"] = theta_max
-    readouts["energy"] = energy_verdict(float(E_max[max_channel]), float(err_max[max_channel]), theta_max, searched)
+    readouts["energy"] = energy or grid_verdict(float(E_max[max_channel]), float(err_max[max_channel]), theta_max)
     normalized = (curve.value * alpha) if alpha is not None else np.ones_like(curve.value)
     messages = sorted({str(w.message).splitlines()[0] for w in caught})
     return {

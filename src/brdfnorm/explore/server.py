@@ -226,7 +226,7 @@ class Explorer:
             def timed() -> dict:
                 started.append(time.perf_counter())
                 return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
-                                     check, params=body.get("params"))
+                                     check, params=body.get("params"), source=entry.source)
 
             lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
             result = await self.compute(request, check, timed, lane)

@@ -235,7 +235,12 @@ async function render(data, generation) {
     node.dataset.quality = data.quality;
     node.dataset.generation = String(generation);
     if (readouts[key].value) node.dataset.value = JSON.stringify(readouts[key].value);
+    else delete node.dataset.value;  // (the coarse pass's pending energy verdict has no number of its own)
   }
+  const energy = $("readout-energy");
+  energy.dataset.status = readouts.energy.status || "pending";  // pass, fail, inconclusive: brdfnorm check's
+  energy.title = readouts.energy.message || "";
+  $("readout-energy-command").textContent = readouts.energy.command ? "same as: " + readouts.energy.command : "";
   $("argmax").textContent = `(θ_o = ${readouts.factor_max.theta_deg.toFixed(2)}°)`;
   $("quality").textContent = data.quality === "fine" ? "refined" : "coarse, refining…";
   const warnings = $("warnings");
@@ -258,6 +263,7 @@ async function render(data, generation) {
   const moved = state.movedAt.get(generation);
   const now = performance.now();
   const timing = { ...data.timing, draw_ms: timings, generation, page_ms: Math.round(now),
+                   check_ms: readouts.energy.elapsed_ms ?? null,
                    page_numbers_ms: Math.round(numbers),
                    page_2d_ms: Math.round(flat), latency_ms: moved === undefined ? null : Math.round(now - moved),
                    latency_2d_ms: moved === undefined ? null : Math.round(flat - moved) };
