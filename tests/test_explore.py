@@ -27,6 +27,7 @@ from brdfnorm.errors import ArgumentError, ParameterError  # noqa: E402
 from brdfnorm.explore import Catalog, background  # noqa: E402
 from brdfnorm.explore.compute import (  # noqa: E402
     Superseded,
+    Verdicts,
     bind_parameters,
     cancellable,
     energy_check,
@@ -202,6 +203,22 @@ def test_energy_readout_is_what_brdfnorm_check_prints(capsys, path, params, expe
     coarse = evaluate_view(model, 30.0, "normal", "coarse", params=params)["readouts"]["energy"]
     assert coarse["source"] == "grid" and coarse["status"] is None
     assert coarse["verdict"] == ("gains energy" if expected_status == "fail" else "pending")
+
+
+def test_a_view_angle_move_reuses_the_energy_verdict_of_the_same_lobe(monkeypatch):
+    import brdfnorm.explore.compute as compute
+
+    runs = []
+    real = compute.check_model
+    monkeypatch.setattr(compute, "check_model", lambda *args, **kwargs: runs.append(1) or real(*args, **kwargs))
+    verdicts, model = Verdicts(), bn.load("blinn-phong")
+    first = evaluate_view(model, 10.0, "normal", "fine", params={"n": 40.0}, verdicts=verdicts, model_key=("m", 0))
+    again = evaluate_view(model, 70.0, "max", "fine", params={"n": 40.0}, verdicts=verdicts, model_key=("m", 0))
+    assert len(runs) == 1 and again["readouts"]["energy"]["cached"] and not first["readouts"]["energy"]["cached"]
+    assert again["readouts"]["energy"]["text"] == first["readouts"]["energy"]["text"]
+    evaluate_view(model, 70.0, "max", "fine", params={"n": 41.0}, verdicts=verdicts, model_key=("m", 0))
+    evaluate_view(model, 70.0, "max", "fine", params={"n": 40.0}, verdicts=verdicts, model_key=("m", 1))  # reloaded
+    assert len(runs) == 3
 
 
 def test_parameters_from_the_page_are_checked_by_kind():

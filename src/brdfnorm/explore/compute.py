@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import math
 import shlex
+import threading
 import time
 import warnings
-from collections.abc import Callable
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 
 import numpy as np
@@ -250,8 +252,36 @@ def check_command(source: str, model: Model) -> str:
                        "--budget", f"{ENERGY_EVALUATIONS:.0e}".replace("e+0", "e") + "evals"])
 
 
-def energy_check(model: Model, source: str) -> dict:
-    """The verdict of :func:`brdfnorm.check.check` (energy only) for the lobe as bound, and where max E is."""
+class Verdicts:
+    """The last energy verdicts by (model, parameter values): the check does not depend on the view angle or the
+    convention, and its evaluation budget makes it reproducible, so a view-angle move reuses it."""
+
+    def __init__(self, size: int = 256) -> None:
+        self.size = size
+        self.lock = threading.Lock()
+        self.found: OrderedDict[Hashable, dict] = OrderedDict()
+
+    def get(self, key: Hashable) -> dict | None:
+        with self.lock:
+            if key not in self.found:
+                return None
+            self.found.move_to_end(key)
+            return {**self.found[key], "cached": True, "elapsed_ms": 0.0}
+
+    def put(self, key: Hashable, verdict: dict) -> None:
+        with self.lock:
+            self.found[key] = verdict
+            while len(self.found) > self.size:
+                self.found.popitem(last=False)
+
+
+def energy_check(model: Model, source: str, verdicts: Verdicts | None = None, model_key: Hashable = None) -> dict:
+    """The verdict of :func:`brdfnorm.check.check` (energy only) for the lobe as bound, and where max E is;
+    from ``verdicts`` when this model (``model_key``: the caller's name for its version) was checked at these
+    parameter values before."""
+    key = (model_key, source, repr(sorted(model.params.items())))
+    if verdicts is not None and model_key is not None and (found := verdicts.get(key)) is not None:
+        return found
     started = time.perf_counter()
     report = check_model(model, checks=("energy",), fixed="all",
                          budget=Budget(seconds=None, evaluations=ENERGY_EVALUATIONS))
@@ -260,19 +290,25 @@ def energy_check(model: Model, source: str) -> dict:
     # The check's notes (non-finite values, a search cut short by the budget) follow its headline after "; ".
     notes = "".join(f"; {note}" for note in r.message.split("; ")[1:])
     text = f"{r.status} — {ENERGY_VERDICTS[r.status]}: max E = {format_with_error(r.value, r.error)} at {where}"
-    return {"verdict": ENERGY_VERDICTS[r.status], "status": r.status, "source": "check", "text": text + notes,
-            "value": [r.value], "error": [r.error], "theta_deg": r.theta_deg, "phi_deg": r.phi_deg,
-            "message": r.message, "tolerance": report.tolerance, "command": check_command(source, model),
-            "evaluations": report.coverage["evaluations"], "elapsed_ms": 1e3 * (time.perf_counter() - started)}
+    verdict = {"verdict": ENERGY_VERDICTS[r.status], "status": r.status, "source": "check", "text": text + notes,
+               "value": [r.value], "error": [r.error], "theta_deg": r.theta_deg, "phi_deg": r.phi_deg,
+               "message": r.message, "tolerance": report.tolerance, "command": check_command(source, model),
+               "evaluations": report.coverage["evaluations"], "elapsed_ms": 1e3 * (time.perf_counter() - started),
+               "cached": False}
+    if verdicts is not None and model_key is not None:
+        verdicts.put(key, verdict)
+    return verdict
 
 
 def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
-                  check: Callable[[], None] = lambda: None, params: object = None, source: str | None = None) -> dict:
+                  check: Callable[[], None] = lambda: None, params: object = None, source: str | None = None,
+                  verdicts: Verdicts | None = None, model_key: Hashable = None) -> dict:
     """Everything the page shows for one state; see the module docstring.
 
     ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
     outside a file's slider range) are reported with the computation's own; ``source`` is how the command line
-    names the model (a built-in's name or the file's path; the model's name if not given).
+    names the model (a built-in's name or the file's path; the model's name if not given); ``verdicts`` keeps
+    energy verdicts across calls for the model called ``model_key`` (which must change when the model does).
     """
     choice(convention, CONVENTIONS, "convention")
     choice(quality, tuple(QUALITIES), "quality")
@@ -302,7 +338,7 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
         lobe_alpha = alpha if alpha is not None else factor_bound(E_view, err_view)[0]
         plane, surface = _lobes(m, theta_v, lobe_alpha)
         # Last: the lobe's numbers are all computed when the (longer) search starts, and a move cancels it.
-        energy = energy_check(m, source or model.name) if searched else None
+        energy = energy_check(m, source or model.name, verdicts, model_key) if searched else None
     readouts = {"albedo": {**_readout(E_view, err_view), "theta_deg": view_deg}}
     for name, (E, err) in (("normal", (E_normal, err_normal)), ("max", (E_max, err_max)),
                            ("view", (E_view, err_view))):

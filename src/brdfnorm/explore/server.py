@@ -57,6 +57,7 @@ from .compute import (
     FIT_LANGUAGES,
     VIEW_MAX_DEG,
     Superseded,
+    Verdicts,
     describe_parameters,
     evaluate_view,
     fit_factor,
@@ -151,6 +152,7 @@ class Explorer:
         self.generations: OrderedDict[tuple[str, str], int] = OrderedDict()
         self.subscribers: set[asyncio.Queue] = set()
         self.lanes: dict[str, anyio.CapacityLimiter] = {}
+        self.verdicts = Verdicts()
         self.stop_watching = asyncio.Event()
         routes = [
             Route("/", self.page),
@@ -226,7 +228,8 @@ class Explorer:
             def timed() -> dict:
                 started.append(time.perf_counter())
                 return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
-                                     check, params=body.get("params"), source=entry.source)
+                                     check, params=body.get("params"), source=entry.source,
+                                     verdicts=self.verdicts, model_key=(entry.id, entry.version))
 
             lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
             result = await self.compute(request, check, timed, lane)
