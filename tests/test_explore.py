@@ -405,6 +405,8 @@ def test_assets_are_gzipped_hashed_and_cached(server_url):
 
     static = ROOT / "src" / "brdfnorm" / "explore" / "static"
     page = httpx.get(server_url).text
+    first = httpx.get(server_url + "api/models").json()["models"][0]["id"]
+    assert f'data-first-model="{first}"' in page  # the page asks for its first view before the catalog comes
     for name in ("app.js", "style.css", "plotly-basic.min.js"):
         on_disk = (static / name).read_bytes()
         tag = re.search(rf'"/static/{re.escape(name)}\?v=([0-9a-f]+)"', page).group(1)

@@ -25,6 +25,7 @@ import asyncio
 import contextlib
 import gzip
 import hashlib
+import html
 import ipaddress
 import json
 import logging
@@ -172,6 +173,9 @@ class Explorer:
         page = (STATIC / "index.html").read_text(encoding="utf-8")
         for name, asset in self.assets.items():
             page = page.replace(f'"/static/{name}"', f'"/static/{name}?v={asset.tag}"')
+        # The page asks for the first model's view before the catalog arrives (see app.js).
+        first = html.escape(catalog.entries()[0].id, quote=True)
+        page = page.replace('<body data-state="loading">', f'<body data-state="loading" data-first-model="{first}">')
         self.page_html = page.encode()
 
     @contextlib.asynccontextmanager

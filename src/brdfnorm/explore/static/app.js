@@ -19,7 +19,7 @@ const state = {
   fitCode: "",
   movedAt: new Map(),  // generation -> performance.now() of the control move (for the latency readout)
 };
-// plotly.min.js is deferred after this script: requests start while it is parsed, drawing waits for it.
+// plotly.js is deferred after this script: requests start while it is parsed, drawing waits for it.
 const plotlyReady = new Promise((resolve) => window.addEventListener("DOMContentLoaded", resolve));
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => setTimeout(resolve, 0)));
 const CHANNEL_COLORS = ["#d62728", "#2ca02c", "#1f77b4"];
@@ -187,6 +187,24 @@ function schedule() {
   run();
 }
 
+// The first view's three requests start together, before plotly.js is compiled: while it compiles the main thread
+// is busy, so a request chained after another's answer would wait for it. The server names the first model
+// (data-first-model) unless the address does; the first coarse view is asked for at the declared defaults.
+const firstView = (() => {
+  const model = new URLSearchParams(location.search).get("model") || document.body.dataset.firstModel;
+  const body = { model, params: null, view: state.view, convention: state.convention, quality: "coarse",
+                 client: state.client, generation: 1 };
+  return { model, body, catalog: getJSON("/api/models"),
+           description: getJSON("/api/models/" + encodeURIComponent(model)).catch(() => null),
+           view: postJSON("/api/evaluate", body).catch((error) => ({ status: 0, data: { error: error.message } })) };
+})();
+
+function prefetched(body) {  // the first view's answer, if this is the request it answered
+  const first = firstView.body;
+  const same = ["model", "view", "convention", "quality", "generation"].every((key) => body[key] === first[key]);
+  return same ? firstView.view : null;  // (generation 1 is the first model's first view, at its defaults)
+}
+
 async function run() {
   state.inflight = true;
   state.pending = false;
@@ -194,7 +212,8 @@ async function run() {
   setStatus("computing…", "busy");
   let coarse;
   try {
-    coarse = await postJSON("/api/evaluate", request("coarse", generation));
+    const body = request("coarse", generation);
+    coarse = await (prefetched(body) || postJSON("/api/evaluate", body));
   } catch (error) {
     coarse = { status: 0, data: { error: "the server is not answering (" + error.message + ")" } };
   }
@@ -430,7 +449,8 @@ function plotAlbedo(data) {
 
 // -- models and live files ---------------------------------------------------------------------------------------
 async function selectModel(id, keepValues) {
-  const description = await getJSON("/api/models/" + encodeURIComponent(id));
+  const first = id === firstView.model && !keepValues && state.modelId === null ? await firstView.description : null;
+  const description = first || await getJSON("/api/models/" + encodeURIComponent(id));
   const previous = keepValues ? state.values : null;
   state.modelId = id;
   state.description = description;
@@ -499,7 +519,7 @@ async function copyCode() {
 
 // -- start ----------------------------------------------------------------------------------------------------------
 async function start() {
-  const catalog = await getJSON("/api/models");
+  const catalog = await firstView.catalog;
   const picker = $("model");
   const groups = {};
   for (const entry of catalog.models) {
