@@ -14,6 +14,11 @@ apart, as a mouse drag sends them) measures the last move's latency, which inclu
 Targets: first load ≤ 2 s, update ≤ 300 ms. Writes ``benchmarks/results/explore.md`` and ``explore.json``;
 prints the tables. The machine's load average is recorded with the numbers: on a shared machine they scale
 with it.
+
+``bench_explore.py --against OLD_SRC [rounds]`` compares cold first loads of another source tree (e.g. an earlier
+commit's ``src/``, from ``git archive``) with this one: both served at once (``brdfnorm explore`` run with each
+tree on PYTHONPATH), loads alternating between them in one browser so that both see the same machine load.
+Writes ``benchmarks/results/explore.before-after.md``.
 """
 
 from __future__ import annotations
@@ -21,7 +26,9 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import socket
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -188,5 +195,86 @@ def main(moves: int = 8, loads: int = 3) -> None:
     print("\n".join(lines))
 
 
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def first_load(browser, url: str) -> dict:
+    context = browser.new_context(viewport={"width": 1440, "height": 1200})
+    try:
+        page = context.new_page()
+        page.goto(url)
+        return wait_timing(page, "coarse")
+    finally:
+        context.close()
+
+
+def compare(old_src: str, rounds: int = 4) -> None:
+    """Cold first loads, alternating between the tree ``old_src`` and this one (see the module docstring)."""
+    trees = {"before": str(Path(old_src).resolve()), "after": str(ROOT / "src")}
+    servers, processes = {}, []
+    try:
+        for name, src in trees.items():
+            port = free_port()
+            processes.append(subprocess.Popen(
+                [sys.executable, "-m", "brdfnorm", "explore", str(ROOT / "examples" / "ggx.brdf"), "--no-browser",
+                 "--port", str(port)], env=dict(os.environ, PYTHONPATH=src), stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL))
+            servers[name] = f"http://127.0.0.1:{port}/"
+        loads = [os.getloadavg()[0]]
+        results = {name: {model_id: [] for model_id, _, _ in MODELS} for name in servers}
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
+            wait_until_serving(servers.values())
+            for k in range(rounds):
+                for model_id, _, _ in MODELS:
+                    for name in (("before", "after") if k % 2 == 0 else ("after", "before")):
+                        results[name][model_id].append(first_load(browser, f"{servers[name]}?model={model_id}"))
+                loads.append(os.getloadavg()[0])
+            browser.close()
+    finally:
+        for process in processes:
+            process.terminate()
+            process.wait()
+    lines = ["# brdfnorm explore: cold first load, before and after", "",
+             f"`bench_explore.py --against {old_src} {rounds}`: {rounds} cold loads per model and tree, alternating "
+             f"between the trees; {os.cpu_count()} CPUs, load average {min(loads):.1f}–{max(loads):.1f} during the "
+             "run. Milliseconds from navigation start to the first numbers / to all three plots drawn.", "",
+             "| model | before: numbers | before: all plots, median (max) | after: numbers "
+             "| after: all plots, median (max) |", "|---|---|---|---|---|"]
+    for model_id, label, _ in MODELS:
+        cells = []
+        for name in servers:
+            loads_of = results[name][model_id]
+            plots = [t["page_ms"] for t in loads_of]
+            cells += [f"{statistics.median(t['page_numbers_ms'] for t in loads_of):.0f}",
+                      f"{statistics.median(plots):.0f} ({max(plots):.0f})"]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    every = {name: [t["page_ms"] for runs in results[name].values() for t in runs] for name in servers}
+    lines += ["", "All models: " + "; ".join(f"{name} median {statistics.median(v):.0f} ms, max {max(v):.0f} ms"
+                                             for name, v in every.items()) + f" (n = {len(every['after'])} each)."]
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "explore.before-after.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def wait_until_serving(urls, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    for url in urls:
+        while True:
+            try:
+                with socket.create_connection(("127.0.0.1", int(url.rsplit(":", 1)[1].strip("/"))), timeout=1):
+                    break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"{url} is not serving") from None
+                time.sleep(0.2)
+
+
 if __name__ == "__main__":
-    main(*(int(a) for a in sys.argv[1:3]))
+    if sys.argv[1:2] == ["--against"]:
+        compare(sys.argv[2], *(int(a) for a in sys.argv[3:4]))
+    else:
+        main(*(int(a) for a in sys.argv[1:3]))
