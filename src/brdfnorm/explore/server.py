@@ -4,7 +4,7 @@ Routes (nothing else is served, and no path from a request is ever opened):
 
 * ``GET /`` the page; ``GET /static/{app.js,style.css,plotly-basic.min.js}`` its assets — plotly.js's official
   *basic* partial bundle (scatter traces only, all the page draws: 1.2 MB against the full bundle's 4.8 MB, which
-  took 1.4–1.9 s of a 2 s first load to compile), vendored beside the page (``static/VENDORED.md``: source,
+  took 1.4–3 s of a first load to compile), vendored beside the page (``static/VENDORED.md``: source,
   version, checksum, licence), so the page needs no network. The assets are read once, gzipped once, and served
   under content-hashed URLs (``?v=HASH``, cached for a year) with ETags; the page itself is never cached.
 * ``GET /api/models`` the catalog (:mod:`.catalog`); ``GET /api/models/{id}`` one model's declared parameters.
