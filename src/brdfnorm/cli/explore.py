@@ -24,7 +24,9 @@ def explore(
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Explore lobes in the browser: parameter sliders, the lobe in 2-D and 3-D, E(θ_o) with its error band,
-    normalization factors (normal / max / view), an energy verdict, and a fit of the factor as GLSL/HLSL code.
+    normalization factors (normal / max / view), the energy verdict of `brdfnorm check` at the page's values
+    (the same as `brdfnorm check MODEL --only energy -p NAME=VALUE ... --budget 2e7evals`, which the page
+    prints), and a fit of the factor as GLSL/HLSL code.
 
     Serves only the models named here, the built-ins and examples/; Ctrl-C stops it.
     """
