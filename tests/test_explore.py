@@ -369,6 +369,25 @@ def test_a_newer_generation_supersedes_the_running_one(server_url):
     assert post(server_url, "api/evaluate", view_request(client="mover", generation=1)).status_code == 409
 
 
+def test_server_energy_verdict_is_the_checks_and_kept_across_view_moves(server_url):
+    def energy(generation: int, view: float, **params) -> dict:
+        response = post(server_url, "api/evaluate", view_request(
+            model="arg1", client="verdicts", generation=generation, quality="fine", view=view, params=params))
+        assert response.status_code == 200, response.text
+        return response.json()["readouts"]["energy"]
+
+    first, moved = energy(1, 20.0, n=20.0), energy(2, 60.0, n=20.0)
+    assert first["source"] == "check" and not first["cached"] and moved["cached"]
+    assert moved["text"] == first["text"] and moved["value"] == first["value"]
+    from brdfnorm.check import Budget, check
+
+    expected = check(bn.load("phong", n=20.0), checks=("energy",), fixed="all",
+                     budget=Budget(seconds=None, evaluations=20_000_000)).results["energy"]
+    assert first["value"] == [expected.value] and first["error"] == [expected.error]
+    assert first["status"] == expected.status == "pass"
+    assert not energy(3, 60.0, n=21.0)["cached"]
+
+
 def test_only_loopback_addresses_count_as_local():
     from brdfnorm.explore.server import is_loopback
 

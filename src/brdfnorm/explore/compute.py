@@ -275,7 +275,8 @@ class Verdicts:
                 self.found.popitem(last=False)
 
 
-def energy_check(model: Model, source: str, verdicts: Verdicts | None = None, model_key: Hashable = None) -> dict:
+def energy_check(model: Model, source: str, verdicts: Verdicts | None = None,
+                 model_key: Hashable | None = None) -> dict:
     """The verdict of :func:`brdfnorm.check.check` (energy only) for the lobe as bound, and where max E is;
     from ``verdicts`` when this model (``model_key``: the caller's name for its version) was checked at these
     parameter values before."""
@@ -302,7 +303,7 @@ def energy_check(model: Model, source: str, verdicts: Verdicts | None = None, mo
 
 def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
                   check: Callable[[], None] = lambda: None, params: object = None, source: str | None = None,
-                  verdicts: Verdicts | None = None, model_key: Hashable = None) -> dict:
+                  verdicts: Verdicts | None = None, model_key: Hashable | None = None) -> dict:
     """Everything the page shows for one state; see the module docstring.
 
     ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
