@@ -441,6 +441,7 @@ def test_assets_are_gzipped_hashed_and_cached(server_url):
         assert unversioned.headers["cache-control"] == "no-cache"
         again = httpx.get(url, headers={"If-None-Match": raw.headers["etag"]})
         assert again.status_code == 304 and again.content == b""
+        assert httpx.get(url, headers={"If-None-Match": 'W/"0123456789abcdef"'}).status_code == 200
 
 
 def test_vendored_plotly_bundle_is_the_recorded_one():

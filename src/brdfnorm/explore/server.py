@@ -105,10 +105,12 @@ class Asset:
     def response(self, request: Request) -> Response:
         """The asset, gzipped where the client accepts it; 304 when its ETag matches; cached for a year when asked
         for under its current hash."""
-        etag = f'"{self.tag}"'
+        # Weak: the gzipped and the plain bytes are one content in two encodings (RFC 9110 §8.8.1).
+        etag = f'W/"{self.tag}"'
         cache = IMMUTABLE if request.query_params.get("v") == self.tag else "no-cache"
         headers = {"Cache-Control": cache, "ETag": etag, "Vary": "Accept-Encoding", "X-Content-Type-Options": "nosniff"}
-        if etag in [t.strip() for t in request.headers.get("if-none-match", "").split(",")]:
+        asked = [t.strip().removeprefix("W/") for t in request.headers.get("if-none-match", "").split(",")]
+        if f'"{self.tag}"' in asked or "*" in asked:
             return Response(status_code=304, headers=headers)
         if accepts_gzip(request.headers.get("accept-encoding", "")):
             return Response(self.gzipped, media_type=self.media_type, headers={**headers, "Content-Encoding": "gzip"})
