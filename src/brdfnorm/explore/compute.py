@@ -54,6 +54,8 @@ UNBOUNDED_SLIDER_MAX = 1e4
 #: the page shows what ``brdfnorm check MODEL --only energy -p … --budget 2e7evals`` prints. The built-ins and
 #: examples/ take at most 3.5e6 at their defaults (measured), so it rarely binds; a stale check is cancelled.
 ENERGY_EVALUATIONS = 20_000_000
+#: Energy gained beyond which a lobe fails (the check's, and the command line's, default ``--tolerance``).
+ENERGY_TOLERANCE = 1e-6
 #: A view angle of 90° is the horizon, where the albedo integral degenerates (as in ``normalize``).
 VIEW_MAX_DEG = float(np.degrees(THETA_MAX))
 
@@ -229,7 +231,7 @@ def grid_verdict(E_max: float, error: float, theta_deg: float) -> dict:
     """The coarse pass's pending verdict: the albedo grid's maximum, a lower bound on max E (gains energy for
     sure when even that exceeds 1 beyond its error; otherwise the check in the fine pass decides)."""
     where = f"grid max E = {format_with_error(E_max, error)} at θ_o = {theta_deg:.3g}°"
-    verdict = "gains energy" if E_max - error > 1.0 else "pending"
+    verdict = "gains energy" if E_max - error > 1.0 + ENERGY_TOLERANCE else "pending"
     return {"verdict": verdict, "status": None, "source": "grid",
             "text": f"{verdict}: {where} (brdfnorm check runs in the refined pass)"}
 
@@ -284,7 +286,7 @@ def energy_check(model: Model, source: str, verdicts: Verdicts | None = None,
     if verdicts is not None and model_key is not None and (found := verdicts.get(key)) is not None:
         return found
     started = time.perf_counter()
-    report = check_model(model, checks=("energy",), fixed="all",
+    report = check_model(model, checks=("energy",), fixed="all", tolerance=ENERGY_TOLERANCE,
                          budget=Budget(seconds=None, evaluations=ENERGY_EVALUATIONS))
     r = report.results["energy"]
     where = f"θ_o = {r.theta_deg:.4g}°" + ("" if model.isotropic else f", φ_o = {r.phi_deg:.4g}°")
