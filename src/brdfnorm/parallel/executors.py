@@ -156,6 +156,7 @@ class Workers:
         self._client = dask_client(self.scheduler)
         self.count = len(self._client.scheduler_info().get("workers", {}))
         if self.count == 0:  # tasks would wait for a worker forever
+            self.close()
             raise ArgumentError(f"the Dask scheduler at {self.scheduler} has no workers (start some with `dask "
                                 f"worker {self.scheduler}`)", where="scheduler")
 
