@@ -7,10 +7,13 @@ an internal error (with a hint to report it); ``--debug`` shows the traceback in
 from __future__ import annotations
 
 import contextlib
+import functools
+import inspect
 import math
 import sys
 import warnings
 from collections.abc import Callable, Iterator
+from dataclasses import astuple, dataclass
 from enum import Enum
 
 import numpy as np
@@ -46,18 +49,58 @@ class Over(str, Enum):
     view = "view"
 
 
-WORKERS_OPTION = typer.Option(None, "--workers", min=1, metavar="N",
-                              help="Local processes computing the table's cells (default: all cores; 1: this "
-                              "process).")
-SCHEDULER_OPTION = typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
-                                help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
-                                "instead of local processes.")
-CHECKPOINT_OPTION = typer.Option(None, "--checkpoint", metavar="DIR",
-                                 help="Save each finished chunk of cells in DIR; rerunning the same command "
-                                 "resumes, computing only what is missing.")
-CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
-                                  help="Cells per chunk (part of the job's definition; default: sized by a short "
-                                  "probe so that a chunk takes about a second).")
+@dataclass(frozen=True)
+class Spread:
+    """Where a command's albedo cells are computed (:mod:`brdfnorm.parallel`): the values of --workers,
+    --scheduler, --checkpoint and --chunk-cells (None where not given)."""
+
+    workers: int | None = None
+    scheduler: str | None = None
+    checkpoint: str | None = None
+    chunk_cells: int | None = None
+
+    def given(self) -> bool:
+        return any(value is not None for value in astuple(self))
+
+
+#: The parallel layer's options, declared once (:func:`parallel_options` adds them to a command).
+PARALLEL_OPTIONS = {
+    "workers": (int, typer.Option(None, "--workers", min=1, metavar="N",
+                                  help="Local processes computing the cells (default: all cores; 1: this process).")),
+    "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
+                                    help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
+                                    "instead of local processes.")),
+    "checkpoint": (str, typer.Option(None, "--checkpoint", metavar="DIR",
+                                     help="Save each finished chunk of cells in DIR; rerunning the same command "
+                                     "resumes, computing only what is missing.")),
+    "chunk_cells": (int, typer.Option(None, "--chunk-cells", min=1, metavar="N",
+                                      help="Cells per chunk (part of the job's definition; default: sized by a "
+                                      "short probe so that a chunk takes about a second).")),
+}
+
+
+def parallel_options(command: Callable | None = None, /, *, chunk_cells: bool = True):
+    """Give a typer command the options of :data:`PARALLEL_OPTIONS` (just before ``--debug``; without
+    ``--chunk-cells`` when ``chunk_cells`` is False); the command receives their values as one
+    ``spread: Spread`` argument instead."""
+    if command is None:
+        return functools.partial(parallel_options, chunk_cells=chunk_cells)
+    names = [name for name in PARALLEL_OPTIONS if chunk_cells or name != "chunk_cells"]
+    signature = inspect.signature(command, eval_str=True)
+    parameters = [p for p in signature.parameters.values() if p.name != "spread"]
+    at = next((i for i, p in enumerate(parameters) if p.name == "debug"), len(parameters))
+    options = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=PARALLEL_OPTIONS[name][1],
+                                 annotation=PARALLEL_OPTIONS[name][0]) for name in names]
+
+    @functools.wraps(command)
+    def with_spread(*args, **kwargs):
+        spread = Spread(**{name: kwargs.pop(name) for name in names})
+        return command(*args, spread=spread, **kwargs)
+
+    # typer reads the signature: the command's own parameters with the options in place of `spread`
+    with_spread.__signature__ = signature.replace(parameters=[*parameters[:at], *options, *parameters[at:]])
+    return with_spread
+
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
@@ -222,13 +265,13 @@ def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable
         yield on_progress
 
 
-def compute_cells(job, label: str, *, workers: int | None, scheduler: str | None, checkpoint: str | None):
-    """:func:`brdfnorm.parallel.albedo_cells` with a progress bar on stderr when it is a terminal, then a
-    one-line summary there (for more than one cell)."""
+def compute_cells(job, label: str, spread: Spread):
+    """:func:`brdfnorm.parallel.albedo_cells` where ``spread`` says, with a progress bar on stderr when it is a
+    terminal, then a one-line summary there (for more than one cell)."""
     from ..parallel import albedo_cells
 
     with progress_bar(label, enabled=job.size > 1) as on_progress:
-        record = albedo_cells(job, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
+        record = albedo_cells(job, workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint,
                               on_progress=on_progress)
     if job.size > 1:
         reused = record.chunks - record.chunks_computed

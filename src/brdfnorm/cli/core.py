@@ -17,21 +17,19 @@ from ..parallel import CellsJob
 from ..parallel.results import albedo_result, normalization_result, sweep_job
 from .application import app
 from .common import (
-    CHECKPOINT_OPTION,
-    CHUNK_CELLS_OPTION,
     CSV_OPTION,
     DEBUG_OPTION,
     JSON_OPTION,
     OUTPUT_OPTION,
     PARAM_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
     At,
     Over,
+    Spread,
     compute_cells,
     console,
     guarded,
     load_model,
+    parallel_options,
     parse_angles,
     parse_azimuth,
     parse_sweep,
@@ -68,6 +66,7 @@ def models(debug: bool = DEBUG_OPTION) -> None:
 
 
 @app.command()
+@parallel_options
 def albedo(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
@@ -84,10 +83,7 @@ def albedo(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
-    chunk_cells: int = CHUNK_CELLS_OPTION,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
@@ -101,12 +97,13 @@ def albedo(
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
         job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
-                          nonfinite=nonfinite.value, digits=digits, chunk_cells=chunk_cells)
-        cells = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
+                          nonfinite=nonfinite.value, digits=digits, chunk_cells=spread.chunk_cells)
+        cells = compute_cells(job, f"{m.name}: albedo", spread)
         write_file(output or STDOUT, render(albedo_result(job, cells).records(), chosen))
 
 
 @app.command("normalize")
+@parallel_options
 def normalize_command(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
@@ -122,10 +119,7 @@ def normalize_command(
     json_output: bool = JSON_OPTION,
     csv_output: bool = CSV_OPTION,
     output: str = OUTPUT_OPTION,
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
-    chunk_cells: int = CHUNK_CELLS_OPTION,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
@@ -140,13 +134,12 @@ def normalize_command(
         kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
                       over=over.value, rtol=rtol, method=method)
         if name is None:
-            if workers or scheduler or checkpoint or chunk_cells:
+            if spread.given():
                 raise ArgumentError("--workers, --scheduler, --checkpoint and --chunk-cells spread a --sweep's "
                                     "cells; there is no sweep", where="--sweep")
             result = compute_normalize(m, at=at.value, **kwargs)
         else:
-            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=chunk_cells)
-            cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
-                                  checkpoint=checkpoint)
+            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=spread.chunk_cells)
+            cells = compute_cells(job, f"{m.name}: sweeping {name}", spread)
             result = normalization_result(job, at.value, name, cells)
         write_file(output or STDOUT, render(result.records(), chosen))
