@@ -80,10 +80,10 @@ def check(
     (default 20 s); ``points``: parameter points of the coarse grid; ``pairs``: uniform direction pairs per
     parameter point (as many grazing ones and a structured grid are added).
 
-    ``workers`` (None: all cores; default 1, this process), ``scheduler`` (a Dask address), ``checkpoint`` (a
-    directory; needs a budget of evaluations) and ``chunk_cells`` send the albedo integrals through
-    :mod:`brdfnorm.parallel` as :func:`brdfnorm.parallel.albedo_cells` takes them (:mod:`.cells`): the report
-    is the same bit for bit under a budget of evaluations.
+    ``workers`` (None: all cores; default 1, this process), ``scheduler`` (a Dask address, with
+    ``workers=None``), ``checkpoint`` (a directory; needs a budget of evaluations) and ``chunk_cells`` send the
+    albedo integrals through :mod:`brdfnorm.parallel` as :func:`brdfnorm.lut.compute` takes them
+    (:mod:`.cells`): the report is the same bit for bit under a budget of evaluations.
     """
     if not isinstance(model, Model):
         from .. import load
