@@ -514,3 +514,30 @@ class LocalLobe(bn.Model):
 
     def evaluate(self, L, V, params):
         return np.full(L.shape[:-1] + (1,), 1 / np.pi)
+
+
+def test_a_check_stopped_by_sigterm_stops_its_workers_and_resumes(tmp_path):
+    directory = tmp_path / "check-ck"
+    process = subprocess.Popen([*CLI, "check", str(COOK_TORRANCE), "--points", "8", "--budget", "6e6evals",
+                                "--chunk-cells", "8", "--workers", "2", "--checkpoint", str(directory), "--json"],
+                               env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    children = {}
+    while len(_chunk_files(directory)) < 4:
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, "no chunk was saved"
+        children.update({c.pid: c for c in psutil.Process(process.pid).children(recursive=True)})
+        time.sleep(0.02)
+    process.send_signal(signal.SIGTERM)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 143 and out == "" and err.strip() == "error: interrupted by SIGTERM", err
+    _, alive = psutil.wait_procs(list(children.values()), timeout=5)
+    assert not alive, [(c.pid, c.cmdline()) for c in alive]
+    saved = len(_chunk_files(directory))
+
+    budget = Budget(seconds=None, evaluations=6_000_000)
+    resumed = check(COOK_TORRANCE, points=8, budget=budget, chunk_cells=8, workers=1, checkpoint=directory)
+    assert _verdicts(resumed) == _verdicts(check(COOK_TORRANCE, points=8, budget=budget))
+    spread = resumed.coverage["parallel"]
+    assert spread["chunks_from_checkpoint"] >= saved >= 4
+    assert 0 < spread["evaluations_computed"] < resumed.coverage["evaluations"]

@@ -24,6 +24,7 @@ it cannot use is worse than none.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import warnings
@@ -33,7 +34,7 @@ import numpy as np
 
 from ..errors import ArgumentError, OutputError
 from ..models.base import Model
-from ..parallel import CellsJob, ModelSource, Workers, run_job
+from ..parallel import CellsJob, ModelSource, Workers, run_job, sigterm_as_interrupt
 from ..parallel.checkpoint import write_atomically
 from ..parallel.job import canonical_json, validate_chunk_cells
 from .core import Budget
@@ -59,10 +60,14 @@ class SpreadAlbedo:
         self.executors: set[str] = set()
 
     def __enter__(self) -> SpreadAlbedo:
+        # SIGTERM anywhere in the check (not only while a job runs) stops it like Ctrl-C, and the pool with it
+        self._stack = contextlib.ExitStack()
+        self._stack.callback(self.pool.close)
+        self._stack.enter_context(sigterm_as_interrupt())
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        self.pool.close()
+        self._stack.close()
 
     def albedo(self, model: Model, theta: np.ndarray, phi: np.ndarray, values: dict[str, np.ndarray], *, over: str,
                rtol: float, max_evaluations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:

@@ -38,7 +38,7 @@ from .executors import OPTIONAL_FIELDS, ChunkResult, Workers, local_cores, run_c
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
 
 __all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "Workers",
-           "albedo_cells", "chunk_plan", "run_job", "local_cores", "run_chunk"]
+           "albedo_cells", "chunk_plan", "local_cores", "run_chunk", "run_job", "sigterm_as_interrupt"]
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = Non
         on_progress(cells_done, job.size)
     spent = 0
     # closing(): stop waiting on the chunks as soon as anything here fails, not when the generator is collected
-    with _sigterm_as_interrupt(), contextlib.closing(pool.run(job, plan, missing)) as results:
+    with sigterm_as_interrupt(), contextlib.closing(pool.run(job, plan, missing)) as results:
         for result in results:
             if store is not None:
                 store.save(result)
@@ -140,7 +140,7 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
+def sigterm_as_interrupt() -> Iterator[None]:
     """Turn SIGTERM into KeyboardInterrupt while chunks run, so workers are stopped and files stay whole."""
     if threading.current_thread() is not threading.main_thread():
         yield
