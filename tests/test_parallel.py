@@ -52,6 +52,21 @@ def _ggx_job(chunk_cells: int = 6) -> CellsJob:
                        chunk_cells=chunk_cells)
 
 
+COOK_TORRANCE = ROOT / "examples" / "cook_torrance.brdf"  # four bool combinations; fails energy at grazing views
+CHECK_ARGS = {"checks": ("energy", "normalization"), "at": "view", "points": 8,
+              "budget": Budget(seconds=None, evaluations=3_000_000)}
+
+
+def _verdicts(report) -> tuple[dict, dict]:
+    """A check's results and coverage without the clock's readings (what must be identical bit for bit)."""
+    def timeless(d: dict) -> dict:
+        return {k: timeless(v) if isinstance(v, dict) else v for k, v in d.items()
+                if not k.endswith("seconds") and k not in ("elapsed_s", "parallel")}
+
+    return ({name: {**vars(r), "sampled": timeless(r.sampled)} for name, r in report.results.items()},
+            timeless(report.coverage))
+
+
 # -- the job definition -----------------------------------------------------------------------------------
 
 def test_model_source_rebuilds_builtin_and_brdf_models():
@@ -213,6 +228,37 @@ def dask_cluster(tmp_path_factory):
                 process.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 process.kill()
+
+
+def test_check_through_dask_equals_the_in_process_check(dask_cluster, capsys):
+    from distributed import Client
+
+    address, _ = dask_cluster
+    with Client(address, timeout=30) as client:  # two unless a test before this one killed one
+        workers = len(client.scheduler_info()["workers"])
+    serial = check(COOK_TORRANCE, **CHECK_ARGS)
+    on_dask = check(COOK_TORRANCE, **CHECK_ARGS, workers=None, scheduler=address, chunk_cells=8)
+    assert on_dask.coverage["parallel"]["executors"] == [f"dask {address}"]
+    assert on_dask.coverage["parallel"]["workers"] == workers
+    assert _verdicts(on_dask) == _verdicts(serial)
+    # the command line: the same JSON but for the clock's readings and where the integrals ran
+    argv = ["check", str(COOK_TORRANCE), "--only", "energy,normalization", "--normalized", "--at", "view",
+            "--points", "8", "--budget", "3e6evals", "--json"]
+    code, local, err = run_cli(capsys, *argv, "--workers", "1")
+    assert code == 1, err  # the energy check fails
+    code, remote, err = run_cli(capsys, *argv, "--scheduler", address, "--chunk-cells", "8")
+    assert code == 1 and f"on {workers} workers (dask {address})" in err, err
+
+    def timeless(text: str) -> dict:
+        report = json.loads(text)["reports"][0]
+        for name in ("elapsed_s", "parallel"):
+            report["coverage"].pop(name, None)
+        for part in (report["coverage"]["energy"], report["checks"]["energy"]["sampled"]):
+            for name in ("coarse_seconds", "refinement_seconds"):
+                part.pop(name)
+        return report
+
+    assert timeless(remote) == timeless(local)
 
 
 def test_dask_table_equals_the_in_process_one_even_when_a_worker_dies(dask_cluster, capsys, monkeypatch):
@@ -382,26 +428,13 @@ def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
                                   dashboard_address=":0") as empty:
         with pytest.raises(ArgumentError, match="no workers"):
             albedo_cells(_ggx_job(), scheduler=empty.scheduler_address)
+        with pytest.raises(ArgumentError, match="no workers"):  # a check too, before any work
+            check("lambert", workers=None, scheduler=empty.scheduler_address)
     with pytest.raises(ArgumentError, match="cannot reach the Dask scheduler"):
         albedo_cells(_ggx_job(), scheduler="tcp://127.0.0.1:1")
 
 
 # -- a check's albedo integrals through the parallel layer ---------------------------------------------------
-
-COOK_TORRANCE = ROOT / "examples" / "cook_torrance.brdf"  # four bool combinations; fails energy at grazing views
-CHECK_ARGS = {"checks": ("energy", "normalization"), "at": "view", "points": 8,
-              "budget": Budget(seconds=None, evaluations=3_000_000)}
-
-
-def _verdicts(report) -> tuple[dict, dict]:
-    """A check's results and coverage without the clock's readings (what must be identical bit for bit)."""
-    def timeless(d: dict) -> dict:
-        return {k: timeless(v) if isinstance(v, dict) else v for k, v in d.items()
-                if not k.endswith("seconds") and k not in ("elapsed_s", "parallel")}
-
-    return ({name: {**vars(r), "sampled": timeless(r.sampled)} for name, r in report.results.items()},
-            timeless(report.coverage))
-
 
 def test_check_on_two_local_workers_equals_the_in_process_check():
     serial = check(COOK_TORRANCE, **CHECK_ARGS)
@@ -413,33 +446,6 @@ def test_check_on_two_local_workers_equals_the_in_process_check():
     assert spread["chunks"] > spread["jobs"] and spread["evaluations_computed"] == pooled.coverage["evaluations"]
     assert _verdicts(pooled) == _verdicts(serial)
     assert pooled.results["energy"].value == serial.results["energy"].value  # the numbers, not just the verdicts
-
-
-def test_check_through_dask_equals_the_in_process_check(dask_cluster, capsys):
-    address, _ = dask_cluster
-    serial = check(COOK_TORRANCE, **CHECK_ARGS)
-    on_dask = check(COOK_TORRANCE, **CHECK_ARGS, workers=None, scheduler=address, chunk_cells=8)
-    assert on_dask.coverage["parallel"]["executors"] == [f"dask {address}"]
-    assert on_dask.coverage["parallel"]["workers"] == 2
-    assert _verdicts(on_dask) == _verdicts(serial)
-    # the command line: the same JSON but for the clock's readings and where the integrals ran
-    argv = ["check", str(COOK_TORRANCE), "--only", "energy,normalization", "--normalized", "--at", "view",
-            "--points", "8", "--budget", "3e6evals", "--json"]
-    code, local, err = run_cli(capsys, *argv, "--workers", "1")
-    assert code == 1, err  # the energy check fails
-    code, remote, err = run_cli(capsys, *argv, "--scheduler", address, "--chunk-cells", "8")
-    assert code == 1 and f"on 2 workers (dask {address})" in err, err
-
-    def timeless(text: str) -> dict:
-        report = json.loads(text)["reports"][0]
-        for name in ("elapsed_s", "parallel"):
-            report["coverage"].pop(name, None)
-        for part in (report["coverage"]["energy"], report["checks"]["energy"]["sampled"]):
-            for name in ("coarse_seconds", "refinement_seconds"):
-                part.pop(name)
-        return report
-
-    assert timeless(remote) == timeless(local)
 
 
 def _chunk_files(directory: Path) -> list[Path]:

@@ -55,7 +55,7 @@ class SpreadAlbedo:
         ModelSource.of(model)  # a model that cannot travel is refused before any work
         self.chunk_cells = chunk_cells
         self.directory = None if checkpoint is None else _open(Path(checkpoint), model, definition, budget)
-        self.pool.start()  # an unreachable scheduler, or one without workers, fails before any work
+        self.pool.placement(1)  # an unreachable scheduler, or one without workers, fails before any work
         self.jobs = self.chunks = self.chunks_restored = self.evaluations_computed = 0
         self.executors: set[str] = set()
 

@@ -84,7 +84,7 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
 
 
 def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = None,
-                  on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
+            on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
     """Compute every cell of ``job`` on the open ``pool`` (see :func:`albedo_cells`)."""
     start = time.perf_counter()
     model = job.source.load()  # refuses a bad source here, once, with its own warnings

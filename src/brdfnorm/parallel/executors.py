@@ -150,20 +150,20 @@ class Workers:
         self.close()
 
     def start(self) -> None:
-        """Connect to the Dask scheduler (once) and count its workers; refuse one that has none."""
-        if self.scheduler is None or self._client is not None:
-            return
-        self._client = dask_client(self.scheduler)
-        self.count = len(self._client.scheduler_info().get("workers", {}))
-        if self.count == 0:  # tasks would wait for a worker forever
-            self.close()
-            raise ArgumentError(f"the Dask scheduler at {self.scheduler} has no workers (start some with `dask "
-                                f"worker {self.scheduler}`)", where="scheduler")
+        """Connect to the Dask scheduler (once) and count its workers."""
+        if self.scheduler is not None and self._client is None:
+            self._client = dask_client(self.scheduler)
+            self.count = len(self._client.scheduler_info().get("workers", {}))
 
     def placement(self, chunks: int) -> tuple[str, int]:
-        """Where ``chunks`` chunks to compute run, in words, and on how many workers."""
+        """Where ``chunks`` chunks to compute run, in words, and on how many workers; a Dask scheduler without
+        workers is refused when there is anything to compute (its tasks would wait forever)."""
         if self.scheduler is not None:
             self.start()
+            if self.count == 0 and chunks:
+                self.close()
+                raise ArgumentError(f"the Dask scheduler at {self.scheduler} has no workers (start some with "
+                                    f"`dask worker {self.scheduler}`)", where="scheduler")
             return f"dask {self.scheduler}", self.count
         if self.count <= 1 or chunks <= 1:
             return "in-process", 1
