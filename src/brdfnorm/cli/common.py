@@ -24,6 +24,8 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from .. import validate
 from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
+from ..output import STDOUT, write_file
+from ..output.formats import render
 
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
@@ -80,26 +82,50 @@ PARALLEL_OPTIONS = {
 
 
 def parallel_options(command: Callable | None = None, /, *, chunk_cells: bool = True):
-    """Give a typer command the options of :data:`PARALLEL_OPTIONS` (just before ``--debug``; without
-    ``--chunk-cells`` when ``chunk_cells`` is False); the command receives their values as one
-    ``spread: Spread`` argument instead."""
+    """Give a typer command the options of :data:`PARALLEL_OPTIONS` (without ``--chunk-cells`` when
+    ``chunk_cells`` is False); the command receives their values as one ``spread: Spread`` argument."""
     if command is None:
         return functools.partial(parallel_options, chunk_cells=chunk_cells)
-    names = [name for name in PARALLEL_OPTIONS if chunk_cells or name != "chunk_cells"]
+    options = {name: option for name, option in PARALLEL_OPTIONS.items() if chunk_cells or name != "chunk_cells"}
+    return _option_group(command, "spread", Spread, options)
+
+
+@dataclass(frozen=True)
+class ResultOutput:
+    """Where and how a command writes its result records: the values of --json, --csv and -o/--output."""
+
+    json_output: bool = False
+    csv_output: bool = False
+    output: str | None = None
+
+    def write(self, records) -> None:
+        """Render ``records`` as the chosen format (table, JSON or CSV) to the output file or stdout."""
+        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output)))
+
+
+def result_options(command: Callable) -> Callable:
+    """Give a typer command --json, --csv and -o/--output; it receives them as one ``result: ResultOutput``."""
+    return _option_group(command, "result", ResultOutput,
+                         {"json_output": (bool, JSON_OPTION), "csv_output": (bool, CSV_OPTION),
+                          "output": (str, OUTPUT_OPTION)})
+
+
+def _option_group(command: Callable, argument: str, group: type, options: dict[str, tuple[type, object]]):
+    """``command`` with ``options`` (name -> (type, typer option)) in place of its parameter ``argument``, just
+    before ``--debug``: typer reads the new signature, and the command receives ``group(**values)``."""
     signature = inspect.signature(command, eval_str=True)
-    parameters = [p for p in signature.parameters.values() if p.name != "spread"]
+    parameters = [p for p in signature.parameters.values() if p.name != argument]
     at = next((i for i, p in enumerate(parameters) if p.name == "debug"), len(parameters))
-    options = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=PARALLEL_OPTIONS[name][1],
-                                 annotation=PARALLEL_OPTIONS[name][0]) for name in names]
+    added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=option, annotation=kind)
+             for name, (kind, option) in options.items()]
 
     @functools.wraps(command)
-    def with_spread(*args, **kwargs):
-        spread = Spread(**{name: kwargs.pop(name) for name in names})
-        return command(*args, spread=spread, **kwargs)
+    def with_group(*args, **kwargs):
+        values = group(**{name: kwargs.pop(name) for name in options})
+        return command(*args, **{argument: values}, **kwargs)
 
-    # typer reads the signature: the command's own parameters with the options in place of `spread`
-    with_spread.__signature__ = signature.replace(parameters=[*parameters[:at], *options, *parameters[at:]])
-    return with_spread
+    with_group.__signature__ = signature.replace(parameters=[*parameters[:at], *added, *parameters[at:]])
+    return with_group
 
 
 #: API argument names as the command line spells them, for error messages.
