@@ -54,8 +54,12 @@ class SpreadAlbedo:
         self.pool = Workers(workers, scheduler)
         ModelSource.of(model)  # a model that cannot travel is refused before any work
         self.chunk_cells = chunk_cells
-        self.directory = None if checkpoint is None else _open(Path(checkpoint), model, definition, budget)
         self.pool.placement(1)  # an unreachable scheduler, or one without workers, fails before any work
+        try:
+            self.directory = None if checkpoint is None else _open(Path(checkpoint), model, definition, budget)
+        except BaseException:
+            self.pool.close()
+            raise
         self.jobs = self.chunks = self.chunks_restored = self.evaluations_computed = 0
         self.executors: set[str] = set()
 
