@@ -391,6 +391,19 @@ def test_a_checkpoint_of_another_job_is_refused(tmp_path, capsys):
     assert code == 2 and "chunk-000001.npz" in err and "damaged" in err and err.count("\n") == 1
 
 
+def test_every_parallel_command_has_the_same_options_in_the_same_place(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "200")
+    for command in ("albedo", "normalize", "fit", "lut", "check"):
+        code, out, _ = run_cli(capsys, command, "--help")
+        assert code == 0
+        options = [line.split()[1] for line in out.splitlines() if line.startswith("│ --") or
+                   line.startswith("│    --")]
+        expected = ["--workers", "--scheduler", "--checkpoint"] + ([] if command == "lut" else ["--chunk-cells"])
+        at = options.index("--workers")
+        assert options[at:at + len(expected) + 1] == [*expected, "--debug"], (command, options)
+        assert "DASK_SCHEDULER_ADDRESS" in out
+
+
 def test_bad_parallel_arguments_are_one_line_errors(capsys):
     cases = [
         (["albedo", "lambert", "--theta", "0,10", "--workers", "0"], "--workers"),
