@@ -1,6 +1,7 @@
 """brdfnorm.parallel: jobs as source, fixed chunks, identical tables in one process, a local pool and on Dask
 (a real scheduler and two worker processes on 127.0.0.1, one killed mid-run), and checkpoints that resume
-after SIGTERM/SIGKILL without recomputing finished chunks (shown by evaluation counts)."""
+after SIGTERM/SIGKILL without recomputing finished chunks (shown by evaluation counts); a check's albedo
+integrals through the same layer, with the same report bit for bit."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ import pytest
 from conftest import run_cli
 
 import brdfnorm as bn
+from brdfnorm.check import Budget, check
 from brdfnorm.errors import ArgumentError, EvaluationError
 from brdfnorm.normalization import normalize
 from brdfnorm.parallel import CellsJob, ModelSource, albedo_cells, chunk_plan
@@ -48,6 +50,21 @@ def _ggx_job(chunk_cells: int = 6) -> CellsJob:
     theta = np.radians(np.linspace(0, 85, 9))[None, :]
     return CellsJob.of(model, theta, values={"roughness": np.geomspace(0.05, 1.0, 4)[:, None]}, rtol=1e-8,
                        chunk_cells=chunk_cells)
+
+
+COOK_TORRANCE = ROOT / "examples" / "cook_torrance.brdf"  # four bool combinations; fails energy at grazing views
+CHECK_ARGS = {"checks": ("energy", "normalization"), "at": "view", "points": 8,
+              "budget": Budget(seconds=None, evaluations=3_000_000)}
+
+
+def _verdicts(report) -> tuple[dict, dict]:
+    """A check's results and coverage without the clock's readings (what must be identical bit for bit)."""
+    def timeless(d: dict) -> dict:
+        return {k: timeless(v) if isinstance(v, dict) else v for k, v in d.items()
+                if not k.endswith("seconds") and k not in ("elapsed_s", "parallel")}
+
+    return ({name: {**vars(r), "sampled": timeless(r.sampled)} for name, r in report.results.items()},
+            timeless(report.coverage))
 
 
 # -- the job definition -----------------------------------------------------------------------------------
@@ -213,6 +230,37 @@ def dask_cluster(tmp_path_factory):
                 process.kill()
 
 
+def test_check_through_dask_equals_the_in_process_check(dask_cluster, capsys):
+    from distributed import Client
+
+    address, _ = dask_cluster
+    with Client(address, timeout=30) as client:  # two unless a test before this one killed one
+        workers = len(client.scheduler_info()["workers"])
+    serial = check(COOK_TORRANCE, **CHECK_ARGS)
+    on_dask = check(COOK_TORRANCE, **CHECK_ARGS, workers=None, scheduler=address, chunk_cells=8)
+    assert on_dask.coverage["parallel"]["executors"] == [f"dask {address}"]
+    assert on_dask.coverage["parallel"]["workers"] == workers
+    assert _verdicts(on_dask) == _verdicts(serial)
+    # the command line: the same JSON but for the clock's readings and where the integrals ran
+    argv = ["check", str(COOK_TORRANCE), "--only", "energy,normalization", "--normalized", "--at", "view",
+            "--points", "8", "--budget", "3e6evals", "--json"]
+    code, local, err = run_cli(capsys, *argv, "--workers", "1")
+    assert code == 1, err  # the energy check fails
+    code, remote, err = run_cli(capsys, *argv, "--scheduler", address, "--chunk-cells", "8")
+    assert code == 1 and f"on {workers} workers (dask {address})" in err, err
+
+    def timeless(text: str) -> dict:
+        report = json.loads(text)["reports"][0]
+        for name in ("elapsed_s", "parallel"):
+            report["coverage"].pop(name, None)
+        for part in (report["coverage"]["energy"], report["checks"]["energy"]["sampled"]):
+            for name in ("coarse_seconds", "refinement_seconds"):
+                part.pop(name)
+        return report
+
+    assert timeless(remote) == timeless(local)
+
+
 def test_dask_table_equals_the_in_process_one_even_when_a_worker_dies(dask_cluster, capsys, monkeypatch):
     from distributed import Client
 
@@ -343,6 +391,19 @@ def test_a_checkpoint_of_another_job_is_refused(tmp_path, capsys):
     assert code == 2 and "chunk-000001.npz" in err and "damaged" in err and err.count("\n") == 1
 
 
+def test_every_parallel_command_has_the_same_options_in_the_same_place(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "200")
+    for command in ("albedo", "normalize", "fit", "lut", "check"):
+        code, out, _ = run_cli(capsys, command, "--help")
+        assert code == 0
+        options = [line.split()[1] for line in out.splitlines() if line.startswith("│ --") or
+                   line.startswith("│    --")]
+        expected = ["--workers", "--scheduler", "--checkpoint"] + ([] if command == "lut" else ["--chunk-cells"])
+        at = options.index("--workers")
+        assert options[at:at + len(expected) + 1] == [*expected, "--debug"], (command, options)
+        assert "DASK_SCHEDULER_ADDRESS" in out
+
+
 def test_bad_parallel_arguments_are_one_line_errors(capsys):
     cases = [
         (["albedo", "lambert", "--theta", "0,10", "--workers", "0"], "--workers"),
@@ -380,5 +441,122 @@ def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
                                   dashboard_address=":0") as empty:
         with pytest.raises(ArgumentError, match="no workers"):
             albedo_cells(_ggx_job(), scheduler=empty.scheduler_address)
+        with pytest.raises(ArgumentError, match="no workers"):  # a check too, before any work
+            check("lambert", workers=None, scheduler=empty.scheduler_address)
     with pytest.raises(ArgumentError, match="cannot reach the Dask scheduler"):
         albedo_cells(_ggx_job(), scheduler="tcp://127.0.0.1:1")
+
+
+# -- a check's albedo integrals through the parallel layer ---------------------------------------------------
+
+def test_check_on_two_local_workers_equals_the_in_process_check():
+    serial = check(COOK_TORRANCE, **CHECK_ARGS)
+    assert "parallel" not in serial.coverage and serial.status == "fail"  # a verdict with a worst case to compare
+    pooled = check(COOK_TORRANCE, **CHECK_ARGS, workers=2, chunk_cells=8)
+    spread = pooled.coverage["parallel"]
+    # batches larger than one chunk went to the pool, the others ran here; same values either way
+    assert spread["executors"] == ["in-process", "local processes"] and spread["workers"] == 2
+    assert spread["chunks"] > spread["jobs"] and spread["evaluations_computed"] == pooled.coverage["evaluations"]
+    assert _verdicts(pooled) == _verdicts(serial)
+    assert pooled.results["energy"].value == serial.results["energy"].value  # the numbers, not just the verdicts
+
+
+def _chunk_files(directory: Path) -> list[Path]:
+    return sorted(directory.glob("*/chunk-*.npz"))
+
+
+def test_a_checkpointed_check_resumes_without_recomputing_finished_chunks(tmp_path, capsys):
+    directory = tmp_path / "check-ck"
+    args = {**CHECK_ARGS, "workers": 1, "chunk_cells": 8, "checkpoint": directory}
+    first = check(COOK_TORRANCE, **args)
+    files = _chunk_files(directory)
+    assert (directory / "check.json").is_file() and len(files) == first.coverage["parallel"]["chunks"]
+    total = first.coverage["evaluations"]
+    assert first.coverage["parallel"]["evaluations_computed"] == total
+    assert _verdicts(first) == _verdicts(check(COOK_TORRANCE, **CHECK_ARGS))
+
+    # a run killed part way leaves whole chunk files (written atomically): drop every third one
+    lost = files[::3]
+    lost_evaluations = 0
+    for path in lost:
+        with np.load(path) as data:
+            lost_evaluations += int(data["evaluations"].sum())
+        path.unlink()
+    assert lost_evaluations > 0
+    resumed = check(COOK_TORRANCE, **args)
+    assert _verdicts(resumed) == _verdicts(first)  # the budget counted restored cells: the same search
+    spread = resumed.coverage["parallel"]
+    assert spread["evaluations_computed"] == lost_evaluations  # by evaluation counts: only what was lost
+    assert spread["chunks_from_checkpoint"] == len(files) - len(lost)
+    assert resumed.coverage["evaluations"] == total
+
+    # the command line on the complete checkpoint computes no integral and prints the same verdicts
+    argv = ["check", str(COOK_TORRANCE), "--only", "energy,normalization", "--normalized", "--at", "view",
+            "--points", "8", "--budget", "3e6evals", "--chunk-cells", "8", "--workers", "1", "--checkpoint",
+            str(directory), "--json"]
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 1, err
+    report = json.loads(out)["reports"][0]
+    assert report["coverage"]["parallel"]["evaluations_computed"] == 0
+    assert f"({len(files)} from the checkpoint)" in err
+    assert report["checks"]["energy"]["value"] == first.results["energy"].value
+
+
+def test_check_checkpoint_refusals_are_one_line_errors(tmp_path, capsys):
+    directory = tmp_path / "ck"
+    base = ["check", "lambert", "--points", "2", "--budget", "2e5evals", "--chunk-cells", "8", "--workers", "1"]
+    code, _, err = run_cli(capsys, *base, "--checkpoint", str(directory))
+    assert code == 0, err
+    before = {p: p.read_bytes() for p in directory.rglob("*") if p.is_file()}
+    cases = [
+        # under a budget of seconds a rerun asks for other integrals: refused, nothing written
+        (["check", "lambert", "--budget", "5", "--checkpoint", str(tmp_path / "other")], "budget of evaluations"),
+        (["check", "lambert", "phong", "--budget", "2e5evals", "--checkpoint", str(tmp_path / "other")], "one MODEL"),
+        ([*base, "--tolerance", "1e-5", "--checkpoint", str(directory)], "different check"),
+        ([*base, "--checkpoint", str(tmp_path)], "holds no brdfnorm check checkpoint"),  # not empty, not ours
+        (["check", "lambert", "--workers", "2", "--scheduler", "tcp://127.0.0.1:9"], "--workers"),
+        (["check", "lambert", "--chunk-cells", "0"], "--chunk-cells"),
+    ]
+    for argv, words in cases:
+        code, out, err = run_cli(capsys, *argv)
+        assert code == 2 and out == "" and err.count("\n") == 1 and words in err, (argv, err)
+    assert not (tmp_path / "other").exists()
+    assert {p: p.read_bytes() for p in directory.rglob("*") if p.is_file()} == before  # nothing clobbered
+    with pytest.raises(ArgumentError, match="cannot travel"):  # a model without a source stays in this process
+        check(LocalLobe(), workers=2, budget=Budget(seconds=None, evaluations=10_000))
+
+
+class LocalLobe(bn.Model):
+    """A lobe defined in a test: no source to send to another process."""
+
+    name = "local"
+
+    def evaluate(self, L, V, params):
+        return np.full(L.shape[:-1] + (1,), 1 / np.pi)
+
+
+def test_a_check_stopped_by_sigterm_stops_its_workers_and_resumes(tmp_path):
+    directory = tmp_path / "check-ck"
+    process = subprocess.Popen([*CLI, "check", str(COOK_TORRANCE), "--points", "8", "--budget", "6e6evals",
+                                "--chunk-cells", "8", "--workers", "2", "--checkpoint", str(directory), "--json"],
+                               env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    children = {}
+    while len(_chunk_files(directory)) < 4:
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, "no chunk was saved"
+        children.update({c.pid: c for c in psutil.Process(process.pid).children(recursive=True)})
+        time.sleep(0.02)
+    process.send_signal(signal.SIGTERM)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 143 and out == "" and err.strip() == "error: interrupted by SIGTERM", err
+    _, alive = psutil.wait_procs(list(children.values()), timeout=5)
+    assert not alive, [(c.pid, c.cmdline()) for c in alive]
+    saved = len(_chunk_files(directory))
+
+    budget = Budget(seconds=None, evaluations=6_000_000)
+    resumed = check(COOK_TORRANCE, points=8, budget=budget, chunk_cells=8, workers=1, checkpoint=directory)
+    assert _verdicts(resumed) == _verdicts(check(COOK_TORRANCE, points=8, budget=budget))
+    spread = resumed.coverage["parallel"]
+    assert spread["chunks_from_checkpoint"] >= saved >= 4
+    assert 0 < spread["evaluations_computed"] < resumed.coverage["evaluations"]

@@ -27,6 +27,7 @@ integrand evaluations); what was covered is reported.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
@@ -35,6 +36,7 @@ import numpy as np
 from .. import validate
 from ..errors import ArgumentError
 from ..models.base import Model, Over
+from .cells import SpreadAlbedo
 from .core import Budget, CheckReport, CheckResult, _Meter
 from .pointwise import _pointwise
 from .search import THETA_MAX, _energy, _normalization
@@ -64,6 +66,10 @@ def check(
     points: int = 48,
     pairs: int = 2048,
     seed: int = 0,
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    checkpoint: str | Path | None = None,
+    chunk_cells: int | None = None,
 ) -> CheckReport:
     """Audit ``model`` (a :class:`Model`, a built-in name or a ``.brdf`` path); see the module docstring.
 
@@ -73,6 +79,11 @@ def check(
     asymmetry (reciprocity); ``at``: the normalization convention; ``budget``: a :class:`Budget` or seconds
     (default 20 s); ``points``: parameter points of the coarse grid; ``pairs``: uniform direction pairs per
     parameter point (as many grazing ones and a structured grid are added).
+
+    ``workers`` (None: all cores; default 1, this process), ``scheduler`` (a Dask address, with
+    ``workers=None``), ``checkpoint`` (a directory; needs a budget of evaluations) and ``chunk_cells`` send the
+    albedo integrals through :mod:`brdfnorm.parallel` as :func:`brdfnorm.lut.compute` takes them
+    (:mod:`.cells`): the report is the same bit for bit under a budget of evaluations.
     """
     if not isinstance(model, Model):
         from .. import load
@@ -93,7 +104,6 @@ def check(
     if budget is not None and not isinstance(budget, Budget):
         budget = Budget(seconds=validate.real_number(budget, "budget"))
     budget = Budget() if budget is None else budget
-    meter = _Meter(budget)
     if isinstance(fixed, str):
         if fixed != "all":
             raise ArgumentError(f"fixed must be parameter names or 'all', got {fixed!r}", where="fixed")
@@ -105,6 +115,20 @@ def check(
                             f"{MAX_POINTS}; sweep fewer values or hold parameters fixed",
                             where="sweep" if space.discrete else "points")
     grid = _points(space, points, seed)
+    definition = {"checks": checks, "sweep": {k: list(v) for k, v in space.discrete}, "held": sorted(space.held),
+                  "tolerance": tolerance, "at": at, "over": over, "points": points, "pairs": pairs, "seed": seed,
+                  "budget": {"seconds": budget.seconds, "evaluations": budget.evaluations}, "chunk_cells": chunk_cells}
+    spread = SpreadAlbedo(model, definition, budget, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
+                          chunk_cells=chunk_cells) \
+        if (workers, scheduler, checkpoint, chunk_cells) != (1, None, None, None) else None
+    with spread or contextlib.nullcontext():
+        return _run(model, checks, space, grid, tolerance, at, over, pairs, seed, _Meter(budget, spread))
+
+
+def _run(model: Model, checks: tuple[str, ...], space, grid, tolerance: float, at: str, over: Over, pairs: int,
+         seed: int, meter: _Meter) -> CheckReport:
+    """The selected checks, in order, with what they covered."""
+    budget = meter.budget
     isotropic = bool(model.isotropic)
     results: dict[str, CheckResult] = {}
     pointwise = [c for c in checks if c in ("reciprocity", "positivity", "finiteness")]
@@ -118,6 +142,8 @@ def check(
     if "energy" in checks:
         results["energy"], coverage["energy"] = _energy(model, space, grid, over, tolerance, meter, isotropic)
     coverage.update(evaluations=meter.evaluations, elapsed_s=meter.elapsed(), budget_spent=meter.spent())
+    if meter.spread is not None:
+        coverage["parallel"] = meter.spread.coverage()
     ordered = {name: results[name] for name in CHECKS if name in results}
     source = getattr(model, "source_path", None)
     return CheckReport(model.name, source, tolerance, over, ordered, coverage)

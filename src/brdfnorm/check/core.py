@@ -36,10 +36,12 @@ class Budget:
 
 
 class _Meter:
-    """Time and evaluations spent against a :class:`Budget`; ``share`` reserves part of it for a stage."""
+    """Time and evaluations spent against a :class:`Budget`; ``share`` reserves part of it for a stage.
+    ``spread``: where the albedo integrals run when not in this process (a :class:`~.cells.SpreadAlbedo`)."""
 
-    def __init__(self, budget: Budget) -> None:
+    def __init__(self, budget: Budget, spread=None) -> None:
         self.budget = budget
+        self.spread = spread
         self.start = time.perf_counter()
         self.evaluations = 0
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..directional import albedo
 from .core import CheckResult, _fixed_name, _params_text
-from .space import _bind, _params_at, _Points
+from .space import _bind, _case_values, _params_at, _Points
 
 THETA_MAX = np.radians(89.9)  # the integrand degenerates at exactly 90°
 COARSE_RTOL = 1e-4
@@ -45,6 +45,15 @@ def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations
     value, error, bad = np.zeros((K, model.channels)), np.zeros((K, model.channels)), np.zeros(K)
     for combo in np.unique(points.combo):
         cases = np.flatnonzero(points.combo == combo)
+        if meter.spread is not None:  # through brdfnorm.parallel: the same values (check/cells.py)
+            bools, per_case = _case_values(space, points, combo, cases)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # a slider range is searched on purpose, never beyond it
+                bound = model.with_params(**bools)
+            value[cases], error[cases], bad[cases], spent = meter.spread.albedo(
+                bound, theta[cases], phi[cases], per_case, over=over, rtol=rtol, max_evaluations=max_evaluations)
+            meter.evaluations += spent
+            continue
         bound = _bind(model, space, points, combo, cases)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # non-convergence and zeroed NaNs are reported from the arrays

@@ -134,16 +134,20 @@ def _points(space: _Space, count: int, seed: int) -> _Points:
     return _Points(c, discrete[i], unit[j])
 
 
+def _case_values(space: _Space, points: _Points, combo: int, cases: np.ndarray) -> tuple[dict, dict]:
+    """The bool values of combination ``combo`` and the per-case float values of the cases (indices into
+    ``points``) that belong to it."""
+    per_case = {name: points.discrete[cases, k] for k, (name, _) in enumerate(space.discrete)}
+    per_case.update({r.name: r.value(points.x[cases, k]) for k, r in enumerate(space.ranges)})
+    return dict(space.bools[combo]), per_case
+
+
 def _bind(model: Model, space: _Space, points: _Points, combo: int, cases: np.ndarray) -> Model:
     """The model with per-case parameter arrays for the cases (indices into ``points``) of one bool combination."""
-    values = dict(space.bools[combo])
-    for k, (name, _) in enumerate(space.discrete):
-        values[name] = points.discrete[cases, k]
-    for k, r in enumerate(space.ranges):
-        values[r.name] = r.value(points.x[cases, k])
+    bools, per_case = _case_values(space, points, combo, cases)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a slider range is searched on purpose, never beyond it
-        return model.with_params(**values)
+        return model.with_params(**bools, **per_case)
 
 
 def _params_at(model: Model, space: _Space, points: _Points, index: int) -> dict:

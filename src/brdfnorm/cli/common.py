@@ -7,10 +7,13 @@ an internal error (with a hint to report it); ``--debug`` shows the traceback in
 from __future__ import annotations
 
 import contextlib
+import functools
+import inspect
 import math
 import sys
 import warnings
 from collections.abc import Callable, Iterator
+from dataclasses import astuple, dataclass
 from enum import Enum
 
 import numpy as np
@@ -21,6 +24,8 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from .. import validate
 from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
+from ..output import STDOUT, write_file
+from ..output.formats import render
 
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
@@ -46,18 +51,82 @@ class Over(str, Enum):
     view = "view"
 
 
-WORKERS_OPTION = typer.Option(None, "--workers", min=1, metavar="N",
-                              help="Local processes computing the table's cells (default: all cores; 1: this "
-                              "process).")
-SCHEDULER_OPTION = typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
-                                help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
-                                "instead of local processes.")
-CHECKPOINT_OPTION = typer.Option(None, "--checkpoint", metavar="DIR",
-                                 help="Save each finished chunk of cells in DIR; rerunning the same command "
-                                 "resumes, computing only what is missing.")
-CHUNK_CELLS_OPTION = typer.Option(None, "--chunk-cells", min=1, metavar="N",
-                                  help="Cells per chunk (part of the job's definition; default: sized by a short "
-                                  "probe so that a chunk takes about a second).")
+@dataclass(frozen=True)
+class Spread:
+    """Where a command's albedo cells are computed (:mod:`brdfnorm.parallel`): the values of --workers,
+    --scheduler, --checkpoint and --chunk-cells (None where not given)."""
+
+    workers: int | None = None
+    scheduler: str | None = None
+    checkpoint: str | None = None
+    chunk_cells: int | None = None
+
+    def given(self) -> bool:
+        return any(value is not None for value in astuple(self))
+
+
+#: The parallel layer's options, declared once (:func:`parallel_options` adds them to a command).
+PARALLEL_OPTIONS = {
+    "workers": (int, typer.Option(None, "--workers", min=1, metavar="N",
+                                  help="Local processes computing the cells (default: all cores; 1: this process).")),
+    "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
+                                    help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
+                                    "instead of local processes.")),
+    "checkpoint": (str, typer.Option(None, "--checkpoint", metavar="DIR",
+                                     help="Save each finished chunk of cells in DIR; rerunning the same command "
+                                     "resumes, computing only what is missing.")),
+    "chunk_cells": (int, typer.Option(None, "--chunk-cells", min=1, metavar="N",
+                                      help="Cells per chunk (part of the job's definition; default: sized by a "
+                                      "short probe so that a chunk takes about a second).")),
+}
+
+
+def parallel_options(command: Callable | None = None, /, *, chunk_cells: bool = True):
+    """Give a typer command the options of :data:`PARALLEL_OPTIONS` (without ``--chunk-cells`` when
+    ``chunk_cells`` is False); the command receives their values as one ``spread: Spread`` argument."""
+    if command is None:
+        return functools.partial(parallel_options, chunk_cells=chunk_cells)
+    options = {name: option for name, option in PARALLEL_OPTIONS.items() if chunk_cells or name != "chunk_cells"}
+    return _option_group(command, "spread", Spread, options)
+
+
+@dataclass(frozen=True)
+class ResultOutput:
+    """Where and how a command writes its result records: the values of --json, --csv and -o/--output."""
+
+    json_output: bool = False
+    csv_output: bool = False
+    output: str | None = None
+
+    def write(self, records) -> None:
+        """Render ``records`` as the chosen format (table, JSON or CSV) to the output file or stdout."""
+        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output)))
+
+
+def result_options(command: Callable) -> Callable:
+    """Give a typer command --json, --csv and -o/--output; it receives them as one ``result: ResultOutput``."""
+    return _option_group(command, "result", ResultOutput,
+                         {"json_output": (bool, JSON_OPTION), "csv_output": (bool, CSV_OPTION),
+                          "output": (str, OUTPUT_OPTION)})
+
+
+def _option_group(command: Callable, argument: str, group: type, options: dict[str, tuple[type, object]]):
+    """``command`` with ``options`` (name -> (type, typer option)) in place of its parameter ``argument``, just
+    before ``--debug``: typer reads the new signature, and the command receives ``group(**values)``."""
+    signature = inspect.signature(command, eval_str=True)
+    parameters = [p for p in signature.parameters.values() if p.name != argument]
+    at = next((i for i, p in enumerate(parameters) if p.name == "debug"), len(parameters))
+    added = [inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=option, annotation=kind)
+             for name, (kind, option) in options.items()]
+
+    @functools.wraps(command)
+    def with_group(*args, **kwargs):
+        values = group(**{name: kwargs.pop(name) for name in options})
+        return command(*args, **{argument: values}, **kwargs)
+
+    with_group.__signature__ = signature.replace(parameters=[*parameters[:at], *added, *parameters[at:]])
+    return with_group
+
 
 #: API argument names as the command line spells them, for error messages.
 CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--method", "sweep": "--sweep",
@@ -222,13 +291,13 @@ def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable
         yield on_progress
 
 
-def compute_cells(job, label: str, *, workers: int | None, scheduler: str | None, checkpoint: str | None):
-    """:func:`brdfnorm.parallel.albedo_cells` with a progress bar on stderr when it is a terminal, then a
-    one-line summary there (for more than one cell)."""
+def compute_cells(job, label: str, spread: Spread):
+    """:func:`brdfnorm.parallel.albedo_cells` where ``spread`` says, with a progress bar on stderr when it is a
+    terminal, then a one-line summary there (for more than one cell)."""
     from ..parallel import albedo_cells
 
     with progress_bar(label, enabled=job.size > 1) as on_progress:
-        record = albedo_cells(job, workers=workers, scheduler=scheduler, checkpoint=checkpoint,
+        record = albedo_cells(job, workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint,
                               on_progress=on_progress)
     if job.size > 1:
         reused = record.chunks - record.chunks_computed

@@ -11,31 +11,25 @@ from rich.table import Table
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize
-from ..output import STDOUT, write_file
-from ..output.formats import render
 from ..parallel import CellsJob
 from ..parallel.results import albedo_result, normalization_result, sweep_job
 from .application import app
 from .common import (
-    CHECKPOINT_OPTION,
-    CHUNK_CELLS_OPTION,
-    CSV_OPTION,
     DEBUG_OPTION,
-    JSON_OPTION,
-    OUTPUT_OPTION,
     PARAM_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
     At,
     Over,
+    ResultOutput,
+    Spread,
     compute_cells,
     console,
     guarded,
     load_model,
+    parallel_options,
     parse_angles,
     parse_azimuth,
     parse_sweep,
-    result_format,
+    result_options,
 )
 
 
@@ -68,6 +62,8 @@ def models(debug: bool = DEBUG_OPTION) -> None:
 
 
 @app.command()
+@parallel_options
+@result_options
 def albedo(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
@@ -81,13 +77,8 @@ def albedo(
                                         help="raise: fail at the first NaN/Inf; zero: count them as 0 (warns)."),
     digits: int = typer.Option(None, "--digits", min=1,
                                help="With --method certified: significant digits of the enclosure (default 30)."),
-    json_output: bool = JSON_OPTION,
-    csv_output: bool = CSV_OPTION,
-    output: str = OUTPUT_OPTION,
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
-    chunk_cells: int = CHUNK_CELLS_OPTION,
+    result: ResultOutput = None,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Directional albedo E = ∫ f(L,V)(N·L) dL at the given view angles (or over the view with --over view).
@@ -96,17 +87,18 @@ def albedo(
     as decimals rounded outward; JSON carries them as strings so that no digit is lost to float parsing.
     """
     with guarded(debug):
-        chosen = result_format(json_output, csv_output)
         m = load_model(model, param)
         degrees = parse_angles(theta)
         azimuth = parse_azimuth(phi)
         job = CellsJob.of(m, np.radians(degrees), np.radians(azimuth), over=over.value, rtol=rtol, method=method,
-                          nonfinite=nonfinite.value, digits=digits, chunk_cells=chunk_cells)
-        cells = compute_cells(job, f"{m.name}: albedo", workers=workers, scheduler=scheduler, checkpoint=checkpoint)
-        write_file(output or STDOUT, render(albedo_result(job, cells).records(), chosen))
+                          nonfinite=nonfinite.value, digits=digits, chunk_cells=spread.chunk_cells)
+        cells = compute_cells(job, f"{m.name}: albedo", spread)
+        result.write(albedo_result(job, cells).records())
 
 
 @app.command("normalize")
+@parallel_options
+@result_options
 def normalize_command(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
@@ -119,18 +111,12 @@ def normalize_command(
     over: Over = OVER_OPTION,
     method: str = METHOD_OPTION,
     rtol: float = RTOL_OPTION,
-    json_output: bool = JSON_OPTION,
-    csv_output: bool = CSV_OPTION,
-    output: str = OUTPUT_OPTION,
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
-    chunk_cells: int = CHUNK_CELLS_OPTION,
+    result: ResultOutput = None,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Normalization factors 1/E under a convention, optionally swept over a parameter."""
     with guarded(debug):
-        chosen = result_format(json_output, csv_output)
         m = load_model(model, param)
         name, values = parse_sweep(sweep) if sweep else (None, None)
         if name is not None:
@@ -140,13 +126,12 @@ def normalize_command(
         kwargs = dict(theta=None if degrees is None else np.radians(degrees), phi=np.radians(azimuth),
                       over=over.value, rtol=rtol, method=method)
         if name is None:
-            if workers or scheduler or checkpoint or chunk_cells:
+            if spread.given():
                 raise ArgumentError("--workers, --scheduler, --checkpoint and --chunk-cells spread a --sweep's "
                                     "cells; there is no sweep", where="--sweep")
-            result = compute_normalize(m, at=at.value, **kwargs)
+            factors = compute_normalize(m, at=at.value, **kwargs)
         else:
-            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=chunk_cells)
-            cells = compute_cells(job, f"{m.name}: sweeping {name}", workers=workers, scheduler=scheduler,
-                                  checkpoint=checkpoint)
-            result = normalization_result(job, at.value, name, cells)
-        write_file(output or STDOUT, render(result.records(), chosen))
+            job = sweep_job(m, at.value, name, values, **kwargs, chunk_cells=spread.chunk_cells)
+            cells = compute_cells(job, f"{m.name}: sweeping {name}", spread)
+            factors = normalization_result(job, at.value, name, cells)
+        result.write(factors.records())

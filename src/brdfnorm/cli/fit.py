@@ -25,17 +25,15 @@ from ..output.formats import to_json
 from ..parallel.results import normalization_result, sweep_job
 from .application import app
 from .common import (
-    CHECKPOINT_OPTION,
-    CHUNK_CELLS_OPTION,
     DEBUG_OPTION,
     PARAM_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
     At,
+    Spread,
     compute_cells,
     console,
     guarded,
     load_model,
+    parallel_options,
     parse_angles,
     parse_sweep,
 )
@@ -98,6 +96,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
 
 
 @app.command("fit")
+@parallel_options
 def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
@@ -125,10 +124,7 @@ def fit_command(
     output: str = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the emitted code here."),
     plot: str = typer.Option(None, "--plot", metavar="FILE.png", help="Plot α, the fit and its error."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
-    chunk_cells: int = CHUNK_CELLS_OPTION,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Fit a cheap formula (the fewest coefficients for --target with --form auto) to the normalization factor."""
@@ -165,9 +161,8 @@ def fit_command(
         m = load_model(model, param)
         m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
         job = sweep_job(m, at.value, name, values, None if degrees is None else np.radians(degrees), rtol=rtol,
-                        chunk_cells=chunk_cells)
-        samples = compute_cells(job, f"{m.name}: sampling the factor over {name}", workers=workers,
-                                scheduler=scheduler, checkpoint=checkpoint)
+                        chunk_cells=spread.chunk_cells)
+        samples = compute_cells(job, f"{m.name}: sampling the factor over {name}", spread)
         result = normalization_result(job, at.value, name, samples)
         y = _factor_channel(result.factor)
         if not np.all(np.isfinite(y)) or np.any(y <= 0):

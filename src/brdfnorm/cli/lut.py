@@ -16,13 +16,12 @@ from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_val
 from ..output import write_file
 from .application import app
 from .common import (
-    CHECKPOINT_OPTION,
     DEBUG_OPTION,
     PARAM_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
+    Spread,
     guarded,
     load_model,
+    parallel_options,
     parse_range,
     progress_bar,
 )
@@ -52,6 +51,7 @@ def parse_clamp(spec: str) -> tuple[str, float]:
 
 
 @app.command("lut")
+@parallel_options(chunk_cells=False)
 def lut_command(
     model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name or a .brdf file."),
     param: list[str] = PARAM_OPTION,
@@ -75,9 +75,7 @@ def lut_command(
                                     "; - writes a text format to stdout (with --format)."),
     fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
     half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
-    workers: int = WORKERS_OPTION,
-    scheduler: str = SCHEDULER_OPTION,
-    checkpoint: str = CHECKPOINT_OPTION,
+    spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Energy-compensation tables: E, its error, E_avg and 1 − E (and DFG) over the axes, one file."""
@@ -117,8 +115,8 @@ def lut_command(
         table_names = table or None
         with progress_bar(f"{m.name}: table cells") as progress:
             result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
-                             average=not no_average, grid=grid, source=model, progress=progress, workers=workers,
-                             scheduler=scheduler, checkpoint=checkpoint)
+                             average=not no_average, grid=grid, source=model, progress=progress, workers=spread.workers,
+                             scheduler=spread.scheduler, checkpoint=spread.checkpoint)
         data = formats.dumps(result, name, tables=table_names, half=half)
         unconverged = result.meta["unconverged"]
         if unconverged and not allow_unconverged:

@@ -12,11 +12,12 @@ in one process.
 >>> table.value.shape, bool(table.converged.all())
 ((3, 1), True)
 
-:class:`CellsJob` is the definition (model source, settings, cells; :mod:`.job`), :func:`albedo_cells`
-computes it: chunks fixed by the job (so the result is bit-for-bit the same in one process, N local processes
-or on Dask workers), computed in-process (``workers=1``), by a local process pool (default: all cores) or on
-a Dask cluster (``scheduler="tcp://HOST:PORT"``), each finished chunk written to ``checkpoint`` (a directory)
-when one is given, and only the missing chunks computed when it already holds some.
+:class:`CellsJob` is the definition (model source, settings, cells; :mod:`.job`), :func:`albedo_cells` computes it
+(:func:`run_job` computes several jobs on one open :class:`Workers`): chunks fixed by the job (so the result is
+bit-for-bit the same in one process, N local processes or on Dask workers), computed in-process (``workers=1``), by
+a local process pool (default: all cores) or on a Dask cluster (``scheduler="tcp://HOST:PORT"``), each finished
+chunk written to ``checkpoint`` (a directory) when one is given, and only the missing chunks computed when it
+already holds some.
 """
 
 from __future__ import annotations
@@ -32,13 +33,12 @@ from pathlib import Path
 import numpy as np
 
 from ..directional import warn_about
-from ..errors import ArgumentError
 from .checkpoint import Checkpoint
-from .executors import OPTIONAL_FIELDS, ChunkResult, dask_workers, execute, local_cores, run_chunk
+from .executors import OPTIONAL_FIELDS, ChunkResult, Workers, local_cores, run_chunk
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
 
-__all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "albedo_cells",
-           "chunk_plan", "local_cores", "run_chunk"]
+__all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "Workers",
+           "albedo_cells", "chunk_plan", "local_cores", "run_chunk", "run_job", "sigterm_as_interrupt"]
 
 
 @dataclass(frozen=True)
@@ -76,14 +76,17 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
     ``scheduler``: a Dask scheduler address (then the cluster's workers compute, and ``workers`` must be None);
     ``checkpoint``: a directory to save finished chunks in and resume from; ``on_progress(done, total)`` is
     called with cell counts as chunks finish (anywhere). SIGTERM stops the run like Ctrl-C
-    (:class:`KeyboardInterrupt`), losing at most the chunks in flight.
+    (:class:`KeyboardInterrupt`), losing at most the chunks in flight. A caller with many jobs holds one
+    :class:`Workers` open and calls :func:`run_job` with it instead.
     """
+    with Workers(workers, scheduler) as pool:
+        return run_job(job, pool, checkpoint=checkpoint, on_progress=on_progress)
+
+
+def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = None,
+            on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
+    """Compute every cell of ``job`` on the open ``pool`` (see :func:`albedo_cells`)."""
     start = time.perf_counter()
-    if scheduler is not None and workers is not None:
-        raise ArgumentError("give either workers (a local process pool) or a Dask scheduler (on the command line "
-                            "also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
-    if workers is not None and (int(workers) != workers or workers < 1):
-        raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
     model = job.source.load()  # refuses a bad source here, once, with its own warnings
     job.settings.validate(model)
     if checkpoint is not None:
@@ -93,23 +96,13 @@ def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | 
         store, plan = None, chunk_plan(job, model)
     done = store.finished() if store is not None else {}
     missing = [k for k in range(plan.count) if k not in done]
-    count = workers if workers is not None else local_cores()
-    if scheduler:
-        executor, count = f"dask {scheduler}", dask_workers(scheduler)
-        if count == 0 and missing:  # tasks would wait for a worker forever
-            raise ArgumentError(f"the Dask scheduler at {scheduler} has no workers (start some with `dask worker "
-                                f"{scheduler}`)", where="scheduler")
-    elif count <= 1 or len(missing) <= 1:
-        executor, count = "in-process", 1
-    else:
-        executor, count = "local processes", min(count, len(missing))
+    executor, count = pool.placement(len(missing))
     cells_done = sum(plan.chunk(k).size for k in done)
     if on_progress is not None:
         on_progress(cells_done, job.size)
     spent = 0
-    # closing(): stop the workers as soon as anything here fails, not when the generator is collected
-    with _sigterm_as_interrupt(), contextlib.closing(execute(job, plan, missing, workers=count,
-                                                              scheduler=scheduler)) as results:
+    # closing(): stop waiting on the chunks as soon as anything here fails, not when the generator is collected
+    with sigterm_as_interrupt(), contextlib.closing(pool.run(job, plan, missing)) as results:
         for result in results:
             if store is not None:
                 store.save(result)
@@ -147,7 +140,7 @@ def _assemble(job: CellsJob, plan: ChunkPlan, done: dict[int, ChunkResult], comp
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
+def sigterm_as_interrupt() -> Iterator[None]:
     """Turn SIGTERM into KeyboardInterrupt while chunks run, so workers are stopped and files stay whole."""
     if threading.current_thread() is not threading.main_thread():
         yield

@@ -131,19 +131,22 @@ class Checkpoint:
         return ChunkResult(index=index, method=method, seconds=seconds, **arrays)
 
     def _write(self, name: str, data: bytes) -> None:
-        """Write ``DIR/name`` through a temporary file and a rename (whole or not at all)."""
-        try:
-            fd, temporary = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=self.directory)
-        except OSError as error:
-            raise OutputError(f"cannot write the checkpoint: {error.strerror}", where=str(self.directory)) from None
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(temporary, self.directory / name)
-        except OSError as error:
-            with contextlib.suppress(OSError):
-                os.unlink(temporary)
-            raise OutputError(f"cannot write the checkpoint: {error.strerror}", where=str(self.directory / name)) \
-                from None
+        write_atomically(self.directory / name, data)
+
+
+def write_atomically(path: Path, data: bytes) -> None:
+    """Write ``path`` through a temporary file in its directory and a rename (whole or not at all)."""
+    try:
+        fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as error:
+        raise OutputError(f"cannot write the checkpoint: {error.strerror}", where=str(path.parent)) from None
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    except OSError as error:
+        with contextlib.suppress(OSError):
+            os.unlink(temporary)
+        raise OutputError(f"cannot write the checkpoint: {error.strerror}", where=str(path)) from None

@@ -5,13 +5,15 @@ settings) and one chunk's cells (plain arrays), rebuilds the model from its sour
 computes the chunk as one vectorized batch. Nothing else crosses a process boundary — no closure, no model
 object — so a worker on another machine only needs the same brdfnorm version (checked).
 
-Executors (:func:`execute`) yield :class:`ChunkResult` objects as chunks finish, in completion order:
+:class:`Workers` (held open across the jobs of one run: a check asks for many small jobs) yields
+:class:`ChunkResult` objects as chunks finish, in completion order, from one of:
 
-* in-process (``workers=1``);
+* this process (``workers=1``, or a job with one chunk to compute);
 * a local :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver`` start method (``spawn`` where
   there is none): fresh interpreters, never a fork of a process that may hold threads or a Dask client;
 * ``dask.distributed`` (``scheduler="tcp://HOST:PORT"``): one task per chunk with a key derived from the job's
-  hash, ``retries`` for failures inside a task; a worker lost mid-chunk is rescheduled by Dask itself.
+  hash and a token of the submission (a job asked for twice never meets its own released key), ``retries`` for
+  failures inside a task; a worker lost mid-chunk is rescheduled by Dask itself.
 
 Stopping early (an exception, SIGTERM turned into :class:`KeyboardInterrupt`) cancels the chunks not started
 and stops local workers at once: at most the chunks in flight are lost.
@@ -23,6 +25,7 @@ import functools
 import json
 import multiprocessing
 import time
+import uuid
 import warnings
 from collections.abc import Iterator, Mapping
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -119,38 +122,93 @@ def local_cores() -> int:
     return max(1, os.cpu_count() or 1)
 
 
-def execute(job: CellsJob, plan: ChunkPlan, missing: list[int], *, workers: int,
-            scheduler: str | None) -> Iterator[ChunkResult]:
-    """Compute the ``missing`` chunks, yielding each as it finishes."""
-    header = canonical_json(job.header())
-    tasks = [(header, k, *job.cells(plan.chunk(k))) for k in missing]
-    if scheduler:
-        return _on_dask(tasks, scheduler, job.digest)
-    if workers <= 1 or len(tasks) <= 1:
-        return (run_chunk(*task) for task in tasks)
-    return _in_pool(tasks, min(workers, len(tasks)))
+class Workers:
+    """Where the chunks of one or more jobs run, held open between jobs (one pool, one Dask client per run).
+
+    ``workers``: local processes (None: all cores; 1: this process); ``scheduler``: a Dask scheduler address
+    (then ``workers`` must be None). Validated here, before any work; the pool starts at the first job with
+    more than one chunk to compute, the Dask client at :meth:`start`. Use it as a context manager: leaving it
+    stops the pool's processes at once (an exception, SIGTERM turned into KeyboardInterrupt) and closes the
+    client.
+    """
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+        if scheduler is not None and workers is not None:
+            raise ArgumentError("give either workers (a local process pool) or a Dask scheduler (on the command "
+                                "line also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
+        if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
+            raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
+        self.scheduler = scheduler or None
+        self.count = int(workers) if workers is not None else local_cores()
+        self._pool: ProcessPoolExecutor | None = None
+        self._client = None
+
+    def __enter__(self) -> Workers:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    def start(self) -> None:
+        """Connect to the Dask scheduler (once) and count its workers."""
+        if self.scheduler is not None and self._client is None:
+            self._client = dask_client(self.scheduler)
+            self.count = len(self._client.scheduler_info().get("workers", {}))
+
+    def placement(self, chunks: int) -> tuple[str, int]:
+        """Where ``chunks`` chunks to compute run, in words, and on how many workers; a Dask scheduler without
+        workers is refused when there is anything to compute (its tasks would wait forever)."""
+        if self.scheduler is not None:
+            self.start()
+            if self.count == 0 and chunks:
+                self.close()
+                raise ArgumentError(f"the Dask scheduler at {self.scheduler} has no workers (start some with "
+                                    f"`dask worker {self.scheduler}`)", where="scheduler")
+            return f"dask {self.scheduler}", self.count
+        if self.count <= 1 or chunks <= 1:
+            return "in-process", 1
+        return "local processes", min(self.count, chunks)
+
+    def run(self, job: CellsJob, plan: ChunkPlan, missing: list[int]) -> Iterator[ChunkResult]:
+        """Compute the ``missing`` chunks of ``job``, yielding each as it finishes (in completion order)."""
+        header = canonical_json(job.header())
+        tasks = [(header, k, *job.cells(plan.chunk(k))) for k in missing]
+        where, count = self.placement(len(tasks))
+        if self.scheduler is not None:
+            return _on_dask(tasks, self._client, job.digest)
+        if where == "in-process":
+            return (run_chunk(*task) for task in tasks)
+        if self._pool is None:
+            methods = multiprocessing.get_all_start_methods()
+            context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+            self._pool = ProcessPoolExecutor(max_workers=self.count, mp_context=context)
+        return _in_pool(self._pool, tasks)
+
+    def close(self) -> None:
+        """Stop the pool's processes now (not after their chunks) and close the Dask client."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            if hasattr(pool, "terminate_workers"):  # Python ≥ 3.14
+                pool.terminate_workers()
+            else:  # no public way before 3.14
+                processes = list((getattr(pool, "_processes", None) or {}).values())
+                pool.shutdown(wait=False, cancel_futures=True)
+                for process in processes:
+                    if process.is_alive():
+                        process.terminate()
+        client, self._client = self._client, None
+        if client is not None:
+            client.close()
 
 
-def _in_pool(tasks: list[tuple], workers: int) -> Iterator[ChunkResult]:
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context)
-    try:
-        pending = {pool.submit(run_chunk, *task) for task in tasks}
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                yield future.result()
-    finally:
-        # Stopped early: drop what has not started and end the workers now rather than after their chunks.
-        if hasattr(pool, "terminate_workers"):  # Python ≥ 3.14
-            pool.terminate_workers()
-        else:  # no public way before 3.14
-            processes = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for process in processes:
-                if process.is_alive():
-                    process.terminate()
+def _in_pool(pool: ProcessPoolExecutor, tasks: list[tuple]) -> Iterator[ChunkResult]:
+    # Stopped early, the caller leaves its Workers, whose close() drops what has not started and ends the rest
+    # (cancelling futures here would race the pool's own shutdown).
+    pending = {pool.submit(run_chunk, *task) for task in tasks}
+    while pending:
+        done, pending = wait(pending, return_when=FIRST_COMPLETED)
+        for future in done:
+            yield future.result()
 
 
 def dask_client(scheduler: str):
@@ -167,25 +225,15 @@ def dask_client(scheduler: str):
         raise ArgumentError(f"cannot reach the Dask scheduler at {scheduler}: {detail}", where="scheduler") from None
 
 
-def dask_workers(scheduler: str) -> int:
-    """How many workers a scheduler has now (for the summary)."""
-    client = dask_client(scheduler)
-    try:
-        return len(client.scheduler_info().get("workers", {}))
-    finally:
-        client.close()
-
-
-def _on_dask(tasks: list[tuple], scheduler: str, digest: str) -> Iterator[ChunkResult]:
+def _on_dask(tasks: list[tuple], client, digest: str) -> Iterator[ChunkResult]:
     from distributed import as_completed
 
-    client = dask_client(scheduler)
     futures = []
     try:
-        futures = [client.submit(run_chunk, *task, key=f"brdfnorm-{digest[:16]}-chunk-{task[1]}",
+        token = uuid.uuid4().hex[:8]
+        futures = [client.submit(run_chunk, *task, key=f"brdfnorm-{digest[:16]}-{token}-chunk-{task[1]}",
                                  retries=DASK_RETRIES, pure=False) for task in tasks]
         for future in as_completed(futures, loop=client.loop):
             yield future.result()
     finally:
         client.cancel(futures)
-        client.close()

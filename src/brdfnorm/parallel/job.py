@@ -162,9 +162,7 @@ class CellsJob:
         digits)."""
         if task not in TASKS:
             raise ArgumentError(f"task must be one of {', '.join(TASKS)}, got {task!r}", where="task")
-        if chunk_cells is not None and (int(chunk_cells) != chunk_cells or chunk_cells < 1):
-            raise ArgumentError(f"chunk_cells must be a positive whole number, got {chunk_cells!r}",
-                                where="chunk_cells")
+        validate_chunk_cells(chunk_cells)
         if task == "max" and len(values or {}) > 1:
             raise ArgumentError("the 'max' task searches one swept parameter at a time", where="values")
         theta, phi = validate.angles(theta, phi)
@@ -223,6 +221,13 @@ class CellsJob:
     def cells(self, index: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         """θ, φ and per-cell parameter values of the cells ``index``."""
         return self.theta[index], self.phi[index], {k: v[index] for k, v in self.values.items()}
+
+
+def validate_chunk_cells(chunk_cells: int | None) -> None:
+    """Refuse a chunk size that is not a positive whole number (None: chosen by the probe)."""
+    if chunk_cells is not None and (isinstance(chunk_cells, bool) or int(chunk_cells) != chunk_cells
+                                    or chunk_cells < 1):
+        raise ArgumentError(f"chunk_cells must be a positive whole number, got {chunk_cells!r}", where="chunk_cells")
 
 
 def canonical_json(data: object) -> str:
