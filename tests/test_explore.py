@@ -35,8 +35,8 @@ from brdfnorm.explore.compute import (  # noqa: E402
     factor_bound,
     fit_factor,
     format_with_error,
-    round_up_error,
 )
+from brdfnorm.output.formats import format_error, round_up  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 GGX = ROOT / "examples" / "ggx.brdf"
@@ -64,9 +64,18 @@ def test_format_with_error(value, error, expected):
 
 @pytest.mark.parametrize("error", [2.5e-11, 1e-3, 9.99e-7, 1.0000001e-5, 3e-300])
 def test_shown_error_is_never_smaller_than_the_estimate(error):
-    shown = round_up_error(error)
+    shown = round_up(error)
     assert shown >= error and shown <= 10 * error
     assert float(f"{shown:.1g}") >= error
+
+
+@pytest.mark.parametrize("error, digits, expected", [
+    (2.46e-9, 1, "3e-09"), (1.111e-10, 2, "1.2e-10"), (3e-10, 1, "3e-10"), (1.2345e-9, 3, "1.24e-09"),
+    (9.981e-7, 3, "9.99e-07"), (9.991e-7, 3, "1e-06"), (5.0, 3, "5"),
+])
+def test_errors_are_shortened_upwards(error, digits, expected):
+    assert format_error(error, digits) == expected
+    assert float(format_error(error, digits)) >= error * (1 - 1e-15)
 
 
 def test_factor_error_bound_holds_over_the_whole_interval():

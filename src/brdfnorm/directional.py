@@ -78,7 +78,7 @@ class AlbedoResult:
             meta={"model": self.model, "params": self.bound, "over": self.over, "rtol": self.rtol},
             columns=(Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6), Column("albedo", "albedo"))
             + parts
-            + (Column("error_estimate", "error estimate", 3), Column("method", "method", None),
+            + (Column("error_estimate", "error estimate", 3, bound=True), Column("method", "method", None),
                      Column("evaluations", "evaluations", None), Column("converged", "converged", None),
                      Column("reason", "reason", None))
             + bounds,

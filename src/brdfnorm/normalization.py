@@ -75,7 +75,7 @@ class NormalizationResult:
             title=f"{self.model}: normalization factor 1/E at {self.at} (over the {self.over})",
             meta={"model": self.model, "params": self.params, "at": self.at, "over": self.over, "rtol": self.rtol},
             columns=columns + (Column("theta_deg", "θ (deg)", 6), Column("phi_deg", "φ (deg)", 6),
-                               Column("albedo", "albedo"), Column("error_estimate", "error estimate", 3),
+                               Column("albedo", "albedo"), Column("error_estimate", "error estimate", 3, bound=True),
                                Column("factor", "factor"), Column("method", "method", None),
                                Column("at", "at", None, in_table=False),
                                Column("converged", "converged", None, in_table=False),

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 
 from ..directional import albedo
+from ..output.formats import format_error
 from .core import CheckResult, _fixed_name, _params_text
 from .space import _bind, _case_values, _params_at, _Points
 
@@ -170,12 +171,13 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
     params = _params_at(model, space, final, 0)
     theta_deg, phi_deg = float(np.degrees(y[c, 0] * THETA_MAX)), float(np.degrees(y[c, 1] * 2 * np.pi))
     where = f"at {_params_text(params)}, {_fixed_name(over)} θ={theta_deg:.4g}° φ={phi_deg:.4g}°"
+    shown = format_error(err, 2)  # rounded up: the printed error is never below the estimate
     if status == "fail":
-        message = f"gains energy: albedo {E:.10g} ± {err:.2g} > 1 + {tolerance:g} (gained {E - 1:.4g}) {where}"
+        message = f"gains energy: albedo {E:.10g} ± {shown} > 1 + {tolerance:g} (gained {E - 1:.4g}) {where}"
     elif status == "pass":
-        message = f"largest albedo found {E:.10g} ± {err:.2g} ≤ 1 + {tolerance:g} {where}"
+        message = f"largest albedo found {E:.10g} ± {shown} ≤ 1 + {tolerance:g} {where}"
     else:
-        message = (f"inconclusive: largest albedo found {E:.10g} ± {err:.2g} straddles 1 + {tolerance:g} {where}; "
+        message = (f"inconclusive: largest albedo found {E:.10g} ± {shown} straddles 1 + {tolerance:g} {where}; "
                    "tighten the tolerance or check the integrand")
     if bad[0] > 0:
         message += f"; non-finite values counted as 0 on {100 * bad[0]:.3g}% of the hemisphere there"
@@ -225,7 +227,7 @@ def _normalization(model, space, points: _Points, at, over, tolerance, meter, is
     status = "fail" if dev - err > tolerance else "pass" if dev + err <= tolerance else "inconclusive"
     where = f"at {_params_text(params)}, {_fixed_name(over)} θ={np.degrees(theta):.4g}° φ={np.degrees(phi):.4g}°"
     verdict = {"fail": "not normalized", "pass": "normalized", "inconclusive": "inconclusive"}[status]
-    message = (f"{verdict} (at {at}): largest |E − 1| {dev:.3g} ± {err:.2g} (tolerance {tolerance:g}), "
+    message = (f"{verdict} (at {at}): largest |E − 1| {dev:.3g} ± {format_error(err, 2)} (tolerance {tolerance:g}), "
                f"E = {E:.10g} {where}")
     return CheckResult("normalization", status, dev, message, error=err, params=params,
                        theta_deg=float(np.degrees(theta)), phi_deg=float(np.degrees(phi)), channel=int(c),

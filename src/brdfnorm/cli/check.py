@@ -18,7 +18,7 @@ from ..check import CHECKS, DEFAULT_CHECKS, Budget, CheckReport
 from ..check import check as run_check
 from ..errors import ArgumentError
 from ..output import STDOUT, write_file
-from ..output.formats import to_json
+from ..output.formats import format_error, to_json
 from .application import app
 from .common import (
     DEBUG_OPTION,
@@ -198,7 +198,7 @@ def cell(result) -> str:
     """The headline number of one check, as the summary table shows it."""
     if result.name in ("energy", "normalization"):
         label = "max E " if result.name == "energy" else "|E−1| "
-        return f"{label}{result.value:.8g} ± {result.error:.1g}"
+        return f"{label}{result.value:.8g} ± {format_error(result.error)}"
     if result.name == "reciprocity":
         return f"{result.value:.2g} of scale"
     return f"{100 * result.share:.3g}% of domain" if result.share else "none found"

@@ -14,6 +14,7 @@ from ..errors import ArgumentError, OutputError
 from ..lut import formats
 from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
 from ..output import write_file
+from ..output.formats import format_error
 from .application import app
 from .common import (
     DEBUG_OPTION,
@@ -126,5 +127,5 @@ def lut_command(
         write_file(output, data)
         cells = int(np.prod([len(v) for v in axes.values()]))
         worst = float(np.max(result["E_error"])) if result["E_error"].size else 0.0
-        typer.echo(f"{m.name}: {cells} cells, max error estimate {worst:.3g}, {unconverged} unconverged"
+        typer.echo(f"{m.name}: {cells} cells, max error estimate {format_error(worst, 3)}, {unconverged} unconverged"
                    + ("" if to_stdout else f"; wrote {output}"), err=True)

@@ -40,6 +40,7 @@ from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, Paramete
 from ..fit import fit
 from ..models.base import Model, mirror
 from ..normalization import THETA_MAX
+from ..output.formats import format_with_error
 from ..validate import choice, count, real_array, real_number, short_repr
 
 CONVENTIONS = ("normal", "max", "view")
@@ -167,30 +168,6 @@ def cancellable(model: Model, check: Callable[[], None]) -> Model:
     copy.evaluate = checked_evaluate  # type: ignore[method-assign]
     copy.projected = checked_projected  # type: ignore[method-assign]
     return copy
-
-
-# -- numbers as text ----------------------------------------------------------------------------------------
-
-def round_up_error(error: float) -> float:
-    """The error to one significant digit, rounded *up* (a shown error is never smaller than the estimate)."""
-    if not (math.isfinite(error) and error > 0):
-        return error
-    exponent = math.floor(math.log10(error))
-    mantissa = math.ceil(error / 10.0**exponent * (1 - 1e-12))
-    return mantissa * 10.0**exponent
-
-
-def format_with_error(value: float, error: float) -> str:
-    """``value ± error`` with the value's digits down to the error's first significant digit."""
-    if not math.isfinite(value):
-        return "not finite"
-    if not (math.isfinite(error) and error > 0):
-        return f"{value:.12g}" + ("" if error == 0 else " ± ?")
-    shown = round_up_error(error)
-    leading = math.floor(math.log10(abs(value))) if value else math.floor(math.log10(shown))
-    digits = min(15, max(1, leading - math.floor(math.log10(shown)) + 1))
-    # '#' keeps trailing zeros (they are digits shown); a bare trailing point is dropped.
-    return f"{value:#.{digits}g}".replace(".e", "e").rstrip(".") + f" ± {shown:.1g}"
 
 
 def _readout(values: np.ndarray, errors: np.ndarray) -> dict:

@@ -7,10 +7,12 @@ and the benchmarks print the same numbers the same way:
 
 * ``json`` — one object, the top-level fields plus ``results`` (the rows); non-finite floats become ``null``.
 * ``csv`` — a header row and one row per point; parameters get one column each; full precision (``repr``).
-* ``table`` — a rich table for people: 12 significant digits for values, 3 for error estimates.
+* ``table`` — a rich table for people: 12 significant digits for values, 3 for error estimates (rounded *up*).
 
 :func:`format_value` is the one formatter of a parameter or result value (bools as 0/1, colors and channels
-comma-joined), used by the tables, ``brdfnorm info`` and the report.
+comma-joined), used by the tables, ``brdfnorm info`` and the report. An error estimate shown with fewer digits
+is rounded up, never to nearest (:func:`round_up`, :func:`format_error`, :func:`format_with_error`): a printed
+error smaller than the estimate would claim an accuracy the computation did not establish.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ class Column:
     header: str
     digits: int | None = 12  # significant digits in a table; None: the value's own text
     in_table: bool = True
+    bound: bool = False  # an error estimate: shortened by rounding up, never to nearest
 
 
 @dataclass(frozen=True)
@@ -53,19 +56,52 @@ class Records:
         return row[column.key]
 
 
-def format_value(value: object, digits: int | None = None) -> str:
+def format_value(value: object, digits: int | None = None, *, bound: bool = False) -> str:
     """A parameter or result value as text: ``digits`` significant digits (None: full precision, ``repr``);
-    bools as 0/1; sequences (colors, channels) comma-joined; text as it is."""
+    bools as 0/1; sequences (colors, channels) comma-joined; text as it is. ``bound``: the value is an error
+    estimate, shortened by rounding up (:func:`format_error`)."""
     if isinstance(value, (bool, np.bool_)):
         return str(int(value))
     if isinstance(value, str):
         return value
     if isinstance(value, (Sequence, np.ndarray)):
-        return ",".join(format_value(v, digits) for v in np.ravel(np.asarray(value, dtype=object)))
+        return ",".join(format_value(v, digits, bound=bound) for v in np.ravel(np.asarray(value, dtype=object)))
     if isinstance(value, (int, np.integer)):
         return str(int(value))
     number = float(value)  # type: ignore[arg-type]
-    return repr(number) if digits is None else f"{number:.{digits}g}"
+    if digits is None:
+        return repr(number)
+    return format_error(number, digits) if bound else f"{number:.{digits}g}"
+
+
+def round_up(error: float, digits: int = 1) -> float:
+    """``error`` to ``digits`` significant digits, rounded *up*: the shown error is never below the estimate."""
+    if not (math.isfinite(error) and error > 0):
+        return error
+    step = 10.0 ** (math.floor(math.log10(error)) - digits + 1)
+    shown = math.ceil(error / step) * step
+    # 10**k is inexact for k < 0 (3e-10 / 1e-10 = 2.9999999999999996 → ceil 3 is right, but 3.0000000000000004
+    # → 4 would not be): step back when the float just below the next step already covers the error.
+    lower = (math.ceil(error / step) - 1) * step
+    return lower if lower >= error else shown
+
+
+def format_error(error: float, digits: int = 1) -> str:
+    """An error estimate as text with ``digits`` significant digits, rounded up (:func:`round_up`)."""
+    return f"{round_up(error, digits):.{digits}g}"
+
+
+def format_with_error(value: float, error: float) -> str:
+    """``value ± error`` with the value's digits down to the error's first significant digit (rounded up)."""
+    if not math.isfinite(value):
+        return "not finite"
+    if not (math.isfinite(error) and error > 0):
+        return f"{value:.12g}" + ("" if error == 0 else " ± ?")
+    shown = round_up(error)
+    leading = math.floor(math.log10(abs(value))) if value else math.floor(math.log10(shown))
+    digits = min(15, max(1, leading - math.floor(math.log10(shown)) + 1))
+    # '#' keeps trailing zeros (they are digits shown); a bare trailing point is dropped.
+    return f"{value:#.{digits}g}".replace(".e", "e").rstrip(".") + f" ± {shown:.1g}"
 
 
 def degrees(radians: float) -> float:
@@ -127,7 +163,7 @@ def _table(records: Records) -> str:
     for column in shown:
         table.add_column(escape(column.header), justify="right")
     for row in records.rows:
-        table.add_row(*(escape(format_value(records.cell(row, c), c.digits)) for c in shown))
+        table.add_row(*(escape(format_value(records.cell(row, c), c.digits, bound=c.bound)) for c in shown))
     buffer = io.StringIO()
     Console(file=buffer, width=160).print(table)
     return buffer.getvalue()

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from ..check import DEFAULT_CHECKS, Budget, CheckReport, check
 from ..errors import ArgumentError
+from ..output.formats import format_error
 from .html import Cell, Section, number, table, text
 
 #: Work per audited file: the command's default budget (seconds).
@@ -37,7 +38,7 @@ def audit_files(paths: Sequence[str | Path]) -> list[Path]:
 def _cell(report: CheckReport, name: str) -> Cell:
     result = report.results[name]
     if name == "energy":
-        shown = f"{result.value:.6g} ± {result.error:.1g}"
+        shown = f"{result.value:.6g} ± {format_error(result.error)}"
     elif name == "reciprocity":
         shown = f"{result.value:.2g} of scale"
     else:
