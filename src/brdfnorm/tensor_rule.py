@@ -1,0 +1,256 @@
+"""The hemisphere integrator's coordinates, and a global tensor rule with degree doubling on them.
+
+Coordinates (shared with the adaptive panels of :mod:`brdfnorm.integrate`, which explains them): lobe-aligned
+polar angles (α, β) about the lobe's peak P, the horizon α_h(β) as the boundary, and the width-adapted radial map
+α = w tan(v·A(β)), v = 1 − (1 − u)², on the rectangle (β, u) ∈ [0, 2π) × [0, 1].
+
+The global rule
+---------------
+On that rectangle the integrand is periodic and, away from float64's limit, analytic in β, and smooth in u. So
+before any panel is cut, each case is integrated by one tensor rule over the whole rectangle:
+
+* in β, the periodic trapezoid rule on a smooth periodic map β(t) = t + ½[atan2(λ sin y, cos y) − y], y = 2t − π
+  (a Möbius map of the circle: dβ/dt = λ/(cos²y + λ² sin²y), so λ at β = ±π/2 and 1/λ at β = 0, π). At grazing
+  views the horizon α_h(β) turns from ~c_P to ~π − c_P within ~c_P/s_P of β = ±π/2 (P = (s_P, 0, c_P) in the
+  plane of N), and the map puts the nodes there. The trapezoid rule converges geometrically for periodic
+  analytic integrands (Trefethen & Weideman, "The exponentially convergent trapezoidal rule", SIAM Review 56,
+  2014), and its node sets are nested when M doubles;
+* in u, Fejér's second rule (the interior Clenshaw-Curtis nodes, nested when N doubles; Waldvogel, "Fast
+  construction of the Fejér and Clenshaw-Curtis quadrature rules", BIT 46, 2006).
+
+The error estimate of the M × N rule is |Q(M, N) − Q(M/2, N)| + |Q(M, N) − Q(M, N/2)| — the deviation of the two
+embedded coarser rules, which cost no evaluation (every other node) — plus the rounding floor and the integrand's
+float64 noise bound (:mod:`brdfnorm.rounding`). This bounds the error of the *coarser* rules; the reported
+Q(M, N), with twice the nodes in each direction, is far more accurate once convergence is geometric (its error
+is roughly the square of the estimate, relative). To make sure it is geometric, a case is accepted only when
+the estimate is within tolerance at two consecutive levels (the previous level's own estimate too: a feature
+missed by Q(M/2) and Q(M) alike would have to be missed by Q(M/4) as well, and the estimates must shrink). The
+direction whose deviation exceeds its share of the tolerance is doubled (both where both do). A case the rule
+does not settle within :data:`MAX_NODES` nodes, whose integrand is not finite at a node, or whose rounding noise
+is a visible share of its tolerance, goes to the adaptive panels — which are therefore only paid for where they
+are needed (narrow lobes near the horizon, kinks at a support edge, float64's limit).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+_EPS = np.finfo(float).eps
+
+#: Starting levels: M = 2^4 azimuths × N − 1 = 2^4 − 1 radial nodes (240 evaluations).
+START_LEVELS = (3, 4)
+#: A case needing more nodes than this goes to the adaptive panels.
+MAX_NODES = 16_384
+#: Rounding floor per node sum, as QUADPACK's on |K − G|.
+_FLOOR = 50.0 * _EPS
+
+
+def map_grid(case, beta, u, weight, frame, widths, supports):
+    """Directions (R, nβ, nu, 3) and Jacobians sin α dα/du · ``weight`` (R, nβ, nu) on the grid β (R, nβ) × u
+    (R or 1, nu) for the cases ``case`` (R,); ``weight`` (R, 1 or nβ) carries the rule's scale factors.
+
+    This is the integrator's hot path: the transcendental functions run on (R, nβ, nu) arrays once each, and
+    the directions are assembled component by component in place.
+    """
+    P, T, B = frame
+    cos_b, sin_b = np.cos(beta), np.sin(beta)
+    pz = P[case, 2][:, None]
+    s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
+    alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[case][:, None])  # (R, nβ)
+    w = widths[case][:, None]
+    # v = 1 − (1 − u)² clusters nodes at the horizon end (dv/du → 0 there), where boundary layers live
+    # (Smith G, Fresnel); then the Cauchy map α = w tan(v·A), A = atan(α_max/w), for the lobe.
+    one_minus_u = 1.0 - u
+    v = 1.0 - one_minus_u * one_minus_u
+    A = np.arctan(alpha_max / w)[:, :, None]  # (R, nβ, 1)
+    t = v[:, None, :] * A  # (R, nβ, nu), becomes tan(vA)
+    np.tan(t, out=t)
+    alpha = t * w[:, :, None]
+    sin_a = np.sin(alpha)
+    cos_a = np.cos(alpha, out=alpha)
+    # dα/du = wA(1 + t²)·2(1 − u).
+    jacobian = t
+    np.multiply(t, t, out=jacobian)
+    jacobian += 1.0
+    jacobian *= A * (w * weight)[:, :, None]
+    jacobian *= 2.0 * one_minus_u[:, None, :]
+    jacobian *= sin_a
+    omega = np.empty(sin_a.shape + (3,))
+    for i in range(3):
+        radial = cos_b * T[case, i][:, None] + sin_b * B[case, i][:, None]  # (R, nβ)
+        np.multiply(sin_a, radial[:, :, None], out=omega[..., i])
+        omega[..., i] += cos_a * P[case, i][:, None, None]
+    return omega, jacobian
+
+
+@cache
+def fejer(level: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fejér's second rule on [0, 1] with N = 2^level: the N − 1 nodes (1 − cos(kπ/N))/2 and their weights."""
+    N = 2**level
+    theta = np.arange(1, N) * np.pi / N
+    odd = 2 * np.arange(1, N // 2 + 1) - 1
+    weights = 2.0 / N * np.sin(theta) * (np.sin(np.outer(theta, odd)) / odd).sum(axis=1)
+    return (1.0 - np.cos(theta)) / 2.0, weights
+
+
+def _azimuths(level: int) -> np.ndarray:
+    """The trapezoid rule's 2^level parameters t_i = 2πi/2^level (those of a level are every other of the next)."""
+    return np.arange(2**level) * (2 * np.pi / 2**level)
+
+
+def beta_map(t: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """β(t) and dβ/dt of the periodic map clustering nodes at β = ±π/2 by the factor 1/λ (module docstring)."""
+    y = 2.0 * t - np.pi
+    sin_y, cos_y = np.sin(y), np.cos(y)
+    beta = t + 0.5 * (np.arctan2(lam * sin_y, cos_y) - np.arctan2(sin_y, cos_y))
+    return beta, lam / (cos_y * cos_y + lam * lam * sin_y * sin_y)
+
+
+def clustering(frame) -> np.ndarray:
+    """λ per case: the width ~c_P/s_P of the horizon's turn near β = ±π/2, between 1/8 and 1."""
+    pz = frame[0][:, 2]
+    return np.clip(2.0 * pz / np.sqrt(np.maximum(1.0 - pz * pz, 1e-300)), 0.125, 1.0)
+
+
+@dataclass(frozen=True)
+class GlobalResult:
+    """Per case: value and error (K, C), evaluations spent (K,), and whether the rule settled it (K,)."""
+
+    value: np.ndarray
+    error: np.ndarray
+    evaluations: np.ndarray
+    settled: np.ndarray
+
+
+@dataclass
+class _Group:
+    """Cases at the same levels, their grids of weighted integrand values F (n, M, N − 1, C), and the previous
+    level's verdict per case."""
+
+    case: np.ndarray
+    level_b: int
+    level_u: int
+    grid: np.ndarray
+    within_before: np.ndarray  # (n,) bool: the previous level's estimate was within tolerance
+
+
+def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, noise_amplitude: np.ndarray, *,
+                     rtol: float, atol: float, noise_bound, max_nodes: int = MAX_NODES,
+                     max_nodes_per_call: int = 1_500_000) -> GlobalResult:
+    """The global tensor rule (module docstring) for ``cases`` (indices into the frame); unsettled cases keep
+    their evaluation count and are left to the caller."""
+    K = frame[0].shape[0]
+    lam = clustering(frame)
+    value = np.zeros((K, 0))
+    error = np.zeros((K, 0))
+    evaluations = np.zeros(K, dtype=np.int64)
+    settled = np.zeros(K, dtype=bool)
+    level_b, level_u = START_LEVELS
+    groups = []
+    if cases.size:
+        grid = _evaluate(integrand, frame, widths, supports, lam, cases, _azimuths(level_b), fejer(level_u)[0],
+                         max_nodes_per_call)
+        evaluations[cases] += grid.shape[1] * grid.shape[2]
+        groups.append(_Group(cases, level_b, level_u, grid, np.zeros(cases.size, dtype=bool)))
+    while groups:
+        refined: dict[tuple[int, int], list[_Group]] = {}
+        for group in groups:
+            F = group.grid
+            finite = np.isfinite(F).all(axis=(1, 2, 3))
+            with np.errstate(invalid="ignore", over="ignore"):
+                q, e_b, e_u, magnitude = _sums(np.where(finite[:, None, None, None], F, 0.0), group.level_u)
+            if value.shape[1] != q.shape[1]:
+                value, error = np.zeros((K, q.shape[1])), np.zeros((K, q.shape[1]))
+            noise = noise_bound(noise_amplitude[group.case], magnitude)
+            floor = _FLOOR * magnitude
+            tolerance = np.maximum(atol, rtol * np.abs(q))
+            estimate = e_b + e_u + floor + noise
+            within = np.all(estimate <= tolerance, axis=1) & finite
+            done = within
+            value[group.case[done]] = q[done]
+            error[group.case[done]] = estimate[done]
+            settled[group.case[done]] = True
+            # Double the direction(s) whose deviation exceeds its share of the tolerance, else the larger one (a
+            # case within tolerance is confirmed at the next level).
+            share = np.maximum(tolerance - floor - noise, 0.0) / 2
+            more_b = np.any(e_b > share, axis=1)
+            more_u = np.any(e_u > share, axis=1)
+            neither = ~(more_b | more_u)
+            larger_b = np.any(e_b >= e_u, axis=1)
+            more_b |= neither & larger_b
+            more_u |= neither & ~larger_b
+            size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
+            go_on = finite & ~done & (size <= max_nodes)
+            for b in (False, True):
+                for u in (False, True):
+                    pick = go_on & (more_b == b) & (more_u == u)
+                    if not pick.any():
+                        continue
+                    new = _refine(group, pick, b, u, integrand, frame, widths, supports, lam, max_nodes_per_call,
+                                  evaluations)
+                    new.within_before = within[pick]
+                    refined.setdefault((new.level_b, new.level_u), []).append(new)
+        groups = [_merge(parts) for parts in refined.values()]
+    if value.shape[1] == 0:
+        value, error = np.zeros((K, 1)), np.zeros((K, 1))
+    return GlobalResult(value, error, evaluations, settled)
+
+
+def _sums(F: np.ndarray, level_u: int):
+    """Q(M, N), |Q − Q(M/2, N)|, |Q − Q(M, N/2)| and the |F| integral, per case and channel."""
+    M = F.shape[1]
+    w = fejer(level_u)[1]
+    over_u = np.einsum("nbuc,u->nbc", F, w)
+    q = over_u.sum(axis=1) * (2 * np.pi / M)
+    q_b = over_u[:, ::2].sum(axis=1) * (4 * np.pi / M)
+    q_u = np.einsum("nbuc,u->nc", F[:, :, 1::2], fejer(level_u - 1)[1]) * (2 * np.pi / M)
+    magnitude = np.einsum("nbuc,u->nc", np.abs(F), w) * (2 * np.pi / M)
+    return q, np.abs(q - q_b), np.abs(q - q_u), magnitude
+
+
+def _evaluate(integrand, frame, widths, supports, lam, case, t, u, max_nodes_per_call) -> np.ndarray:
+    """Weighted integrand values F (n, len(t), len(u), C) at azimuth parameters t and radial nodes u."""
+    parts = []
+    chunk = max(1, max_nodes_per_call // (t.size * u.size))
+    for start in range(0, case.size, chunk):
+        k = case[start:start + chunk]
+        beta, dbeta = beta_map(t[None, :], lam[k][:, None])
+        omega, jacobian = map_grid(k, beta, u[None, :], dbeta, frame, widths, supports)
+        index = np.broadcast_to(k[:, None, None], jacobian.shape)
+        with np.errstate(all="ignore"):
+            values = np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float)
+            parts.append(values.reshape(jacobian.shape + (-1,)) * jacobian[..., None])
+    return np.concatenate(parts)
+
+
+def _refine(group: _Group, pick, along_b: bool, along_u: bool, integrand, frame, widths, supports, lam,
+            max_nodes_per_call, evaluations) -> _Group:
+    """The picked cases of ``group`` with their grid doubled along β and/or u (only the new nodes evaluated)."""
+    case, F = group.case[pick], group.grid[pick]
+    level_b, level_u = group.level_b, group.level_u
+    if along_b:
+        M = 2**level_b
+        t_new = (2 * np.arange(M) + 1) * (np.pi / M)
+        new = _evaluate(integrand, frame, widths, supports, lam, case, t_new, fejer(level_u)[0], max_nodes_per_call)
+        grid = np.empty((case.size, 2 * M) + F.shape[2:])
+        grid[:, 0::2], grid[:, 1::2] = F, new
+        F, level_b = grid, level_b + 1
+        np.add.at(evaluations, case, new.shape[1] * new.shape[2])
+    if along_u:
+        nodes = fejer(level_u + 1)[0][0::2]
+        new = _evaluate(integrand, frame, widths, supports, lam, case, _azimuths(level_b), nodes, max_nodes_per_call)
+        grid = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+        grid[:, :, 1::2], grid[:, :, 0::2] = F, new
+        F, level_u = grid, level_u + 1
+        np.add.at(evaluations, case, new.shape[1] * new.shape[2])
+    return _Group(case, level_b, level_u, F, np.zeros(case.size, dtype=bool))
+
+
+def _merge(parts: list[_Group]) -> _Group:
+    if len(parts) == 1:
+        return parts[0]
+    return _Group(np.concatenate([p.case for p in parts]), parts[0].level_b, parts[0].level_u,
+                  np.concatenate([p.grid for p in parts]), np.concatenate([p.within_before for p in parts]))
