@@ -9,26 +9,30 @@ The global rule
 On that rectangle the integrand is periodic and, away from float64's limit, analytic in β, and smooth in u. So
 before any panel is cut, each case is integrated by one tensor rule over the whole rectangle:
 
-* in β, the periodic trapezoid rule on a smooth periodic map β(t) = t + ½[atan2(λ sin y, cos y) − y], y = 2t − π
-  (a Möbius map of the circle: dβ/dt = λ/(cos²y + λ² sin²y), so λ at β = ±π/2 and 1/λ at β = 0, π). At grazing
-  views the horizon α_h(β) turns from ~c_P to ~π − c_P within ~c_P/s_P of β = ±π/2 (P = (s_P, 0, c_P) in the
-  plane of N), and the map puts the nodes there. The trapezoid rule converges geometrically for periodic
+* in β, the periodic trapezoid rule on the smooth periodic map tan(β − π) = λ tan(t − π) (a Möbius map of the
+  circle: dβ/dt = λ/(cos²y + λ² sin²y), y = t − π, so nodes 1/λ times denser at β = π and sparser at β = 0),
+  with λ = c_P = cos θ_P clipped to [0.1, 1]. β = π points from the peak P down to the nearest horizon: for a
+  peak c_P above the horizon the lobe's tail is cut there, at α_h ≈ c_P/|cos β|, and the cut profile varies
+  fastest in β there. (Measured on Blinn-Phong n = 512 at rtol 1e-9: 8 400 evaluations per albedo over
+  θ_o = 0…89° with this map, 12 600 with uniform β, more with nodes clustered at β = ±π/2 where the horizon
+  turns; mixtures of both were worse than either.) The trapezoid rule converges geometrically for periodic
   analytic integrands (Trefethen & Weideman, "The exponentially convergent trapezoidal rule", SIAM Review 56,
   2014), and its node sets are nested when M doubles;
 * in u, Fejér's second rule (the interior Clenshaw-Curtis nodes, nested when N doubles; Waldvogel, "Fast
-  construction of the Fejér and Clenshaw-Curtis quadrature rules", BIT 46, 2006).
+  construction of the Fejér and Clenshaw-Curtis quadrature rules", BIT 46, 2006). No node lies on the horizon
+  (u = 1) or the pole (u = 0), where a BRDF may divide by zero.
 
-The error estimate of the M × N rule is |Q(M, N) − Q(M/2, N)| + |Q(M, N) − Q(M, N/2)| — the deviation of the two
+The error estimate of the M × N rule is |Q(M, N) − Q(M/2, N)| + |Q(M, N) − Q(M, N/2)| — the deviations of the two
 embedded coarser rules, which cost no evaluation (every other node) — plus the rounding floor and the integrand's
-float64 noise bound (:mod:`brdfnorm.rounding`). This bounds the error of the *coarser* rules; the reported
-Q(M, N), with twice the nodes in each direction, is far more accurate once convergence is geometric (its error
-is roughly the square of the estimate, relative). To make sure it is geometric, a case is accepted only when
-the estimate is within tolerance at two consecutive levels (the previous level's own estimate too: a feature
-missed by Q(M/2) and Q(M) alike would have to be missed by Q(M/4) as well, and the estimates must shrink). The
-direction whose deviation exceeds its share of the tolerance is doubled (both where both do). A case the rule
-does not settle within :data:`MAX_NODES` nodes, whose integrand is not finite at a node, or whose rounding noise
-is a visible share of its tolerance, goes to the adaptive panels — which are therefore only paid for where they
-are needed (narrow lobes near the horizon, kinks at a support edge, float64's limit).
+float64 noise bound (:mod:`brdfnorm.rounding`). This is the error of the *coarser* rules; the reported Q(M, N),
+with twice the nodes in the direction of each, is far more accurate once convergence is geometric (its error is
+roughly the square of the estimate, relative), which is where the margin of honesty comes from. The direction(s)
+whose deviation exceeds half the tolerance (the larger one where neither does) are doubled. A case goes to the
+adaptive panels of :mod:`brdfnorm.integrate` when it would need more than :data:`MAX_NODES` nodes — predicted
+early, from the last doubling's reduction, assuming each doubling squares it (geometric convergence) — when its
+integrand is not finite at a node, or when its rounding noise is a visible share of its tolerance. The panels
+are thus paid for only where needed: narrow lobes near the horizon (Blinn-Phong n = 512 beyond θ_o ≈ 84°), kinks
+at a support edge, float64's limit.
 """
 
 from __future__ import annotations
@@ -40,10 +44,15 @@ import numpy as np
 
 _EPS = np.finfo(float).eps
 
-#: Starting levels: M = 2^4 azimuths × N − 1 = 2^4 − 1 radial nodes (240 evaluations).
+#: Starting levels: M = 2^3 azimuths × N − 1 = 2^4 − 1 radial nodes (120 evaluations).
 START_LEVELS = (3, 4)
 #: A case needing more nodes than this goes to the adaptive panels.
 MAX_NODES = 16_384
+#: Azimuths at most: 2^MAX_LEVEL_B.
+MAX_LEVEL_B = 10
+#: Nodes per integrand call: arrays of this size stay in cache (measured 52 against 79 ns per node for 32 768
+#: against 731 520 nodes per call, Blinn-Phong map and lobe together).
+CHUNK_NODES = 32_768
 #: Rounding floor per node sum, as QUADPACK's on |K − G|.
 _FLOOR = 50.0 * _EPS
 
@@ -102,17 +111,18 @@ def _azimuths(level: int) -> np.ndarray:
 
 
 def beta_map(t: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """β(t) and dβ/dt of the periodic map clustering nodes at β = ±π/2 by the factor 1/λ (module docstring)."""
-    y = 2.0 * t - np.pi
+    """β(t) and dβ/dt of the periodic map with tan((β − π)/1) = λ tan(t − π): nodes 1/λ times denser at β = π
+    (the horizon nearest the lobe), 1/λ times sparser at β = 0 (module docstring)."""
+    y = t - np.pi
     sin_y, cos_y = np.sin(y), np.cos(y)
-    beta = t + 0.5 * (np.arctan2(lam * sin_y, cos_y) - np.arctan2(sin_y, cos_y))
+    beta = t + (np.arctan2(lam * sin_y, cos_y) - np.arctan2(sin_y, cos_y))
     return beta, lam / (cos_y * cos_y + lam * lam * sin_y * sin_y)
 
 
 def clustering(frame) -> np.ndarray:
-    """λ per case: the width ~c_P/s_P of the horizon's turn near β = ±π/2, between 1/8 and 1."""
+    """λ per case: c_P, the height of the lobe's peak above the horizon, between 0.1 and 1."""
     pz = frame[0][:, 2]
-    return np.clip(2.0 * pz / np.sqrt(np.maximum(1.0 - pz * pz, 1e-300)), 0.125, 1.0)
+    return np.clip(pz, 0.1, 1.0)
 
 
 @dataclass(frozen=True)
@@ -127,14 +137,16 @@ class GlobalResult:
 
 @dataclass
 class _Group:
-    """Cases at the same levels, their grids of weighted integrand values F (n, M, N − 1, C), and the previous
-    level's verdict per case."""
+    """Cases at the same levels, their grids of weighted integrand values F (n, M, N − 1, C), and per case the
+    deviations e_β, e_u (relative to their share of the tolerance) before the last doubling along each direction
+    (inf where there was none)."""
 
     case: np.ndarray
     level_b: int
     level_u: int
     grid: np.ndarray
-    within_before: np.ndarray  # (n,) bool: the previous level's estimate was within tolerance
+    last_b: np.ndarray  # (n,)
+    last_u: np.ndarray  # (n,)
 
 
 def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, noise_amplitude: np.ndarray, *,
@@ -154,7 +166,7 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
         grid = _evaluate(integrand, frame, widths, supports, lam, cases, _azimuths(level_b), fejer(level_u)[0],
                          max_nodes_per_call)
         evaluations[cases] += grid.shape[1] * grid.shape[2]
-        groups.append(_Group(cases, level_b, level_u, grid, np.zeros(cases.size, dtype=bool)))
+        groups.append(_Group(cases, level_b, level_u, grid, np.full(cases.size, np.inf), np.full(cases.size, np.inf)))
     while groups:
         refined: dict[tuple[int, int], list[_Group]] = {}
         for group in groups:
@@ -183,7 +195,14 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
             more_b |= neither & larger_b
             more_u |= neither & ~larger_b
             size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
-            go_on = finite & ~done & (size <= max_nodes)
+            ratio_b = _normalized(e_b, share).max(axis=1)
+            ratio_u = _normalized(e_u, share).max(axis=1)
+            # Give up early where geometric convergence, extrapolated from the last doubling, would not settle
+            # the case within max_nodes (a kink, a feature the coordinates do not follow): the panels will.
+            hopeless = ((_doublings(ratio_b, group.last_b) + group.level_b) > MAX_LEVEL_B) | (
+                2 ** (group.level_b + _doublings(ratio_b, group.last_b))
+                * (2 ** (group.level_u + _doublings(ratio_u, group.last_u)) - 1) > max_nodes)
+            go_on = finite & ~done & (size <= max_nodes) & ~hopeless
             for b in (False, True):
                 for u in (False, True):
                     pick = go_on & (more_b == b) & (more_u == u)
@@ -191,12 +210,36 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
                         continue
                     new = _refine(group, pick, b, u, integrand, frame, widths, supports, lam, max_nodes_per_call,
                                   evaluations)
-                    new.within_before = within[pick]
+                    if b:
+                        new.last_b = ratio_b[pick]
+                    if u:
+                        new.last_u = ratio_u[pick]
                     refined.setdefault((new.level_b, new.level_u), []).append(new)
         groups = [_merge(parts) for parts in refined.values()]
     if value.shape[1] == 0:
         value, error = np.zeros((K, 1)), np.zeros((K, 1))
     return GlobalResult(value, error, evaluations, settled)
+
+
+def _doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """Doublings still needed along a direction for its deviation to fall from ``ratio`` (× its share of the
+    tolerance) to 1, where each doubling squares the last one's reduction ``ratio / last`` (geometric convergence:
+    err ∝ ρ^M); 0 where already within, and 0 before any doubling (nothing to extrapolate from yet)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        reduction = np.where(np.isfinite(last) & (last > 0), ratio / last, 0.0)
+        needed = np.zeros(ratio.shape, dtype=int)
+        remaining = ratio.copy()
+        for _ in range(8):
+            reduction = reduction * reduction
+            go = remaining > 1.0
+            needed += go
+            remaining = np.where(go, remaining * reduction, remaining)
+    return np.where(remaining > 1.0, 99, needed)
+
+
+def _normalized(error: np.ndarray, share: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(share > 0, error / share, np.where(error > 0, np.inf, 0.0))
 
 
 def _sums(F: np.ndarray, level_u: int):
@@ -214,7 +257,7 @@ def _sums(F: np.ndarray, level_u: int):
 def _evaluate(integrand, frame, widths, supports, lam, case, t, u, max_nodes_per_call) -> np.ndarray:
     """Weighted integrand values F (n, len(t), len(u), C) at azimuth parameters t and radial nodes u."""
     parts = []
-    chunk = max(1, max_nodes_per_call // (t.size * u.size))
+    chunk = max(1, min(max_nodes_per_call, CHUNK_NODES) // (t.size * u.size))
     for start in range(0, case.size, chunk):
         k = case[start:start + chunk]
         beta, dbeta = beta_map(t[None, :], lam[k][:, None])
@@ -246,11 +289,12 @@ def _refine(group: _Group, pick, along_b: bool, along_u: bool, integrand, frame,
         grid[:, :, 1::2], grid[:, :, 0::2] = F, new
         F, level_u = grid, level_u + 1
         np.add.at(evaluations, case, new.shape[1] * new.shape[2])
-    return _Group(case, level_b, level_u, F, np.zeros(case.size, dtype=bool))
+    return _Group(case, level_b, level_u, F, group.last_b[pick], group.last_u[pick])
 
 
 def _merge(parts: list[_Group]) -> _Group:
     if len(parts) == 1:
         return parts[0]
     return _Group(np.concatenate([p.case for p in parts]), parts[0].level_b, parts[0].level_u,
-                  np.concatenate([p.grid for p in parts]), np.concatenate([p.within_before for p in parts]))
+                  np.concatenate([p.grid for p in parts]), np.concatenate([p.last_b for p in parts]),
+                  np.concatenate([p.last_u for p in parts]))
