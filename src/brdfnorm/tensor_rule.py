@@ -84,9 +84,16 @@ def map_grid(case, beta, u, weight, frame, widths, supports):
     A = np.arctan(alpha_max / w)[:, :, None]  # (R, nβ, 1)
     t = v[:, None, :] * A  # (R, nβ, nu), becomes tan(vA)
     np.tan(t, out=t)
-    alpha = t * w[:, :, None]
-    sin_a = np.sin(alpha)
-    cos_a = np.cos(alpha, out=alpha)
+    # sin α and cos α from h = tan(α/2), one transcendental instead of two: 2h/(1 + h²), (1 − h²)/(1 + h²).
+    h = t * (0.5 * w[:, :, None])
+    np.tan(h, out=h)
+    h2 = h * h
+    scale = 1.0 + h2
+    np.reciprocal(scale, out=scale)
+    sin_a = h
+    sin_a *= 2.0 * scale
+    cos_a = np.subtract(1.0, h2, out=h2)
+    cos_a *= scale
     # dα/du = wA(1 + t²)·2(1 − u).
     jacobian = t
     np.multiply(t, t, out=jacobian)
@@ -243,19 +250,16 @@ def _integrate_batch(integrand, frame, widths, supports, lam, cases, noise_ampli
 
 
 def _doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
-    """Doublings still needed along a direction for its deviation to fall from ``ratio`` (× its share of the
-    tolerance) to 1, where each doubling squares the last one's reduction ``ratio / last`` (geometric convergence:
-    err ∝ ρ^M); 0 where already within, and 0 before any doubling (nothing to extrapolate from yet)."""
+    """Doublings still needed along a direction for its estimate to fall from ``ratio`` (× its share of the
+    tolerance) to 1, if each doubling squares the last one's reduction r = ``ratio / last`` (geometric
+    convergence, err ∝ ρ^M): after k more, ratio·r^(2^(k+1) − 2). 0 where already within or before any doubling
+    (nothing to extrapolate from); 99 where the estimate did not shrink."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         reduction = np.where(np.isfinite(last) & (last > 0), ratio / last, 0.0)
-        needed = np.zeros(ratio.shape, dtype=int)
-        remaining = ratio.copy()
-        for _ in range(8):
-            reduction = reduction * reduction
-            go = remaining > 1.0
-            needed += go
-            remaining = np.where(go, remaining * reduction, remaining)
-    return np.where(remaining > 1.0, 99, needed)
+        exponent = np.log(np.maximum(ratio, 1.0)) / -np.log(np.clip(reduction, 1e-300, 1.0))
+        needed = np.ceil(np.log2(exponent + 2.0)) - 1.0
+    needed = np.where(ratio <= 1.0, 0.0, np.where(reduction >= 1.0, 99.0, needed))
+    return np.clip(np.nan_to_num(needed, nan=0.0), 0.0, 99.0).astype(int)
 
 
 def _normalized(error: np.ndarray, share: np.ndarray) -> np.ndarray:
@@ -274,13 +278,14 @@ def _sums(F: np.ndarray, level_u: int):
     """
     M = F.shape[1]
     w = fejer(level_u)[1]
-    over_u = np.einsum("nbuc,u->nbc", F, w)
+    by_channel = F.transpose(0, 1, 3, 2)  # (n, M, C, N − 1): matmul over the radial nodes
+    over_u = by_channel @ w
     q = over_u.sum(axis=1) * (2 * np.pi / M)
     q_b = over_u[:, ::2].sum(axis=1) * (4 * np.pi / M)
     q_bb = over_u[:, ::4].sum(axis=1) * (8 * np.pi / M)
-    q_u = np.einsum("nbuc,u->nc", F[:, :, 1::2], fejer(level_u - 1)[1]) * (2 * np.pi / M)
-    q_uu = np.einsum("nbuc,u->nc", F[:, :, 3::4], fejer(level_u - 2)[1]) * (2 * np.pi / M)
-    magnitude = np.einsum("nbuc,u->nc", np.abs(F), w) * (2 * np.pi / M)
+    q_u = (by_channel[..., 1::2] @ fejer(level_u - 1)[1]).sum(axis=1) * (2 * np.pi / M)
+    q_uu = (by_channel[..., 3::4] @ fejer(level_u - 2)[1]).sum(axis=1) * (2 * np.pi / M)
+    magnitude = (np.abs(by_channel) @ w).sum(axis=1) * (2 * np.pi / M)
     return q, _margin(np.abs(q - q_b), np.abs(q_b - q_bb)), _margin(np.abs(q - q_u), np.abs(q_u - q_uu)), magnitude
 
 
