@@ -128,3 +128,14 @@ def test_randomized_honesty_probe(rng):
             _record(ratios, result.value[:, 0], result.error[:, 0], exact, 1e-12 * exact, ("naive ggx", rtol))
     assert len(ratios) == 3 * len(RTOLS) + 3
     print(f"worst true error / estimate: {max(ratios):.3g}")
+
+
+@pytest.mark.parametrize("budget", [1, 100, 1000])
+def test_tiny_budgets_end_unconverged_with_a_reason(budget):
+    # A quarter of the budget below the rule's first grid: the global rule is skipped, the panels say "budget".
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = bn.albedo(bn.load("blinn-phong", n=50), 0.5, method="quadrature", max_evaluations=budget)
+    assert not result.converged[()] and result.reason[()] == "budget"
+    exact = bn.albedo(bn.load("blinn-phong", n=50), 0.5, method="series", rtol=1e-13).value[0]
+    assert result.error[0] >= abs(result.value[0] - exact)

@@ -63,7 +63,7 @@ from typing import Literal
 import numpy as np
 
 from .rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from .tensor_rule import integrate_global, map_grid
+from .tensor_rule import START_NODES, integrate_global, map_grid
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -259,9 +259,11 @@ def integrate_hemisphere(
     evaluations += PROBE_EVALUATIONS
     # The global tensor rule first (brdfnorm.tensor_rule), for every case whose rounding noise is far below its
     # tolerance; the adaptive panels below take the cases it does not settle.
+    # (Not at all where a quarter of the budget would not cover its first grid.)
+    global_nodes = min(GLOBAL_NODES, max_evaluations // 4)
     quiet = np.flatnonzero((rtol == 0) | np.all(noise_bound(noise_amplitude, 1.0) < rtol / 16, axis=-1))
-    tried = integrate_global(integrand, frame, widths, supports, quiet, noise_amplitude, rtol=rtol, atol=atol,
-                             noise_bound=noise_bound, max_nodes=min(GLOBAL_NODES, max_evaluations // 4),
+    tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
+                             noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
                              max_nodes_per_call=max_nodes_per_call)
     evaluations += tried.evaluations
     remaining = np.flatnonzero(~tried.settled)

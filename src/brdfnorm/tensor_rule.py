@@ -49,6 +49,7 @@ _EPS = np.finfo(float).eps
 
 #: Starting levels: M = 2^3 azimuths × N − 1 = 2^4 − 1 radial nodes (120 evaluations).
 START_LEVELS = (3, 4)
+START_NODES = 2 ** START_LEVELS[0] * (2 ** START_LEVELS[1] - 1)
 #: A case needing more nodes than this goes to the adaptive panels.
 MAX_NODES = 16_384
 #: Azimuths at most: 2^MAX_LEVEL_B.
@@ -177,7 +178,7 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
     evaluations = np.zeros(K, dtype=np.int64)
     settled = np.zeros(K, dtype=bool)
     # Batches of cases whose grids, at most max_nodes each, fit in BATCH_NODES values (bounded memory).
-    batch = max(1, BATCH_NODES // max_nodes)
+    batch = max(1, BATCH_NODES // max(max_nodes, START_NODES))
     for start in range(0, cases.size, batch):
         part = cases[start:start + batch]
         value, error = _integrate_batch(integrand, frame, widths, supports, lam, part, noise_amplitude, rtol, atol,
