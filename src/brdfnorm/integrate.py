@@ -27,7 +27,10 @@ and the domain a rectangle, after which adaptive Gauss-Kronrod cubature converge
    v = 1 − (1 − u)², u ∈ [0, 1], which grades the nodes towards the horizon, where the map alone would
    leave boundary layers (Smith G within α of the horizon, Fresnel) between all nodes.
 
-On the rectangle (β, u) ∈ [0, 2π] × [0, 1] a tensor-product Gauss-Kronrod rule (QUADPACK's G7/K15 pair,
+On the rectangle (β, u) ∈ [0, 2π] × [0, 1] each case is first integrated by one global tensor rule with degree
+doubling (:mod:`brdfnorm.tensor_rule`: periodic trapezoid in β × Fejér in u), which settles smooth lobes at low
+and middle angles in a few thousand evaluations. The cases it does not settle — and those whose rounding noise
+matters — are integrated by adaptive panels: a tensor-product Gauss-Kronrod rule (QUADPACK's G7/K15 pair,
 225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded lower-order estimates (G7 in β or in u);
 their differences are the panel's error estimate in each direction. This is the plain |K − G| estimate of
 the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the error of the reported K15 ⊗ K15
