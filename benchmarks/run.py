@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_engine import GOAL_S, w_engine  # noqa: E402
 from bench_parallel import w_parallel  # noqa: E402
 
 import brdfnorm as bn  # noqa: E402
@@ -808,12 +809,38 @@ def targets(results: dict, cfg: Config) -> list[dict]:
         if line:
             out.append({"target": f"{size}×{size} ggx E table at rtol 1e-10 (α from 1e-8) ≤ {goal:g} s",
                         "measured": f"{fmt_time(line['time_s'])}; {line['note']}", "met": bool(line["time_s"] <= goal)})
+    out += _engine_targets(results, cfg)
     mem = results.get("memory", {})
     if "peak_rss_mib" in mem:
         out.append({"target": f"peak RSS of the {cfg.sweep_n.size}×{cfg.table_angles.size} table < 1 GB",
                     "measured": f"{mem['peak_rss_mib']:.0f} MiB peak RSS (baseline after imports "
                                 f"{mem['baseline_rss_mib']:.0f} MiB)",
                     "met": bool(mem["peak_rss_mib"] < 1000)})
+    return out
+
+
+def _engine_targets(results: dict, cfg: Config) -> list[dict]:
+    """Issue 13's goals for the generic engine besides '≥ 100× dblquad' (above): evaluations per albedo, the
+    examples/ggx.brdf table and its interactive curve."""
+    out = []
+    prof = results.get("profile", {})
+    if "brdfnorm_evaluations_per_albedo" in prof:
+        per = prof["brdfnorm_evaluations_per_albedo"]
+        out.append({"target": f"{cfg.table_angles.size}-angle table, brdfnorm quadrature: ≤ 5000 evaluations per "
+                              "albedo", "measured": f"{per:.0f} (dblquad {prof['dblquad_evaluations_per_albedo']:.0f})",
+                    "met": bool(per <= 5000)})
+    ggx = results.get("ggx-table", {}).get("methods", {}).get("brdfnorm")
+    if ggx and not cfg.quick:
+        out.append({"target": "examples/ggx.brdf 64×90 table at rtol 1e-9 ≤ 4 s", "measured": fmt_time(ggx["time_s"]),
+                    "met": bool(ggx["time_s"] <= 4.0)})
+    curve = results.get("engine", {})
+    if "time_s" in curve:
+        out.append({"target": f"examples/ggx.brdf {cfg.table_angles.size}-angle curve at rtol 1e-6 ≤ "
+                              f"{GOAL_S * 1e3:g} ms, estimates covering the errors",
+                    "measured": f"{fmt_time(curve['time_s'])} at load average {curve['load_average']:.1f}; "
+                                f"{curve['evaluations_per_albedo']:.0f} evaluations per albedo; max rel error "
+                                f"{curve['max_rel_error']:.2g}",
+                    "met": bool(curve["time_s"] <= GOAL_S and curve["estimates_cover_errors"])})
     return out
 
 
@@ -987,6 +1014,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "fit": lambda c, r, _: w_fit(c, r), "eval": lambda c, r, _: w_eval(c, r),
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
+    "engine": lambda c, r, _: w_engine(c, r),
 })
 
 
