@@ -71,7 +71,7 @@ _EPS = np.finfo(float).eps
 _ALPHA_FLOOR = 1e-150
 #: The horizon piece spans N·L ∈ [0, LAYER·α] (linearized), where G2's boundary layer lives.
 _LAYER = 4.0
-_PANELS_PER_CHUNK = 1000
+_PANELS_PER_CHUNK = 64
 _TWO_PI = 2.0 * np.pi
 
 #: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), piece floor(v) (R,)) -> (R, n, n, C).
