@@ -71,7 +71,9 @@ _EPS = np.finfo(float).eps
 _ALPHA_FLOOR = 1e-150
 #: The horizon piece spans N·L ∈ [0, LAYER·α] (linearized), where G2's boundary layer lives.
 _LAYER = 4.0
-_PANELS_PER_CHUNK = 64
+#: Panels per integrand call: arrays of 64 × 225 nodes stay in cache (1000 was ~1.5x slower); an integrand with
+#: much work per azimuth node (transmission's ray search) asks for more, to amortize numpy's per-call overhead.
+PANELS_PER_CHUNK = 64
 _TWO_PI = 2.0 * np.pi
 
 #: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), piece floor(v) (R,)) -> (R, n, n, C).
@@ -124,11 +126,11 @@ def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, 
     return values * (ha * hb)[:, None, None, None]
 
 
-def _evaluate(integrand: RectangleIntegrand, panels: _Panels) -> None:
+def _evaluate(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> None:
     R = panels.case.size
     value = err_a = err_b = None
-    for start in range(0, R, _PANELS_PER_CHUNK):
-        sl = slice(start, start + _PANELS_PER_CHUNK)
+    for start in range(0, R, chunk):
+        sl = slice(start, start + chunk)
         f = _rule_on(integrand, panels, NODES, sl)
         over_b_k = np.einsum("rabc,b->rac", f, KRONROD)
         over_b_g = np.einsum("rabc,b->rac", f, GAUSS)
@@ -146,7 +148,7 @@ def _evaluate(integrand: RectangleIntegrand, panels: _Panels) -> None:
     panels.checked = np.full_like(value, np.nan)
 
 
-def _quarters(integrand: RectangleIntegrand, panels: _Panels) -> np.ndarray:
+def _quarters(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> np.ndarray:
     """The four quarters of every panel by G7 ⊗ G7, summed: (R, C)."""
     total = np.zeros_like(panels.value)
     for qa in (0, 1):
@@ -154,8 +156,8 @@ def _quarters(integrand: RectangleIntegrand, panels: _Panels) -> np.ndarray:
             ma, mb = (panels.a0 + panels.a1) / 2, (panels.b0 + panels.b1) / 2
             quarter = _Panels(panels.case, np.where(qa, ma, panels.a0), np.where(qa, panels.a1, ma),
                               np.where(qb, mb, panels.b0), np.where(qb, panels.b1, mb))
-            for start in range(0, quarter.case.size, _PANELS_PER_CHUNK):
-                sl = slice(start, start + _PANELS_PER_CHUNK)
+            for start in range(0, quarter.case.size, chunk):
+                sl = slice(start, start + chunk)
                 f = _rule_on(integrand, quarter, GAUSS_NODES, sl)
                 total[sl] += np.einsum("rabc,a,b->rc", f, GAUSS_WEIGHTS, GAUSS_WEIGHTS)
     return total
@@ -168,7 +170,7 @@ def _per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
 
 
 def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int, *, rtol: float, atol: float,
-                        max_evaluations: int) -> CubatureResult:
+                        max_evaluations: int, chunk: int = PANELS_PER_CHUNK) -> CubatureResult:
     """Integrate every case over the union of its initial panels, adaptively and all cases at once."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
@@ -178,7 +180,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
     fresh = initial
     per_panel, per_check = NODES.size**2, 4 * GAUSS_NODES.size**2
     while True:
-        _evaluate(integrand, fresh)
+        _evaluate(integrand, fresh, chunk)
         np.add.at(evaluations, fresh.case, per_panel)
         pool = _Panels.join(pool, fresh)
         if value is None:
@@ -191,7 +193,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
         check = meets[pool.case] & np.isnan(pool.checked[:, 0])
         if np.any(check):
             subset = pool.take(check)
-            difference = np.abs(subset.value - _quarters(integrand, subset))
+            difference = np.abs(subset.value - _quarters(integrand, subset, chunk))
             pool.checked[check] = np.maximum(difference, 50.0 * _EPS * np.abs(subset.value))
             np.add.at(evaluations, subset.case, per_check)
         total_error = _per_case(K, pool.case, pool.error())
