@@ -312,7 +312,8 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         for step in np.unique(level):
             nodes = np.flatnonzero(level == step)
             cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()},
-                                  rtol=min(rtol / 4 * NODE_RTOL_STEP**step, NODE_RTOL_MAX), method=method)
+                                  rtol=max(rtol / 4, min(rtol / 4 * NODE_RTOL_STEP**step, NODE_RTOL_MAX)),
+                                  method=method)
             value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
             converged[nodes] = cells.converged
         integrals += mu.size
