@@ -150,19 +150,27 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         s_lo, s_middle, s_split, s_hi = (distribution.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
         local = v - piece[:, None, None]
         # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle) and towards s_hi
-        # in the last part (the boundary layer and the square root alike).
-        first_map, first_jac = local * local, 2.0 * local
-        last_map, last_jac = 1.0 - (1.0 - local) ** 2, 2.0 * (1.0 - local)
-        t_lo, t_mid = distribution.pole_coordinate(s_lo), distribution.pole_coordinate(s_middle)
-        s_pole, density_pole = distribution.pole(t_lo + first_map * (t_mid - t_lo))
-        t_start, t_stop = distribution.tail_coordinate(s_middle), distribution.tail_coordinate(s_split)
-        s_tail, density_tail = distribution.tail(t_start + local * (t_stop - t_start))
-        s_near = s_split + last_map * (s_hi - s_split)
-        pole, tail = (piece == 0)[:, None, None], (piece == 1)[:, None, None]
-        s = np.where(pole, s_pole, np.where(tail, s_tail, s_near))
-        density = np.where(pole, density_pole, np.where(tail, density_tail, distribution.slope_density(s_near)))
-        length = np.where(pole, (t_mid - t_lo) * first_jac, np.where(tail, t_stop - t_start,
-                                                                       (s_hi - s_split) * last_jac))
+        # in the last part (the boundary layer and the square root alike). Each part on its own panels only.
+        shape = np.broadcast_shapes(local.shape, s_lo.shape)
+        s, density, length = np.empty(shape), np.empty(shape), np.empty(shape)
+        for kind in range(3):
+            rows = np.flatnonzero(piece == kind)
+            if not rows.size:
+                continue
+            at = local[rows]
+            if kind == 0:
+                t_lo, t_mid = distribution.pole_coordinate(s_lo[rows]), distribution.pole_coordinate(s_middle[rows])
+                s[rows], density[rows] = distribution.pole(t_lo + at * at * (t_mid - t_lo))
+                length[rows] = (t_mid - t_lo) * (2.0 * at)
+            elif kind == 1:
+                t_start = distribution.tail_coordinate(s_middle[rows])
+                t_stop = distribution.tail_coordinate(s_split[rows])
+                s[rows], density[rows] = distribution.tail(t_start + at * (t_stop - t_start))
+                length[rows] = t_stop - t_start
+            else:
+                near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
+                s[rows], density[rows] = near, distribution.slope_density(near)
+                length[rows] = (s_hi[rows] - s_split[rows]) * (2.0 * (1.0 - at))
         x, y = s * dx, s * dy
         n = np.sqrt(1.0 + x * x + y * y)
         one_sp = 1.0 + (vx * x + vy * y) / vz
