@@ -32,7 +32,6 @@ from .halfvector import CubatureResult, _Panels, adaptive_rectangles, single_sca
 from .models.dielectric import MicrofacetDielectric, refraction_shadowing
 from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
-_TWO_PI = 2.0 * np.pi
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
 #: Samples of L_z along a ray's β-interval before its sign changes are located by bisection.
@@ -40,6 +39,9 @@ _SAMPLES = 17
 _BISECTIONS = 48
 #: The last part of a ray spans the band where Λ(L) turns on: |L_z| ≲ LAYER·α.
 _LAYER = 4.0
+#: Panels per integrand call: more than the reflection's, as the ray search per azimuth node is a loop of small
+#: array operations whose per-call overhead wants amortizing.
+_PANELS_PER_CHUNK = 512
 
 
 #: The window integrals: over the facets with V·m above the critical cosine c* (c* = 0 for η > 1), where
@@ -68,10 +70,11 @@ def _window(V, eta, angle, part):
     return lo, hi, hi <= lo
 
 
-def _scattered_z(part, vx, vy, vz, eta, cos_a, sin_a, beta):
-    """L_z of V scattered by the facet (sin β cos a, sin β sin a, cos β): refracted or reflected."""
+def _scattered_z(part, w, vz, eta, beta):
+    """L_z of V scattered by the facet (sin β cos a, sin β sin a, cos β): refracted or reflected; w = V·d̂ =
+    V_x cos a + V_y sin a, fixed along the ray."""
     sb, cb = np.sin(beta), np.cos(beta)
-    cos_i = (vx * cos_a + vy * sin_a) * sb + vz * cb
+    cos_i = w * sb + vz * cb
     if part != "refraction":
         return 2.0 * cos_i * cb - vz
     sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
@@ -91,34 +94,29 @@ def _ray(V, alpha, eta, angle, part):
     if part != "refraction" or np.all(eta > 1.0):
         return dx, dy, np.where(empty, 0.0, lo), np.where(empty, 0.0, hi), empty
 
-    def on_side(beta):  # β may carry one more axis than the ray quantities
-        extra = (...,) + (None,) * (np.ndim(beta) - np.ndim(angle))
-        args = (vx, vy, vz, eta, np.cos(angle), np.sin(angle))
-        z = _scattered_z(part, *(np.broadcast_to(q, np.shape(angle))[extra] for q in args), beta)
-        return z < 0
+    shape = np.shape(angle)
+    w, vz, eta = (np.broadcast_to(q, shape) for q in (vx * np.cos(angle) + vy * np.sin(angle), vz, eta))
 
     # Sample the side on [lo, hi]; the interval runs from the first to the last sample on it, its ends located
     # between neighbouring samples by bisection.
     grid = lo[..., None] + (hi - lo)[..., None] * np.linspace(0.0, 1.0, _SAMPLES)
-    inside = on_side(grid) & ~empty[..., None]
-    first = np.argmax(inside, axis=-1)
-    last = _SAMPLES - 1 - np.argmax(inside[..., ::-1], axis=-1)
-    none = ~np.any(inside, axis=-1)
+    sampled = (_scattered_z(part, w[..., None], vz[..., None], eta[..., None], grid) < 0) & ~empty[..., None]
+    first = np.argmax(sampled, axis=-1)
+    last = _SAMPLES - 1 - np.argmax(sampled[..., ::-1], axis=-1)
+    none = ~np.any(sampled, axis=-1)
     take = np.take_along_axis
     b_lo = take(grid, first[..., None], -1)[..., 0]
     b_hi = take(grid, last[..., None], -1)[..., 0]
     a = take(grid, np.maximum(first - 1, 0)[..., None], -1)[..., 0]
     d = take(grid, np.minimum(last + 1, _SAMPLES - 1)[..., None], -1)[..., 0]
-    b, c = b_lo.copy(), b_hi.copy()
+    # Both ends at once: a bracket [outside, inside] per end (the lower end's [a, b_lo], the upper's [d, b_hi]).
+    outside, inside = np.stack([a, d]), np.stack([b_lo, b_hi])
     for _ in range(_BISECTIONS):
-        mid = 0.5 * (a + b)
-        ok = on_side(mid)
-        a, b = np.where(ok, a, mid), np.where(ok, mid, b)
-        mid = 0.5 * (c + d)
-        ok = on_side(mid)
-        c, d = np.where(ok, mid, c), np.where(ok, d, mid)
-    b_lo = np.where(first > 0, b, b_lo)
-    b_hi = np.where(last < _SAMPLES - 1, c, b_hi)
+        mid = 0.5 * (outside + inside)
+        ok = _scattered_z(part, w, vz, eta, mid) < 0
+        outside, inside = np.where(ok, outside, mid), np.where(ok, mid, inside)
+    b_lo = np.where(first > 0, inside[0], b_lo)
+    b_hi = np.where(last < _SAMPLES - 1, inside[1], b_hi)
     return dx, dy, np.where(none, 0.0, b_lo), np.where(none, 0.0, b_hi), none
 
 
@@ -132,15 +130,19 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         k = case[:, None, None]
         a, e = alpha[k], eta[k]
         vx, vy, vz = V[k, 0], V[k, 1], V[k, 2]
-        # Ray quantities per (panel, azimuth node), then broadcast over the radial nodes.
-        ray = _ray((vx[..., 0], vy[..., 0], vz[..., 0]), a[..., 0], e[..., 0], phi[..., 0], part)
-        dx, dy, b_lo, b_hi, none = (q[..., None] for q in ray)
+        # Ray quantities per (panel, azimuth node), then broadcast over the radial nodes. Panels that differ only
+        # in their radial range (the pieces, and halvings along v) share their rays: each is searched once.
+        key = np.stack([case.astype(float), phi[:, 0, 0], phi[:, -1, 0]], axis=1)
+        _, unique, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        ray = _ray((vx[unique, :, 0], vy[unique, :, 0], vz[unique, :, 0]), a[unique, :, 0], e[unique, :, 0],
+                   phi[unique, :, 0], part)
+        dx, dy, b_lo, b_hi, none = (q[inverse.ravel()][..., None] for q in ray)
         d = a  # |d| for an isotropic distribution
         s_lo = np.tan(b_lo) / d
         s_hi = np.where(b_hi >= np.pi / 2, _S_CAP, np.minimum(np.tan(b_hi) / d, _S_CAP))
         # The last part: the band next to s_hi where |L_z| < LAYER·α (linearized through the slope of L_z).
         step = 1e-6 * (s_hi - s_lo)
-        z_end = _scattered_z(part, vx, vy, vz, e, np.cos(phi), np.sin(phi), np.arctan((s_hi - step) * d))
+        z_end = _scattered_z(part, vx * np.cos(phi) + vy * np.sin(phi), vz, e, np.arctan((s_hi - step) * d))
         slope = np.maximum(np.abs(z_end) / np.maximum(step, 1e-300), 1e-300)
         s_split = np.clip(s_hi - _LAYER * a / slope, s_lo, s_hi)
         s_middle = np.clip(s_split / (1.0 + s_split), s_lo, s_split)
@@ -148,19 +150,27 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         s_lo, s_middle, s_split, s_hi = (distribution.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
         local = v - piece[:, None, None]
         # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle) and towards s_hi
-        # in the last part (the boundary layer and the square root alike).
-        first_map, first_jac = local * local, 2.0 * local
-        last_map, last_jac = 1.0 - (1.0 - local) ** 2, 2.0 * (1.0 - local)
-        t_lo, t_mid = distribution.pole_coordinate(s_lo), distribution.pole_coordinate(s_middle)
-        s_pole, density_pole = distribution.pole(t_lo + first_map * (t_mid - t_lo))
-        t_start, t_stop = distribution.tail_coordinate(s_middle), distribution.tail_coordinate(s_split)
-        s_tail, density_tail = distribution.tail(t_start + local * (t_stop - t_start))
-        s_near = s_split + last_map * (s_hi - s_split)
-        pole, tail = (piece == 0)[:, None, None], (piece == 1)[:, None, None]
-        s = np.where(pole, s_pole, np.where(tail, s_tail, s_near))
-        density = np.where(pole, density_pole, np.where(tail, density_tail, distribution.slope_density(s_near)))
-        length = np.where(pole, (t_mid - t_lo) * first_jac, np.where(tail, t_stop - t_start,
-                                                                       (s_hi - s_split) * last_jac))
+        # in the last part (the boundary layer and the square root alike). Each part on its own panels only.
+        shape = np.broadcast_shapes(local.shape, s_lo.shape)
+        s, density, length = np.empty(shape), np.empty(shape), np.empty(shape)
+        for kind in range(3):
+            rows = np.flatnonzero(piece == kind)
+            if not rows.size:
+                continue
+            at = local[rows]
+            if kind == 0:
+                t_lo, t_mid = distribution.pole_coordinate(s_lo[rows]), distribution.pole_coordinate(s_middle[rows])
+                s[rows], density[rows] = distribution.pole(t_lo + at * at * (t_mid - t_lo))
+                length[rows] = (t_mid - t_lo) * (2.0 * at)
+            elif kind == 1:
+                t_start = distribution.tail_coordinate(s_middle[rows])
+                t_stop = distribution.tail_coordinate(s_split[rows])
+                s[rows], density[rows] = distribution.tail(t_start + at * (t_stop - t_start))
+                length[rows] = t_stop - t_start
+            else:
+                near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
+                s[rows], density[rows] = near, distribution.slope_density(near)
+                length[rows] = (s_hi[rows] - s_split[rows]) * (2.0 * (1.0 - at))
         x, y = s * dx, s * dy
         n = np.sqrt(1.0 + x * x + y * y)
         one_sp = 1.0 + (vx * x + vy * y) / vz
@@ -177,7 +187,7 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
             lambda_l = lam(a * a * (Lx * Lx + Ly * Ly) / (Lz * Lz))
             G2 = (refraction_shadowing if refraction else shadowing_masking)(shadowing, lambda_l, lambda_v[k])
             factor = G2 * (1.0 - fresnel_dielectric(np.clip(cos_i, 0.0, 1.0), e))
-            weight = factor * one_sp * density * length / _TWO_PI
+            weight = factor * one_sp * density * length / np.pi  # 1/2π, twice: half the azimuths are integrated
         side = (Lz < 0) if refraction else (Lz > 0)
         valid = side & (cos_i > 0) & ~none & np.isfinite(weight)
         return np.where(valid, weight, 0.0)[..., None]
@@ -186,18 +196,18 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
 
 
 def _azimuth_edges(V: np.ndarray, eta: float) -> np.ndarray:
-    """Initial azimuth panel edges: eight even ones, and (η < 1) the rays on which the window V·m > c* opens
-    (A(φ) = c*), where every part's ray integral has a square-root onset — on a panel edge, never inside one,
-    where the cubature's nodes could step over it."""
-    edges = [np.linspace(0.0, _TWO_PI, 9)]
+    """Initial azimuth panel edges over [φ_V, φ_V + π]: the lobe is isotropic, so the integrand is even about the
+    plane of N and V and half the azimuths, counted twice, are the whole integral. Four even panels, and (η < 1)
+    the ray on which the window V·m > c* opens (A(φ) = c*), where every part's ray integral has a square-root
+    onset — on a panel edge, never inside one, where the cubature's nodes could step over it."""
+    phi_v = np.arctan2(V[1], V[0])
+    edges = [phi_v + np.linspace(0.0, np.pi, 5)]
     critical2 = max(1.0 - eta * eta, 0.0)
     vxy = np.hypot(V[0], V[1])
     if critical2 > V[2] ** 2 and vxy > 0:
         ratio = np.sqrt(critical2 - V[2] ** 2) / vxy
         if ratio <= 1.0:
-            phi_v = np.arctan2(V[1], V[0])
-            spread = np.array([np.arccos(ratio), np.arccos(-ratio)])
-            edges.append(np.mod(phi_v + np.concatenate([spread, -spread]), _TWO_PI))
+            edges.append(phi_v + np.array([np.arccos(ratio), np.arccos(-ratio)]))
     edges = np.unique(np.concatenate(edges))
     return edges[np.concatenate([[True], np.diff(edges) > 1e-12])]
 
@@ -219,7 +229,7 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
     initial = _Panels(cases, a0, a1, b0, b0 + 1.0)
     result = adaptive_rectangles(_part_integrand(distribution, shadowing, fixed, alpha, eta, part), initial, K,
-                                 rtol=rtol, atol=atol, max_evaluations=max_evaluations)
+                                 rtol=rtol, atol=atol, max_evaluations=max_evaluations, chunk=_PANELS_PER_CHUNK)
     # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight, p = |c|α), and
     # Beckmann's cap, where the weight (1 − F) G2 (1 + c·x) ≤ 1 + |c| α s over the dropped slope radii.
     p = alpha * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2]

@@ -45,6 +45,10 @@ CHUNK_CELLS = 256
 MAX_AVG_PANELS = 400
 #: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
 MU_FLOOR = 1e-7
+#: E_avg's albedos at nodes of small weight are computed to looser tolerances, in steps of this factor, never
+#: looser than NODE_RTOL_MAX (see average_over_mu).
+NODE_RTOL_STEP = 10.0
+NODE_RTOL_MAX = 1e-4
 
 # Kronrod's 15-point extension of the 7-point Gauss rule on [-1, 1] (nodes ≥ 0; the rule is symmetric).
 _XK = np.array([0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
@@ -277,11 +281,21 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     height-correlated microfacet lobe), so that layer needs no refinement. Globally adaptive (as QUADPACK):
     while a combination's summed panel errors exceed rtol·|E_avg|, its worst panels (error ≥ ¼ of its largest)
     are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights; albedos
-    are computed to rtol/4. Nodes below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing
-    directions); that changes the integral by at most MU_FLOOR²·max|E|, which is added to the error.
+    are computed to rtol/4, looser where the weight 4x³ is below 1 (rtol/(4·4x³), at most NODE_RTOL_MAX). Nodes
+    below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing directions); that changes the
+    integral by at most MU_FLOOR²·max|E|, which is added to the error.
     Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
     """
     M = len(next(iter(params.values()))) if params else 1
+
+    def node_levels(x: np.ndarray) -> np.ndarray:
+        # A node's albedo enters through the weight 4x³ (≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, 4x³)),
+        # which keeps Σ weight·error ≤ (rtol/4)(E_avg + ∫₀¹ |E| dx) — rounded down to powers of NODE_RTOL_STEP
+        # so that the nodes go in a few batched calls (the grazing ones, the costliest albedos, are the loosest).
+        ratio = 1.0 / np.minimum(1.0, 4.0 * np.maximum(x, 1e-300) ** 3)
+        cap = np.log(NODE_RTOL_MAX / (rtol / 4)) / np.log(NODE_RTOL_STEP)
+        return np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0)).ravel()
+
     flat = {n: np.asarray(v, dtype=float).ravel() for n, v in params.items()}
     integrals = 0
     albedo_converged = np.ones(M, dtype=bool)
@@ -291,11 +305,19 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         nonlocal integrals
         x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
         mu = np.maximum(x * x, MU_FLOOR)
-        cells = compute_cells(model, np.arccos(mu.ravel()), {n: np.repeat(v[owner], 15) for n, v in flat.items()},
-                              rtol=rtol / 4, method=method)
+        level = node_levels(x)
+        theta, value, error = np.arccos(mu.ravel()), np.empty(mu.size), np.empty(mu.size)
+        converged = np.empty(mu.size, dtype=bool)
+        node_params = {n: np.repeat(v[owner], 15) for n, v in flat.items()}
+        for step in np.unique(level):
+            nodes = np.flatnonzero(level == step)
+            cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()},
+                                  rtol=max(rtol / 4, min(rtol / 4 * NODE_RTOL_STEP**step, NODE_RTOL_MAX)),
+                                  method=method)
+            value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
+            converged[nodes] = cells.converged
         integrals += mu.size
-        value, error = _single_channel(cells.value, cells.error, model)
-        albedo_converged[owner[~cells.converged.reshape(-1, 15).all(axis=1)]] = False
+        albedo_converged[owner[~converged.reshape(-1, 15).all(axis=1)]] = False
         np.maximum.at(largest_e, owner, np.abs(value).reshape(-1, 15).max(axis=1))
         weight = 4.0 * x**3  # dμ 2μ = 4x³ dx
         g, g_error = weight * value.reshape(-1, 15), weight * error.reshape(-1, 15)
