@@ -192,8 +192,9 @@ def auto_candidates(two_d: bool, max_coefficients: int) -> list[Form]:
 
 
 def smith_candidates(max_coefficients: int) -> list[Form]:
-    """The ``smith:P/Q@D`` forms with at most ``max_coefficients`` coefficients, fewest first (for E(μ, α))."""
-    forms: list[Form] = [SmithForm(P, Q, D) for D in range(0, 4) for P in range(0, 5) for Q in range(0, 4)]
+    """The ``smith:P/Q@D`` forms with at most ``max_coefficients`` coefficients, fewest first (for E(μ, α));
+    D ≥ 1, since E depends on α at every μ."""
+    forms: list[Form] = [SmithForm(P, Q, D) for D in range(1, 4) for P in range(0, 5) for Q in range(0, 4)]
     forms = [f for f in forms if f.n_coefficients <= max_coefficients]
     return sorted(forms, key=lambda f: (f.n_coefficients, sum(f.operations().values())))
 
