@@ -181,7 +181,8 @@ def _smith_body(form: SmithForm, result: FitResult, language: str, mu: str, alph
     numerator = [f"({_horner(lit[i * k:(i + 1) * k], 'v')})" for i in range(form.P + 1)]
     log_row = f"({_horner(lit[n:n + k], 'v')})"
     den = ["1.0"] + lit[n + k:]
-    denominator = [f"({_horner(den[j * k:(j + 1) * k], 'v')})" for j in range(form.Q + 1)]
+    kq = form.dq + 1
+    denominator = [f"({_horner(den[j * kq:(j + 1) * kq], 'v')})" for j in range(form.Q + 1)]
     top = _horner(numerator, "u") if len(numerator) > 1 else numerator[0]
     bottom = _horner(denominator, "u") if len(denominator) > 1 else denominator[0]
     lines.append(f"{syn.declare}p = {top} + l * {log_row}{syn.end}")

@@ -26,7 +26,8 @@ Forms (:data:`FORMS`, selected by name as colour-science selects a ``method=``)
   stall near 10⁻².
 * ``smith:P/Q@D`` (issue 12 item 5) — the albedo E(μ, α) of a GGX lobe, x = μ and t = α:
   E = 1 − s·(N(s, α²) + ln s·L(α²)) / Q(s, α²) with s = μ/√(μ² + α²(1 − μ²)) = 1/(1 + 2Λ), N and Q of degree P
-  and Q in s, N, L and Q of degree D in α² (:class:`brdfnorm.forms.SmithForm` says why: s absorbs the boundary
+  and Q in s, N, L and Q of degree D in α² — ``smith:P/Q@D/DQ`` gives Q its own degree DQ
+  (:class:`brdfnorm.forms.SmithForm` says why: s absorbs the boundary
   layer μ ≲ α, the factor s gives E(0, α) = 1, ln s the α²·s·ln s of the horizon). Over μ ∈ [0, 1],
   α ∈ [0.02, 1] of height-correlated GGX (F = 1), ``smith:1/1@1`` (9 coefficients) reaches 7.5·10⁻³ and
   ``smith:1/1@2`` (14) 2.0·10⁻³ max absolute error on a dense check grid, where rationals in √μ of ≤ 16
@@ -141,13 +142,15 @@ def parse_form(spec: str, two_d: bool = False) -> Form:
     if second and not two_d:
         raise ArgumentError(f"form {spec!r}: '@D' applies only to two-variable fits (samples with t, e.g. "
                             "at='view')", where="form")
-    D, tau = 0, False
+    D, tau, den_degree = 0, False, None
     if second:
-        text = second["base"]
-        if not _DEGREE.match(second["degree"]):
-            raise ArgumentError(f"form {spec!r}: bad degree {second['degree']!r} after '@' (a whole number)",
-                                where="form")
-        D, tau = int(second["degree"]), bool(second["tau"])
+        text, degree = second["base"], second["degree"]
+        both = _RATIO.match(degree)
+        if both and text.startswith("smith:"):  # smith:P/Q@D/DQ: the denominator's own degree in α²
+            degree, den_degree = both[1], int(both[2])
+        if not _DEGREE.match(degree):
+            raise ArgumentError(f"form {spec!r}: bad degree {degree!r} after '@' (a whole number)", where="form")
+        D, tau = int(degree), bool(second["tau"])
     name, sep, arg = text.partition(":")
     FORMS.validate(name, extra=("auto",))
     if name == "auto":
@@ -161,7 +164,7 @@ def parse_form(spec: str, two_d: bool = False) -> Form:
         if not (two_d and second) or tau:
             raise ArgumentError(f"form {spec!r}: smith:P/Q@D fits E(μ, α) (two variables, μ and α) and takes "
                                 "'@D' without '~tau', e.g. smith:1/1@2", where="form")
-        return SmithForm(D=D, **fields)
+        return SmithForm(D=D, DQ=den_degree, **fields)
     if two_d and not second:
         raise ArgumentError(f"form {spec!r} needs '@D' (the degree in the second variable) in a two-variable "
                             "fit, e.g. rational-sqrt:3/2@2", where="form")
@@ -195,7 +198,8 @@ def auto_candidates(two_d: bool, max_coefficients: int) -> list[Form]:
 def smith_candidates(max_coefficients: int) -> list[Form]:
     """The ``smith:P/Q@D`` forms with at most ``max_coefficients`` coefficients, fewest first (for E(μ, α));
     D ≥ 1, since E depends on α at every μ."""
-    forms: list[Form] = [SmithForm(P, Q, D) for D in range(1, 4) for P in range(0, 5) for Q in range(0, 4)]
+    forms: list[Form] = [SmithForm(P, Q, D, None if DQ == D else DQ) for D in range(1, 4) for DQ in range(1, 4)
+                         for P in range(0, 5) for Q in range(0, 4)]
     forms = [f for f in forms if f.n_coefficients <= max_coefficients]
     return sorted(forms, key=lambda f: (f.n_coefficients, sum(f.operations().values())))
 

@@ -218,7 +218,8 @@ class SmithForm(Form):
     """E(μ, α) = 1 − x·(N(x, v) + ln x·L(v)) / Q(x, v), x = :func:`smith_variable`, v = α², for the albedo of a
     GGX lobe with height-correlated shadowing (F = 1).
 
-    N = Σ p_ik x^i v^k (i ≤ P), Q = Σ q_jk x^j v^k (j ≤ Q, q_00 = 1), L = Σ l_k v^k, all k ≤ D. Why: at the
+    N = Σ p_ik x^i v^k (i ≤ P), L = Σ l_k v^k (k ≤ D), Q = Σ q_jk x^j v^k (j ≤ Q, k ≤ DQ, q_00 = 1); DQ = D
+    unless given (spec ``smith:P/Q@D/DQ``). Why: at the
     horizon G2 → G1(V) and every reflected ray leaves upwards, so E(0, α) = 1 exactly (the factor x keeps it);
     the first correction is 2x·⟨1 + Λ(L)⟩ over the reflected directions, where Λ(L) ≈ α/(2μ_L) diverges at
     grazing L, so 1 − E ≈ x·(α² ln(1/x) + b(α)) as x → 0 (the tables show the slope α² to 1 %): the ln x term,
@@ -229,23 +230,28 @@ class SmithForm(Form):
     P: int
     Q: int
     D: int
+    DQ: int | None = None
     two_d: bool = True
 
     @property
+    def dq(self) -> int:
+        """The denominator's degree in v."""
+        return self.D if self.DQ is None else self.DQ
+
+    @property
     def spec(self) -> str:  # type: ignore[override]
-        return f"smith:{self.P}/{self.Q}@{self.D}"
+        return f"smith:{self.P}/{self.Q}@{self.D}" + (f"/{self.dq}" if self.dq != self.D else "")
 
     @property
     def n_coefficients(self) -> int:  # type: ignore[override]
-        k = self.D + 1
-        return (self.P + 2) * k + (self.Q + 1) * k - 1
+        return (self.P + 2) * (self.D + 1) + (self.Q + 1) * (self.dq + 1) - 1
 
     def split(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """N's p[i, k], L's l[k] and Q's q[j, k] (q[0, 0] = 1) from the flat vector."""
         c = np.asarray(c, dtype=float)
         k = self.D + 1
         n = (self.P + 1) * k
-        den = np.concatenate([[1.0], c[n + k:]]).reshape(self.Q + 1, k)
+        den = np.concatenate([[1.0], c[n + k:]]).reshape(self.Q + 1, self.dq + 1)
         return c[:n].reshape(self.P + 1, k), c[n:n + k], den
 
     @staticmethod
@@ -273,13 +279,13 @@ class SmithForm(Form):
         powers = range(self.D + 1)
         phi = np.stack([u**i * vv**k for i in range(self.P + 1) for k in powers]
                        + [log_u * vv**k for k in powers], axis=1)
-        psi = np.stack([u**j * vv**k for j in range(self.Q + 1) for k in powers], axis=1)[:, 1:]
+        psi = np.stack([u**j * vv**k for j in range(self.Q + 1) for k in range(self.dq + 1)], axis=1)[:, 1:]
         # E − Ẽ = x·(r̃ − r): the error of E divided by metric_scale is that of r divided by this scale.
         scale = metric_scale(metric, y) / u
         c = _fit_rational(phi, psi, (1.0 - y) / u, scale, metric)
-        k = self.D + 1
+        k, kq = self.D + 1, self.dq + 1
         undo = np.array([vs ** -(i % k) for i in range((self.P + 2) * k)]
-                        + [vs ** -(i % k) for i in range((self.Q + 1) * k)][1:])
+                        + [vs ** -(i % kq) for i in range((self.Q + 1) * kq)][1:])
         return c * undo
 
     def expression(self, c, x, t):
@@ -299,8 +305,8 @@ class SmithForm(Form):
 
     def operations(self) -> dict[str, int]:
         """x (2 fma, sqrt, max, div), v, ln x; Horner in v then in x for N, L and Q; the last fma and div."""
-        rows = self.P + 2 + self.Q + 1
-        return {"fma": 3 + rows * self.D + self.P + self.Q + 2, "mul": 2, "div": 2, "sqrt": 1, "log": 1,
+        horner = (self.P + 2) * self.D + (self.Q + 1) * self.dq
+        return {"fma": 3 + horner + self.P + self.Q + 2, "mul": 2, "div": 2, "sqrt": 1, "log": 1,
                 "max": 2}
 
 
