@@ -17,7 +17,7 @@ from conftest import run_cli
 import brdfnorm as bn
 from brdfnorm import lut
 from brdfnorm.codegen import emit
-from brdfnorm.fit import fit
+from brdfnorm.fit import fit, parse_form
 from brdfnorm.forms import SmithForm, smith_variable
 from brdfnorm.lut.fitting import fit_table
 
@@ -115,7 +115,10 @@ def test_bad_uses_of_the_form():
     form = fit(np.array([0.5, 1.0] * 8), np.linspace(0.5, 0.9, 16), np.linspace(0.1, 1, 16), form="smith:0/0@0",
                names=("mu", "alpha"))
     assert isinstance(form.form_object, SmithForm) and len(form.coefficients) == 2
-    for spec, message in [("smith:1/1", "@D"), ("smith:1@1", "smith:P/Q@D"), ("smith:1/1@1~tau", "~tau")]:
+    assert parse_form("smith:1/1@1/2", two_d=True).n_coefficients == 11
+    assert parse_form("smith:1/1@2/2", two_d=True).spec == "smith:1/1@2"
+    for spec, message in [("smith:1/1", "@D"), ("smith:1@1", "smith:P/Q@D"), ("smith:1/1@1~tau", "~tau"),
+                          ("rational-sqrt:1/1@1/2", "bad degree"), ("smith:1/1@1/x", "bad degree")]:
         with pytest.raises(ValueError, match=message):
             fit(np.ones(20), np.ones(20), np.ones(20), form=spec)
     with pytest.raises(ValueError, match="0 ≤ μ ≤ 1"):
