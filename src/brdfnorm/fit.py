@@ -29,9 +29,9 @@ Forms (:data:`FORMS`, selected by name as colour-science selects a ``method=``)
   and Q in s, N, L and Q of degree D in α² — ``smith:P/Q@D/DQ`` gives Q its own degree DQ
   (:class:`brdfnorm.forms.SmithForm` says why: s absorbs the boundary
   layer μ ≲ α, the factor s gives E(0, α) = 1, ln s the α²·s·ln s of the horizon). Over μ ∈ [0, 1],
-  α ∈ [0.02, 1] of height-correlated GGX (F = 1), ``smith:1/1@1`` (9 coefficients) reaches 7.5·10⁻³ and
-  ``smith:1/1@2`` (14) 2.0·10⁻³ max absolute error on a dense check grid, where rationals in √μ of ≤ 16
-  coefficients stall at 0.049.
+  α ∈ [0.02, 1] of height-correlated GGX (F = 1), ``smith:1/1@1`` (9 coefficients) reaches 7.5·10⁻³,
+  ``smith:1/1@1/2`` (11) 4.2·10⁻³ and ``smith:1/1@2`` (14) 2.0·10⁻³ max absolute error on a dense check grid,
+  where rationals in √μ of ≤ 16 coefficients stall at 0.049.
 * ``auto`` fits candidates in order of coefficient count and returns the first count at which one reaches the
   target maximum relative error (the best one of that count), with the list of what it tried.
 

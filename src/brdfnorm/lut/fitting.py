@@ -4,12 +4,11 @@ The table's direction axis (``mu``, or ``theta`` as μ = cos θ) is the fit's fi
 its second variable t, on which every coefficient depends polynomially (:mod:`brdfnorm.fit`'s ``P/Q@D`` forms):
 rationals in √x, and — when the second axis is ``alpha`` — the ``smith:P/Q@D`` forms in the Smith variable
 μ/√(μ² + α²(1 − μ²)) with E(0, α) = 1 and the horizon's ln term built in (issue 12 item 5: GGX's E(μ, α) over
-μ ∈ [0, 1], α ∈ [0.02, 1] to 7.5·10⁻³ with 9 coefficients, 2.0·10⁻³ with 14, where rationals in √μ stall at
-0.049 with 16). Every candidate form up to ``max_coefficients`` is fitted (minimax in absolute error by
-default); the front lists,
-for each coefficient count, the smallest maximum absolute error reached on the table's cells when no form with
-fewer coefficients does better. The chosen fit is the one with the fewest coefficients meeting ``target`` (an
-absolute error), or the most accurate one when none does.
+μ ∈ [0, 1], α ∈ [0.02, 1] to 7.5·10⁻³ with 9 coefficients, 4.2·10⁻³ with 11, 2.0·10⁻³ with 14, where
+rationals in √μ stall at 0.049 with 16). Every candidate form up to ``max_coefficients`` is fitted (minimax in
+absolute error by default); the front lists, for each coefficient count, the smallest maximum absolute error
+reached on the table's cells when no form with fewer coefficients does better. The chosen fit is the one with the
+fewest coefficients meeting ``target`` (an absolute error), or the most accurate one when none does.
 """
 
 from __future__ import annotations
