@@ -136,6 +136,11 @@ def test_cli_prints_the_front_and_emits_code(capsys, table, tmp_path):
     assert code == 2 and stderr.count("\n") == 1 and "alpha" in stderr and "--form" in stderr
 
 
+def test_fit_help_names_the_smith_forms(capsys):
+    code, stdout, _ = run_cli(capsys, "fit", "--help")
+    assert code == 0 and "smith:P/Q@D/DQ" in stdout and "minimax-abs" in stdout
+
+
 # -- the emitted code --------------------------------------------------------------------------------------
 
 PROBE_MU = np.array([0.0, 1e-6, 3e-4, 0.02, 0.1, 0.5, 0.9, 1.0, 0.3, 0.0])

@@ -112,8 +112,9 @@ def fit_command(
     form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
                              "rational-sqrt:P/Q | auto; with --at view add @D (degree in cos θ_o) and "
                              "optionally ~tau, e.g. rational-sqrt:4/2@3~tau. With --lut of a (mu, alpha) "
-                             "table also smith:P/Q@D[/DQ], E = 1 − s·(N + ln s·L)/Q in s = μ/√(μ² + α²(1 − μ²)) "
-                             "with Q of degree DQ in α², e.g. smith:1/1@1/2 (GGX to 5e-3, 11 coefficients)."),
+                             "table also smith:P/Q@D or smith:P/Q@D/DQ, E = 1 − s·(N + ln s·L)/Q in "
+                             "s = μ/√(μ² + α²(1 − μ²)) with Q of degree DQ in α², e.g. smith:1/1@1/2 (GGX to "
+                             "5e-3, 11 coefficients)."),
     metric: Metric = typer.Option(None, "--metric", help="What the fit minimizes (default minimax-rel; with "
                                   "--lut minimax-abs)."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
