@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass
 
 from .fit import FitResult
-from .forms import HyperbolaForm, RationalForm
+from .forms import HyperbolaForm, RationalForm, SmithForm
 from .registry import Registry
 
 #: Words no emitted identifier may be, in any target: the keywords and reserved words of C11/C23, GLSL 4.6 and
@@ -42,7 +42,7 @@ RESERVED = frozenset(keyword.kwlist) | frozenset("""
     min12int min16uint float1 float2 float3 float4 float2x2 float3x3 float4x4 double2 double3 double4 int2 int3
     int4 uint2 uint3 uint4 bool2 bool3 bool4 matrix vector string technique pass cbuffer tbuffer groupshared
     nointerpolation linear centroid row_major column_major snorm unorm export extern register packoffset
-    sqrt pow abs exp log sin cos tan fma d u v p q
+    sqrt pow abs exp log sin cos tan fma max fmax maximum numpy d u v p q l
 """.split())
 
 #: Longest piece of outside text (a model name, a file name) quoted in a generated comment.
@@ -58,14 +58,16 @@ class Syntax:
     declare: str  # how a local is introduced: "float ", "double ", ""
     sqrt: str
     end: str  # statement terminator
+    log: str = "log"
+    max: str = "max"
 
 
 #: Target languages (``emit(..., language=)``).
 LANGUAGES: Registry[Syntax] = Registry("language", "language", {
     "glsl": Syntax("float", "//", "float ", "sqrt", ";"),
     "hlsl": Syntax("float", "//", "float ", "sqrt", ";"),
-    "c": Syntax("double", "//", "double ", "sqrt", ";"),
-    "python": Syntax("", "#", "", "", ""),
+    "c": Syntax("double", "//", "double ", "sqrt", ";", max="fmax"),
+    "python": Syntax("", "#", "", "", "", max="maximum"),
 })
 
 
@@ -131,6 +133,8 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
         lines.append(f"{syn.declare}d = {x} - {literal(x0, language)}{syn.end}")
         lines.append(f"return {lit[0]} + {lit[1]} * {sqrt(f'd * d + {b2}')}{syn.end}")
         return lines
+    if isinstance(form, SmithForm):
+        return _smith_body(form, result, language, x, t)
     assert isinstance(form, RationalForm)
     u = x
     if form.sqrt:
@@ -153,6 +157,37 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
             terms = [row[0] for row in rows]
         lines.append(f"{syn.declare}{name} = {_horner(terms, u) if len(terms) > 1 else terms[0]}{syn.end}")
     lines.append(f"return p / q{syn.end}" if form.has_denominator else f"return p{syn.end}")
+    return lines
+
+
+def _smith_body(form: SmithForm, result: FitResult, language: str, mu: str, alpha: str) -> list[str]:
+    """E = 1 − u·(N + l·L)/Q with u = μ/√(μ² + α²(1 − μ²)), v = α², l = ln u (:class:`SmithForm`).
+
+    The guards keep μ = 0 exact: u = 0 there (also when α = 0), ln is taken of max(u, 1e-30) — a float32
+    normal — and u·(…) vanishes, so E = 1 as the lobe's own limit says.
+    """
+    syn = LANGUAGES[language]
+    lit = [literal(c, language) for c in result.coefficients]
+    k = form.D + 1
+    sqrt = (lambda e: f"({e}) ** 0.5") if language == "python" else (lambda e: f"{syn.sqrt}({e})")
+    lines = ["from numpy import log, maximum  # arrays and floats alike"] if language == "python" else []
+    tiny = literal(1e-30, language)
+    lines += [
+        f"{syn.declare}v = {alpha} * {alpha}{syn.end}",
+        f"{syn.declare}u = {mu} / {syn.max}({sqrt(f'{mu} * {mu} + v * (1.0 - {mu} * {mu})')}, {tiny}){syn.end}",
+        f"{syn.declare}l = {syn.log}({syn.max}(u, {tiny})){syn.end}",
+    ]
+    n = (form.P + 1) * k
+    numerator = [f"({_horner(lit[i * k:(i + 1) * k], 'v')})" for i in range(form.P + 1)]
+    log_row = f"({_horner(lit[n:n + k], 'v')})"
+    den = ["1.0"] + lit[n + k:]
+    kq = form.dq + 1
+    denominator = [f"({_horner(den[j * kq:(j + 1) * kq], 'v')})" for j in range(form.Q + 1)]
+    top = _horner(numerator, "u") if len(numerator) > 1 else numerator[0]
+    bottom = _horner(denominator, "u") if len(denominator) > 1 else denominator[0]
+    lines.append(f"{syn.declare}p = {top} + l * {log_row}{syn.end}")
+    lines.append(f"{syn.declare}q = {bottom}{syn.end}")
+    lines.append(f"return 1.0 - u * p / q{syn.end}")
     return lines
 
 

@@ -24,6 +24,11 @@ from scipy.optimize import least_squares, minimize
 LAWSON_ITERATIONS = 300
 
 
+def metric_scale(metric: str, y: np.ndarray) -> np.ndarray:
+    """What a sample's error is divided by under ``metric``: |y| for the relative metrics, 1 for the absolute."""
+    return np.ones_like(y) if metric in ("abs-lsq", "minimax-abs") else np.abs(y)
+
+
 def _fmt(value: float) -> str:
     return f"{value:.9g}"
 
@@ -159,7 +164,7 @@ class RationalForm(Form):
         sv = (float(np.max(np.abs(v))) or 1.0) if self.two_d else 1.0
         us, vs = u / su, v / sv
         phi = self._basis(us, vs, self.P)
-        scale = np.ones_like(y) if metric == "abs-lsq" else np.abs(y)
+        scale = metric_scale(metric, y)
         if self.has_denominator:
             c = _fit_rational(phi, self._basis(us, vs, self.Q)[:, 1:], y, scale, metric)
         else:
@@ -196,6 +201,115 @@ class RationalForm(Form):
         return {"fma": fma, "mul": int(self.tau), "div": int(self.has_denominator), "sqrt": int(self.sqrt)}
 
 
+def smith_variable(mu: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """x = μ/√(μ² + α²(1 − μ²)) = 1/(1 + 2Λ(μ)), GGX's Λ = (−1 + √(1 + α² tan²θ))/2 (Heitz 2014, eq. 72).
+
+    x is 0 at the horizon, 1 at the normal, and μ/α where μ ≪ α: it stretches the boundary layer μ ≲ α, where
+    E(μ, α) turns over, to a fixed part of [0, 1] whatever α is. 0 at μ = α = 0 (the mirror's horizon).
+    """
+    mu = np.asarray(mu, dtype=float)
+    root = np.sqrt(mu * mu + np.asarray(alpha, dtype=float) ** 2 * (1.0 - mu * mu))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(root > 0, mu / np.where(root > 0, root, 1.0), 0.0)
+
+
+@dataclass(frozen=True)
+class SmithForm(Form):
+    """E(μ, α) = 1 − x·(N(x, v) + ln x·L(v)) / Q(x, v), x = :func:`smith_variable`, v = α², for the albedo of a
+    GGX lobe with height-correlated shadowing (F = 1).
+
+    N = Σ p_ik x^i v^k (i ≤ P), L = Σ l_k v^k (k ≤ D), Q = Σ q_jk x^j v^k (j ≤ Q, k ≤ DQ, q_00 = 1); DQ = D
+    unless given (spec ``smith:P/Q@D/DQ``). Why: at the
+    horizon G2 → G1(V) and every reflected ray leaves upwards, so E(0, α) = 1 exactly (the factor x keeps it);
+    the first correction is 2x·⟨1 + Λ(L)⟩ over the reflected directions, where Λ(L) ≈ α/(2μ_L) diverges at
+    grazing L, so 1 − E ≈ x·(α² ln(1/x) + b(α)) as x → 0 (the tables show the slope α² to 1 %): the ln x term,
+    which no rational in x (or √μ) follows. Fitted as the rational r = (1 − E)/x with the error of E weighted
+    back in (minimax-abs on E is minimax of |r̃ − r|·x).
+    """
+
+    P: int
+    Q: int
+    D: int
+    DQ: int | None = None
+    two_d: bool = True
+
+    @property
+    def dq(self) -> int:
+        """The denominator's degree in v."""
+        return self.D if self.DQ is None else self.DQ
+
+    @property
+    def spec(self) -> str:  # type: ignore[override]
+        return f"smith:{self.P}/{self.Q}@{self.D}" + (f"/{self.dq}" if self.dq != self.D else "")
+
+    @property
+    def n_coefficients(self) -> int:  # type: ignore[override]
+        return (self.P + 2) * (self.D + 1) + (self.Q + 1) * (self.dq + 1) - 1
+
+    def split(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """N's p[i, k], L's l[k] and Q's q[j, k] (q[0, 0] = 1) from the flat vector."""
+        c = np.asarray(c, dtype=float)
+        k = self.D + 1
+        n = (self.P + 1) * k
+        den = np.concatenate([[1.0], c[n + k:]]).reshape(self.Q + 1, self.dq + 1)
+        return c[:n].reshape(self.P + 1, k), c[n:n + k], den
+
+    @staticmethod
+    def variables(mu: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """x, v = α² and ln x (finite at x = 0, where x·ln x → 0 and the value is 1)."""
+        x = smith_variable(mu, alpha)
+        return x, np.asarray(alpha, dtype=float) ** 2, np.log(np.maximum(x, 1e-300))
+
+    def evaluate(self, c, x, t=None):
+        p, l, q = self.split(c)
+        u, v, log_u = self.variables(x, t)
+        numerator = RationalForm._horner2(p, u, v) + log_u * RationalForm._horner2(l[None, :], u, v)
+        return 1.0 - u * numerator / self.denominator(c, x, t)
+
+    def denominator(self, c, x, t=None):
+        u, v, _ = self.variables(x, t)
+        return RationalForm._horner2(self.split(c)[2], u, v)
+
+    def fit(self, x, t, y, metric):
+        u, v, log_u = self.variables(x, t)
+        inside = u > 0  # at x = 0 the form is 1 whatever the coefficients: no information there
+        u, v, log_u, y = u[inside], v[inside], log_u[inside], y[inside]
+        vs = float(np.max(v)) or 1.0
+        vv = v / vs
+        powers = range(self.D + 1)
+        phi = np.stack([u**i * vv**k for i in range(self.P + 1) for k in powers]
+                       + [log_u * vv**k for k in powers], axis=1)
+        psi = np.stack([u**j * vv**k for j in range(self.Q + 1) for k in range(self.dq + 1)], axis=1)[:, 1:]
+        # E − Ẽ = x·(r̃ − r): the error of E divided by metric_scale is that of r divided by this scale.
+        scale = metric_scale(metric, y) / u
+        c = _fit_rational(phi, psi, (1.0 - y) / u, scale, metric)
+        k, kq = self.D + 1, self.dq + 1
+        undo = np.array([vs ** -(i % k) for i in range((self.P + 2) * k)]
+                        + [vs ** -(i % kq) for i in range((self.Q + 1) * kq)][1:])
+        return c * undo
+
+    def expression(self, c, x, t):
+        p, l, q = self.split(c)
+        v = f"({t}²)"
+        u = f"s({x}, {t})"
+
+        def poly(row: Sequence[float], fixed_one: bool = False) -> str:
+            return _join(["1" if fixed_one and k == 0 else _term(a, k, v) for k, a in enumerate(row)])
+
+        def poly2(coef: np.ndarray, fixed_one: bool) -> str:
+            return _join([f"({poly(row, fixed_one and i == 0)})" + (f"·{u}" + (f"^{i}" if i > 1 else "") if i else "")
+                          for i, row in enumerate(coef)])
+
+        return (f"1 - {u}·({poly2(p, False)} + ({poly(l)})·ln {u}) / ({poly2(q, True)}), "
+                f"{u} = {x}/√({x}² + {t}²(1 - {x}²))")
+
+    def operations(self) -> dict[str, int]:
+        """x (2 fma, sqrt, max, div), v, ln x; Horner in v then in x for N, L and Q; the last fma and div."""
+        horner = (self.P + 2) * self.D + (self.Q + 1) * self.dq
+        return {"fma": 3 + horner + self.P + self.Q + 2, "mul": 2, "div": 2, "sqrt": 1, "log": 1,
+                "max": 2}
+
+
 @dataclass(frozen=True)
 class HyperbolaForm(Form):
     """y = a + c·√((x − x0)² + b²): seed 003's commenter's scaled, shifted √(x² + 1); b ≥ 0 reported."""
@@ -208,7 +322,7 @@ class HyperbolaForm(Form):
         return a + s * np.sqrt((np.asarray(x, dtype=float) - x0) ** 2 + b * b)
 
     def fit(self, x, t, y, metric):
-        scale = np.ones_like(y) if metric == "abs-lsq" else np.abs(y)
+        scale = metric_scale(metric, y)
         xs = float(np.max(np.abs(x))) or 1.0
         ys = float(np.max(np.abs(y))) or 1.0
         X, Y = x / xs, y / ys
@@ -230,8 +344,8 @@ class HyperbolaForm(Form):
                     best = (cost, result.x)
         assert best is not None
         p = best[1]
-        if metric == "minimax-rel":
-            p = _minimax(lambda q: model(q, X) * ys / y - 1.0, p, None)
+        if metric.startswith("minimax"):
+            p = _minimax(lambda q: (model(q, X) * ys - y) / scale, p, None)
         a, s, x0, b = p
         # y = ys·(a + s·√((x/xs − x0)² + b²)) = ys·a + (ys·s/xs)·√((x − x0·xs)² + (b·xs)²)
         return np.array([a * ys, s * ys / xs, x0 * xs, abs(b) * xs])
@@ -259,25 +373,26 @@ def _lstsq(A: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _fit_linear(phi: np.ndarray, y: np.ndarray, scale: np.ndarray, metric: str) -> np.ndarray:
     c = _lstsq(phi / scale[:, None], y / scale)
-    if metric != "minimax-rel":
+    if not metric.startswith("minimax"):
         return c
-    # Lawson: weights ∝ weight·|error| drive the weighted least-squares solution to the minimax one.
+    # Lawson: weights ∝ weight·|error| drive the weighted least-squares solution to the minimax one of the
+    # scaled error (f − y)/scale (scale = |y| for minimax-rel, 1 for minimax-abs).
     w = np.full(y.shape, 1.0 / y.size)
     best = c
-    best_err = np.max(np.abs(phi @ c / y - 1.0))
+    best_err = np.max(np.abs((phi @ c - y) / scale))
     for _ in range(LAWSON_ITERATIONS):
-        e = phi @ c / y - 1.0
+        e = (phi @ c - y) / scale
         w = w * np.abs(e)
         total = w.sum()
         if not np.isfinite(total) or total == 0:
             break
         w /= total
         root = np.sqrt(w)
-        c = _lstsq(phi * (root / y)[:, None], root)
-        err = np.max(np.abs(phi @ c / y - 1.0))
+        c = _lstsq(phi * (root / scale)[:, None], root * y / scale)
+        err = np.max(np.abs((phi @ c - y) / scale))
         if err < best_err:
             best, best_err = c, err
-    return _minimax(lambda q: phi @ q / y - 1.0, best, lambda q: phi / y[:, None])
+    return _minimax(lambda q: (phi @ q - y) / scale, best, lambda q: phi / scale[:, None])
 
 
 def _fit_rational(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, scale: np.ndarray, metric: str) -> np.ndarray:
@@ -306,12 +421,11 @@ def _fit_rational(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, scale: np.nda
 
     ones = np.ones_like(y)
     c = _refine(residual, jacobian, c, ones)
-    if metric != "minimax-rel":
+    if not metric.startswith("minimax"):
         return c
 
     def rel(c: np.ndarray) -> np.ndarray:
-        p, q = split(c)
-        return p / q / y - 1.0
+        return residual(c, ones)
 
     def no_pole(c: np.ndarray) -> bool:
         q = split(c)[1]
@@ -326,16 +440,12 @@ def _fit_rational(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, scale: np.nda
         w /= w.mean()
         if not np.all(np.isfinite(w)):
             break
-        c = _refine(lambda c, r: residual(c, r) * scale / y, lambda c, r: jacobian(c, r) * (scale / y)[:, None],
-                    c, np.sqrt(w))
+        c = _refine(residual, jacobian, c, np.sqrt(w))
         err = float(np.max(np.abs(rel(c))))
         if err < best_err and no_pole(c):
             best, best_err = c, err
 
-    def rel_jac(c: np.ndarray) -> np.ndarray:
-        return jacobian(c, ones) * (scale / y)[:, None]
-
-    polished = _minimax(rel, best, rel_jac)
+    polished = _minimax(rel, best, lambda c: jacobian(c, ones))
     return polished if no_pole(polished) else best
 
 

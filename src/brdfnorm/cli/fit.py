@@ -45,6 +45,7 @@ class Metric(str, Enum):
     abs_lsq = "abs-lsq"
     rel_lsq = "rel-lsq"
     minimax_rel = "minimax-rel"
+    minimax_abs = "minimax-abs"
 
 
 assert tuple(m.value for m in Metric) == METRICS
@@ -109,8 +110,12 @@ def fit_command(
     lut_table: str = typer.Option("E", "--table", metavar="NAME", help="The table fitted with --lut."),
     form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
                              "rational-sqrt:P/Q | auto; with --at view add @D (degree in cos θ_o) and "
-                             "optionally ~tau, e.g. rational-sqrt:4/2@3~tau."),
-    metric: Metric = typer.Option(Metric.minimax_rel, "--metric", help="What the fit minimizes."),
+                             "optionally ~tau, e.g. rational-sqrt:4/2@3~tau. With --lut of a (mu, alpha) "
+                             "table also smith:P/Q@D or smith:P/Q@D/DQ, E = 1 − s·(N + ln s·L)/Q in "
+                             "s = μ/√(μ² + α²(1 − μ²)) with Q of degree DQ in α², e.g. smith:1/1@1/2 (GGX to "
+                             "5e-3, 11 coefficients)."),
+    metric: Metric = typer.Option(None, "--metric", help="What the fit minimizes (default minimax-rel; with "
+                                  "--lut minimax-abs)."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
     theta: str = typer.Option(None, "--theta", metavar="SPEC",
                               help="Polar angles in degrees for --at view (START:STOP:COUNT or list)."),
@@ -138,12 +143,13 @@ def fit_command(
         if lut is not None:
             if model is not None or sweep is not None or at is not At.normal or theta is not None:
                 raise ArgumentError("--lut fits a table file: give no MODEL, --sweep, --at or --theta", where="--lut")
-            _fit_lut(lut, lut_table, form, metric.value, 5e-3 if target is None else target,
+            _fit_lut(lut, lut_table, form, (metric or Metric.minimax_abs).value, 5e-3 if target is None else target,
                      max_coefficients or 16, emit_language, output, json_output)
             return
         if model is None or sweep is None:
             raise ArgumentError("give MODEL and --sweep NAME=SPEC (or --lut FILE)", where="--sweep")
         target = 1e-3 if target is None else target
+        metric = metric or Metric.minimax_rel
         if at is At.view and theta is None:
             raise ArgumentError("--at view fits over the view angle: give --theta SPEC", where="--theta")
         if at is not At.view and theta is not None:

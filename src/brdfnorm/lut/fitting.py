@@ -1,12 +1,14 @@
 """Fits of a two-axis lookup table, E(μ, α) say, by :func:`brdfnorm.fit.fit`, with the Pareto front.
 
-The table's direction axis (``mu``, or ``theta`` as μ = cos θ) is the fit's first variable x — the forms are
-rationals in √x, which follow the steep rise of a height-correlated lobe's E towards μ → 0 — and the other axis
-its second variable t, on which every coefficient depends polynomially (:mod:`brdfnorm.fit`'s ``P/Q@D`` forms).
-Every candidate form up to ``max_coefficients`` is fitted (minimax in relative error by default); the front lists,
-for each coefficient count, the smallest maximum absolute error reached on the table's cells when no form with
-fewer coefficients does better. The chosen fit is the one with the fewest coefficients meeting ``target`` (an
-absolute error), or the most accurate one when none does.
+The table's direction axis (``mu``, or ``theta`` as μ = cos θ) is the fit's first variable x and the other axis
+its second variable t, on which every coefficient depends polynomially (:mod:`brdfnorm.fit`'s ``P/Q@D`` forms):
+rationals in √x, and — when the second axis is ``alpha`` — the ``smith:P/Q@D`` forms in the Smith variable
+μ/√(μ² + α²(1 − μ²)) with E(0, α) = 1 and the horizon's ln term built in (issue 12 item 5: GGX's E(μ, α) over
+μ ∈ [0, 1], α ∈ [0.02, 1] to 7.5·10⁻³ with 9 coefficients, 4.2·10⁻³ with 11, 2.0·10⁻³ with 14, where
+rationals in √μ stall at 0.049 with 16). Every candidate form up to ``max_coefficients`` is fitted (minimax in
+absolute error by default); the front lists, for each coefficient count, the smallest maximum absolute error
+reached on the table's cells when no form with fewer coefficients does better. The chosen fit is the one with the
+fewest coefficients meeting ``target`` (an absolute error), or the most accurate one when none does.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ArgumentError
-from ..fit import FitResult, auto_candidates, fit, parse_form
+from ..fit import FitResult, auto_candidates, fit, parse_form, smith_candidates
+from ..forms import SmithForm
 from .table import Lut
 
 
@@ -50,16 +53,22 @@ def table_samples(lut: Lut, table: str = "E") -> tuple[np.ndarray, np.ndarray, n
     return X.ravel(), T.ravel(), values.ravel(), (first, second)
 
 
-def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "minimax-rel",
+def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "minimax-abs",
               target: float = 5e-3, max_coefficients: int = 16) -> TableFit:
     """Fit ``table`` over its two axes; ``form="auto"`` tries every candidate up to ``max_coefficients``."""
     x, t, y, names = table_samples(lut, table)
     if np.any(x < 0):
         raise ArgumentError("the direction axis must be μ ≥ 0 (rationals in √μ)", where="--lut")
+    limit = min(max_coefficients, x.size)
     if form.strip() != "auto":
         candidates = [parse_form(form, two_d=True)]
     else:
-        candidates = auto_candidates(True, min(max_coefficients, x.size))
+        candidates = auto_candidates(True, limit)
+        if names[1] == "alpha":
+            candidates = smith_candidates(limit) + candidates
+    if any(isinstance(c, SmithForm) for c in candidates) and (names[1] != "alpha" or np.any(x > 1)):
+        raise ArgumentError(f"form {form!r} fits E(μ, α): the table's axes must be mu (or theta) and alpha, "
+                            f"not {names[0]} and {names[1]}", where="--form")
     tried, results = [], []
     for candidate in candidates:
         result = fit(x, y, t, form=candidate, metric=metric, names=names)
