@@ -37,7 +37,10 @@ piece the integrand is analytic, with its nearest singularity (Λ's branch point
 comparable to the piece. The φ panels start at the zeros and extrema of p(φ) = c·d(φ), where s_h(φ) changes
 fastest at grazing views (over a φ-width ~ V_z).
 
-Cubature. Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case): a
+Cubature. First a global tensor rule per case and piece (:mod:`brdfnorm.halfvector_global`: periodic trapezoid
+in φ × Fejér in v, degree doubling with node reuse), which settles most views with half the evaluations; the
+cases it does not settle (grazing views, μ ≲ 0.01) start afresh on the panels below.
+Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case): a
 tensor K15 ⊗ K15 rule per panel (225 nodes), its error the plain |KK − GK| + |KK − KG| of the embedded G7
 rules (not QUADPACK's rescaling); panels are bisected along their worse direction while their case misses
 max(atol, rtol·|E|). When a case first meets the tolerance, every panel not yet checked is re-integrated on
@@ -54,6 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from . import halfvector_global as global_rule
 from .errors import ArgumentError
 from .integrate import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 from .models.microfacet import (
@@ -261,14 +265,10 @@ def _case_slice(params: dict, case: np.ndarray) -> dict:
             for k, v in params.items()}
 
 
-def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
+def _grading_width(g: _Geometry) -> np.ndarray:
+    """δ per case: the azimuthal width of the grazing feature next to the zeros of p(φ) (1 where none)."""
     Vz = g.V[:, 2]
     cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
-    offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
-    amplitude = np.hypot(cx * g.ax, cy * g.ay)
-    cos_offset, sin_offset = np.cos(offset), np.sin(offset)
-    layer = _LAYER * np.maximum(g.ax, g.ay)
-    dist = g.distribution
     # Azimuth grading (φ-map): the horizon radius changes fastest near the zeros of p(φ) = c·d(φ), where
     # y = p/|d| ∈ [−reach, reach], reach = |c| α_max/α_min, crosses the scales 1 (horizon at real slope ~1;
     # it matters while the tail mass ~α² does) and 1/(16α) (the horizon enters the distribution's bulk,
@@ -279,6 +279,20 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
     scale = np.where(a_max > 1e-6, np.minimum(1.0, 1.0 / (16.0 * a_min)), 1.0 / (16.0 * a_min))
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = np.where(reach > scale, np.clip(0.5 * scale / reach, 1e-300, 1.0), 1.0)
+    return delta
+
+
+def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegrand:
+    """(H1) on the rectangle (φ, v); ``linear``: φ is the azimuth from the offset itself (no φ-map), for the
+    global rule (:mod:`brdfnorm.halfvector_global`), which clusters its own nodes."""
+    Vz = g.V[:, 2]
+    cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
+    offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
+    amplitude = np.hypot(cx * g.ax, cy * g.ay)
+    cos_offset, sin_offset = np.cos(offset), np.sin(offset)
+    layer = _LAYER * np.maximum(g.ax, g.ay)
+    dist = g.distribution
+    delta = _grading_width(g)
     kappa = np.arcsinh(0.5 * np.pi / delta)
 
     def integrand(case, phi, v, piece):
@@ -290,16 +304,18 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
         k = case[:, None, None]
         ax, ay, vz = g.ax[k], g.ay[k], Vz[k]
         zero = np.pi * np.round(phi / np.pi)  # the zero of p at the panel's end (panels never straddle one)
-        xi = np.abs(phi - zero) / (0.5 * np.pi)
-        stretch = kappa[k] * xi
         # The azimuth is offset + zero + ε; ε, the distance from the zero of p, is kept apart so that p and the
         # direction keep their relative accuracy next to the zero (at grazing views |c| ~ 1/μ is huge).
-        epsilon = np.sign(phi - zero) * delta[k] * np.sinh(stretch)
+        if linear:
+            epsilon, phi_jacobian = phi - zero, 1.0
+        else:
+            stretch = kappa[k] * np.abs(phi - zero) / (0.5 * np.pi)
+            epsilon = np.sign(phi - zero) * delta[k] * np.sinh(stretch)
+            phi_jacobian = delta[k] * kappa[k] * np.cosh(stretch) / (0.5 * np.pi)
         parity = 1.0 - 2.0 * (np.round(zero / np.pi) % 2)  # cos(zero), sin(zero) = 0
         cos_e, sin_e = np.cos(epsilon), np.sin(epsilon)
         cos_a = parity * (cos_offset[k] * cos_e - sin_offset[k] * sin_e)
         sin_a = parity * (sin_offset[k] * cos_e + cos_offset[k] * sin_e)
-        phi_jacobian = delta[k] * kappa[k] * np.cosh(stretch) / (0.5 * np.pi)
         dx, dy = ax * cos_a, ay * sin_a  # (R, n, 1)
         d2 = dx * dx + dy * dy
         p = -amplitude[k] * parity * sin_e  # A cos(π/2 + zero + ε)
@@ -362,7 +378,7 @@ def _microfacet_integrand(g: _Geometry) -> RectangleIntegrand:
 
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
                              rtol: float = 1e-10, atol: float = 0.0,
-                             max_evaluations: int = 20_000_000) -> CubatureResult:
+                             max_evaluations: int = 20_000_000, use_global: bool = True) -> CubatureResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     K = fixed.shape[0]
@@ -380,9 +396,24 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
         index = np.flatnonzero(mask)
         cases.append(np.repeat(index, a0.size))
         bounds.append([np.tile(x.ravel(), index.size) for x in (a0, a1, b0, b1)])
+    # The global rule first (brdfnorm.halfvector_global), for every case whose feature its nodes resolve.
+    lam = global_rule.clustering(fixed[:, 2])
+    tried = np.arange(K) if use_global else np.arange(0)
+    value, error, evaluations, settled = global_rule.integrate_global(
+        _microfacet_integrand(g, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol, atol=atol)
     initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
-    result = adaptive_rectangles(_microfacet_integrand(g), initial, K, rtol=rtol, atol=atol,
-                                 max_evaluations=max_evaluations)
+    initial = initial.take(~settled[initial.case])
+    if initial.case.size:
+        panels = adaptive_rectangles(_microfacet_integrand(g), initial, K, rtol=rtol, atol=atol,
+                                     max_evaluations=max(max_evaluations - int(evaluations.max()), 1))
+        shape = (K, max(value.shape[1], panels.value.shape[1]))  # 1 channel where no case ran on a side
+        value, error = (np.broadcast_to(x, shape).copy() for x in (value, error))
+        value[~settled] = np.broadcast_to(panels.value, shape)[~settled]
+        error[~settled] = np.broadcast_to(panels.error, shape)[~settled]
+        evaluations = evaluations + np.where(settled, 0, panels.evaluations)
+        settled = settled | panels.converged
+    converged = settled
+    result = CubatureResult(value, error, evaluations, converged)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
     mass, moment = distribution.truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
