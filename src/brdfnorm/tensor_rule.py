@@ -10,7 +10,8 @@ On that rectangle the integrand is periodic and, away from float64's limit, anal
 before any panel is cut, each case is integrated by one tensor rule over the whole rectangle:
 
 * in β, the periodic trapezoid rule on the smooth periodic map tan(β − π) = λ tan(t − π) (a Möbius map of the
-  circle: dβ/dt = λ/(cos²y + λ² sin²y), y = t − π, so nodes 1/λ times denser at β = π and sparser at β = 0),
+  circle: dβ/dt = λ/(cos²y + λ² sin²y), y = t − π, so nodes 1/λ times denser at β = π and at β = 0
+  (dβ/dt = λ at both), 1/λ times sparser at β = ±π/2),
   with λ = c_P + 2w² (P = the peak, w = the lobe's width) clipped to [0.1, 1]. β = π points from the peak down
   to the nearest horizon: for a peak c_P above the horizon the lobe's tail is cut there, at α_h ≈ c_P/|cos β|,
   and the cut profile varies fastest in β there. (Measured on Blinn-Phong n = 512 at rtol 1e-9 over
@@ -127,7 +128,8 @@ def _azimuths(level: int) -> np.ndarray:
 
 def beta_map(t: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """β(t) and dβ/dt of the periodic map with tan((β − π)/1) = λ tan(t − π): nodes 1/λ times denser at β = π
-    (the horizon nearest the lobe), 1/λ times sparser at β = 0 (module docstring)."""
+    (the horizon nearest the lobe) and at β = 0 (dβ/dt = λ at both), 1/λ times sparser at β = ±π/2 (module
+    docstring)."""
     y = t - np.pi
     sin_y, cos_y = np.sin(y), np.cos(y)
     beta = t + (np.arctan2(lam * sin_y, cos_y) - np.arctan2(sin_y, cos_y))
