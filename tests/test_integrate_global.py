@@ -11,8 +11,9 @@ import pytest
 from conftest import ggx_albedo_reference, phong_like_reference
 
 import brdfnorm as bn
+from brdfnorm import integrate as engine
 from brdfnorm.integrate import integrate_hemisphere
-from brdfnorm.tensor_rule import START_LEVELS, beta_map, fejer, integrate_global
+from brdfnorm.tensor_rule import LAMBDA_MIN, START_LEVELS, beta_map, fejer, integrate_global, radial_width_scale
 
 NAIVE_GGX = Path(__file__).resolve().parent / "fixtures" / "ggx_naive.brdf"
 
@@ -38,6 +39,44 @@ def test_beta_map_is_a_periodic_bijection_with_its_derivative(lam):
     np.testing.assert_allclose(derivative, numeric, rtol=1e-7)
     # Clustered at β = π: the derivative there is λ.
     assert abs(beta_map(np.array([np.pi]), lam)[1][0] - lam) < 1e-15
+
+
+@pytest.mark.parametrize("lam", [LAMBDA_MIN, 0.6, 1.0])
+def test_radial_width_follows_an_ellipse_of_axis_ratio_lambda(lam):
+    # The map's nodes t and the widths at them: the point (width cos β, width sin β) lies on the ellipse
+    # x² + (y/λ)² = 1 (axes 1 along β = 0, π and λ along β = ±π/2), whose parametrization by t is the map itself.
+    t = np.linspace(0.0, 2 * np.pi, 101)
+    beta, derivative = beta_map(t, lam)
+    width = radial_width_scale(derivative, lam)
+    np.testing.assert_allclose((width * np.cos(beta)) ** 2 + (width * np.sin(beta) / lam) ** 2, 1.0, rtol=1e-13)
+
+
+def test_global_rule_alone_is_honest_at_grazing_views(rng, monkeypatch):
+    # Beyond θ_o ≈ 75° the β map's clustering is held at LAMBDA_MIN and the elliptic radial width is narrowest:
+    # every case the global rule settles (not the panels after it) must carry an estimate ≥ its true error.
+    settled = []
+
+    def spy(*args, **kwargs):
+        result = integrate_global(*args, **kwargs)
+        settled.append(result)
+        return result
+
+    monkeypatch.setattr(engine, "integrate_global", spy)
+    checked = 0
+    for rtol in RTOLS:
+        theta = np.radians(np.concatenate([rng.uniform(75.0, 85.0, 16), rng.uniform(85.0, 89.95, 32)]))
+        n = np.exp(rng.uniform(np.log(5.0), np.log(1e4), theta.size))
+        model = bn.load("blinn-phong").with_params(n=n)
+        reference = bn.albedo(model, theta, method="series", rtol=1e-13)
+        settled.clear()
+        _quiet(model, theta, rtol=rtol)
+        (result,) = settled
+        picked = result.settled
+        true_error = np.abs(result.value[picked, 0] - reference.value[picked, 0])
+        allowance = reference.error[picked, 0] + 4e-15 * reference.value[picked, 0]
+        assert np.all(result.error[picked, 0] + allowance >= true_error), (rtol, np.flatnonzero(picked))
+        checked += picked.sum()
+    assert checked >= len(RTOLS) * 48 // 3  # the check has substance: many grazing cases settle in the rule
 
 
 def test_smooth_cases_settle_in_the_global_rule_with_few_evaluations():
