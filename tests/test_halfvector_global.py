@@ -101,3 +101,39 @@ def test_global_estimates_bound_the_error_anisotropic_and_fresnel(global_only, n
         largest = max(largest, float(np.max(true_error, initial=0.0)))
     assert settled_any >= 9  # of 27
     assert largest > 100 * float(np.max(reference.error))
+
+
+GRAZING = np.array([1e-6, 1e-5, 1e-4, 1e-3, 1e-2])
+GRAZING_LOBES = [("ggx", "height-correlated"), ("ggx", "separable"), ("beckmann", "height-correlated"),
+                 ("beckmann", "separable")]
+
+
+@pytest.fixture(scope="module")
+def grazing_references():
+    out = {}
+    for name, shadowing in GRAZING_LOBES:
+        fine = np.array([[reference_albedo(name, mu, a, shadowing, order=20) for mu in GRAZING] for a in ALPHAS])
+        coarse = np.array([[reference_albedo(name, mu, a, shadowing, order=14) for mu in GRAZING] for a in ALPHAS])
+        out[name, shadowing] = fine, np.abs(fine - coarse) + 1e-15
+    return out
+
+
+@pytest.mark.parametrize("name, shadowing", GRAZING_LOBES)
+def test_global_estimates_bound_the_error_at_grazing_views(global_only, grazing_references, name, shadowing):
+    """μ = 1e-6 … 1e-2, where GGX takes the graded azimuth map and the horizon piece in ln s (Beckmann keeps the
+    Möbius map: the sweep found the graded route's estimates 10³× too small for it, so it must stay honest too)."""
+    reference, own = grazing_references[name, shadowing]
+    settled_count = 0
+    for rtol in RTOLS:
+        result = bn.albedo(bn.load(name, alpha=ALPHAS[:, None], shadowing=shadowing), np.arccos(GRAZING)[None, :],
+                           rtol=rtol)
+        settled = result.converged
+        settled_count += int(settled.sum())
+        true_error = np.abs(result.value[..., 0] - reference)[settled]
+        estimate = result.error[..., 0][settled]
+        ratio = true_error / (estimate + own[settled])
+        assert np.all(ratio <= 1.0), (rtol, ratio.max(), true_error[np.argmax(ratio)], estimate[np.argmax(ratio)])
+        if rtol == 1e-3 and name == "ggx":  # errors far above the references' own: the check can fail
+            assert np.max(true_error) > 100 * np.max(own)
+    # The global rule carries GGX's grazing views (measured 96–106 of 120); Beckmann's mostly go to the panels.
+    assert settled_count >= (80 if name == "ggx" else 10), settled_count

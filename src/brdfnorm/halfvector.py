@@ -294,6 +294,7 @@ def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegr
     dist = g.distribution
     delta = _grading_width(g)
     kappa = np.arcsinh(0.5 * np.pi / delta)
+    log_horizon = linear and dist.name in global_rule.GRADED
 
     def integrand(case, phi, v, piece):
         # Slopes of ~1e150 (α → 0) square to inf where their weight is 0; np.where evaluates both branches.
@@ -345,14 +346,18 @@ def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegr
                 start = dist.tail_coordinate(s_middle[rows])
                 length = dist.tail_coordinate(s_split[rows]) - start
                 radius, density = dist.tail(start + at * length)
+            elif log_horizon:  # ln s linear: a layer wider than the horizon radius spans decades (global rule)
+                log_ratio = np.log(s_end[rows] / s_split[rows])
+                radius = s_end[rows] * np.exp((at - 1.0) * log_ratio)
+                length, density = radius * log_ratio, dist.slope_density(radius)
+                to_end = -s_end[rows] * np.expm1((at - 1.0) * log_ratio)
             else:
                 length = s_end[rows] - s_split[rows]
                 radius = s_split[rows] + at * length
-                density = dist.slope_density(radius)
+                density, to_end = dist.slope_density(radius), length * (1.0 - at)
             s[rows] = radius
             weight_t[rows] = density * length
-            gap_to_horizon[rows] = (s_h[rows] - radius if kind < 2
-                                    else (s_h[rows] - s_end[rows]) + length * (1.0 - at))
+            gap_to_horizon[rows] = s_h[rows] - radius if kind < 2 else (s_h[rows] - s_end[rows]) + to_end
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
         Lz = vz * gap_to_horizon * (d2 * s + q_minus_p) / n2
@@ -400,7 +405,8 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     lam = global_rule.clustering(fixed[:, 2])
     tried = np.arange(K) if use_global else np.arange(0)
     value, error, evaluations, settled = global_rule.integrate_global(
-        _microfacet_integrand(g, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol, atol=atol)
+        _microfacet_integrand(g, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol, atol=atol,
+        width=global_rule.grading_width(fixed[:, 2], distribution.name))
     initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:
