@@ -105,7 +105,9 @@ def fit_command(
                               help="The fitted parameter: NAME=START:STOP:COUNT[:log] or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
-                            "(coefficients vs max absolute error) on stderr. --target is then absolute "
+                            "(coefficients vs max absolute error; an entry beats every smaller fit by ≥ 1 %; "
+                            "candidates proved unable to enter it are skipped, listed in --json) on stderr. "
+                            "--target is then absolute "
                             "(default 5e-3) and --max-coefficients defaults to 16."),
     lut_table: str = typer.Option("E", "--table", metavar="NAME", help="The table fitted with --lut."),
     form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "

@@ -41,8 +41,8 @@ class TableFit:
 #: more coefficients for less than 1 % is not worth it, and the same fit reached by two forms (``smith:1/1@1/2``
 #: and ``smith:2/1@1/2`` agree to 10⁻¹⁵) would otherwise enter or not by rounding.
 FRONT_STEP = 0.01
-#: Errors of one coefficient count within this relative difference are a tie, broken by candidate order (the
-#: fewest operations first): the fits' last bits vary with the BLAS kernel.
+#: Errors of one coefficient count within this relative difference are a tie, broken by candidate order (smith
+#: forms, then rationals in √μ, each fewest operations first): the fits' last bits vary with the BLAS kernel.
 TIE = 1e-9
 
 
@@ -87,7 +87,7 @@ def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "
         raise ArgumentError("every candidate form has a pole over the table", where="--form")
     front, best_so_far = [], np.inf
     for count in sorted({len(r.coefficients) for r in results}):
-        at_count = [r for r in results if len(r.coefficients) == count]  # in candidate order: cheapest first
+        at_count = [r for r in results if len(r.coefficients) == count]  # in candidate order (TIE)
         smallest = min(r.max_abs_error for r in at_count)
         level = next(r for r in at_count if r.max_abs_error <= smallest * (1 + TIE))
         if level.max_abs_error < (1 - FRONT_STEP) * best_so_far:
@@ -114,8 +114,9 @@ def _fit_candidates(candidates: list, x: np.ndarray, t: np.ndarray, y: np.ndarra
                     names: tuple[str, str], prune: bool) -> tuple[list[dict], list[FitResult]]:
     """Fit the candidates in order of coefficient count; ``tried`` in the candidates' order, and the fits
     without a pole. With ``prune``, a candidate whose family provably stays above ``PRUNE_MARGIN`` × the best
-    pole-free error of fewer coefficients (:meth:`brdfnorm.forms.Form.error_exceeds`) is not fitted: it could
-    not be its count's best below that error, so the front and the chosen fit are those of fitting it."""
+    pole-free error of fewer coefficients (:meth:`brdfnorm.forms.Form.error_exceeds`) is not fitted: that best
+    error is ≥ (1 − FRONT_STEP) × the front's last, so the candidate could neither enter the front nor tie with
+    a count's entry; the front and the chosen fit are those of fitting it (tested against ``prune=False``)."""
     tried: list[dict | None] = [None] * len(candidates)
     results: list[FitResult] = []
     best_fewer = np.inf
