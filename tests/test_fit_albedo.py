@@ -7,6 +7,7 @@ glslangValidator as well), the HLSL compiled."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import shutil
 import subprocess
 
@@ -179,6 +180,12 @@ def test_cli_prints_the_front_and_emits_code(capsys, table, tmp_path):
     assert code == 0, stderr
     assert "Pareto front" in stderr and "smith:" in stderr and "chosen: smith:" in stderr
     assert stdout.startswith("// Table E of ggx: smith:") and "Pareto" not in stdout
+    code, stdout, _ = run_cli(capsys, "fit", "--lut", str(path), "--max-coefficients", "9", "--json")
+    data = json.loads(stdout)  # every candidate listed, the pruned ones with the bound they were proved above
+    skipped = [e for e in data["tried"] if e["skipped"]]
+    assert code == 0 and len(data["tried"]) == len(fit_table(table, max_coefficients=9).tried) and skipped
+    assert all(e["max_abs_error"] is None and e["max_abs_error_above"] > 0 for e in skipped)
+    assert data["form"] == data["front"][-1]["form"] or data["max_abs_error"] <= GOAL
     other = lut.save(lut.Lut({"E": table["E"]}, {"mu": FIT_MU, "n": FIT_ALPHA}, {}), tmp_path / "n.npz")
     code, _, stderr = run_cli(capsys, "fit", "--lut", str(other), "--form", "smith:1/1@1")
     assert code == 2 and stderr.count("\n") == 1 and "alpha" in stderr and "--form" in stderr

@@ -226,8 +226,9 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
     if output is not None:
         write_file(output, code)
     if json_output:
-        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], "front": result.front,
-                                    "tried": result.tried, **best.to_dict(),
+        # the table's candidates, not the chosen FitResult's own (empty) ``tried``, which used to overwrite them
+        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], **best.to_dict(),
+                                    "front": result.front, "tried": result.tried,
                                     **({"language": emit_language, "code": code} if code else {})}) + "\n")
         return
     err = console(stderr=True)
