@@ -7,6 +7,7 @@ glslangValidator as well), the HLSL compiled."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import shutil
 import subprocess
 
@@ -91,13 +92,62 @@ def test_pareto_front_smith_beats_rationals_in_sqrt_mu(table):
     counts = [entry["coefficients"] for entry in result.front]
     errors = [entry["max_abs_error"] for entry in result.front]
     assert counts == sorted(counts) and errors == sorted(errors, reverse=True)
-    best_sqrt = min(e["max_abs_error"] for e in result.tried if e["form"].startswith("rational-sqrt"))
-    best_smith = min(e["max_abs_error"] for e in result.tried if e["form"].startswith("smith"))
-    assert best_smith < 0.3 * best_sqrt
+    best_smith = min(e["max_abs_error"] for e in result.tried if e["form"].startswith("smith") and not e["skipped"])
+    rationals = [e for e in result.tried if e["form"].startswith("rational-sqrt")]
+    assert all(e["max_abs_error"] > best_smith / 0.3 for e in rationals if not e["skipped"])
+    # a candidate left unfitted (pruned) is checked by the linear program for the whole family at that bound
+    M, A = _grid(FIT_MU, FIT_ALPHA)
+    assert all(parse_form(e["form"], two_d=True).error_exceeds(M.ravel(), A.ravel(), table["E"].ravel(),
+                                                               best_smith / 0.3)
+               for e in rationals if e["skipped"])
     assert result.best.form.startswith("smith") and result.best.max_abs_error == errors[-1] == best_smith
     assert result.best.warnings if best_smith > GOAL else not result.best.warnings
-    M, A = _grid(FIT_MU, FIT_ALPHA)  # the front's errors are the fit's errors on the table
+    # the front's errors are the fit's errors on the table
     assert np.isclose(np.max(np.abs(result.best(M, A) - table["E"])), result.best.max_abs_error, rtol=1e-9)
+
+
+def test_pruned_front_equals_the_front_of_fitting_every_candidate(table):
+    """``auto`` leaves unfitted the candidates proved (by a linear program) unable to enter the front; on a small
+    table the front, the chosen fit and every fitted candidate equal those of fitting all of them, and every
+    pruned candidate's actual fit (or pole) confirms the proof: its error exceeds the bound it was skipped for."""
+    small = lut.Lut({"E": table["E"][::3, ::3]}, {"mu": FIT_MU[::3], "alpha": FIT_ALPHA[::3]}, {"model": "ggx"})
+    fast = fit_table(small, max_coefficients=10)
+    slow = fit_table(small, max_coefficients=10, prune=False)
+    # (the same fit's last bits vary with the BLAS kernel: errors and coefficients equal to 1e-9)
+    assert [(e["coefficients"], e["form"]) for e in fast.front] == [(e["coefficients"], e["form"]) for e in slow.front]
+    assert np.allclose([e["max_abs_error"] for e in fast.front], [e["max_abs_error"] for e in slow.front], rtol=1e-9)
+    assert fast.best.form == slow.best.form and np.allclose(fast.best.coefficients, slow.best.coefficients, rtol=1e-6)
+    assert [e["form"] for e in fast.tried] == [e["form"] for e in slow.tried]
+    skipped = [(f, s) for f, s in zip(fast.tried, slow.tried, strict=True) if f["skipped"]]
+    assert len(skipped) >= 10 and not any(e["skipped"] for e in slow.tried)
+    # (a fit with a pole is ill-conditioned: its error varies with those last bits too, and it is not in the front)
+    assert all(np.isclose(f["max_abs_error"], s["max_abs_error"], rtol=1e-9)
+               for f, s in zip(fast.tried, slow.tried, strict=True) if not (f["skipped"] or f["pole"] or s["pole"]))
+    assert all(s["pole"] or s["max_abs_error"] > f["max_abs_error_above"] for f, s in skipped)
+
+
+def test_the_pruning_proof_against_fits_and_least_squares(table):
+    """:meth:`RationalForm.error_exceeds` (and SmithForm's) never claims a bound that a pole-free fit beats (the
+    fit is a witness), and does claim one below a polynomial's least-squares RMS error, a lower bound of its
+    minimax error."""
+    M, A = _grid(FIT_MU, FIT_ALPHA)
+    x, t, y = M.ravel(), A.ravel(), table["E"].ravel()
+    witnesses = 0
+    for spec in ("rational-sqrt:1/0@1", "rational-sqrt:2/0@1", "rational-sqrt:4/0@1~tau", "rational-sqrt:2/0@2",
+                 "rational-sqrt:3/0@1~tau", "smith:0/0@1", "smith:1/1@1", "smith:1/1@1/2"):
+        form = parse_form(spec, two_d=True)
+        result = fit(x, y, t, form=form, metric="minimax-abs", names=("mu", "alpha"))
+        q = form.denominator(np.asarray(result.coefficients), x, t)
+        if np.all(q > 0) or np.all(q < 0):  # no pole on the samples: the fit is in the family proved about
+            witnesses += 1
+            assert not form.error_exceeds(x, t, y, result.max_abs_error * (1 + 1e-6))
+            assert form.error_exceeds(x, t, y, result.max_abs_error * 0.5)
+    assert witnesses >= 5
+    poly = parse_form("poly:3", two_d=False)
+    c = np.polynomial.polynomial.polyfit(x, y, 3)
+    rms = np.sqrt(np.mean((np.polynomial.polynomial.polyval(x, c) - y) ** 2))
+    assert poly.error_exceeds(x, None, y, 0.999 * rms)
+    assert not poly.error_exceeds(x, None, y, np.max(np.abs(np.polynomial.polynomial.polyval(x, c) - y)))
 
 
 def test_minimax_abs_beats_the_other_metrics_in_max_abs_error(table):
@@ -131,6 +181,12 @@ def test_cli_prints_the_front_and_emits_code(capsys, table, tmp_path):
     assert code == 0, stderr
     assert "Pareto front" in stderr and "smith:" in stderr and "chosen: smith:" in stderr
     assert stdout.startswith("// Table E of ggx: smith:") and "Pareto" not in stdout
+    code, stdout, _ = run_cli(capsys, "fit", "--lut", str(path), "--max-coefficients", "9", "--json")
+    data = json.loads(stdout)  # every candidate listed, the pruned ones with the bound they were proved above
+    skipped = [e for e in data["tried"] if e["skipped"]]
+    assert code == 0 and len(data["tried"]) == len(fit_table(table, max_coefficients=9).tried) and skipped
+    assert all(e["max_abs_error"] is None and e["max_abs_error_above"] > 0 for e in skipped)
+    assert data["form"] == data["front"][-1]["form"] or data["max_abs_error"] <= GOAL
     other = lut.save(lut.Lut({"E": table["E"]}, {"mu": FIT_MU, "n": FIT_ALPHA}, {}), tmp_path / "n.npz")
     code, _, stderr = run_cli(capsys, "fit", "--lut", str(other), "--form", "smith:1/1@1")
     assert code == 2 and stderr.count("\n") == 1 and "alpha" in stderr and "--form" in stderr

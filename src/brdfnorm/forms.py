@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares, minimize
+from scipy.optimize import least_squares, linprog, minimize
 
 #: Lawson iterations for minimax (each one weighted least-squares solve; the polish finishes the job).
 LAWSON_ITERATIONS = 300
@@ -76,6 +76,12 @@ class Form(ABC):
     def denominator(self, c: np.ndarray, x: np.ndarray, t: np.ndarray | None = None) -> np.ndarray | None:
         """The denominator's values (to detect poles), or None for forms without one."""
         return None
+
+    def error_exceeds(self, x: np.ndarray, t: np.ndarray | None, y: np.ndarray, bound: float) -> bool:
+        """True only when it is proved that every member of the family without a pole on the samples has
+        max |f − y| > ``bound`` over them (whatever its coefficients, so whatever a fit would find); False when
+        that is not known (the default for families without such a proof)."""
+        return False
 
 
 @dataclass(frozen=True)
@@ -175,6 +181,22 @@ class RationalForm(Form):
         if self.has_denominator:
             powers += [(i, j) for i in range(self.Q + 1) for j in range(k)][1:]
         return c * np.array([su**-i * sv**-j for i, j in powers])
+
+    def error_exceeds(self, x, t, y, bound):
+        """A linear program (scipy.optimize.linprog, HiGHS) decides it: max |p/q − y| ≤ e with q > 0 on the
+        samples is, after scaling p and q together (p/q is homogeneous), the linear feasibility problem
+        |p_j − y_j q_j| ≤ e·q_j, q_j ≥ 1 — the bisection step of the rational Chebyshev problem (Cheney &
+        Loeb's differential correction, Numer. Math. 4 (1962) 124). The homogeneous family lets q_00 take any
+        value, so it contains every fit of this form whose denominator keeps one sign on the samples (q < 0 is
+        −p/−q). Infeasible means the discrete minimax error of the family exceeds ``bound``; HiGHS's feasibility
+        tolerance errs towards feasible (no proof), the safe side."""
+        u, v = self.variables(np.asarray(x, dtype=float), t)
+        y = np.asarray(y, dtype=float)
+        us = u / (float(np.max(np.abs(u))) or 1.0)
+        vs = v / ((float(np.max(np.abs(v))) or 1.0) if self.two_d else 1.0)
+        phi = self._basis(us, vs, self.P)
+        psi = self._basis(us, vs, self.Q) if self.has_denominator else np.ones((y.size, 1))
+        return _infeasible(phi, psi, y, bound)
 
     def expression(self, c, x, t):
         num, den = self.split(c)
@@ -288,6 +310,20 @@ class SmithForm(Form):
                         + [vs ** -(i % kq) for i in range((self.Q + 1) * kq)][1:])
         return c * undo
 
+    def error_exceeds(self, x, t, y, bound):
+        """As :meth:`RationalForm.error_exceeds`: E − Ẽ = (x·(N + ln x·L) − (1 − E)·Q)/Q is linear in the
+        coefficients over Q, so |E − Ẽ| ≤ e with Q ≥ 1 on the samples is a linear feasibility problem (samples
+        at x = 0, where Ẽ = 1 whatever the coefficients, are left out: the bound holds on the others alone)."""
+        u, v, log_u = self.variables(x, t)
+        inside = u > 0
+        u, v, log_u, y = u[inside], v[inside], log_u[inside], np.asarray(y, dtype=float)[inside]
+        vv = v / (float(np.max(v)) or 1.0) if v.size else v
+        powers = range(self.D + 1)
+        phi = np.stack([u ** (i + 1) * vv**k for i in range(self.P + 1) for k in powers]
+                       + [u * log_u * vv**k for k in powers], axis=1)
+        psi = np.stack([u**j * vv**k for j in range(self.Q + 1) for k in range(self.dq + 1)], axis=1)
+        return _infeasible(phi, psi, 1.0 - y, bound)
+
     def expression(self, c, x, t):
         p, l, q = self.split(c)
         v = f"({t}²)"
@@ -362,6 +398,19 @@ class HyperbolaForm(Form):
 # ---------------------------------------------------------------------------------------------------------
 # Solvers
 # ---------------------------------------------------------------------------------------------------------
+
+
+def _infeasible(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, bound: float) -> bool:
+    """Whether no (p, q) has |φp − y·ψq| ≤ bound·ψq and ψq ≥ 1 at every sample (HiGHS says infeasible)."""
+    if y.size == 0:
+        return False
+    A = np.vstack([np.hstack([phi, -(y + bound)[:, None] * psi]),
+                   np.hstack([-phi, (y - bound)[:, None] * psi]),
+                   np.hstack([np.zeros_like(phi), -psi])])
+    b = np.concatenate([np.zeros(2 * y.size), -np.ones(y.size)])
+    result = linprog(np.zeros(A.shape[1]), A_ub=A, b_ub=b, bounds=(None, None), method="highs")
+    return bool(result.status == 2)
+
 
 
 def _lstsq(A: np.ndarray, b: np.ndarray) -> np.ndarray:

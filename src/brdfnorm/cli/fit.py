@@ -105,7 +105,9 @@ def fit_command(
                               help="The fitted parameter: NAME=START:STOP:COUNT[:log] or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
-                            "(coefficients vs max absolute error) on stderr. --target is then absolute "
+                            "(coefficients vs max absolute error; an entry beats every smaller fit by ≥ 1 %; "
+                            "candidates proved unable to enter it are skipped, listed in --json) on stderr. "
+                            "--target is then absolute "
                             "(default 5e-3) and --max-coefficients defaults to 16."),
     lut_table: str = typer.Option("E", "--table", metavar="NAME", help="The table fitted with --lut."),
     form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
@@ -224,8 +226,9 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
     if output is not None:
         write_file(output, code)
     if json_output:
-        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], "front": result.front,
-                                    "tried": result.tried, **best.to_dict(),
+        # the table's candidates, not the chosen FitResult's own (empty) ``tried``, which used to overwrite them
+        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], **best.to_dict(),
+                                    "front": result.front, "tried": result.tried,
                                     **({"language": emit_language, "code": code} if code else {})}) + "\n")
         return
     err = console(stderr=True)
