@@ -71,6 +71,10 @@ CHUNK_NODES = 32_768
 BATCH_NODES = 2**23
 #: The β map's strongest clustering (:func:`clustering`).
 LAMBDA_MIN = 0.25
+#: The floor for heavy-tailed lobes (:func:`_heavy_tailed`).
+LAMBDA_MIN_HEAVY_TAIL = 0.6
+#: A lobe is heavy-tailed when this share of its |integrand| on the start grid lies at u ≥ 1/2.
+HEAVY_TAIL_SHARE = 0.15
 #: The plain deviation's margin (:func:`_sums`).
 SAFETY = 9.0
 #: Rounding floor per node sum, as QUADPACK's on |K − G|.
@@ -216,6 +220,13 @@ def _integrate_batch(integrand, frame, widths, supports, lam, cases, noise_ampli
     grid = _evaluate(integrand, frame, widths, supports, lam, cases, _azimuths(level_b), fejer(level_u)[0],
                      max_nodes_per_call)
     evaluations[cases] += grid.shape[1] * grid.shape[2]
+    # Heavy tails (GGX) want weaker clustering than the floor: start those cases again on a weaker map.
+    weaker = _heavy_tailed(grid, level_u) & (lam[cases] < LAMBDA_MIN_HEAVY_TAIL)
+    if weaker.any():
+        lam[cases[weaker]] = LAMBDA_MIN_HEAVY_TAIL
+        grid[weaker] = _evaluate(integrand, frame, widths, supports, lam, cases[weaker], _azimuths(level_b),
+                                 fejer(level_u)[0], max_nodes_per_call)
+        evaluations[cases[weaker]] += grid.shape[1] * grid.shape[2]
     groups = [_Group(cases, level_b, level_u, grid, np.full(cases.size, np.inf), np.full(cases.size, np.inf))]
     while groups:
         refined: dict[tuple[int, int], list[_Group]] = {}
@@ -269,6 +280,21 @@ def _integrate_batch(integrand, frame, widths, supports, lam, cases, noise_ampli
                     refined.setdefault((new.level_b, new.level_u), []).append(new)
         groups = [_merge(parts) for parts in refined.values()]
     return value, error
+
+
+def _heavy_tailed(grid: np.ndarray, level_u: int) -> np.ndarray:
+    """Whether a case's lobe is heavy-tailed: more than :data:`HEAVY_TAIL_SHARE` of the |integrand| on its start
+    grid at u ≥ 1/2, i.e. beyond the width w of the radial map (GGX at roughness 0.3: 0.28–0.44 at every view;
+    Blinn-Phong n = 512: 0.04–0.06). Such lobes are integrated with fewer nodes on a weaker β clustering, the
+    floor :data:`LAMBDA_MIN_HEAVY_TAIL` (examples/ggx.brdf, 90 views, rtol 1e-6: 11 710 evaluations per albedo with
+    the floor 0.25, 10 900 with 0.45, 9 500 with 0.6, 11 100 with 1; 0.65 took 8 400 but one view's true error
+    reached 0.59 of its estimate, against ≤ 0.005 at 0.45, 0.6 and 0.8); Gaussian-like lobes need the stronger
+    floor (Blinn-Phong n = 512 at 70–79°, rtol 1e-9: 14 400 at 0.25, 18 900 at 0.45)."""
+    u, w = fejer(level_u)
+    with np.errstate(invalid="ignore"):
+        radial = np.abs(np.nan_to_num(grid, nan=0.0, posinf=0.0, neginf=0.0)).sum(axis=(1, 3)) * w  # (n, N − 1)
+        total = radial.sum(axis=1)
+        return radial[:, u >= 0.5].sum(axis=1) > HEAVY_TAIL_SHARE * total
 
 
 def _doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
