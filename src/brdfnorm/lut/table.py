@@ -9,10 +9,10 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 * Cells: one batched :func:`brdfnorm.albedo` call per chunk of cells (parameter values as arrays broadcast
   against θ), :func:`compute_cells` — a pure function of (model, directions, parameter values, settings), so a
   process pool or a cluster can compute any chunk.
-* E_avg: the exact integral over μ ∈ [0, 1] by its own globally adaptive Gauss–Kronrod (G7/K15) quadrature in
-  x = √μ, vectorized over the other axes — never a sum over the table's samples. Its error estimate is the
-  panels' |K15 − G7| (the error of the G7 rule, a deliberately pessimistic bound for the K15 value that is used)
-  plus the albedo error estimates propagated through the K15 weights.
+* E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
+  table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|), and for what that does not
+  settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
+  pessimistic bound for the K15 value that is used); both add the albedo error estimates through |weights|.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
