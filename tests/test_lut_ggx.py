@@ -116,3 +116,45 @@ def test_benchmark_lut_workload_quick(tmp_path):
     assert ours["max_abs_error"] <= 1e-9 and mc["max_abs_error"] > ours["max_abs_error"]
     assert mc["max_abs_error"] <= 6 * mc["max_standard_error"] + 1e-12  # the peer is a correct estimator
     assert any("Monte Carlo" in t["target"] for t in results["targets"])
+
+
+ALPHAS = np.array([1e-8, 0.02, 0.3, 1.0])
+
+
+@pytest.fixture(scope="module")
+def adaptive_e_avg():
+    """E_avg by the other μ rule (globally adaptive G7/K15 in √μ, no Clenshaw–Curtis) at rtol 1e-12."""
+    from brdfnorm.lut.table import _average_adaptive
+
+    value, error, _, _ = _average_adaptive(bn.load("ggx"), {"alpha": ALPHAS}, rtol=1e-12)
+    return value, error
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-5, 1e-7, 1e-10])
+def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol):
+    """E_avg's estimate (Clenshaw–Curtis doubling + albedo errors) ≥ its distance to an independent E_avg."""
+    from brdfnorm.lut.table import average_over_mu
+
+    reference, reference_error = adaptive_e_avg
+    assert np.all(reference_error <= 1e-12)
+    value, error, converged, _ = average_over_mu(bn.load("ggx"), {"alpha": ALPHAS}, rtol=rtol)
+    assert converged.all()
+    true = np.abs(value - reference)
+    assert np.all(true <= error + reference_error), (rtol, true, error)
+    assert np.all(error <= rtol * np.abs(value) + 1e-13)
+    if rtol == 1e-3:  # the check can fail: the error is measurable there, far above the reference's
+        assert np.all(true[1:] >= 100 * reference_error[1:]), true
+
+
+@pytest.mark.parametrize("alpha", [0.02, 0.3])
+def test_e_avg_loose_against_gauss_legendre_over_the_reference(alpha):
+    """At rtol 1e-3 (albedos as loose as 1e-4) against Gauss–Legendre in μ over tests/ggx_reference.py."""
+    from brdfnorm.lut.table import average_over_mu
+
+    value, error, _, _ = average_over_mu(bn.load("ggx"), {"alpha": np.array([alpha])}, rtol=1e-3)
+    x, w = np.polynomial.legendre.leggauss(24)
+    total = 0.0
+    for lo, hi in [(0.0, 1e-3), (1e-3, 1e-2), (1e-2, 0.05), (0.05, 0.1), (0.1, 0.4), (0.4, 1.0)]:
+        mu = lo + (hi - lo) * (x + 1) / 2
+        total += (hi - lo) / 2 * sum(wk * 2 * m * ggx_albedo(m, alpha, nodes=48) for m, wk in zip(mu, w, strict=True))
+    assert abs(value[0] - total) <= error[0] + 1e-10, (value[0], total, error[0])

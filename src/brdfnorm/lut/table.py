@@ -9,10 +9,10 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 * Cells: one batched :func:`brdfnorm.albedo` call per chunk of cells (parameter values as arrays broadcast
   against θ), :func:`compute_cells` — a pure function of (model, directions, parameter values, settings), so a
   process pool or a cluster can compute any chunk.
-* E_avg: the exact integral over μ ∈ [0, 1] by its own globally adaptive Gauss–Kronrod (G7/K15) quadrature in
-  x = √μ, vectorized over the other axes — never a sum over the table's samples. Its error estimate is the
-  panels' |K15 − G7| (the error of the G7 rule, a deliberately pessimistic bound for the K15 value that is used)
-  plus the albedo error estimates propagated through the K15 weights.
+* E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
+  table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|), and for what that does not
+  settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
+  pessimistic bound for the K15 value that is used); both add the albedo error estimates through |weights|.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
@@ -43,6 +43,9 @@ CHANNELS = ("dfg",)
 CHUNK_CELLS = 256
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
+#: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
+CC_FIRST = 16
+CC_MAX = 64
 #: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
 MU_FLOOR = 1e-7
 #: E_avg's albedos at nodes of small weight are computed to looser tolerances, in steps of this factor, never
@@ -273,8 +276,102 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
             done, {name: part.reshape(shape) for name, part in parts.items()})
 
 
+def _node_albedos(model: Model, x: np.ndarray, node_params: Mapping[str, np.ndarray], rtol: float,
+                  method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """E at μ = max(x², MU_FLOOR) for E_avg's nodes x (N,) with per-node parameter values: (value, error, ok)."""
+    # A node's albedo enters through the weight 4x³ (≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, 4x³)),
+    # which keeps Σ weight·error ≤ (rtol/4)(E_avg + ∫₀¹ |E| dx) — rounded down to powers of NODE_RTOL_STEP
+    # so that the nodes go in a few batched calls (the grazing ones, the costliest albedos, are the loosest).
+    ratio = 1.0 / np.minimum(1.0, 4.0 * np.maximum(x, 1e-300) ** 3)
+    cap = np.log(NODE_RTOL_MAX / (rtol / 4)) / np.log(NODE_RTOL_STEP)
+    level = np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
+    theta = np.arccos(np.maximum(x * x, MU_FLOOR))
+    value, error, converged = np.empty(x.size), np.empty(x.size), np.empty(x.size, dtype=bool)
+    for step in np.unique(level):
+        nodes = np.flatnonzero(level == step)
+        cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()},
+                              rtol=max(rtol / 4, min(rtol / 4 * NODE_RTOL_STEP**step, NODE_RTOL_MAX)),
+                              method=method)
+        value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
+        converged[nodes] = cells.converged
+    return value, error, converged
+
+
+def clenshaw_curtis(intervals: int) -> tuple[np.ndarray, np.ndarray]:
+    """Clenshaw–Curtis nodes and weights on [0, 1] with ``intervals`` (even) cells: x_j = (1 − cos(πj/n))/2.
+
+    Exact for polynomials of degree n; the nodes of n are every other node of 2n (nested doubling)."""
+    n = intervals
+    angle = np.pi * np.arange(n + 1) / n
+    k = np.arange(1, n // 2 + 1)
+    b = np.where(k == n // 2, 1.0, 2.0)
+    weights = 1.0 - (b / (4.0 * k * k - 1.0)) @ np.cos(2.0 * np.outer(k, angle))
+    weights *= np.where((np.arange(n + 1) == 0) | (np.arange(n + 1) == n), 1.0, 2.0) / n
+    return (1.0 - np.cos(angle)) / 2.0, weights / 2.0
+
+
 def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
                     max_panels: int = MAX_AVG_PANELS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """E_avg = 2∫₀¹ E(μ) μ dμ = ∫₀¹ 4x³ E(x²) dx (x = √μ) for M parameter combinations (name -> (M,)).
+
+    First nested Clenshaw–Curtis in x with CC_FIRST, 2·CC_FIRST, … CC_MAX intervals: a combination is settled
+    when |Q_2n − Q_n| plus the albedo error estimates through |weights| is within rtol·|Q_2n| (Q_2n is kept;
+    the difference is the error of Q_n, pessimistic for Q_2n when the rule converges). In x the weight 4x³
+    vanishes where E has its boundary layer (μ ≲ α), so a smooth E needs 33–65 albedos. Combinations not settled
+    by CC_MAX (kinks, e.g. a critical angle) go to :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR
+    as there. Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
+    """
+    M = len(next(iter(params.values()))) if params else 1
+    flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
+    n = CC_FIRST
+    x, _ = clenshaw_curtis(n)
+    values = np.zeros((M, n + 1))  # x = 0 has weight 4x³ = 0: never evaluated
+    errors = np.zeros((M, n + 1))
+    albedo_ok = np.ones(M, dtype=bool)
+    open_ = np.ones(M, dtype=bool)
+    largest_e = np.zeros(M)
+    integrals = 0
+
+    def fill(rows: np.ndarray, columns: np.ndarray, nodes: np.ndarray) -> None:
+        nonlocal integrals
+        owner = np.repeat(rows, columns.size)
+        value, error, ok = _node_albedos(model, np.tile(nodes[columns], rows.size),
+                                         {k: v[owner] for k, v in flat.items()}, rtol, method)
+        values[np.ix_(rows, columns)] = value.reshape(rows.size, columns.size)
+        errors[np.ix_(rows, columns)] = error.reshape(rows.size, columns.size)
+        albedo_ok[rows[~ok.reshape(rows.size, columns.size).all(axis=1)]] = False
+        largest_e[rows] = np.maximum(largest_e[rows], np.abs(value).reshape(rows.size, columns.size).max(axis=1))
+        integrals += value.size
+
+    fill(np.arange(M), np.arange(1, n + 1), x)
+    total, total_error = np.zeros(M), np.zeros(M)
+    previous = values @ (clenshaw_curtis(n)[1] * 4.0 * x**3)
+    while n < CC_MAX and open_.any():
+        coarse_values, coarse_errors = values, errors
+        n *= 2
+        x, w = clenshaw_curtis(n)
+        values, errors = np.zeros((M, n + 1)), np.zeros((M, n + 1))
+        values[:, ::2], errors[:, ::2] = coarse_values, coarse_errors
+        rows = np.flatnonzero(open_)
+        fill(rows, np.arange(1, n + 1, 2), x)
+        weight = w * 4.0 * x**3  # dμ 2μ = 4x³ dx
+        fine = values[rows] @ weight
+        total[rows] = fine
+        total_error[rows] = np.abs(fine - previous[rows]) + errors[rows] @ np.abs(weight)
+        previous[rows] = fine
+        open_[rows] = total_error[rows] > rtol * np.abs(fine)
+    total_error += MU_FLOOR**2 * largest_e  # nodes below MU_FLOOR evaluated there
+    converged = albedo_ok & ~open_
+    rest = np.flatnonzero(open_)
+    if rest.size:
+        total[rest], total_error[rest], converged[rest], count = _average_adaptive(
+            model, {k: v[rest] for k, v in flat.items()}, rtol=rtol, method=method, max_panels=max_panels)
+        integrals += count
+    return total, total_error, converged, integrals
+
+
+def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
+                      max_panels: int = MAX_AVG_PANELS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15.
 
     In x = √μ the integral is ∫₀¹ 4x³ E(x²) dx: the weight vanishes where E has its boundary layer (μ ≲ α for a
@@ -288,14 +385,6 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     """
     M = len(next(iter(params.values()))) if params else 1
 
-    def node_levels(x: np.ndarray) -> np.ndarray:
-        # A node's albedo enters through the weight 4x³ (≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, 4x³)),
-        # which keeps Σ weight·error ≤ (rtol/4)(E_avg + ∫₀¹ |E| dx) — rounded down to powers of NODE_RTOL_STEP
-        # so that the nodes go in a few batched calls (the grazing ones, the costliest albedos, are the loosest).
-        ratio = 1.0 / np.minimum(1.0, 4.0 * np.maximum(x, 1e-300) ** 3)
-        cap = np.log(NODE_RTOL_MAX / (rtol / 4)) / np.log(NODE_RTOL_STEP)
-        return np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0)).ravel()
-
     flat = {n: np.asarray(v, dtype=float).ravel() for n, v in params.items()}
     integrals = 0
     albedo_converged = np.ones(M, dtype=bool)
@@ -305,17 +394,8 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         nonlocal integrals
         x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
         mu = np.maximum(x * x, MU_FLOOR)
-        level = node_levels(x)
-        theta, value, error = np.arccos(mu.ravel()), np.empty(mu.size), np.empty(mu.size)
-        converged = np.empty(mu.size, dtype=bool)
         node_params = {n: np.repeat(v[owner], 15) for n, v in flat.items()}
-        for step in np.unique(level):
-            nodes = np.flatnonzero(level == step)
-            cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()},
-                                  rtol=max(rtol / 4, min(rtol / 4 * NODE_RTOL_STEP**step, NODE_RTOL_MAX)),
-                                  method=method)
-            value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
-            converged[nodes] = cells.converged
+        value, error, converged = _node_albedos(model, x.ravel(), node_params, rtol, method)
         integrals += mu.size
         albedo_converged[owner[~converged.reshape(-1, 15).all(axis=1)]] = False
         np.maximum.at(largest_e, owner, np.abs(value).reshape(-1, 15).max(axis=1))
