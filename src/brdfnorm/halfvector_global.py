@@ -49,7 +49,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tensor_rule import _FLOOR, MAX_LEVEL_B, START_LEVELS, _doublings, _normalized, _sums, beta_map, fejer
+from .tensor_rule import (
+    _FLOOR,
+    MAX_LEVEL_B,
+    START_LEVELS,
+    _doublings,
+    _normalized,
+    _sums,
+    beta_map,
+    fejer,
+    schedule_doublings,
+)
 
 #: Radial pieces of (H1): pole, tail, horizon layer.
 PIECES = 3
@@ -205,16 +215,9 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
             hopeless &= (group.level_b >= GRADED_PREDICTS) | (width[group.case] == 0)
             go_on = finite & ~done & (size <= max_nodes) & ~hopeless & ~failed[group.case]
             failed[group.case[finite & ~done & ~go_on]] = True
-            for b in (False, True):
-                for u in (False, True):
-                    pick = go_on & (more_b == b) & (more_u == u)
-                    if pick.any():
-                        new = _refine(group, pick, b, u, integrand, lam, width, symmetric, scale, evaluations)
-                        if b and group.level_b > START_LEVELS[0]:
-                            new.last_b = ratio_b[pick]
-                        if u and group.level_u > START_LEVELS[1]:
-                            new.last_u = ratio_u[pick]
-                        refined.setdefault((new.level_b, new.level_u), []).append(new)
+            schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
+                               lambda g, pick, b, u: _refine(g, pick, b, u, integrand, lam, width, symmetric,
+                                                             scale, evaluations))
         groups = [_merge(parts) for parts in refined.values()]
         groups = [g.__class__(*(x[keep] if isinstance(x, np.ndarray) else x for x in vars(g).values()))
                   for g in groups if (keep := ~failed[g.case]).any()]

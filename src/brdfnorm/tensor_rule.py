@@ -266,21 +266,29 @@ def _integrate_batch(integrand, frame, widths, supports, lam, cases, noise_ampli
                 2 ** (group.level_b + _doublings(ratio_b, group.last_b))
                 * (2 ** (group.level_u + _doublings(ratio_u, group.last_u)) - 1) > max_nodes)
             go_on = finite & ~done & (size <= max_nodes) & ~hopeless
-            for b in (False, True):
-                for u in (False, True):
-                    pick = go_on & (more_b == b) & (more_u == u)
-                    if not pick.any():
-                        continue
-                    new = _refine(group, pick, b, u, integrand, frame, widths, supports, lam, max_nodes_per_call,
-                                  evaluations)
-                    # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
-                    if b and group.level_b > START_LEVELS[0]:
-                        new.last_b = ratio_b[pick]
-                    if u and group.level_u > START_LEVELS[1]:
-                        new.last_u = ratio_u[pick]
-                    refined.setdefault((new.level_b, new.level_u), []).append(new)
+            schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
+                               lambda g, pick, b, u: _refine(g, pick, b, u, integrand, frame, widths, supports,
+                                                             lam, max_nodes_per_call, evaluations))
         groups = [_merge(parts) for parts in refined.values()]
     return value, error
+
+
+def schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine) -> None:
+    """Double the cases ``go_on`` of ``group`` along β (``more_b``), u (``more_u``) or both:
+    ``refine(group, pick, b, u)`` makes the finer group of the picked cases, filed in ``refined`` by its levels
+    with the ratios it was doubled on (the extrapolation of :func:`_doublings`)."""
+    for b in (False, True):
+        for u in (False, True):
+            pick = go_on & (more_b == b) & (more_u == u)
+            if not pick.any():
+                continue
+            new = refine(group, pick, b, u)
+            # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
+            if b and group.level_b > START_LEVELS[0]:
+                new.last_b = ratio_b[pick]
+            if u and group.level_u > START_LEVELS[1]:
+                new.last_u = ratio_u[pick]
+            refined.setdefault((new.level_b, new.level_u), []).append(new)
 
 
 def _heavy_tailed(grid: np.ndarray, level_u: int) -> np.ndarray:
