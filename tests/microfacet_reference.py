@@ -18,6 +18,14 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import erf, roots_legendre
 
+#: Anisotropic and Fresnel lobes the honesty tests check against the generic hemisphere engine (which this
+#: reference does not cover: it is isotropic with F = 1), each by its own route.
+FRESNEL_LOBES = [
+    ("ggx", {"alpha_x": 0.08, "alpha_y": 0.5, "fresnel": "schlick", "f0": 0.04}),
+    ("ggx", {"alpha_x": 0.7, "alpha_y": 0.15, "fresnel": "conductor", "eta": (0.2, 0.9, 1.1), "k": (3.0, 2.5, 2.2)}),
+    ("beckmann", {"alpha_x": 0.3, "alpha_y": 0.1, "shadowing": "separable", "fresnel": "dielectric", "eta": 1.5}),
+    ("ggx", {"alpha": 0.2, "fresnel": "dielectric", "eta": 1.33}),
+]
 
 def _lambda(name: str, a2: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

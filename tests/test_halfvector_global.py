@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from microfacet_reference import reference_albedo
+from microfacet_reference import FRESNEL_LOBES, reference_albedo
 
 import brdfnorm as bn
 from brdfnorm import halfvector
@@ -77,15 +77,7 @@ def test_global_estimates_bound_the_error_against_gauss_legendre(global_only, re
         assert np.max(true_error) > 100 * np.max(own)
 
 
-LOBES = [
-    ("ggx", {"alpha_x": 0.08, "alpha_y": 0.5, "fresnel": "schlick", "f0": 0.04}),
-    ("ggx", {"alpha_x": 0.7, "alpha_y": 0.15, "fresnel": "conductor", "eta": (0.2, 0.9, 1.1), "k": (3.0, 2.5, 2.2)}),
-    ("beckmann", {"alpha_x": 0.3, "alpha_y": 0.1, "shadowing": "separable", "fresnel": "dielectric", "eta": 1.5}),
-    ("ggx", {"alpha": 0.2, "fresnel": "dielectric", "eta": 1.33}),
-]
-
-
-@pytest.mark.parametrize("name, params", LOBES)
+@pytest.mark.parametrize("name, params", FRESNEL_LOBES)
 def test_global_estimates_bound_the_error_anisotropic_and_fresnel(global_only, name, params):
     model = bn.load(name, **params)
     theta = np.arccos([0.05, 0.4, 0.9])
