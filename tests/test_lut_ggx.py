@@ -126,23 +126,26 @@ def adaptive_e_avg():
     """E_avg by the other μ rule (globally adaptive G7/K15 in √μ, no Clenshaw–Curtis) at rtol 1e-12."""
     from brdfnorm.lut.table import _average_adaptive
 
-    value, error, _, _ = _average_adaptive(bn.load("ggx"), {"alpha": ALPHAS}, rtol=1e-12)
+    value, error, _, _ = _average_adaptive(bn.load("ggx"), {"alpha": ALPHAS}, rtol=1e-12, method="microfacet")
     return value, error
 
 
+@pytest.mark.parametrize("method", ["microfacet", "azimuthal"])
 @pytest.mark.parametrize("rtol", [1e-3, 1e-5, 1e-7, 1e-10])
-def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol):
-    """E_avg's estimate (Clenshaw–Curtis doubling + albedo errors) ≥ its distance to an independent E_avg."""
+def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol, method):
+    """E_avg's estimate (Clenshaw–Curtis doubling + albedo errors) ≥ its distance to an independent E_avg, with
+    the albedos of either route (the azimuthal one's are accurate to ~1e-14 at any rtol: its check is strict
+    already, without a measurable error)."""
     from brdfnorm.lut.table import average_over_mu
 
     reference, reference_error = adaptive_e_avg
     assert np.all(reference_error <= 1e-12)
-    value, error, converged, _ = average_over_mu(bn.load("ggx"), {"alpha": ALPHAS}, rtol=rtol)
+    value, error, converged, _ = average_over_mu(bn.load("ggx"), {"alpha": ALPHAS}, rtol=rtol, method=method)
     assert converged.all()
     true = np.abs(value - reference)
     assert np.all(true <= error + reference_error), (rtol, true, error)
     assert np.all(error <= rtol * np.abs(value) + 1e-13)
-    if rtol == 1e-3:  # the check can fail: the error is measurable there, far above the reference's
+    if rtol == 1e-3 and method == "microfacet":  # the check can fail: the error is measurable there
         assert np.all(true[1:] >= 100 * reference_error[1:]), true
 
 

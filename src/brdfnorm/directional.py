@@ -436,13 +436,21 @@ from .series import albedo_method as _series  # noqa: E402
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
 
+# Isotropic GGX with F = 1 (the lobe of energy-compensation tables): the azimuth in closed form, a 1-D integral
+# (brdfnorm.azimuthal), tried before the half-vector cubature below.
+from . import azimuthal as _azimuthal  # noqa: E402
+
+register_method(Method("azimuthal", _azimuthal.applies, _azimuthal.albedo_method,
+                       "isotropic GGX, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
+                auto_priority=1)
+
 # Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
 # (brdfnorm.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates fail.
 from .halfvector import albedo_method as _microfacet  # noqa: E402
 from .models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
-                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=1)
+                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=2)
 
 # Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
 # (brdfnorm.transmission); the result reports both parts.
@@ -451,7 +459,7 @@ from .transmission import albedo_method as _dielectric  # noqa: E402
 
 register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
                        "reflection + refraction over the facet normal, the slope distribution as measure"),
-                auto_priority=2)
+                auto_priority=3)
 
 # Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).

@@ -57,6 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from . import azimuthal
 from . import halfvector_global as global_rule
 from .errors import ArgumentError
 from .integrate import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
@@ -437,14 +438,37 @@ _TABLE_RTOL = 1e-8
 _EXACT_RTOL = 1e-11
 
 
+def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
+                 atol: float | np.ndarray = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
+    """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
+    by :mod:`brdfnorm.azimuthal` where it has the distribution (its 1-D integral), else by (H1); a case the
+    1-D route does not settle (none is known) goes to (H1) too. ``atol`` scalar or (K,)."""
+    K = fixed.shape[0]
+    alpha = np.broadcast_to(np.asarray(alpha, dtype=float).ravel(), (K,))
+    atol = np.broadcast_to(np.asarray(atol, dtype=float).ravel(), (K,))
+    params = {"alpha": alpha, "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": shadowing, "fresnel": "none",
+              "f0": 0.0, "f90": 1.0, "eta": 1.0, "k": 0.0}
+    if distribution.name not in azimuthal.DISTRIBUTIONS:
+        return single_scattering_albedo(distribution, fixed, params, rtol=rtol, atol=atol[:, None],
+                                        max_evaluations=max_evaluations)
+    value, error, evaluations, converged = azimuthal.albedo(distribution, shadowing, fixed[:, 2],
+                                                            np.maximum(alpha, _ALPHA_FLOOR), rtol=rtol, atol=atol)
+    value, error = value[:, None], error[:, None]
+    if not converged.all():
+        rest = np.flatnonzero(~converged)
+        again = single_scattering_albedo(distribution, fixed[rest], {**params, "alpha": alpha[rest]}, rtol=rtol,
+                                         atol=atol[rest, None], max_evaluations=max_evaluations)
+        value[rest], error[rest], converged[rest] = again.value, again.error, again.converged
+        evaluations[rest] += again.evaluations
+    return CubatureResult(value, error, evaluations, converged)
+
+
 def _albedo_grid(distribution: Distribution, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
                  rtol: float = _TABLE_RTOL, atol=0.0) -> CubatureResult:
     """Single-scattering E (F = 1, isotropic) at the pairs (μ, α) of two equal-shape arrays, flattened."""
     mu = np.clip(np.ravel(mu), MU_MIN, 1.0)
     fixed = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=-1)
-    params = {"alpha": np.ravel(alpha), "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": shadowing,
-              "fresnel": "none", "f0": 0.0, "f90": 1.0, "eta": 1.5, "k": 0.0}
-    return single_scattering_albedo(distribution, fixed, params, rtol=rtol)
+    return white_albedo(distribution, shadowing, fixed, np.ravel(alpha), rtol=rtol, atol=atol)
 
 
 #: E_avg's integral starts here; the dropped ∫₀^μ 2μE dμ ∈ [0, μ²] is added as half of that ± half.
@@ -573,28 +597,39 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
 
     The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral over the view with the light fixed
     is the same integral at the fixed direction. With ``ms=kulla-conty`` the compensation lobe's albedo is
-    added in closed form: ∫ f_ms (N·L) dL = (1 − E(μ_V)) · 2∫₀¹(1 − E(μ))μ dμ / (1 − E_avg), the inner
-    integral exact for the table as read (piecewise linear in μ).
+    added by :func:`with_compensation`.
     """
     model: MicrofacetModel = problem.model
     K = problem.fixed.shape[0]
-    if np.any(problem.fixed[:, 2] < MU_MIN):
-        raise ArgumentError(
-            f"the half-vector method needs cos θ ≥ {MU_MIN:g} (θ ≤ {np.degrees(np.arccos(MU_MIN)):.7f}°): closer to "
-            "the horizon float64 cannot resolve where it cuts the lobe (estimates would be optimistic)", where="theta")
+    require_mu_min(problem.fixed[:, 2])
     params = problem.case_params(np.arange(K))
     result = single_scattering_albedo(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
                                       max_evaluations=max_evaluations)
-    value, error = result.value, result.error
-    if params["ms"] == "kulla-conty":
-        table = compensation(model.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
-        alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
-        mu_v = problem.fixed[:, 2]
-        e_v, lost = table.albedo(mu_v, alpha), 1.0 - table.average_albedo(alpha)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            compensated = np.where(lost > 0, (1.0 - e_v) * table.missing_energy(alpha) / lost, 0.0)
-            # The table entries' own quadrature errors, through a ratio of sums of at most a few of them.
-            propagated = np.where(lost > 0, 4.0 * table.error / lost, 0.0)
-        value = value + compensated[:, None]
-        error = error + propagated[:, None]
+    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
     return value, error, result.evaluations, result.converged, None
+
+
+def require_mu_min(cos_fixed: np.ndarray) -> None:
+    """Refuse fixed directions closer to the horizon than :data:`MU_MIN`."""
+    if np.any(cos_fixed < MU_MIN):
+        raise ArgumentError(
+            f"the microfacet methods need cos θ ≥ {MU_MIN:g} (θ ≤ {np.degrees(np.arccos(MU_MIN)):.7f}°): closer to "
+            "the horizon float64 cannot resolve where it cuts the lobe (estimates would be optimistic)", where="theta")
+
+
+def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping[str, object], value: np.ndarray,
+                      error: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(value, error) of the single-scattering albedo (K, C) plus, with ``ms=kulla-conty``, the compensation
+    lobe's albedo in closed form: ∫ f_ms (N·L) dL = (1 − E(μ_V)) · 2∫₀¹(1 − E(μ))μ dμ / (1 − E_avg), the inner
+    integral exact for the table as read (piecewise linear in μ)."""
+    if params["ms"] != "kulla-conty":
+        return value, error
+    K = fixed.shape[0]
+    table = compensation(model.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+    alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
+    e_v, lost = table.albedo(fixed[:, 2], alpha), 1.0 - table.average_albedo(alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        compensated = np.where(lost > 0, (1.0 - e_v) * table.missing_energy(alpha) / lost, 0.0)
+        # The table entries' own quadrature errors, through a ratio of sums of at most a few of them.
+        propagated = np.where(lost > 0, 4.0 * table.error / lost, 0.0)
+    return value + compensated[:, None], error + propagated[:, None]

@@ -2,7 +2,7 @@
 microfacet normal with the slope distribution as the measure, exact from rough interfaces down to mirrors.
 
 Reflection is the microfacet BRDF with the exact dielectric Fresnel: its F = 1 albedo by
-:func:`brdfnorm.halfvector.single_scattering_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
+:func:`brdfnorm.halfvector.white_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
 critical angle (:data:`PARTS`), so that the Fresnel kink at total internal reflection (η < 1) is an edge of
 the domain rather than inside it. Refraction follows the same route (Walter et al. 2007,
 §5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's weight is
@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .halfvector import CubatureResult, _Panels, adaptive_rectangles, single_scattering_albedo
+from .halfvector import CubatureResult, _Panels, adaptive_rectangles, white_albedo
 from .models.dielectric import MicrofacetDielectric, refraction_shadowing
 from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
@@ -249,10 +249,8 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
     budget = max_evaluations // 3
     results = {part: part_albedo(model.distribution, problem.fixed, alpha, eta, params["shadowing"], part,
                                  rtol=rtol, atol=atol / 3, max_evaluations=budget) for part in PARTS}
-    white = {"alpha": alpha, "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": params["shadowing"], "fresnel": "none",
-             "f0": 0.0, "f90": 1.0, "eta": 1.0, "k": 0.0}
-    results["white"] = single_scattering_albedo(model.distribution, problem.fixed, white, rtol=rtol, atol=atol / 3,
-                                                max_evaluations=budget)
+    results["white"] = white_albedo(model.distribution, params["shadowing"], problem.fixed, alpha, rtol=rtol,
+                                    atol=atol / 3, max_evaluations=budget)
     t = results["refraction"].value
     r = results["white"].value - results["reflection-loss"].value
     error = sum(result.error for result in results.values())
