@@ -92,8 +92,8 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
 
 def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray, *, rtol: float,
            atol: float | np.ndarray = 0.0):
-    """(value (K,), error (K,), evaluations (K,), converged (K,)) of E at cos θ_V = ``cos_view`` (K,) and
-    roughness ``alpha`` (K,), both in (0, 1] for cos θ_V; ``atol`` scalar or (K,)."""
+    """(value (K,), error (K,), evaluations (K,), converged (K,)) of E at cos θ_V = ``cos_view`` (K,) in (0, 1]
+    and roughness ``alpha`` (K,) > 0; ``atol`` scalar or (K,)."""
     mu = np.asarray(cos_view, dtype=float)
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), mu.shape)
     K = mu.size
@@ -119,11 +119,12 @@ def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray
         g = 1.0 - al2
         bracket = al2 * (r + 2.0 * g * m / root_q) + g * g * m * c / (cosh * cosh * q * root_q)
         if np.any(al > 1.0):  # g < 0: the sum above cancels; the completed square below does not
-            b = 2.0 * sin_l * sin_v[k][:, None]
-            a = 0.5 * (m * m * (1.0 + d * d) + (sin_l + sin_v[k][:, None]) ** 2 + m * m)
+            # w = a_w + b_w cos φ with a_w − b_w = m²(1 + d²), a_w + b_w = (sin θ_L + sin θ_V)² + m².
+            a_minus_b, a_plus_b = m * m * (1.0 + d * d), (sin_l + sin_v[k][:, None]) ** 2 + m * m
+            a_w, b_w = 0.5 * (a_plus_b + a_minus_b), 2.0 * sin_l * sin_v[k][:, None]
             root_p = m * r * root_q
-            square = (m * m * (1.0 + d * d) * ((sin_l + sin_v[k][:, None]) ** 2 + m * m) - g * m * m * a) ** 2
-            completed = al2 * r * (square / (c * root_p**3) + b * b / (c * (c + root_p)))
+            square = (a_minus_b * a_plus_b - g * m * m * a_w) ** 2  # (c·a_w − b_w²)², c = a_w − g m²
+            completed = al2 * r * (square / (c * root_p**3) + b_w * b_w / (c * (c + root_p)))
             bracket = np.where(al > 1.0, completed, bracket)
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
             lambda_l = distribution.smith_lambda(al2 * (sin_l / cos_l) ** 2)
