@@ -11,6 +11,8 @@ points next to the pole by 2–4× — all found by the sweep below before they 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from microfacet_reference import reference_albedo
@@ -86,3 +88,12 @@ def test_rounding_floor_is_in_the_estimate():
     # more than float64 gives (the panel differences alone are 0 for a smooth lobe at α = 1).
     result = bn.albedo(bn.load("ggx", alpha=1.0), np.arccos([0.5, 1.0]), rtol=1e-12)
     assert np.all(result.error[:, 0] >= 1e-14 * result.value[:, 0])
+
+
+def test_no_floating_point_warnings_over_the_parameter_range():
+    # α = 1 (g = 0), just above it (the pole's branch points at distance atanh(1/α) → ∞), α = 100, μ = 1e-8.
+    alpha = np.array([1e-12, 1e-8, 0.5, 1.0, 1.0 + 1e-12, 2.0, 100.0])[:, None]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = bn.albedo(bn.load("ggx", alpha=alpha), np.arccos([1e-8, 1e-4, 0.5, 1.0])[None, :], rtol=1e-10)
+    assert result.method == "azimuthal" and result.converged.all() and np.all(np.isfinite(result.value))

@@ -159,7 +159,8 @@ def _panels(e_v: np.ndarray, theta_v: np.ndarray, alpha: np.ndarray, scale: np.n
     steps = T_STEP * np.arange(-T_REACH // T_STEP, T_REACH // T_STEP + 1)[None, :]
     graded = to_t(e_v[:, None] - np.minimum(scale[:, None] * _GRADES[None, :], _HALF_PI))
     # For α > 1 Λ(L)'s branch points move to the pole: tan θ_L = ±i/α, θ_L = ±i atanh(1/α).
-    pole_scale = np.where(alpha > 1.0, np.arctanh(1.0 / np.maximum(alpha, 1.0 + 1e-16)), np.inf)
+    pole_scale = np.full(alpha.shape, np.inf)
+    pole_scale[alpha > 1.0] = np.arctanh(1.0 / alpha[alpha > 1.0])
     graded_pole = to_t(np.minimum(pole_scale[:, None] * _GRADES[None, :], _HALF_PI) - theta_v[:, None])
     points = np.concatenate([start, steps + 0 * start, graded, graded_pole, end], axis=1)
     points = np.clip(points, start, end)
