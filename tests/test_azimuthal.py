@@ -18,7 +18,9 @@ import pytest
 from microfacet_reference import reference_albedo
 
 import brdfnorm as bn
+from brdfnorm.azimuthal import white_albedo
 from brdfnorm.errors import ArgumentError
+from brdfnorm.models.microfacet import GGXDistribution
 
 MUS = np.array([1e-6, 1e-4, 2e-3, 0.04, 0.3, 0.75, 1.0])
 ALPHAS = np.array([1e-8, 1e-4, 0.01, 0.07, 0.35, 1.0])
@@ -91,9 +93,15 @@ def test_rounding_floor_is_in_the_estimate():
 
 
 def test_no_floating_point_warnings_over_the_parameter_range():
-    # α = 1 (g = 0), just above it (the pole's branch points at distance atanh(1/α) → ∞), α = 100, μ = 1e-8.
+    # α = 0 (the mirror: q^{3/2} ~ α³ underflowed at a normal view), α = 1 (g = 0), just above it (the pole's
+    # branch points at distance atanh(1/α) → ∞), α = 100, μ = 1e-8.
     alpha = np.array([1e-12, 1e-8, 0.5, 1.0, 1.0 + 1e-12, 2.0, 100.0])[:, None]
+    views = np.arccos([1e-8, 1e-4, 0.5, 1.0])
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        result = bn.albedo(bn.load("ggx", alpha=alpha), np.arccos([1e-8, 1e-4, 0.5, 1.0])[None, :], rtol=1e-10)
+        result = bn.albedo(bn.load("ggx", alpha=alpha), views[None, :], rtol=1e-10)
+        # The Kulla-Conty tables' α = 0 column (the model's own α stops at 1e-12): the 1-D route at α = 0.
+        mirror = white_albedo(GGXDistribution(), "height-correlated", bn.directional._directions(views, 0.0 * views),
+                              np.zeros(4), rtol=1e-10)
     assert result.method == "azimuthal" and result.converged.all() and np.all(np.isfinite(result.value))
+    assert mirror.converged.all() and np.all(np.abs(mirror.value[:, 0] - 1.0) <= 1e-15)  # a mirror keeps it all

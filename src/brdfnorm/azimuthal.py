@@ -53,7 +53,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .models.microfacet import MicrofacetModel, shadowing_masking
+from .halfvector import CubatureResult, single_scattering_albedo
+from .models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from .series import adaptive_gauss_legendre
 
 _HALF_PI = 0.5 * np.pi
@@ -66,6 +67,9 @@ T_REACH = 24.0
 _GRADES = 4.0 ** np.arange(-2, 40)
 #: Distributions with a closed-form azimuthal integral here.
 DISTRIBUTIONS = ("ggx",)
+#: Roughness floor: 1 − E = O(α²), so α = 1e-60 is a mirror to float64 (E differs by ~1e-120), while q^{3/2} ~ α³
+#: of a normal view still stays far above float64's underflow (at 1e-150 it was 0: a division by zero).
+ALPHA_FLOOR = 1e-60
 
 
 def applies(model, over) -> bool:
@@ -75,19 +79,29 @@ def applies(model, over) -> bool:
             and model.params["fresnel"] == "none")
 
 
-def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
-    """``brdfnorm.albedo`` method ``"azimuthal"`` for a :class:`brdfnorm.albedo.Problem` (``ms=kulla-conty``
-    adds the compensation lobe as :mod:`brdfnorm.halfvector` does)."""
-    from .halfvector import require_mu_min, white_albedo, with_compensation
-
-    model: MicrofacetModel = problem.model
-    K = problem.fixed.shape[0]
-    require_mu_min(problem.fixed[:, 2])
-    params = problem.case_params(np.arange(K))
-    result = white_albedo(model.distribution, params["shadowing"], problem.fixed, params["alpha"], rtol=rtol,
-                          atol=atol, max_evaluations=max_evaluations)
-    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
-    return value, error, result.evaluations, result.converged, None
+def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
+                 atol: float | np.ndarray = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
+    """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
+    by this module's 1-D integral where it has the distribution (its 1-D integral), else by (H1); a case the
+    1-D route does not settle (none is known) goes to (H1) too. ``atol`` scalar or (K,)."""
+    K = fixed.shape[0]
+    alpha = np.broadcast_to(np.asarray(alpha, dtype=float).ravel(), (K,))
+    atol = np.broadcast_to(np.asarray(atol, dtype=float).ravel(), (K,))
+    params = {"alpha": alpha, "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": shadowing, "fresnel": "none",
+              "f0": 0.0, "f90": 1.0, "eta": 1.0, "k": 0.0}
+    if distribution.name not in DISTRIBUTIONS:
+        return single_scattering_albedo(distribution, fixed, params, rtol=rtol, atol=atol[:, None],
+                                        max_evaluations=max_evaluations)
+    value, error, evaluations, converged = albedo(distribution, shadowing, fixed[:, 2],
+                                                  np.maximum(alpha, ALPHA_FLOOR), rtol=rtol, atol=atol)
+    value, error = value[:, None], error[:, None]
+    if not converged.all():
+        rest = np.flatnonzero(~converged)
+        again = single_scattering_albedo(distribution, fixed[rest], {**params, "alpha": alpha[rest]}, rtol=rtol,
+                                         atol=atol[rest, None], max_evaluations=max_evaluations)
+        value[rest], error[rest], converged[rest] = again.value, again.error, again.converged
+        evaluations[rest] += again.evaluations
+    return CubatureResult(value, error, evaluations, converged)
 
 
 def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray, *, rtol: float,

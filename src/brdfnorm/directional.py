@@ -439,14 +439,15 @@ register_method(Method("series", lambda model, over: type(model) is BlinnPhong, 
 # Isotropic GGX with F = 1 (the lobe of energy-compensation tables): the azimuth in closed form, a 1-D integral
 # (brdfnorm.azimuthal), tried before the half-vector cubature below.
 from . import azimuthal as _azimuthal  # noqa: E402
+from .microfacet_albedo import azimuthal_method as _azimuthal_method  # noqa: E402
+from .microfacet_albedo import halfvector_method as _microfacet  # noqa: E402
 
-register_method(Method("azimuthal", _azimuthal.applies, _azimuthal.albedo_method,
+register_method(Method("azimuthal", _azimuthal.applies, _azimuthal_method,
                        "isotropic GGX, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
                 auto_priority=1)
 
 # Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
 # (brdfnorm.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates fail.
-from .halfvector import albedo_method as _microfacet  # noqa: E402
 from .models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,

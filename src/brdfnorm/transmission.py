@@ -2,7 +2,7 @@
 microfacet normal with the slope distribution as the measure, exact from rough interfaces down to mirrors.
 
 Reflection is the microfacet BRDF with the exact dielectric Fresnel: its F = 1 albedo by
-:func:`brdfnorm.halfvector.white_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
+:func:`brdfnorm.azimuthal.white_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
 critical angle (:data:`PARTS`), so that the Fresnel kink at total internal reflection (η < 1) is an edge of
 the domain rather than inside it. Refraction follows the same route (Walter et al. 2007,
 §5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's weight is
@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .halfvector import CubatureResult, _Panels, adaptive_rectangles, white_albedo
+from .azimuthal import white_albedo
+from .halfvector import CubatureResult, _Panels, adaptive_rectangles
 from .models.dielectric import MicrofacetDielectric, refraction_shadowing
 from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 

@@ -1,0 +1,207 @@
+"""The albedo methods of the microfacet lobes, and Kulla & Conty's energy-compensation tables they use.
+
+Methods (registered in :mod:`brdfnorm.directional`): ``"azimuthal"`` — isotropic GGX with F = 1 by the 1-D
+integral of :mod:`brdfnorm.azimuthal` — and ``"microfacet"`` — every ``ggx``/``beckmann`` lobe by the half-vector
+cubature of :mod:`brdfnorm.halfvector`. Both add, with ``ms=kulla-conty``, the compensation lobe of Kulla & Conty
+2017 ("Revisiting physically based shading at Imageworks") in closed form (:func:`with_compensation`), from the
+tables :func:`compensation` builds: E(μ, α) and E_avg(α) of the F = 1 lobe (by
+:func:`brdfnorm.azimuthal.white_albedo`), read as a renderer reads them or exact.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from .azimuthal import white_albedo
+from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
+from .models.microfacet import (
+    BeckmannDistribution,
+    Distribution,
+    GGXDistribution,
+    MicrofacetModel,
+    register_compensation,
+)
+from .series import adaptive_gauss_legendre
+
+#: The μ = 0 row of a table is evaluated here (a renderer clamps μ there too).
+MU_CLAMP = 1e-4
+#: Tables are read with interpolation errors ≥ 1e-6 (N ≤ 64), so 1e-8 is ample; exact values are for checks.
+_TABLE_RTOL = 1e-8
+_EXACT_RTOL = 1e-11
+
+
+# -- the albedo methods -----------------------------------------------------------------------------------
+
+def halfvector_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+    """``brdfnorm.albedo`` method ``"microfacet"``: the batch of a :class:`brdfnorm.albedo.Problem` by the
+    half-vector cubature. The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral over the view
+    with the light fixed is the same integral at the fixed direction."""
+    model: MicrofacetModel = problem.model
+    K = problem.fixed.shape[0]
+    require_mu_min(problem.fixed[:, 2])
+    params = problem.case_params(np.arange(K))
+    result = single_scattering_albedo(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
+                                      max_evaluations=max_evaluations)
+    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
+    return value, error, result.evaluations, result.converged, None
+
+
+def azimuthal_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+    """``brdfnorm.albedo`` method ``"azimuthal"``: isotropic GGX with F = 1 by :mod:`brdfnorm.azimuthal`."""
+    model: MicrofacetModel = problem.model
+    K = problem.fixed.shape[0]
+    require_mu_min(problem.fixed[:, 2])
+    params = problem.case_params(np.arange(K))
+    result = white_albedo(model.distribution, params["shadowing"], problem.fixed, params["alpha"], rtol=rtol,
+                          atol=atol, max_evaluations=max_evaluations)
+    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
+    return value, error, result.evaluations, result.converged, None
+
+
+def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping[str, object], value: np.ndarray,
+                      error: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(value, error) of the single-scattering albedo (K, C) plus, with ``ms=kulla-conty``, the compensation
+    lobe's albedo in closed form: ∫ f_ms (N·L) dL = (1 − E(μ_V)) · 2∫₀¹(1 − E(μ))μ dμ / (1 − E_avg), the inner
+    integral exact for the table as read (piecewise linear in μ)."""
+    if params["ms"] != "kulla-conty":
+        return value, error
+    K = fixed.shape[0]
+    table = compensation(model.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+    alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
+    e_v, lost = table.albedo(fixed[:, 2], alpha), 1.0 - table.average_albedo(alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        compensated = np.where(lost > 0, (1.0 - e_v) * table.missing_energy(alpha) / lost, 0.0)
+        # The table entries' own quadrature errors, through a ratio of sums of at most a few of them.
+        propagated = np.where(lost > 0, 4.0 * table.error / lost, 0.0)
+    return value + compensated[:, None], error + propagated[:, None]
+
+
+# -- Kulla & Conty's compensation tables -------------------------------------------------------------------
+
+def _albedo_grid(distribution: Distribution, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
+                 rtol: float = _TABLE_RTOL, atol=0.0) -> CubatureResult:
+    """Single-scattering E (F = 1, isotropic) at the pairs (μ, α) of two equal-shape arrays, flattened."""
+    mu = np.clip(np.ravel(mu), MU_MIN, 1.0)
+    fixed = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=-1)
+    return white_albedo(distribution, shadowing, fixed, np.ravel(alpha), rtol=rtol, atol=atol)
+
+
+#: E_avg's integral starts here; the dropped ∫₀^μ 2μE dμ ∈ [0, μ²] is added as half of that ± half.
+_AVERAGE_MU_MIN = 1e-6
+
+
+def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: float = 1e-10):
+    """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
+
+    In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
+    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.series.adaptive_gauss_legendre` over
+    x ∈ [ln 1e-6, 0] converges fast; each node's E is computed to an absolute accuracy scaled by its weight,
+    and the nodes' errors are added to the outer estimate (bounded by max(2μ²·err_E) times the x-range).
+    """
+    alpha = np.atleast_1d(np.asarray(alpha, dtype=float)).ravel()
+    K = alpha.size
+    edges = np.log([_AVERAGE_MU_MIN, 0.05, 1.0])
+    a = np.tile(edges[:-1], K)
+    b = np.tile(edges[1:], K)
+    case = np.repeat(np.arange(K), edges.size - 1)
+    inner_error = np.zeros(K)
+    span = -edges[0]
+
+    def integrand(index: np.ndarray, x: np.ndarray) -> np.ndarray:
+        mu = np.exp(x)
+        weight = 2.0 * mu * mu
+        result = _albedo_grid(distribution, shadowing, mu, np.broadcast_to(alpha[index][:, None], mu.shape),
+                              rtol=rtol / 10, atol=(rtol / (100.0 * span)) / weight.ravel()[:, None])
+        np.maximum.at(inner_error, index, np.max(weight * result.error[:, 0].reshape(mu.shape), axis=1))
+        return weight * result.value[:, 0].reshape(mu.shape)
+
+    value, error, _, converged = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
+    dropped = _AVERAGE_MU_MIN**2 / 2
+    return value + dropped, error + span * inner_error + dropped
+
+
+@dataclass(frozen=True)
+class Compensation:
+    """E(μ, α) and E_avg(α) of one lobe (F = 1): tabulated on an N × N node grid (``size`` N ≥ 2) and read
+    as a renderer reads them (bilinear in (μ, α), linear in α), or exact (``size`` 0, an integral per value)."""
+
+    distribution: Distribution
+    shadowing: str
+    size: int
+    mu: np.ndarray | None = None  # (N,) nodes
+    alpha: np.ndarray | None = None  # (N,)
+    table: np.ndarray | None = None  # (N, N) E[μ_i, α_j]
+    average: np.ndarray | None = None  # (N,) E_avg[α_j]
+    error: float = 0.0  # largest quadrature error of any table entry
+
+    def albedo(self, mu: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        mu, alpha = np.broadcast_arrays(np.asarray(mu, dtype=float), np.asarray(alpha, dtype=float))
+        if self.size == 0:
+            exact = _albedo_grid(self.distribution, self.shadowing, mu, alpha, rtol=_EXACT_RTOL)
+            return exact.value[:, 0].reshape(mu.shape)
+        return _bilinear(self.table, self.mu, self.alpha, mu, alpha)
+
+    def average_albedo(self, alpha: np.ndarray) -> np.ndarray:
+        alpha = np.asarray(alpha, dtype=float)
+        if self.size == 0:
+            unique, inverse = np.unique(alpha, return_inverse=True)
+            exact = average_albedo(self.distribution, self.shadowing, unique, rtol=_EXACT_RTOL)[0]
+            return exact[inverse].reshape(alpha.shape)
+        return np.interp(alpha, self.alpha, self.average)
+
+    def energies(self, mu_l, mu_v, alpha):
+        """(E(μ_L), E(μ_V), E_avg(α)) broadcast together."""
+        mu_l, mu_v, alpha = np.broadcast_arrays(mu_l, mu_v, alpha)
+        e = self.albedo(np.concatenate([mu_l.ravel(), mu_v.ravel()]), np.concatenate([alpha.ravel()] * 2))
+        return e[:mu_l.size].reshape(mu_l.shape), e[mu_l.size:].reshape(mu_l.shape), self.average_albedo(alpha)
+
+    def missing_energy(self, alpha: np.ndarray) -> np.ndarray:
+        """2∫₀¹ (1 − E(μ)) μ dμ of E as this compensation reads it (exact for the piecewise-linear table)."""
+        alpha = np.asarray(alpha, dtype=float)
+        if self.size == 0:
+            return 1.0 - self.average_albedo(alpha)
+        # Along μ the bilinear read is linear between nodes: 2-point Gauss–Legendre per segment is exact.
+        lo, hi = self.mu[:-1], self.mu[1:]
+        nodes = (lo + hi)[:, None] / 2 + (hi - lo)[:, None] / 2 * np.array([-1.0, 1.0]) / np.sqrt(3.0)
+        weights = (hi - lo)[:, None] / 2
+        e = _bilinear(self.table, self.mu, self.alpha, nodes[None], alpha[..., None, None])
+        return np.sum(weights * 2.0 * nodes * (1.0 - e), axis=(-2, -1))
+
+
+def _bilinear(table, mu_nodes, alpha_nodes, mu, alpha):
+    """Bilinear interpolation on a node grid (clamped to its edges), as a GPU samples a texture."""
+    def locate(nodes, x):
+        x = np.clip(x, nodes[0], nodes[-1])
+        i = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2)
+        return i, (x - nodes[i]) / (nodes[i + 1] - nodes[i])
+
+    i, fu = locate(mu_nodes, mu)
+    j, fa = locate(alpha_nodes, alpha)
+    return ((1 - fu) * (1 - fa) * table[i, j] + fu * (1 - fa) * table[i + 1, j]
+            + (1 - fu) * fa * table[i, j + 1] + fu * fa * table[i + 1, j + 1])
+
+
+@lru_cache(maxsize=16)
+def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensation:
+    distribution = {"ggx": GGXDistribution, "beckmann": BeckmannDistribution}[distribution_name]()
+    if size == 0:
+        return Compensation(distribution, shadowing, 0)
+    nodes = np.linspace(0.0, 1.0, size)
+    mu_grid, alpha_grid = np.meshgrid(nodes, nodes, indexing="ij")
+    grid = _albedo_grid(distribution, shadowing, np.maximum(mu_grid, MU_CLAMP), alpha_grid)
+    table = grid.value[:, 0].reshape(size, size)
+    average, average_error = average_albedo(distribution, shadowing, nodes, rtol=_TABLE_RTOL)
+    error = float(max(grid.error.max(), average_error.max()))
+    return Compensation(distribution, shadowing, size, nodes, nodes, table, average, error)
+
+
+def compensation(distribution: Distribution, shadowing: str, size: int) -> Compensation:
+    """The (cached) Kulla-Conty tables of a lobe; ``size`` 0 for exact values."""
+    return _compensation(distribution.name, shadowing, int(size))
+
+
+register_compensation(compensation)
