@@ -654,13 +654,13 @@ import json, sys, time
 import numpy as np
 sys.path.insert(0, sys.argv[4])
 from run import lut_subject, high_water_kib_of_self
-size, rtol = int(sys.argv[1]), float(sys.argv[2])
+size, rtol, method = int(sys.argv[1]), float(sys.argv[2]), sys.argv[5]
 model, axis, clamp, axis_range = lut_subject()
 from brdfnorm import lut
 base = high_water_kib_of_self()
 start, cpu = time.perf_counter(), time.process_time()
 table = lut.compute(model, {"mu": lut.grid_values(0, 1, size), axis: lut.grid_values(*axis_range, size)},
-                    clamp={"mu": 1e-4, axis: clamp}, rtol=rtol)
+                    clamp={"mu": 1e-4, axis: clamp}, rtol=rtol, method=method)
 elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
 np.savez(sys.argv[3], E=table["E"], E_avg=table["E_avg"], E_error=table["E_error"], E_avg_error=table["E_avg_error"])
 print(json.dumps({"seconds": elapsed, "cpu_seconds": cpu, "peak_rss_kib": high_water_kib_of_self(),
@@ -686,7 +686,8 @@ def lut_subject():
 
 def w_lut(cfg: Config, refs: References) -> dict:
     """`brdfnorm lut`: N×N tables E(μ, α) + E_avg at rtol 1e-10 (fresh subprocesses: time and peak RSS),
-    against a Monte-Carlo table made as engines make them (GGX visible-normal sampling, 2¹⁶ samples a cell)."""
+    against a Monte-Carlo table made as engines make them (GGX visible-normal sampling, 2¹⁶ samples a cell);
+    errors against the half-vector cubature's table at rtol 1e-12."""
     import tempfile
 
     model, axis, clamp, axis_range = lut_subject()
@@ -704,8 +705,11 @@ def w_lut(cfg: Config, refs: References) -> dict:
                 if rtol == 1e-12 and (size != sizes[0] or not builtin):
                     continue
                 target = Path(scratch) / f"lut{size}_{rtol:g}.npz"
+                # The reference table by another route: the half-vector cubature, where auto takes the 1-D
+                # azimuthal integral (whose rtol 1e-12 table is its rtol 1e-10 table, bit for bit).
+                method = "microfacet" if (rtol == 1e-12 and builtin) else "auto"
                 done = subprocess.run([sys.executable, "-c", _LUT_SNIPPET, str(size), str(rtol), str(target),
-                                       str(HERE)], capture_output=True, text=True, cwd=ROOT)
+                                       str(HERE), method], capture_output=True, text=True, cwd=ROOT)
                 if done.returncode:
                     out["sizes"][str(size)] = {"error": done.stderr.strip().splitlines()[-1:]}
                     break

@@ -3,13 +3,17 @@ in closed form.
 
 Checked against routes that share nothing with it but the lobe: the closed form 1 − ln 2 (GGX, α = 1, μ = 1), the
 half-vector cubature (``method="microfacet"``, rtol 1e-13, a 2-D integral over the half vector), the fixed-order
-Gauss–Legendre reference of tests/microfacet_reference.py, and mpmath (Beckmann's von Mises moments from
-``besseli``). Its estimates are ~1e-14 (its initial panels already resolve the lobe), so "true error ≤ estimate +
-the reference's own" is a strict check: a wrong angle at the pole (sin θ_L taken as cos(π/2 − θ_L)) failed it by
-10× at α = 6e-6, one wide tail panel by 12× — both found by the sweep below before they were fixed.
+Gauss–Legendre reference of tests/microfacet_reference.py, and mpmath (the mirror limit; Beckmann's von Mises
+moments from ``besseli``, its normal view). Its estimates are ~1e-14 (its initial panels already resolve the
+lobe), so "true error ≤ estimate + the reference's own" is a strict check: a wrong angle at the pole (sin θ_L
+taken as cos(π/2 − θ_L)) failed it by 10× at α = 6e-6, one wide tail panel by 12×, G2's pole at grazing views
+(e_L ≈ −μ) by 4×, and for α > 1 the cancelling bracket and Λ's branch points next to the pole by 2–4× — all
+found by the sweep below before they were fixed.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import mpmath
 import numpy as np
@@ -113,7 +117,7 @@ def test_estimates_bound_the_error_on_random_views_and_roughnesses(name, rtol):
     rng = np.random.default_rng(11)
     n = 160
     mu = np.exp(rng.uniform(np.log(1e-6), 0.0, n))
-    alpha = np.exp(rng.uniform(np.log(1e-8), 0.0, n))
+    alpha = np.exp(rng.uniform(np.log(1e-8), np.log(100.0), n))  # the parameter's range: α > 1 too
     mu[:10], alpha[10:20] = 1.0, 1.0
     for shadowing in SHADOWINGS:
         model = bn.load(name, alpha=alpha, shadowing=shadowing)
@@ -166,3 +170,13 @@ def test_beckmann_tail_beyond_the_reach_is_negligible(monkeypatch):
     tail = azimuthal.albedo(distribution, "height-correlated", mu, alpha, rtol=1e-3)[0]
     assert np.any(tail > 0.0)  # some cases reach past the cut
     assert np.all(tail <= 1e-25 * albedo)
+
+
+@pytest.mark.parametrize("name", azimuthal.DISTRIBUTIONS)
+def test_no_floating_point_warnings_over_the_parameter_range(name):
+    # α = 1 (g = 0), just above it (the pole's branch points at distance atanh(1/α) → ∞), α = 100, μ = 1e-8.
+    alpha = np.array([1e-12, 1e-8, 0.5, 1.0, 1.0 + 1e-12, 2.0, 100.0])[:, None]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = bn.albedo(bn.load(name, alpha=alpha), np.arccos([1e-8, 1e-4, 0.5, 1.0])[None, :], rtol=1e-10)
+    assert result.method == "azimuthal" and result.converged.all() and np.all(np.isfinite(result.value))

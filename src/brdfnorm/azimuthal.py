@@ -31,7 +31,11 @@ substitution d = α sinh t follows both: with r = √(d² + α²) = α cosh t an
 
     E = 1/cos θ_V ∫ G2 sin θ_L/(1 + d²) · [α²r + 2α²(1 − α²) m/√Q + (1 − α²)² m c/(cosh²t Q^{3/2})] dt,
 
-Q = c + b, over t from −asinh(tan(θ_V/2)/α) (θ_L = 0) to asinh(tan((π/2 − θ_V)/2)/α) (the horizon): the peak
+Q = c + b, over t from −asinh(tan(θ_V/2)/α) (θ_L = 0) to asinh(tan((π/2 − θ_V)/2)/α) (the horizon). For α > 1 (g < 0)
+the bracket cancels (E ~ 1/α², relative errors of 2e-11 at α = 30–70 were measured), so there it is taken from
+the completed square 1 + 2g/√P + g²c/P^{3/2} = (ca − b²)²/(c P^{3/2}) + b²/(c(c + √P)), where
+ca − b² = (a − b)(a + b) − g·a is a sum of positive terms (a − b = m²(1 + d²), a + b = (sin θ_L + sin θ_V)² + m²).
+The peak
 is the bounded last term, ~1/cosh²t, and the tails are smooth in t ~ ln|d| (a map that compresses them, such as
 d = α tan ψ, piles the tail's α²|d| into a layer at the ends of the range that the rule cannot see). At α = 1
 the bracket is r and the integrand G2 sin θ_L dθ_L/(2 dt), so at θ_V = 0 (G2 = 2μ/(1 + μ),
@@ -166,8 +170,8 @@ def _scaled_asymptotic(y: np.ndarray) -> np.ndarray:
 
 def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray, *, rtol: float,
            atol: float | np.ndarray = 0.0):
-    """(value (K,), error (K,), evaluations (K,), converged (K,)) of E at cos θ_V = ``cos_view`` (K,) and
-    roughness ``alpha`` (K,), both in (0, 1] for cos θ_V; ``atol`` scalar or (K,)."""
+    """(value (K,), error (K,), evaluations (K,), converged (K,)) of E at cos θ_V = ``cos_view`` (K,) in (0, 1]
+    and roughness ``alpha`` (K,) > 0; ``atol`` scalar or (K,)."""
     route = _ROUTES[distribution.name]
     mu = np.asarray(cos_view, dtype=float)
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), mu.shape)
@@ -203,9 +207,10 @@ def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray
 
 
 class _GGXRoute:
-    """d = α sinh t; the kernel is the bracket of the GGX section of the module docstring."""
+    """d = α sinh t; the kernel is the bracket of the GGX section of the module docstring (its tail beyond
+    |t| = T_REACH keeps a panel of its own: nothing is cut)."""
 
-    step, reach = T_STEP, T_REACH
+    step, reach, cut = T_STEP, T_REACH, np.inf
 
     @staticmethod
     def d(alpha: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -224,13 +229,23 @@ class _GGXRoute:
         root_q = np.sqrt(q)
         c = 0.5 * (m * m * r * r + q)
         g = 1.0 - al2
-        return al2 * (r + 2.0 * g * m / root_q) + g * g * m * c / (cosh * cosh * q * root_q)
+        bracket = al2 * (r + 2.0 * g * m / root_q) + g * g * m * c / (cosh * cosh * q * root_q)
+        if np.any(alpha > 1.0):  # g < 0: the sum above cancels; the completed square below does not
+            # w = a_w + b_w cos φ with a_w − b_w = m²(1 + d²), a_w + b_w = (sin θ_L + sin θ_V)² + m².
+            a_minus_b, a_plus_b = m * m * (1.0 + d * d), (sin_l + sin_v) ** 2 + m * m
+            a_w, b_w = 0.5 * (a_plus_b + a_minus_b), 2.0 * sin_l * sin_v
+            root_p = m * r * root_q
+            square = (a_minus_b * a_plus_b - g * m * m * a_w) ** 2  # (c·a_w − b_w²)², c = a_w − g m²
+            completed = al2 * r * (square / (c * root_p**3) + b_w * b_w / (c * (c + root_p)))
+            bracket = np.where(alpha > 1.0, completed, bracket)
+        return bracket
 
 
 class _BeckmannRoute:
-    """d = α s; the kernel is e^{−s²} times the bracket of the Beckmann section of the module docstring."""
+    """d = α s; the kernel is e^{−s²} times the bracket of the Beckmann section of the module docstring, cut at
+    |s| = S_REACH."""
 
-    step, reach = S_STEP, S_REACH
+    step, reach, cut = S_STEP, S_REACH, S_REACH
 
     @staticmethod
     def d(alpha: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -272,15 +287,22 @@ def _panels(route, e_v: np.ndarray, theta_v: np.ndarray, alpha: np.ndarray, scal
     geometrically in the elevation e_L (by 4 from a 16th of ``scale``), G2's singularities being at distance
     ~``scale`` from e_L = 0: Λ(L)'s branch points at e_L = ±i atanh α (GGX; Beckmann's Λ has a pole at e_L = 0),
     and for height-correlated G2 the pole of 1/(1 + Λ(L) + Λ(V)) at e_L ≈ −α/(2(1 + Λ(V))) (Λ(L) ≈ α/(2 e_L)),
-    ~μ_V away at grazing views. A panel whose distance to them is 4 times its own width converges like 3^-30,
-    where one wide panel agreed with its halves before either was accurate (3e-6 off, estimated 8e-7, at
-    μ_V = 1.4e-6, α = 0.85, before the pole's scale was added)."""
+    ~μ_V away at grazing views; for α > 1 also from the pole θ_L = 0, where Λ(L)'s branch points lie at
+    θ_L = ±i atanh(1/α) then (GGX; Beckmann's Λ turns on at θ_L ~ 1/α there, e^{−cot²θ_L/α²} growing off the
+    real axis). A panel whose distance to them is 4 times its own width converges like 3^-30, where one wide
+    panel agreed with its halves before either was accurate (3e-6 off, estimated 8e-7, at μ_V = 1.4e-6,
+    α = 0.85, before the pole's scale was added)."""
     to_t = lambda elevation_gap: route.t(alpha[:, None], np.tan(0.5 * elevation_gap))  # noqa: E731
-    start = np.maximum(-to_t(theta_v[:, None]), -route.reach)
-    end = np.minimum(to_t(e_v[:, None]), route.reach)  # e_L = 0: the horizon, or the lobe's reach
+    start = np.maximum(-to_t(theta_v[:, None]), -route.cut)
+    end = np.minimum(to_t(e_v[:, None]), route.cut)  # e_L = 0: the horizon, or the route's cut
     steps = route.step * np.arange(-route.reach // route.step, route.reach // route.step + 1)[None, :]
     graded = to_t(e_v[:, None] - np.minimum(scale[:, None] * _GRADES[None, :], _HALF_PI))
-    points = np.clip(np.concatenate([start, steps + 0 * start, graded, end], axis=1), start, end)
+    # For α > 1 Λ(L)'s branch points move to the pole: tan θ_L = ±i/α, θ_L = ±i atanh(1/α).
+    pole_scale = np.full(alpha.shape, np.inf)
+    pole_scale[alpha > 1.0] = np.arctanh(1.0 / alpha[alpha > 1.0])
+    graded_pole = to_t(np.minimum(pole_scale[:, None] * _GRADES[None, :], _HALF_PI) - theta_v[:, None])
+    points = np.concatenate([start, steps + 0 * start, graded, graded_pole, end], axis=1)
+    points = np.clip(points, start, end)
     points = np.sort(points, axis=1)
     a, b = points[:, :-1].ravel(), points[:, 1:].ravel()
     case = np.repeat(np.arange(e_v.size), points.shape[1] - 1)
