@@ -109,14 +109,19 @@ DISTRIBUTIONS = ("ggx", "beckmann")
 #: Beckmann's von Mises moments J_k: Kummer's series below this κ, the asymptotic expansion from it on.
 KAPPA_SWITCH = 25.0
 _ASYMPTOTIC_TERMS = 36
-#: Γ(k + ½)/π · (k + ½)_n (½)_n/n!, n < _ASYMPTOTIC_TERMS, lowest first: the coefficients of κ^k J_k/√y in y.
-_ASYMPTOTIC = []
-for _k in range(3):
-    _term, _coefficients = Fraction(1), []
-    for _n in range(_ASYMPTOTIC_TERMS):
-        _coefficients.append(float(_term) * gamma(_k + 0.5) / pi)
-        _term *= (Fraction(2 * _k + 1, 2) + _n) * (Fraction(1, 2) + _n) / (_n + 1)
-    _ASYMPTOTIC.append(np.array(_coefficients))
+
+
+def _asymptotic_coefficients(k: int) -> np.ndarray:
+    """Γ(k + ½)/π · (k + ½)_n (½)_n/n!, n < :data:`_ASYMPTOTIC_TERMS`, lowest first: κ^k J_k/√y as a series in y
+    (the Pochhammer ratios exact, in rationals)."""
+    term, coefficients = Fraction(1), []
+    for n in range(_ASYMPTOTIC_TERMS):
+        coefficients.append(float(term) * gamma(k + 0.5) / pi)
+        term *= (Fraction(2 * k + 1, 2) + n) * (Fraction(1, 2) + n) / (n + 1)
+    return np.array(coefficients)
+
+
+_ASYMPTOTIC = [_asymptotic_coefficients(k) for k in range(3)]
 #: J_k = _KUMMER[k] e^{−2κ} ₁F₁(½; k + 1; 2κ): 2^k Γ(k + ½)/(√π k!).
 _KUMMER = (1.0, 1.0, 1.5)
 
