@@ -128,5 +128,6 @@ def test_global_estimates_bound_the_error_at_grazing_views(global_only, grazing_
         assert np.all(ratio <= 1.0), (rtol, ratio.max(), true_error[np.argmax(ratio)], estimate[np.argmax(ratio)])
         if rtol == 1e-3 and name == "ggx":  # errors far above the references' own: the check can fail
             assert np.max(true_error) > 100 * np.max(own)
-    # The global rule carries GGX's grazing views (measured 96–106 of 120); Beckmann's mostly go to the panels.
-    assert settled_count >= (80 if name == "ggx" else 10), settled_count
+    # The global rule carries GGX's grazing views (measured 54–70 of 120 since views below μ = 9e-5 are integrated
+    # to rtol 1e-10, 96–106 before); Beckmann's mostly go to the panels.
+    assert settled_count >= (40 if name == "ggx" else 10), settled_count

@@ -45,7 +45,8 @@ def test_ggx_normal_incidence_alpha_one_is_one_minus_ln2(shadowing, method):
     assert result.error[0] >= true_error
 
 
-@pytest.mark.parametrize("name, method", [("ggx", "microfacet"), ("ggx", "azimuthal"), ("beckmann", "microfacet")])
+@pytest.mark.parametrize("name", ["ggx", "beckmann"])
+@pytest.mark.parametrize("method", ["microfacet", "azimuthal"])
 def test_grid_agrees_with_gauss_legendre_reference(name, method):
     model = bn.load(name, alpha=ALPHAS[:, None])
     result = bn.albedo(model, np.arccos(MUS)[None, :], method=method)  # one vectorized call, rtol 1e-10

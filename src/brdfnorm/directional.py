@@ -436,14 +436,14 @@ from .series import albedo_method as _series  # noqa: E402
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
 
-# Isotropic GGX with F = 1 (the lobe of energy-compensation tables): the azimuth in closed form, a 1-D integral
-# (brdfnorm.azimuthal), tried before the half-vector cubature below.
+# Isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables): the azimuth in closed form, a
+# 1-D integral (brdfnorm.azimuthal), tried before the half-vector cubature below.
 from . import azimuthal as _azimuthal  # noqa: E402
 from .microfacet_albedo import azimuthal_method as _azimuthal_method  # noqa: E402
 from .microfacet_albedo import halfvector_method as _microfacet  # noqa: E402
 
 register_method(Method("azimuthal", _azimuthal.applies, _azimuthal_method,
-                       "isotropic GGX, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
+                       "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
                 auto_priority=1)
 
 # Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure

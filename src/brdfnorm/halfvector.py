@@ -377,7 +377,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
                              max_evaluations: int = 20_000_000, use_global: bool = True) -> CubatureResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 
-    Views below cos θ = :data:`GRAZING_MU` are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
+    Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
     estimates at looser tolerances were found optimistic (GGX against the 1-D route of
     :mod:`brdfnorm.azimuthal`, 150 random (μ ∈ [1e-6, 1e-2], α ∈ [1e-8, 1]) views: up to 5·10⁵ times the
     estimate at rtol 1e-3, μ = 1.5e-6, α = 0.84; 4.7 times at rtol 1e-5; 1.3e-7 ≤ μ: 0.056 off, estimated 1e-8,
@@ -457,8 +457,9 @@ def _single_scattering(distribution: Distribution, fixed: np.ndarray, params: Ma
 
 # -- limits ---------------------------------------------------------------------------------------------------
 
-#: Views below this cos θ are integrated to at most GRAZING_RTOL (see single_scattering_albedo).
-GRAZING_MU = 1e-4
+#: Views below this cos θ are integrated to at most GRAZING_RTOL (see single_scattering_albedo): below the tables'
+#: clamp μ = 1e-4 (where the honesty grids pass at every rtol), whatever rounding cos(arccos 1e-4) brings.
+GRAZING_MU = 9e-5
 GRAZING_RTOL = 1e-10
 #: Below this cos θ the reference checks found the estimates optimistic (GGX, μ = 1e-11: 2e-9 off, 7e-11 claimed).
 MU_MIN = 1e-8
