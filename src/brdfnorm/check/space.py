@@ -14,7 +14,6 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 from ..errors import ArgumentError
 from ..models.base import Model
@@ -103,6 +102,9 @@ def _unit_samples(dimensions: int, count: int, seed: int) -> np.ndarray:
     which every prefix is spread over the whole box, so a search cut short by its budget still covers it."""
     if dimensions == 0:
         return np.zeros((1, 0))
+    # Imported here: scipy.stats costs ~0.5 s to import, which every CLI command would pay at start-up.
+    from scipy.stats import qmc
+
     corners = np.array(list(itertools.product((0.0, 1.0), repeat=dimensions)))[:32]
     halton = qmc.Halton(dimensions, scramble=True, seed=seed).random(max(count - corners.shape[0] - 1, 0))
     return np.vstack([np.full((1, dimensions), 0.5), corners, halton])
