@@ -164,9 +164,11 @@ def _per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
     return out
 
 
-def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int, *, rtol: float, atol: float,
-                        max_evaluations: int, chunk: int = PANELS_PER_CHUNK) -> CubatureResult:
-    """Integrate every case over the union of its initial panels, adaptively and all cases at once."""
+def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int, *, rtol: float | np.ndarray,
+                        atol: float | np.ndarray, max_evaluations: int,
+                        chunk: int = PANELS_PER_CHUNK) -> CubatureResult:
+    """Integrate every case over the union of its initial panels, adaptively and all cases at once (``rtol`` and
+    ``atol`` scalars or per case, (K, 1))."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
@@ -384,38 +386,8 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     K = fixed.shape[0]
-    grazing = fixed[:, 2] < GRAZING_MU
-    if rtol <= GRAZING_RTOL or not grazing.any():
-        return _single_scattering(distribution, fixed, params, rtol=rtol, atol=atol,
-                                  max_evaluations=max_evaluations, use_global=use_global)
-    parts = [(np.flatnonzero(~grazing), rtol), (np.flatnonzero(grazing), GRAZING_RTOL)]
-    results = [(rows, _single_scattering(distribution, fixed[rows], _rows(params, rows, K), rtol=part_rtol,
-                                         atol=_rows({"atol": atol}, rows, K)["atol"],
-                                         max_evaluations=max_evaluations, use_global=use_global))
-               for rows, part_rtol in parts if rows.size]
-    C = max(result.value.shape[1] for _, result in results)
-    value, error = np.zeros((K, C)), np.zeros((K, C))
-    evaluations, converged = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
-    for rows, result in results:
-        value[rows], error[rows] = result.value, result.error
-        evaluations[rows], converged[rows] = result.evaluations, result.converged
-    return CubatureResult(value, error, evaluations, converged)
-
-
-def _rows(params: Mapping[str, object], rows: np.ndarray, K: int) -> dict:
-    """The parameters of cases ``rows``: per-case arrays (leading axis K; colours (K, 3)) sliced, shared kept."""
-    def take(name, value):
-        array = np.asarray(value) if isinstance(value, np.ndarray | float | int) else None
-        shared_colour = name in ("f0", "f90", "eta", "k") and array is not None and array.ndim < 2
-        if array is None or array.ndim == 0 or shared_colour or array.shape[0] != K:
-            return value
-        return array[rows]
-    return {name: take(name, value) for name, value in params.items()}
-
-
-def _single_scattering(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
-                       rtol: float, atol, max_evaluations: int, use_global: bool) -> CubatureResult:
-    K = fixed.shape[0]
+    # Per case (K, 1): both rules compare each case's estimate with max(atol, rtol·|E|) elementwise.
+    rtol = np.where(fixed[:, 2] < GRAZING_MU, min(rtol, GRAZING_RTOL), rtol)[:, None]
     g = _geometry(distribution, fixed, params)
     # An isotropic lobe is symmetric about the plane of N and V: with the azimuth map's zeros at φ = 0, π and
     # its symmetry axes at φ = π/2, 3π/2, half the range [π/2, 3π/2], counted twice, is the whole integral.

@@ -146,8 +146,8 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
 
 
 def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symmetric: np.ndarray,
-                     scale: np.ndarray, *, rtol: float, atol: float | np.ndarray, max_nodes: int = MAX_NODES,
-                     width: np.ndarray | None = None):
+                     scale: np.ndarray, *, rtol: float | np.ndarray, atol: float | np.ndarray,
+                     max_nodes: int = MAX_NODES, width: np.ndarray | None = None):
     """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases``; ``scale`` (K,)
     turns the integrand's weight into one over the full azimuth range."""
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
