@@ -36,30 +36,28 @@ _EXACT_RTOL = 1e-11
 
 # -- the albedo methods -----------------------------------------------------------------------------------
 
-def halfvector_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
-    """``brdfnorm.albedo`` method ``"microfacet"``: the batch of a :class:`brdfnorm.albedo.Problem` by the
-    half-vector cubature. The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral over the view
-    with the light fixed is the same integral at the fixed direction."""
-    model: MicrofacetModel = problem.model
-    K = problem.fixed.shape[0]
-    require_mu_min(problem.fixed[:, 2])
-    params = problem.case_params(np.arange(K))
-    result = single_scattering_albedo(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
-                                      max_evaluations=max_evaluations)
-    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
-    return value, error, result.evaluations, result.converged, None
+def _albedo_method(single_scattering):
+    """A ``brdfnorm.albedo`` method that integrates a :class:`brdfnorm.albedo.Problem`'s batch by
+    ``single_scattering(distribution, fixed, params, rtol=, atol=, max_evaluations=)`` and adds the compensation
+    lobe (:func:`with_compensation`). The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral
+    over the view with the light fixed is the same integral at the fixed direction."""
+    def run(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+        model: MicrofacetModel = problem.model
+        require_mu_min(problem.fixed[:, 2])
+        params = problem.case_params(np.arange(problem.fixed.shape[0]))
+        result = single_scattering(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
+                                   max_evaluations=max_evaluations)
+        value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
+        return value, error, result.evaluations, result.converged, None
+    return run
 
 
-def azimuthal_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
-    """``brdfnorm.albedo`` method ``"azimuthal"``: isotropic GGX with F = 1 by :mod:`brdfnorm.azimuthal`."""
-    model: MicrofacetModel = problem.model
-    K = problem.fixed.shape[0]
-    require_mu_min(problem.fixed[:, 2])
-    params = problem.case_params(np.arange(K))
-    result = white_albedo(model.distribution, params["shadowing"], problem.fixed, params["alpha"], rtol=rtol,
-                          atol=atol, max_evaluations=max_evaluations)
-    value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
-    return value, error, result.evaluations, result.converged, None
+#: Method ``"microfacet"``: every ggx/beckmann lobe by the half-vector cubature.
+halfvector_method = _albedo_method(single_scattering_albedo)
+#: Method ``"azimuthal"``: isotropic lobes with F = 1 by :mod:`brdfnorm.azimuthal`'s 1-D integral.
+azimuthal_method = _albedo_method(
+    lambda distribution, fixed, params, **options: white_albedo(distribution, params["shadowing"], fixed,
+                                                                params["alpha"], **options))
 
 
 def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping[str, object], value: np.ndarray,
