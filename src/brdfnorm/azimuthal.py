@@ -140,8 +140,8 @@ def applies(model, over) -> bool:
 def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
                  atol: float | np.ndarray = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
     """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
-    by this module's 1-D integral where it has the distribution (its 1-D integral), else by (H1); a case the
-    1-D route does not settle (none is known) goes to (H1) too. ``atol`` scalar or (K,)."""
+    by this module's 1-D integral where it has the distribution, else by the half-vector cubature (H1), which
+    also takes any case the 1-D route does not settle (none is known). ``atol`` scalar or (K,)."""
     K = fixed.shape[0]
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float).ravel(), (K,))
     atol = np.broadcast_to(np.asarray(atol, dtype=float).ravel(), (K,))
