@@ -8,6 +8,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from ..directional import METHODS
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize
@@ -41,8 +42,9 @@ class NonFinite(str, Enum):
 MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
                                 "path to a BRDF Explorer .brdf file.")
 METHOD_OPTION = typer.Option("auto", "--method",
-                             help="auto | quadrature | closed-form | series | microfacet | certified (where it "
-                                  "applies; microfacet: ggx and beckmann, over the half vector).")
+                             help=" | ".join(("auto", *METHODS)) + " (where it applies; auto takes the first that "
+                                  "does, never certified; azimuthal: isotropic ggx and beckmann without Fresnel, "
+                                  "a 1-D integral; microfacet: ggx and beckmann over the half vector).")
 RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
