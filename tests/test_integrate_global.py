@@ -193,3 +193,25 @@ def test_heavy_tails_get_the_cubic_horizon_grading_and_settle_in_the_global_rule
     reference = bn.albedo(bn.load("ggx", alpha=0.107**2, shadowing="separable", fresnel="schlick", f0=0.04,
                                   f90=1.0), theta, method="microfacet", rtol=1e-12)
     assert abs(result.value[0] - reference.value[0]) <= result.error[0] + reference.error[0]
+
+
+@pytest.mark.parametrize("theta_deg", [29.5, 29.77482180521632, 30.99])
+def test_a_stall_before_a_sudden_agreement_is_not_settled(theta_deg):
+    # examples/oren_nayar.brdf (max(s, 0) and the switch at θ_L = θ_V: kinks the grid crosses obliquely) at
+    # rtol 1e-6: the global rule's value moved 3.4e-5, 2.7e-5, then 4.6e-9 (29.77°) while every level stayed 3e-7
+    # off, and it settled with an estimate 0.71–0.74 of the error; _stalled now keeps such a case going. The
+    # reference reduces the azimuth in closed form (∫ max(cos Δφ, 0) dφ = 2) and integrates θ_L by scipy quad.
+    from scipy.integrate import quad
+
+    theta = np.radians(theta_deg)
+    sigma2, rho = 0.25, 0.8
+    A, B = 1.0 - 0.5 * sigma2 / (sigma2 + 0.33), 0.45 * sigma2 / (sigma2 + 0.09)
+
+    def polar(t):
+        return 2.0 * np.sin(t) ** 2 * np.cos(t) / max(np.cos(t), np.cos(theta))
+
+    polar_integral = quad(polar, 0.0, theta, epsrel=1e-13)[0] + quad(polar, theta, np.pi / 2, epsrel=1e-13)[0]
+    exact = rho / np.pi * (A * np.pi + B * np.sin(theta) * polar_integral)
+    model = bn.load(str(Path(__file__).resolve().parents[1] / "examples" / "oren_nayar.brdf"))
+    result = _quiet(model, theta, rtol=1e-6)
+    assert result.error[0] >= abs(result.value[0] - exact)
