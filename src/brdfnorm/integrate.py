@@ -71,7 +71,7 @@ from .tensor_rule import START_NODES, integrate_global, map_grid
 NonFinitePolicy = Literal["raise", "zero"]
 
 #: Nodes per case the global tensor rule may spend before a case goes to the adaptive panels.
-GLOBAL_NODES = 16_384
+GLOBAL_NODES = 65_536
 
 # QUADPACK qk15 (Piessens et al., 1983): Kronrod nodes on [0, 1) mirrored, with the embedded 7-point Gauss rule
 # at every other node.
