@@ -41,7 +41,9 @@ d₂ = |Q(½) − Q(¼)| (:func:`_sums`), plus the rounding floor and the integr
 far more accurate once convergence is geometric (its error is roughly the square of d₁, relative). The factor 10
 covers pre-asymptotic plateaus, where two rules agree better than either is accurate (a randomized probe found
 Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). The direction(s) whose estimate
-exceeds half the tolerance (the larger one where neither does) are doubled. A case goes to the adaptive panels of
+exceeds half the tolerance (the larger one where neither does) are doubled — only one where the other is within
+the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
+(:func:`_stalled`). A case goes to the adaptive panels of
 :mod:`brdfnorm.integrate` when it would need more than :data:`MAX_NODES` nodes — predicted early, from the last
 doubling's reduction, assuming each doubling squares it (geometric convergence) — when its integrand is not finite
 at a node, or when its rounding noise is a visible share of its tolerance. The panels are thus paid for only where
