@@ -222,3 +222,6 @@ def average_split(model: Model, params: Mapping[str, np.ndarray], *, rtol: float
             value[rows], error[rows], converged[rows] = v, e, c
             integrals += n
     return value, error, converged, integrals
+
+
+T.AVERAGE_ROUTES["transmits"] = average_split

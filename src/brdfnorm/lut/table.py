@@ -41,6 +41,8 @@ CHANNELS = ("dfg",)
 #: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
 #: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
 CHUNK_CELLS = 256
+#: E_avg routes for kinds of model, registered by the modules that provide them (``transmits``: lut.glass).
+AVERAGE_ROUTES: dict[str, Callable] = {}
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
@@ -479,9 +481,8 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     if average:
         combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
                       for n in others)
-        route = average_over_mu
-        if getattr(model, "transmits", False):  # glass: tanh-sinh in μ where η > 1 (lut.glass)
-            from .glass import average_split as route
+        route = AVERAGE_ROUTES.get("transmits", average_over_mu) if getattr(model, "transmits", False) \
+            else average_over_mu
         avg, avg_error, avg_converged, _ = route(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
