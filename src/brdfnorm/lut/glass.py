@@ -27,6 +27,7 @@ import numpy as np
 
 from ..models.base import Model
 from . import table as T
+from .adaptive import adaptive_unit_interval
 
 #: The adaptive fallback's map μ = t⁴ (dμ 2μ = 8t⁷ dt: the grazing end graded).
 MAPS = {(4, 1): (lambda t: t**4, lambda t: 4.0 * t**3)}
@@ -164,28 +165,7 @@ def _adaptive(nodes: _Nodes, owner, a, b, maps, rtol):
         difference = np.abs(kronrod - half * (g @ T.GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(T.KRONROD_WEIGHTS))
 
-    seg = np.repeat(np.arange(S), 2)
-    left, width = np.tile([0.0, 0.5], S), np.full(2 * S, 0.5)
-    value, error = evaluate(seg, left, width)
-    while True:
-        total, total_error = np.bincount(seg, value, S), np.bincount(seg, error, S)
-        panels = np.bincount(seg, minlength=S)
-        open_ = (total_error > rtol * np.abs(total)) & (panels < MAX_PANELS)
-        if not open_.any():
-            break
-        worst = np.zeros(S)
-        np.maximum.at(worst, seg, error)
-        split = open_[seg] & (error >= 0.25 * worst[seg]) & (width > 1e-12)
-        if not split.any():
-            break
-        keep = ~split
-        child_seg = np.repeat(seg[split], 2)
-        child_left = np.stack([left[split], left[split] + 0.5 * width[split]], axis=1).ravel()
-        child_width = np.repeat(0.5 * width[split], 2)
-        child_value, child_error = evaluate(child_seg, child_left, child_width)
-        seg = np.concatenate([seg[keep], child_seg])
-        left, width = np.concatenate([left[keep], child_left]), np.concatenate([width[keep], child_width])
-        value, error = np.concatenate([value[keep], child_value]), np.concatenate([error[keep], child_error])
+    total, total_error = adaptive_unit_interval(evaluate, S, rtol=rtol, max_panels=MAX_PANELS)
     return total, total_error, total_error <= rtol * np.abs(total), ok, largest
 
 

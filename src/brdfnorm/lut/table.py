@@ -33,6 +33,7 @@ from ..directional import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..parameters import resolve
+from .adaptive import adaptive_unit_interval
 
 #: Axes that give the view direction: μ = cos θ_o, or θ_o itself (radians in the API).
 DIRECTION_AXES = ("mu", "theta")
@@ -408,28 +409,7 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
 
-    owner = np.repeat(np.arange(M), 2)
-    left, width = np.tile([0.0, 0.5], M), np.full(2 * M, 0.5)
-    value, error = evaluate(owner, left, width)
-    while True:
-        total, total_error = np.bincount(owner, value, M), np.bincount(owner, error, M)
-        panels = np.bincount(owner, minlength=M)
-        open_ = (total_error > rtol * np.abs(total)) & (panels < max_panels)
-        if not open_.any():
-            break
-        worst = np.zeros(M)
-        np.maximum.at(worst, owner, error)
-        split = open_[owner] & (error >= 0.25 * worst[owner]) & (width > 1e-12)
-        if not split.any():
-            break
-        keep = ~split
-        children_owner = np.repeat(owner[split], 2)
-        children_left = np.stack([left[split], left[split] + 0.5 * width[split]], axis=1).ravel()
-        children_width = np.repeat(0.5 * width[split], 2)
-        children_value, children_error = evaluate(children_owner, children_left, children_width)
-        owner = np.concatenate([owner[keep], children_owner])
-        left, width = np.concatenate([left[keep], children_left]), np.concatenate([width[keep], children_width])
-        value, error = np.concatenate([value[keep], children_value]), np.concatenate([error[keep], children_error])
+    total, total_error = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
     floor_error = MU_FLOOR**2 * largest_e
     total_error = total_error + floor_error
     converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
