@@ -1,5 +1,5 @@
 """Globally adaptive bisection of [0, 1] for many integrals at once (as QUADPACK's QAG): the μ integrals of the
-tables' E_avg (:mod:`brdfnorm.lut.table`, and per segment :mod:`brdfnorm.lut.glass`), whose panel rules and error
+tables' E_avg (:mod:`brdfnorm.lut.table`, and the fallback of :mod:`brdfnorm.lut.glass`), whose panel rules and error
 estimates the callers supply."""
 
 from __future__ import annotations

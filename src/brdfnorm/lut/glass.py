@@ -29,47 +29,8 @@ from ..models.base import Model
 from . import table as T
 from .adaptive import adaptive_unit_interval
 
-#: The adaptive fallback's map μ = t⁴ (dμ 2μ = 8t⁷ dt: the grazing end graded).
-MAPS = {(4, 1): (lambda t: t**4, lambda t: 4.0 * t**3)}
-#: G7/K15 panels a segment may split into before it gives up.
+#: G7/K15 panels a combination's fallback may split into before it gives up.
 MAX_PANELS = 200
-
-
-class _Nodes:
-    """Albedos at μ(t) of many segments: batched per (map, rtol level), with the density ρ(t) = 2μ dμ/dt."""
-
-    def __init__(self, model: Model, params: Mapping[str, np.ndarray], rtol: float, method: str) -> None:
-        self.model, self.params, self.rtol, self.method = model, params, rtol, method
-        self.integrals = 0
-
-    def __call__(self, owner, a, b, maps, t):
-        """owner, a, b (S,), maps (S,) list, t (S, n): (ρ·E, ρ·E_error, converged (S,), max|E| (S,))."""
-        mu, density = np.empty_like(t), np.empty_like(t)
-        for key in set(maps):
-            rows = np.array([m == key for m in maps])
-            h, dh = MAPS[key]
-            width = (b - a)[rows, None]
-            mu[rows] = a[rows, None] + width * h(t[rows])
-            density[rows] = 2.0 * mu[rows] * width * dh(t[rows])
-        # A node's albedo enters through ρ (≤ 1 almost everywhere): rtol/(4·min(1, ρ)) keeps Σ w ρ error within
-        # (rtol/4) max E, rounded down to powers of NODE_RTOL_STEP so the nodes go in a few batched calls.
-        ratio = 1.0 / np.minimum(1.0, np.maximum(density, 1e-300))
-        cap = np.log(T.NODE_RTOL_MAX / (self.rtol / 4)) / np.log(T.NODE_RTOL_STEP)
-        level = np.clip(np.floor(np.log(ratio) / np.log(T.NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
-        theta = np.arccos(np.clip(np.maximum(mu, T.MU_FLOOR), 0.0, 1.0))
-        value, error = np.zeros_like(t), np.zeros_like(t)
-        ok = np.ones(t.shape, dtype=bool)
-        per_node = {n: np.broadcast_to(v[owner][:, None], t.shape) for n, v in self.params.items()}
-        live = density > 0  # t = 0: weight 0, never evaluated
-        for step in np.unique(level[live]):
-            nodes = live & (level == step)
-            cells = T.compute_cells(self.model, theta[nodes], {n: v[nodes] for n, v in per_node.items()},
-                                    rtol=max(self.rtol / 4, min(self.rtol / 4 * T.NODE_RTOL_STEP**step,
-                                                                T.NODE_RTOL_MAX)), method=self.method)
-            value[nodes], error[nodes] = T._single_channel(cells.value, cells.error, self.model)
-            ok[nodes] = cells.converged
-            self.integrals += int(nodes.sum())
-        return density * value, density * error, ok.all(axis=1), np.abs(value).max(axis=1)
 
 
 #: Double-exponential levels: steps DE_FIRST_STEP / 2^k for k < DE_LEVELS, nodes |u| ≤ DE_RANGE.
@@ -80,26 +41,25 @@ DE_RANGE = 3.5
 DE_SKIP = 1e-4
 
 
-def _de_nodes(a, b, u):
-    """tanh-sinh nodes μ(u) on [a, b] (per segment rows, u (S, n)) and the density ρ = 2μ dμ/du, computed
-    from the nearer end (no cancellation next to either end)."""
+def _de_nodes(u):
+    """tanh-sinh nodes μ(u) on [0, 1] and the density ρ = 2μ dμ/du, computed from the nearer end (no cancellation
+    next to either end)."""
     s = 0.5 * np.pi * np.sinh(u)
     e = np.exp(-2.0 * np.abs(s))
-    gap = (b - a)[:, None] * e / (1.0 + e)  # distance from the nearer end
-    mu = np.where(u < 0, a[:, None] + gap, b[:, None] - gap)
-    dmu = (b - a)[:, None] * 0.25 * np.pi * np.cosh(u) * 4.0 * e / (1.0 + e) ** 2  # (π/4) cosh u / cosh² s
+    gap = e / (1.0 + e)  # distance from the nearer end
+    mu = np.where(u < 0, gap, 1.0 - gap)
+    dmu = 0.25 * np.pi * np.cosh(u) * 4.0 * e / (1.0 + e) ** 2  # (π/4) cosh u / cosh² s
     return mu, 2.0 * mu * dmu
 
 
-def _double_exponential(model, params, owner, a, b, rtol, method):
-    """tanh-sinh per segment, step halving (nested): (value, error, settled, albedos ok, max|E|, integrals).
+def _double_exponential(model, params, rtol, method):
+    """tanh-sinh per combination, step halving (nested): (value, error, settled, albedos ok, max|E|, integrals).
 
     The error of a level is |Q_h − Q_2h| (the coarser level's error, pessimistic for Q_h, which is kept) plus the
     albedo errors through the weights, plus 2·S_h + S_2h for the skipped nodes (S: their weights times the bound
     max(1, max|E|) on E — a single-scattering BSDF scatters at most what arrives), plus the tails beyond |u| =
-    DE_RANGE, bounded in closed form (below 1e-22 of the segment)."""
-    S = owner.size
-    flat = {n: np.asarray(v, dtype=float)[owner] for n, v in params.items()}
+    DE_RANGE, bounded in closed form (below 1e-22 of the integral's range)."""
+    S = len(next(iter(params.values())))
     value, error = np.zeros(S), np.full(S, np.inf)
     previous, previous_skip = np.full(S, np.nan), np.zeros(S)
     ok, largest = np.ones(S, dtype=bool), np.zeros(S)
@@ -112,25 +72,16 @@ def _double_exponential(model, params, owner, a, b, rtol, method):
         j = np.arange(-int(DE_RANGE / step), int(DE_RANGE / step) + 1)
         u = j * step if level == 0 else (j * step)[j % 2 == 1]
         rows = np.flatnonzero(open_)
-        mu, rho = _de_nodes(a[rows], b[rows], np.broadcast_to(u, (rows.size, u.size)))
+        mu, rho = _de_nodes(np.broadcast_to(u, (rows.size, u.size)))
         skip = rho * step < DE_SKIP * rtol
         live = ~skip & (rho > 0)
-        # Node albedo tolerances as in table._node_albedos, by the weight ρ·2·DE_RANGE (Σ h ρ ≈ the segment).
-        ratio = 1.0 / np.minimum(1.0, np.maximum(rho * 2.0 * DE_RANGE, 1e-300))
-        cap = np.log(T.NODE_RTOL_MAX / (rtol / 4)) / np.log(T.NODE_RTOL_STEP)
-        tier = np.clip(np.floor(np.log(ratio) / np.log(T.NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
         E, E_error = np.zeros(mu.shape), np.zeros(mu.shape)
         good = np.ones(mu.shape, dtype=bool)
-        theta = np.arccos(np.clip(np.maximum(mu, T.MU_FLOOR), 0.0, 1.0))
-        for t in np.unique(tier[live]):
-            nodes = live & (tier == t)
-            which = np.broadcast_to(rows[:, None], mu.shape)[nodes]
-            cells = T.compute_cells(model, theta[nodes], {n: v[which] for n, v in flat.items()},
-                                    rtol=max(rtol / 4, min(rtol / 4 * T.NODE_RTOL_STEP**t, T.NODE_RTOL_MAX)),
-                                    method=method)
-            E[nodes], E_error[nodes] = T._single_channel(cells.value, cells.error, model)
-            good[nodes] = cells.converged
-            integrals += int(nodes.sum())
+        # Node albedo tolerances by the weight ρ·2·DE_RANGE (Σ h ρ ≈ the integral's range).
+        which = np.broadcast_to(rows[:, None], mu.shape)[live]
+        E[live], E_error[live], good[live] = T._node_albedos(
+            model, mu[live], rho[live] * 2.0 * DE_RANGE, {n: v[which] for n, v in params.items()}, rtol, method)
+        integrals += int(live.sum())
         ok[rows] &= good.all(axis=1)
         largest[rows] = np.maximum(largest[rows], np.abs(E).max(axis=1))
         sums[rows] += (rho * E).sum(axis=1)
@@ -143,30 +94,41 @@ def _double_exponential(model, params, owner, a, b, rtol, method):
                            + previous_skip[rows])
             open_[rows] = error[rows] > rtol * np.abs(q)
         previous[rows], previous_skip[rows] = q, skipped
-    # Beyond |u| = DE_RANGE: μ within (b − a)·e^{−2s} of an end, s = (π/2) sinh(DE_RANGE) ≈ 26: ∫ 2μ E dμ there
-    # ≤ 2 (b − a) e^{−2s} max(1, max|E|).
-    tail = 2.0 * (b - a) * np.exp(-np.pi * np.sinh(DE_RANGE)) * np.maximum(1.0, largest)
+    # Beyond |u| = DE_RANGE: μ within e^{−2s} of an end, s = (π/2) sinh(DE_RANGE) ≈ 26: ∫ 2μ E dμ there
+    # ≤ 2 e^{−2s} max(1, max|E|).
+    tail = 2.0 * np.exp(-np.pi * np.sinh(DE_RANGE)) * np.maximum(1.0, largest)
     error = error + tail
     return value, error, ~open_, ok, largest, integrals
 
 
-def _adaptive(nodes: _Nodes, owner, a, b, maps, rtol):
-    """Globally adaptive G7/K15 in t per segment (as table._average_adaptive): (value, error, settled, ok, max|E|)."""
-    S = owner.size
+def _adaptive(model, params, rtol, method):
+    """Globally adaptive G7/K15 in t, μ = t⁴ (dμ 2μ = 8t⁷ dt: the grazing end graded), per combination (as
+    table._average_adaptive): (value, error, settled, ok, max|E|, integrals)."""
+    S = len(next(iter(params.values())))
     ok, largest = np.ones(S, dtype=bool), np.zeros(S)
+    integrals = 0
 
-    def evaluate(seg, left, width):
+    def evaluate(owner, left, width):
+        nonlocal integrals
         t = left[:, None] + 0.5 * width[:, None] * (T.KRONROD_NODES + 1.0)
-        g, g_error, ok_p, big = nodes(owner[seg], a[seg], b[seg], [maps[s] for s in seg], t)
-        ok[seg[~ok_p]] = False
-        np.maximum.at(largest, seg, big)
-        half = 0.5 * width
+        mu = t**4
+        density = 2.0 * mu * (4.0 * t**3)
+        E, E_error = np.zeros(t.shape), np.zeros(t.shape)
+        good = np.ones(t.shape, dtype=bool)
+        live = density > 0  # t = 0: weight 0, never evaluated
+        which = np.broadcast_to(owner[:, None], t.shape)[live]
+        E[live], E_error[live], good[live] = T._node_albedos(
+            model, mu[live], density[live], {n: v[which] for n, v in params.items()}, rtol, method)
+        integrals += int(live.sum())
+        ok[owner[~good.all(axis=1)]] = False
+        np.maximum.at(largest, owner, np.abs(E).max(axis=1))
+        g, g_error, half = density * E, density * E_error, 0.5 * width
         kronrod = half * (g @ T.KRONROD_WEIGHTS)
         difference = np.abs(kronrod - half * (g @ T.GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(T.KRONROD_WEIGHTS))
 
     total, total_error = adaptive_unit_interval(evaluate, S, rtol=rtol, max_panels=MAX_PANELS)
-    return total, total_error, total_error <= rtol * np.abs(total), ok, largest
+    return total, total_error, total_error <= rtol * np.abs(total), ok, largest, integrals
 
 
 def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto"
@@ -175,16 +137,15 @@ def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, meth
     computed), as :func:`brdfnorm.lut.table.average_over_mu` returns them."""
     M = len(next(iter(params.values())))
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
-    owner, a, b, maps = np.arange(M), np.zeros(M), np.ones(M), [(4, 1)] * M
-    value, error, settled, ok, largest, integrals = _double_exponential(model, flat, owner, a, b, rtol, method)
-    nodes = _Nodes(model, flat, rtol, method)
+    value, error, settled, ok, largest, integrals = _double_exponential(model, flat, rtol, method)
     rest = np.flatnonzero(~settled)
     if rest.size:
-        v, e, s, o, big = _adaptive(nodes, owner[rest], a[rest], b[rest], [maps[r] for r in rest], rtol)
+        v, e, s, o, big, n = _adaptive(model, {k: x[rest] for k, x in flat.items()}, rtol, method)
         value[rest], error[rest], settled[rest], ok[rest] = v, e, s, o
         largest[rest] = np.maximum(largest[rest], big)
+        integrals += n
     error = error + T.MU_FLOOR**2 * largest  # nodes below MU_FLOOR evaluated there
-    return value, error, settled & ok, integrals + nodes.integrals
+    return value, error, settled & ok, integrals
 
 
 def average_split(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto"

@@ -279,17 +279,19 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
             done, {name: part.reshape(shape) for name, part in parts.items()})
 
 
-def _node_albedos(model: Model, x: np.ndarray, node_params: Mapping[str, np.ndarray], rtol: float,
-                  method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """E at μ = max(x², MU_FLOOR) for E_avg's nodes x (N,) with per-node parameter values: (value, error, ok)."""
-    # A node's albedo enters through the weight 4x³ (≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, 4x³)),
-    # which keeps Σ weight·error ≤ (rtol/4)(E_avg + ∫₀¹ |E| dx) — rounded down to powers of NODE_RTOL_STEP
-    # so that the nodes go in a few batched calls (the grazing ones, the costliest albedos, are the loosest).
-    ratio = 1.0 / np.minimum(1.0, 4.0 * np.maximum(x, 1e-300) ** 3)
+def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params: Mapping[str, np.ndarray],
+                  rtol: float, method: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """E at max(μ, MU_FLOOR) for E_avg's nodes μ (N,) with per-node parameter values: (value, error, ok).
+
+    A node's albedo enters the integral through its ``weight`` (N,), the density of its rule's variable (4x³ in
+    x = √μ here; ≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, weight)), which keeps Σ weight·error ≤
+    (rtol/4)(E_avg + ∫ |E|) — rounded down to powers of NODE_RTOL_STEP so that the nodes go in a few batched calls
+    (the grazing ones, the costliest albedos, are the loosest)."""
+    ratio = 1.0 / np.minimum(1.0, np.maximum(weight, 1e-300))
     cap = np.log(NODE_RTOL_MAX / (rtol / 4)) / np.log(NODE_RTOL_STEP)
     level = np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
-    theta = np.arccos(np.maximum(x * x, MU_FLOOR))
-    value, error, converged = np.empty(x.size), np.empty(x.size), np.empty(x.size, dtype=bool)
+    theta = np.arccos(np.clip(np.maximum(mu, MU_FLOOR), 0.0, 1.0))
+    value, error, converged = np.empty(mu.size), np.empty(mu.size), np.empty(mu.size, dtype=bool)
     for step in np.unique(level):
         nodes = np.flatnonzero(level == step)
         cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()},
@@ -338,8 +340,9 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     def fill(rows: np.ndarray, columns: np.ndarray, nodes: np.ndarray) -> None:
         nonlocal integrals
         owner = np.repeat(rows, columns.size)
-        value, error, ok = _node_albedos(model, np.tile(nodes[columns], rows.size),
-                                         {k: v[owner] for k, v in flat.items()}, rtol, method)
+        x = np.tile(nodes[columns], rows.size)
+        value, error, ok = _node_albedos(model, x * x, 4.0 * x**3, {k: v[owner] for k, v in flat.items()}, rtol,
+                                         method)
         values[np.ix_(rows, columns)] = value.reshape(rows.size, columns.size)
         errors[np.ix_(rows, columns)] = error.reshape(rows.size, columns.size)
         albedo_ok[rows[~ok.reshape(rows.size, columns.size).all(axis=1)]] = False
@@ -398,7 +401,8 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
         mu = np.maximum(x * x, MU_FLOOR)
         node_params = {n: np.repeat(v[owner], 15) for n, v in flat.items()}
-        value, error, converged = _node_albedos(model, x.ravel(), node_params, rtol, method)
+        value, error, converged = _node_albedos(model, (x * x).ravel(), (4.0 * x**3).ravel(), node_params, rtol,
+                                                method)
         integrals += mu.size
         albedo_converged[owner[~converged.reshape(-1, 15).all(axis=1)]] = False
         np.maximum.at(largest_e, owner, np.abs(value).reshape(-1, 15).max(axis=1))
