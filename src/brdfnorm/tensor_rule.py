@@ -338,9 +338,8 @@ def _heavy_tailed(grid: np.ndarray, level_u: int) -> np.ndarray:
     c = ±iα/√(1 − α²)), a boundary layer the quadratic grading resolves only algebraically in u (examples/ggx.brdf,
     roughness 0.107, θ_o = 60°, rtol 1e-9: the u estimate fell 1e-2, 1e-4, 2e-6, 4e-8 over four doublings, and the
     case went to the panels, 55 248 evaluations; cubic: 2e-2, 4e-5, 2e-7, 6e-10, settled at 16 952 with β doubled
-    once more). Gaussian-like
-    lobes have no such layer and lose by it (Blinn-Phong n = 512, 90 views, rtol 1e-9: 9 464 evaluations per
-    albedo with p = 2, 14 600 with p = 3), hence only for heavy tails."""
+    once more). Gaussian-like lobes have no such layer and lose by it (Blinn-Phong n = 512, 90 views, rtol 1e-9:
+    9 464 evaluations per albedo with p = 2, 14 600 with p = 3), hence only for heavy tails."""
     u, w = fejer(level_u)
     with np.errstate(invalid="ignore"):
         radial = np.abs(np.nan_to_num(grid, nan=0.0, posinf=0.0, neginf=0.0)).sum(axis=(1, 3)) * w  # (n, N − 1)
