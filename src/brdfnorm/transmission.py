@@ -141,17 +141,30 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         d = a  # |d| for an isotropic distribution
         s_lo = np.tan(b_lo) / d
         s_hi = np.where(b_hi >= np.pi / 2, _S_CAP, np.minimum(np.tan(b_hi) / d, _S_CAP))
-        # The last part: the band next to s_hi where |L_z| < LAYER·α (linearized through the slope of L_z).
-        step = 1e-6 * (s_hi - s_lo)
+        # The last part: the band next to s_hi where |L_z| < LAYER·α, its width Δ linearized through the slope of
+        # L_z (a difference over a thousandth of the ray: over less, L_z cancels to rounding noise next to the
+        # horizon and the split jitters from azimuth to azimuth). The split is a smooth function of Δ and of the
+        # ray's span that never passes the ray's middle, so that s_lo is never in the last part: where the layer
+        # covers the whole ray (α ≳ V_z), the first parts collapsed and left the square-root onset of 1 − F at s_lo
+        # ungraded in the last one, and the cubature converged to a value 5e-6 off with an estimate of 4e-10
+        # (η = 1/1.1, α = 1, μ = 1/15); where the ray is cut at S_CAP (L_z has no root there: it tends to −V_z/η),
+        # the band covered the whole ray and its nodes, graded towards s = 1e16, missed all of T at V_z ≲ 2e-7.
+        # The pole part ends before s = 1 (atan s resolves s ≫ 1 only to ~1e-16·s², too coarse for a window that
+        # opens far out) and is empty where the window opens beyond it; the tail part is graded at its start.
+        span = s_hi - s_lo
+        step = 1e-3 * span
         z_end = _scattered_z(part, vx * np.cos(phi) + vy * np.sin(phi), vz, e, np.arctan((s_hi - step) * d))
-        slope = np.maximum(np.abs(z_end) / np.maximum(step, 1e-300), 1e-300)
-        s_split = np.clip(s_hi - _LAYER * a / slope, s_lo, s_hi)
-        s_middle = np.clip(s_split / (1.0 + s_split), s_lo, s_split)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            layer = _LAYER * a * step / np.abs(z_end)
+            s_split = np.where(layer < np.inf, s_hi - layer / (1.0 + 2.0 * layer / span), s_lo + 0.5 * span)
+            s_split = np.where(span > 0, s_split, s_hi)
+            s_middle = np.clip(s_split / (1.0 + s_split), s_lo, s_split)
         # Beckmann's truncation (its dropped mass is bounded below); GGX has none.
         s_lo, s_middle, s_split, s_hi = (distribution.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
         local = v - piece[:, None, None]
-        # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle) and towards s_hi
-        # in the last part (the boundary layer and the square root alike). Each part on its own panels only.
+        # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle), towards the start
+        # of the second (which is s_lo where the first is empty) and towards s_hi in the last part (the boundary
+        # layer and the square root alike). Each part on its own panels only.
         shape = np.broadcast_shapes(local.shape, s_lo.shape)
         s, density, length = np.empty(shape), np.empty(shape), np.empty(shape)
         for kind in range(3):
@@ -166,8 +179,8 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
             elif kind == 1:
                 t_start = distribution.tail_coordinate(s_middle[rows])
                 t_stop = distribution.tail_coordinate(s_split[rows])
-                s[rows], density[rows] = distribution.tail(t_start + at * (t_stop - t_start))
-                length[rows] = t_stop - t_start
+                s[rows], density[rows] = distribution.tail(t_start + at * at * (t_stop - t_start))
+                length[rows] = (t_stop - t_start) * (2.0 * at)
             else:
                 near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
                 s[rows], density[rows] = near, distribution.slope_density(near)
