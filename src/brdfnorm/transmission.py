@@ -40,6 +40,8 @@ _SAMPLES = 17
 _BISECTIONS = 48
 #: The last part of a ray spans the band where Λ(L) turns on: |L_z| ≲ LAYER·α.
 _LAYER = 4.0
+#: Views with V_z/|V_xy| below this get azimuth panels graded towards φ_V + π/2 (:func:`_azimuth_edges`).
+_GRAZING = 0.05
 #: Panels per integrand call: more than the reflection's, as the ray search per azimuth node is a loop of small
 #: array operations whose per-call overhead wants amortizing.
 _PANELS_PER_CHUNK = 512
@@ -216,8 +218,15 @@ def _azimuth_edges(V: np.ndarray, eta: float) -> np.ndarray:
     onset — on a panel edge, never inside one, where the cubature's nodes could step over it."""
     phi_v = np.arctan2(V[1], V[0])
     edges = [phi_v + np.linspace(0.0, np.pi, 5)]
-    critical2 = max(1.0 - eta * eta, 0.0)
+    # At grazing views the facet angle β₀ = atan2(V·d̂, V_z) of the best-lit facets swings from +π/2 to −π/2 within
+    # δ = V_z/|V_xy| of the azimuth φ_V + π/2 (where V·d̂ = 0), and every window end with it: panels graded
+    # geometrically towards that azimuth, from δ/4 out, so that no panel's nodes straddle the swing.
     vxy = np.hypot(V[0], V[1])
+    if V[2] < _GRAZING * vxy:
+        first = V[2] / vxy / 4.0
+        offsets = first * 4.0 ** np.arange(int(np.ceil(np.log(np.pi / 4 / first) / np.log(4.0))))
+        edges.append(phi_v + np.pi / 2 + np.concatenate([-offsets, offsets]))
+    critical2 = max(1.0 - eta * eta, 0.0)
     if critical2 > V[2] ** 2 and vxy > 0:
         ratio = np.sqrt(critical2 - V[2] ** 2) / vxy
         if ratio <= 1.0:
