@@ -268,7 +268,8 @@ def integrate_hemisphere(
                              max_nodes_per_call=max_nodes_per_call)
     evaluations += tried.evaluations
     remaining = np.flatnonzero(~tried.settled)
-    panels = _initial_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining])
+    panels = _initial_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
+                             frame[0][remaining, 2], widths[remaining], supports[remaining])
     history = []  # total error estimate per case and round (for the stall check)
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
@@ -372,34 +373,63 @@ def integrate_hemisphere(
     return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
 
 
-#: Initial u-edges below the first regular one are graded towards the pole by this factor (:func:`_initial_panels`).
+#: Initial edges next to the pole and to β = ±π/2 are graded by this factor (:func:`_initial_panels`).
 NECK_GRADING = 4.0
 
 
-def _initial_panels(cases: np.ndarray, edges_b: np.ndarray, edges_u: np.ndarray, u_neck: np.ndarray) -> _Panels:
-    """The starting panels of ``cases``: the tensor grid of ``edges_b`` × ``edges_u``, with the first u-panel cut
-    further at u_neck·4^k (k = 0, 1, … below a quarter of the first regular edge) where a case's lobe has a neck
-    (:func:`brdfnorm.tensor_rule.neck_u`: the lobe of a peak c_P above the horizon covers every azimuth within
-    c_P·w of it). Without these cuts no node of the first panel, nor of its halves in the confirmation, lies
-    inside the neck, and panels away from β = 0, π report ~0 there with a ~0 error (Beckmann α = 0.0176 at
-    μ = 1.26e-4: 1.3e-6 missed, the estimate 5.4e-10). With them the rules see the neck and bisect it."""
-    first = edges_u[1] / NECK_GRADING
-    ladder = u_neck[:, None] * NECK_GRADING ** np.arange(64)  # (R, 64): far past u = 1 for any u_neck ≥ 1e-38
-    extra = ladder < first
+def _ladder(start: np.ndarray, stop: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per case (R,), the rungs start·4^k below ``stop`` (R, 64) and which of them are kept."""
+    rungs = start[:, None] * NECK_GRADING ** np.arange(64)  # far past any stop for start ≥ 1e-38
+    return rungs, rungs < stop
+
+
+def _initial_panels(cases: np.ndarray, edges_b: np.ndarray, edges_u: np.ndarray, u_neck: np.ndarray,
+                    height: np.ndarray, widths: np.ndarray, supports: np.ndarray) -> _Panels:
+    """The starting panels of ``cases``: the tensor grid of ``edges_b`` × ``edges_u``, cut further where the peak
+    lies a height c_P = ``height`` ≪ 1 above the horizon, at two scales of c_P the plain grid's nodes do not see.
+
+    * In u, at u_neck·4^k (k = 0, 1, … up to a quarter of the first regular edge): the lobe's neck
+      (:func:`brdfnorm.tensor_rule.neck_u`: the lobe of a half-vector BRDF covers every azimuth within c_P·w of
+      its peak). Without these cuts no node of the first panel, nor of its halves in the confirmation, lies in
+      the neck, and panels away from β = 0, π report ~0 there with a ~0 error (Beckmann α = 0.0176 at
+      μ = 1.26e-4: 1.3e-6 missed, the estimate 5.4e-10).
+    * In β, at π/2 + c_P·4^k and 3π/2 − c_P·4^k (k = 0, 1, … up to a quarter of a regular panel): the horizon
+      passes c_P below the peak, so at a distance α from it the directions less than c_P above the horizon lie
+      within β − π/2 ≈ c_P/α of ±π/2 (α_h(β) falls from π/2 to c_P there). A heavy tail (GGX) holds mass all
+      along that band, in a sliver of β the nodes of a panel [π/2, π] (the nearest 6.7e-3 from π/2) miss
+      (GGX α = 0.27 at μ = 1e-5: 2.2e-7 missed, the estimate 9e-8)."""
+    u_rungs, u_kept = _ladder(u_neck, edges_u[1] / NECK_GRADING)
+    n_extra = u_kept.sum(axis=1)
+    regular_b = np.union1d(edges_b, [np.pi / 2, 3 * np.pi / 2])
+    stop_b = (edges_b[1] - edges_b[0]) / NECK_GRADING
     parts = []
-    for count in np.unique(extra.sum(axis=1)):
-        pick = extra.sum(axis=1) == count
-        lower = np.concatenate([np.zeros((pick.sum(), 1)), ladder[pick, :count],
-                                np.broadcast_to(edges_u[1:-1], (pick.sum(), edges_u.size - 2))], axis=1)
-        upper = np.concatenate([lower[:, 1:], np.ones((pick.sum(), 1))], axis=1)  # (r, nu + count)
-        n_b, n_u = edges_b.size - 1, upper.shape[1]
-        parts.append(_Panels(
-            np.repeat(cases[pick], n_b * n_u),
-            np.tile(np.repeat(edges_b[:-1], n_u), pick.sum()), np.tile(np.repeat(edges_b[1:], n_u), pick.sum()),
-            np.repeat(lower[:, None, :], n_b, axis=1).ravel(), np.repeat(upper[:, None, :], n_b, axis=1).ravel()))
+    for count in np.unique(n_extra):
+        pick = n_extra == count
+        r = pick.sum()
+        u = np.concatenate([np.zeros((r, 1)), u_rungs[pick, :count],
+                            np.broadcast_to(edges_u[1:], (r, edges_u.size - 1))], axis=1)
+        for j in range(u.shape[1] - 1):
+            start = _band_start(height[pick], u[:, j + 1], widths[pick], supports[pick])
+            b_rungs, b_kept = _ladder(start, stop_b)
+            b_count = b_kept.sum(axis=1)
+            for n_b_extra in np.unique(b_count):
+                sub = b_count == n_b_extra
+                steps = b_rungs[sub, :n_b_extra]
+                beta = np.sort(np.concatenate([np.broadcast_to(regular_b, (sub.sum(), regular_b.size)),
+                                               np.pi / 2 + steps, np.pi / 2 - steps, 1.5 * np.pi + steps,
+                                               1.5 * np.pi - steps], axis=1), axis=1)
+                n_b = beta.shape[1] - 1
+                parts.append(_Panels(np.repeat(cases[pick][sub], n_b), beta[:, :-1].ravel(), beta[:, 1:].ravel(),
+                                     np.repeat(u[sub, j], n_b), np.repeat(u[sub, j + 1], n_b)))
     if not parts:
         return _Panels(cases[:0], *(np.zeros(0) for _ in range(4)))
-    return _Panels(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Panels.FIELDS[:5]))
+    joined = _Panels(*(np.concatenate([getattr(p, f) for p in parts]) for f in _Panels.FIELDS[:5]))
+    return joined.take(np.argsort(joined.case, kind="stable"))
+
+
+def _band_start(height, u_top, widths, supports):
+    """The first β step of a row of panels reaching up to ``u_top`` (:func:`_initial_panels`)."""
+    return height
 
 
 def _case_errors(pool: _Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):
