@@ -30,18 +30,19 @@ and the domain a rectangle, after which adaptive Gauss-Kronrod cubature converge
 On the rectangle (β, u) ∈ [0, 2π] × [0, 1] each case is first integrated by one global tensor rule with degree
 doubling (:mod:`brdfnorm.tensor_rule`: periodic trapezoid in β × Fejér in u), which settles smooth lobes at low
 and middle angles in a few thousand evaluations. The cases it does not settle — and those whose rounding noise
-matters — are integrated by adaptive panels: a tensor-product Gauss-Kronrod rule (QUADPACK's G7/K15 pair,
-225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded lower-order estimates (G7 in β or in u);
-their differences are the panel's error estimate in each direction. This is the plain |K − G| estimate of
-the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the error of the reported K15 ⊗ K15
-value with a wide margin, which is what "honest" means here (the tests check estimate ≥ true error on random
-cases). Both embedded rules can still agree on a feature that lies between all their nodes (the sliver a
-Blinn-Phong lobe becomes at grazing views, 2 cos θ_o/√n wide sideways). So when a case first meets its
-tolerance, each of its panels is recomputed as two halves with the G7 ⊗ G7 rule — new nodes, a quarter of
-the cost of K15 halves — and the difference joins the panel's error before the case may stop. Panels are
-bisected along their worse direction, largest errors first, until the summed estimate is
-below max(atol, rtol·|E|) for every case and channel, or the evaluation budget runs out (then
-``converged`` is False and the estimate still says how far off the value may be).
+matters — are integrated by adaptive panels (starting from a grid cut further at two scales of a grazing peak's
+height above the horizon, where no node of the plain grid looks: :func:`_initial_panels`): a tensor-product
+Gauss-Kronrod rule (QUADPACK's G7/K15 pair, 225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded
+lower-order estimates (G7 in β or in u); their differences are the panel's error estimate in each direction.
+This is the plain |K − G| estimate of the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the
+error of the reported K15 ⊗ K15 value with a wide margin, which is what "honest" means here (the tests check
+estimate ≥ true error on random cases). Both embedded rules can still agree on a feature that lies between all
+their nodes (the sliver a Blinn-Phong lobe becomes at grazing views, 2 cos θ_o/√n wide sideways). So when a case
+first meets its tolerance, each of its panels is recomputed as two halves with the G7 ⊗ G7 rule — new nodes, a
+quarter of the cost of K15 halves — and the difference joins the panel's error before the case may stop. Panels
+are bisected along their worse direction, largest errors first, until the summed estimate is below max(atol,
+rtol·|E|) for every case and channel, or the evaluation budget runs out (then ``converged`` is False and the
+estimate still says how far off the value may be).
 
 At float64's limit the integrand itself is noise: a lobe written with a cosine near 1 (cos^n, (N·H)^n,
 1 − (N·H)²) sees that cosine only to within ε, which at n = 1e16 or GGX α = 1e-8 is a staircase as wide as

@@ -45,7 +45,9 @@ exceeds half the tolerance (the larger one where neither does) are doubled — o
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
 (:func:`_stalled`). A case goes to the adaptive panels of
 :mod:`brdfnorm.integrate` when it would need more than :data:`MAX_NODES` nodes — predicted early, from the last
-doubling's reduction, assuming each doubling squares it (geometric convergence) — when its integrand is not finite
+doubling's reduction, assuming each doubling squares it (geometric convergence), or from the radial level its
+lobe's neck needs at a grazing view (:func:`neck_u`: no case settles before its coarsest embedded rule has a node
+inside the neck) — when its integrand is not finite
 at a node, or when its rounding noise is a visible share of its tolerance. The panels are thus paid for only where
 needed: narrow lobes near the horizon (Blinn-Phong n = 512 beyond θ_o ≈ 84°), kinks at a support edge, float64's
 limit.
@@ -102,8 +104,9 @@ def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
     misses the neck, and the embedded rules agree on the miss (Beckmann α = 0.0176 at μ = 1.26e-4: panels
     β ∈ [π/8, π/4] × u ∈ [0, 1/4] gave 1e-27 against 4.4e-7; the albedo settled 1.3e-6 off with an estimate
     of 5.4e-10, the global rule's Fejér nodes as blind at μ ≲ 1e-6 for GGX). The rules below put nodes inside
-    it: the global rule by a minimum radial level (:func:`_neck_levels`), the panels by initial edges graded
-    towards the pole (:func:`brdfnorm.integrate.integrate_hemisphere`)."""
+    it: the global rule by a minimum radial level (:func:`_neck_levels`; without it, broad Beckmann lobes at
+    μ ≈ 1e-6…1e-4 settled up to 4.6 times outside their estimates on a random sweep), the panels by initial
+    edges graded towards the pole (:func:`brdfnorm.integrate._initial_panels`)."""
     P = frame[0]
     pz = np.maximum(P[:, 2], 0.0)
     w = widths * width_scale
