@@ -45,7 +45,9 @@ exceeds half the tolerance (the larger one where neither does) are doubled — o
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
 (:func:`_stalled`). A case goes to the adaptive panels of
 :mod:`brdfnorm.integrate` when it would need more than :data:`MAX_NODES` nodes — predicted early, from the last
-doubling's reduction, assuming each doubling squares it (geometric convergence) — when its integrand is not finite
+doubling's reduction, assuming each doubling squares it (geometric convergence), or from the radial level its
+lobe's neck needs at a grazing view (:func:`neck_u`: no case settles before its coarsest embedded rule has a node
+inside the neck) — when its integrand is not finite
 at a node, or when its rounding noise is a visible share of its tolerance. The panels are thus paid for only where
 needed: narrow lobes near the horizon (Blinn-Phong n = 512 beyond θ_o ≈ 84°), kinks at a support edge, float64's
 limit.
@@ -87,6 +89,41 @@ SAFETY = 9.0
 STALL = 0.5
 #: Rounding floor per node sum, as QUADPACK's on |K − G|.
 _FLOOR = 50.0 * _EPS
+
+
+def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
+    """Per case, the u below which the radial map (:func:`map_grid`) at β = ±π/2, with the width ``widths`` ×
+    ``width_scale`` and horizon grading exponent ``grading``, covers the lobe's *neck*: the radius c_P·w about a
+    peak c_P above the horizon.
+
+    Why: a half-vector lobe is an ellipse about its peak only while c_P ≫ w. A tilt δ of H moves L by 2(V·H)δ
+    across the plane of incidence (L = 2(V·H)H − V), and at grazing views V·H runs from ≈ c_P at the peak to
+    ≈ w at the lobe's far end, so the lobe is a fan: a wedge about β = 0 whose half-width in β is about
+    w/2 + c_P·w/α (α the angle from the peak), which covers every azimuth within α ≲ c_P·w of the peak. The
+    radial map spends its nodes on the scale w; at u ≲ c_P/3 every node of a rule with too few radial nodes
+    misses the neck, and the embedded rules agree on the miss (Beckmann α = 0.0176 at μ = 1.26e-4: panels
+    β ∈ [π/8, π/4] × u ∈ [0, 1/4] gave 1e-27 against 4.4e-7; the albedo settled 1.3e-6 off with an estimate
+    of 5.4e-10, the global rule's Fejér nodes as blind at μ ≲ 1e-6 for GGX). The rules below put nodes inside
+    it: the global rule by a minimum radial level (:func:`_neck_levels`; without it, broad Beckmann lobes at
+    μ ≈ 1e-6…1e-4 settled up to 4.6 times outside their estimates on a random sweep), the panels by initial
+    edges graded towards the pole (:func:`brdfnorm.integrate._initial_panels`)."""
+    P = frame[0]
+    pz = np.maximum(P[:, 2], 0.0)
+    w = widths * width_scale
+    alpha_max = np.minimum(np.pi / 2, supports)
+    A = np.arctan(alpha_max / w)
+    v = np.clip(np.arctan(pz * widths / w) / A, 0.0, 1.0)
+    # u = 1 − (1 − v)^(1/p), accurate for tiny v.
+    return -np.expm1(np.log1p(-np.minimum(v, 1.0 - _EPS)) / grading)
+
+
+def _neck_levels(u_neck: np.ndarray) -> np.ndarray:
+    """The smallest radial level whose coarsest embedded rule (two levels down, :func:`_sums`) has its first node
+    (1 − cos(π/2^l))/2 = sin²(π/2^(l+1)) at or below ``u_neck``: only then do the rules whose deviations make the
+    estimate see the neck (:func:`neck_u`)."""
+    with np.errstate(divide="ignore"):
+        inner = np.ceil(np.log2(np.pi / np.arcsin(np.sqrt(np.clip(u_neck, 0.0, 1.0))))) - 1.0
+    return np.clip(np.nan_to_num(inner, posinf=99.0) + 2.0, START_LEVELS[1], 99).astype(int)
 
 
 def map_grid(case, beta, u, weight, frame, widths, supports, width_scale=1.0, grading=None):
@@ -219,6 +256,8 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
     settled = np.zeros(K, dtype=bool)
     # Batches of cases whose grids, at most max_nodes each, fit in BATCH_NODES values (bounded memory).
     batch = max(1, BATCH_NODES // max(max_nodes, START_NODES))
+    # Cases whose neck (neck_u) no grid within max_nodes reaches, even on the start map, go to the panels untried.
+    cases = cases[_fits(_neck_levels(neck_u(frame, widths, supports, lam, grading)[cases]), max_nodes)]
     for start in range(0, cases.size, batch):
         part = cases[start:start + batch]
         value, error = _integrate_batch(integrand, frame, widths, supports, (lam, grading), part, noise_amplitude,
@@ -248,6 +287,9 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
         grid[weaker] = _evaluate(integrand, frame, widths, supports, maps, cases[weaker], _azimuths(level_b),
                                  fejer(level_u)[0], max_nodes_per_call)
         evaluations[cases[weaker]] += grid.shape[1] * grid.shape[2]
+    # The radial level each case needs before it may settle (neck_u), on its final map.
+    min_level_u = np.zeros(K, dtype=int)
+    min_level_u[cases] = _neck_levels(neck_u(frame, widths, supports, lam, grading)[cases])
     groups = [_Group(cases, level_b, level_u, grid, np.full(cases.size, np.inf), np.full(cases.size, np.inf))]
     while groups:
         refined: dict[tuple[int, int], list[_Group]] = {}
@@ -264,7 +306,8 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             tolerance = np.maximum(atol, rtol * np.abs(q))
             estimate = e_b + e_u + floor + noise
             earlier = np.full((q.shape[0], 3, q.shape[1]), np.nan) if group.earlier is None else group.earlier
-            within = np.all(estimate <= tolerance, axis=1) & finite & ~_stalled(q, earlier)
+            short = group.level_u < min_level_u[group.case]  # the neck lies below the coarse rules' nodes
+            within = np.all(estimate <= tolerance, axis=1) & finite & ~_stalled(q, earlier) & ~short
             group.earlier = np.concatenate([q[:, None], earlier[:, :2]], axis=1)
             done = within
             value[group.case[done]] = q[done]
@@ -275,7 +318,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             share = np.maximum(tolerance - floor - noise, 0.0) / 2
             more_b = np.any(e_b > share, axis=1)
             more_u = np.any(e_u > share, axis=1)
-            neither = ~(more_b | more_u)
+            neither = ~(more_b | more_u | short)
             larger_b = np.any(e_b >= e_u, axis=1)
             more_b |= neither & larger_b
             more_u |= neither & ~larger_b
@@ -289,13 +332,14 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             both = more_b & more_u
             lone_b = both & (ratio_u < 2.0) & (ratio_b >= ratio_u)
             lone_u = both & (ratio_b < 2.0) & ~lone_b
-            more_u &= ~lone_b
+            more_u = (more_u & ~lone_b) | short
             more_b &= ~lone_u
             size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
             # Give up early where geometric convergence, extrapolated from the last doubling, would not settle
             # the case within max_nodes (a kink, a feature the coordinates do not follow): the panels will.
             needed_b = np.where(lone_u, 0, _doublings(ratio_b, group.last_b))
-            needed_u = np.where(lone_b, 0, _doublings(ratio_u, group.last_u))
+            needed_u = np.maximum(np.where(lone_b & ~short, 0, _doublings(ratio_u, group.last_u)),
+                                  min_level_u[group.case] - group.level_u)
             hopeless = ((needed_b + group.level_b) > MAX_LEVEL_B) | (
                 2 ** (group.level_b + needed_b) * (2 ** (group.level_u + needed_u) - 1) > max_nodes)
             go_on = finite & ~done & (size <= max_nodes) & ~hopeless
@@ -345,6 +389,11 @@ def _heavy_tailed(grid: np.ndarray, level_u: int) -> np.ndarray:
         radial = np.abs(np.nan_to_num(grid, nan=0.0, posinf=0.0, neginf=0.0)).sum(axis=(1, 3)) * w  # (n, N − 1)
         total = radial.sum(axis=1)
         return radial[:, u >= 0.5].sum(axis=1) > HEAVY_TAIL_SHARE * total
+
+
+def _fits(level_u: np.ndarray, max_nodes: int) -> np.ndarray:
+    """Whether a grid of the start's azimuths and radial level ``level_u`` fits in ``max_nodes``."""
+    return 2 ** START_LEVELS[0] * (2.0 ** np.minimum(level_u, 60) - 1) <= max_nodes
 
 
 def _stalled(q: np.ndarray, earlier: np.ndarray) -> np.ndarray:
