@@ -106,7 +106,7 @@ def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
     of 5.4e-10, the global rule's Fejér nodes as blind at μ ≲ 1e-6 for GGX). The rules below put nodes inside
     it: the global rule by a minimum radial level (:func:`_neck_levels`; without it, broad Beckmann lobes at
     μ ≈ 1e-6…1e-4 settled up to 4.6 times outside their estimates on a random sweep), the panels by initial
-    edges graded towards the pole (:func:`brdfnorm.integrate._initial_panels`)."""
+    edges graded towards the pole (:func:`brdfnorm.grazing_panels.starting_panels`)."""
     P = frame[0]
     pz = np.maximum(P[:, 2], 0.0)
     w = widths * width_scale
