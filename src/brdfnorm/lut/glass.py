@@ -27,7 +27,6 @@ import numpy as np
 
 from ..models.base import Model
 from . import table as T
-from .adaptive import adaptive_unit_interval
 
 #: G7/K15 panels a combination's fallback may split into before it gives up.
 MAX_PANELS = 200
@@ -102,32 +101,12 @@ def _double_exponential(model, params, rtol, method):
 
 
 def _adaptive(model, params, rtol, method):
-    """Globally adaptive G7/K15 in t, μ = t⁴ (dμ 2μ = 8t⁷ dt: the grazing end graded), per combination (as
-    table._average_adaptive): (value, error, settled, ok, max|E|, integrals)."""
+    """Globally adaptive G7/K15 in t, μ = t⁴ (dμ 2μ = 8t⁷ dt: the grazing end graded), per combination
+    (:func:`brdfnorm.lut.table.kronrod_in_mu`): (value, error, settled, ok, max|E|, integrals)."""
     S = len(next(iter(params.values())))
-    ok, largest = np.ones(S, dtype=bool), np.zeros(S)
-    integrals = 0
-
-    def evaluate(owner, left, width):
-        nonlocal integrals
-        t = left[:, None] + 0.5 * width[:, None] * (T.KRONROD_NODES + 1.0)
-        mu = t**4
-        density = 2.0 * mu * (4.0 * t**3)
-        E, E_error = np.zeros(t.shape), np.zeros(t.shape)
-        good = np.ones(t.shape, dtype=bool)
-        live = density > 0  # t = 0: weight 0, never evaluated
-        which = np.broadcast_to(owner[:, None], t.shape)[live]
-        E[live], E_error[live], good[live] = T._node_albedos(
-            model, mu[live], density[live], {n: v[which] for n, v in params.items()}, rtol, method)
-        integrals += int(live.sum())
-        ok[owner[~good.all(axis=1)]] = False
-        np.maximum.at(largest, owner, np.abs(E).max(axis=1))
-        g, g_error, half = density * E, density * E_error, 0.5 * width
-        kronrod = half * (g @ T.KRONROD_WEIGHTS)
-        difference = np.abs(kronrod - half * (g @ T.GAUSS_WEIGHTS))
-        return kronrod, difference + half * (g_error @ np.abs(T.KRONROD_WEIGHTS))
-
-    total, total_error = adaptive_unit_interval(evaluate, S, rtol=rtol, max_panels=MAX_PANELS)
+    total, total_error, ok, largest, integrals = T.kronrod_in_mu(
+        model, params, S, lambda t: (t**4, 2.0 * t**4 * (4.0 * t**3)), rtol=rtol, method=method,
+        max_panels=MAX_PANELS)
     return total, total_error, total_error <= rtol * np.abs(total), ok, largest, integrals
 
 
