@@ -12,8 +12,9 @@ NECK_GRADING = 4.0
 BAND_GRADING = 8.0
 
 
-def _ladder(start: np.ndarray, stop: float, factor: float = NECK_GRADING) -> tuple[np.ndarray, np.ndarray]:
-    """Per case (R,), the rungs start·factor^k below ``stop`` (R, 64) and which of them are kept."""
+def ladder(start: np.ndarray, stop: float, factor: float = NECK_GRADING) -> tuple[np.ndarray, np.ndarray]:
+    """Per case (R,), the rungs start·factor^k (R, 64) and which of them lie below ``stop``: geometrically graded
+    panel edges (also :func:`brdfnorm.transmission._azimuth_edges`)."""
     rungs = start[:, None] * factor ** np.arange(64)  # far past any stop for start ≥ 1e-38
     return rungs, rungs < stop
 
@@ -41,7 +42,7 @@ def starting_panels(cases: np.ndarray, edges_b: np.ndarray, edges_u: np.ndarray,
       with steps of 4, 107 000; of 8 (:data:`BAND_GRADING`), 96 500; of 16, 92 500 — all with no estimate below
       its error. Restricting the ladder to the tails the global rule's start grid calls heavy left narrow GGX
       lobes, α ≈ 0.003–0.03 at μ ≈ 1e-5 and rtol 1e-9, up to 26 times outside their estimates.)"""
-    u_rungs, u_kept = _ladder(u_neck, edges_u[1] / NECK_GRADING)
+    u_rungs, u_kept = ladder(u_neck, edges_u[1] / NECK_GRADING)
     n_extra = u_kept.sum(axis=1)
     regular_b = np.union1d(edges_b, [np.pi / 2, 3 * np.pi / 2])
     stop_b = (edges_b[1] - edges_b[0]) / NECK_GRADING
@@ -53,7 +54,7 @@ def starting_panels(cases: np.ndarray, edges_b: np.ndarray, edges_u: np.ndarray,
                             np.broadcast_to(edges_u[1:], (r, edges_u.size - 1))], axis=1)
         for j in range(u.shape[1] - 1):
             start = _band_start(height[pick], u[:, j + 1], widths[pick], supports[pick])
-            b_rungs, b_kept = _ladder(start, stop_b, BAND_GRADING)
+            b_rungs, b_kept = ladder(start, stop_b, BAND_GRADING)
             b_count = b_kept.sum(axis=1)
             for n_b_extra in np.unique(b_count):
                 sub = b_count == n_b_extra

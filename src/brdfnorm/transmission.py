@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .azimuthal import white_albedo
+from .grazing_panels import ladder
 from .halfvector import CubatureResult, _Panels, adaptive_rectangles
 from .models.dielectric import MicrofacetDielectric, refraction_shadowing
 from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
@@ -223,8 +224,8 @@ def _azimuth_edges(V: np.ndarray, eta: float) -> np.ndarray:
     # geometrically towards that azimuth, from δ/4 out, so that no panel's nodes straddle the swing.
     vxy = np.hypot(V[0], V[1])
     if V[2] < _GRAZING * vxy:
-        first = V[2] / vxy / 4.0
-        offsets = first * 4.0 ** np.arange(int(np.ceil(np.log(np.pi / 4 / first) / np.log(4.0))))
+        rungs, kept = ladder(np.array([V[2] / vxy / 4.0]), np.pi / 4, 4.0)
+        offsets = rungs[kept]
         edges.append(phi_v + np.pi / 2 + np.concatenate([-offsets, offsets]))
     critical2 = max(1.0 - eta * eta, 0.0)
     if critical2 > V[2] ** 2 and vxy > 0:
