@@ -249,7 +249,7 @@ def _geometry(distribution: Distribution, fixed: np.ndarray, params: Mapping[str
     colours = {"fresnel": params["fresnel"]}
     for name in ("f0", "f90", "eta", "k"):
         value = np.asarray(params[name], dtype=float)
-        colours[name] = value if value.ndim <= 1 else np.broadcast_to(value, (K, 3))
+        colours[name] = value if value.ndim <= 1 else np.broadcast_to(value, (K, value.shape[-1]))  # (K, 3) or (K, 1)
     return _Geometry(distribution, params["shadowing"], fixed, ax, ay, lambda_v, colours)
 
 
