@@ -1,12 +1,12 @@
 """Albedo of rough dielectrics (:mod:`brdfnorm.models.dielectric`): reflection plus refraction, over the
 microfacet normal with the slope distribution as the measure, exact from rough interfaces down to mirrors.
 
-Reflection is the microfacet BRDF with the exact dielectric Fresnel: its F = 1 albedo by
-:func:`brdfnorm.azimuthal.white_albedo`, less the loss ∫ G2 (1 − F) over the facets below the
-critical angle (:data:`PARTS`), so that the Fresnel kink at total internal reflection (η < 1) is an edge of
-the domain rather than inside it. Refraction follows the same route (Walter et al. 2007,
-§5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's weight is
-|V·m| G2 (1 − F)/(|N·V| |N·m|), the same form as the reflected one with F → 1 − F), so in the energy form
+Reflection is the microfacet BRDF with the exact dielectric Fresnel: from outside (η > 1) its half-vector albedo
+(:mod:`brdfnorm.halfvector`), from inside its F = 1 albedo by :func:`brdfnorm.azimuthal.white_albedo` less the loss
+∫ G2 (1 − F) over the facets below the critical angle (:data:`PARTS`), so that the Fresnel kink at total internal
+reflection is an edge of the domain rather than inside it (:func:`reflection_albedo`). Refraction follows the same
+route (Walter et al. 2007, §5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's
+weight is |V·m| G2 (1 − F)/(|N·V| |N·m|), the same form as the reflected one with F → 1 − F), so in the energy form
 
     E_T(V) = (1/2π) ∫₀^{2π} ∫ G2(L, V) (1 − F(V·m)) (1 + c·x) du dφ,    L = refract(V, m, η),        (T1)
 
@@ -17,11 +17,12 @@ height-correlated).
 Where refraction exists along a ray. With β the facet's polar angle (tan β = s|d|), V·m = A cos(β − β₀)
 (A = √(V_z² + (V·d̂)²)): refraction needs V·m > c* (c* = √(1 − η²) for η < 1, the critical cosine, else 0),
 an interval of β in closed form; within it the refracted L must also point below the surface (L_z < 0), whose
-ends are found by bisection to float64's resolution. The ray's piece [s_a, s_b] is then integrated in three
-parts as the reflection is (pole coordinate, tail coordinate, and a last part next to s_b where G2's boundary
-layer at L_z → 0 lives), with quadratic grading at both ends: 1 − F vanishes like a square root at the
-critical angle, and the grading makes that analytic. Where refraction reaches the horizontal facet (s_b = ∞),
-the heavy GGX tail is cut at s = 1e16 and the dropped share bounded in the error.
+ends are in closed form too. The ray's piece [s_a, s_b] is then integrated in three parts as the reflection is
+(pole coordinate, tail coordinate, and a last part next to s_b where G2's boundary layer at L_z → 0 lives), with
+quadratic grading at both ends: 1 − F vanishes like a square root at the critical angle, and the grading makes that
+analytic. Where refraction reaches the horizontal facet (s_b = ∞), the heavy GGX tail is cut at s = 1e16 and the
+dropped share bounded in the error. The azimuths where a part's bounds have a kink (:func:`_switches`) are panel
+edges, and the panels are graded towards the azimuths where the window opens.
 """
 
 from __future__ import annotations
