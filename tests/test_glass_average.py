@@ -85,3 +85,13 @@ def test_unsettled_combinations_and_forced_methods_take_the_mu_average(monkeypat
     assert fallback[3] > 0 and fallback[0][0] == generic[0][0] and fallback[1][0] == generic[1][0]
     forced = _quiet(glass.average, model, params, rtol=1e-3, method="quadrature")
     assert forced[3] > 0
+
+
+def test_spread_over_processes_is_bit_identical():
+    """E_avg runs where the cells do (`--workers`): the same values, bit for bit, as in this process."""
+    model = bn.load("ggx-dielectric")
+    params = {"alpha": np.array([0.1, 0.4, 0.9]), "eta": np.array([1 / 1.3, 1.5, 2.0])}
+    here = _quiet(glass.average, model, params, rtol=1e-7)
+    spread = _quiet(glass.average, model, params, rtol=1e-7, spread={"workers": 2})
+    for a, b in zip(here, spread, strict=True):
+        assert np.array_equal(a, b)

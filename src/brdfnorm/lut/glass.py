@@ -11,29 +11,41 @@ or a table computed with a forced albedo method, takes the generic route.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 
 import numpy as np
 
 from ..dielectric_average import average_albedo
 from ..models.base import Model
+from ..parallel.executors import Workers
 from . import table as T
 
 #: Albedo methods under which the 3-D route stands in for the μ-average of albedos.
 ROUTE_METHODS = ("auto", "dielectric")
+#: Chunks of (α, η) combinations per worker (their costs differ up to tenfold: smaller chunks even them out).
+CHUNKS_PER_WORKER = 4
 
 
-def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto"
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
+            spread: Mapping[str, object] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg of a dielectric for M parameter combinations (name -> (M,)): (value, error, converged, albedo
-    integrals computed), as :func:`brdfnorm.lut.table.average_over_mu` returns them."""
+    integrals computed), as :func:`brdfnorm.lut.table.average_over_mu` returns them. With ``spread`` (``workers``,
+    ``scheduler``) the combinations run where the table's cells do, in :data:`CHUNKS_PER_WORKER` chunks per
+    worker; each combination's value does not depend on where it ran."""
     if method not in ROUTE_METHODS:
         return T.average_over_mu(model, params, rtol=rtol, method=method)
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
     alpha, eta = (flat.get(name, np.full(M, float(model.params[name]))) for name in ("alpha", "eta"))
-    result = average_albedo(model.distribution, alpha, eta, model.params["shadowing"], rtol=rtol)
-    value, error, converged = result.value, result.error, result.converged
+    spread = spread or {}
+    with Workers(spread.get("workers", 1), spread.get("scheduler")) as pool:
+        pool.start()
+        chunks = np.array_split(np.arange(M), max(1, min(M, CHUNKS_PER_WORKER * pool.count)))
+        tasks = [(model.distribution, alpha[c], eta[c], model.params["shadowing"]) for c in chunks if c.size]
+        parts = pool.map(functools.partial(average_albedo, rtol=rtol), tasks)
+    value, error = np.concatenate([p.value for p in parts]), np.concatenate([p.error for p in parts])
+    converged = np.concatenate([p.converged for p in parts])
     integrals = 0
     rest = np.flatnonzero(~converged)
     if rest.size:

@@ -476,9 +476,11 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     if average:
         combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
                       for n in others)
-        route = AVERAGE_ROUTES.get("transmits", average_over_mu) if getattr(model, "transmits", False) \
-            else average_over_mu
-        avg, avg_error, avg_converged, _ = route(model, combos, rtol=rtol, method=method)
+        if getattr(model, "transmits", False) and "transmits" in AVERAGE_ROUTES:  # spread like the cells
+            avg, avg_error, avg_converged, _ = AVERAGE_ROUTES["transmits"](model, combos, rtol=rtol, method=method,
+                                                                           spread=spread)
+        else:
+            avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
         avg_converged = avg_converged.reshape(avg_shape)

@@ -178,11 +178,28 @@ class Workers:
             return _on_dask(tasks, self._client, job.digest)
         if where == "in-process":
             return (run_chunk(*task) for task in tasks)
+        return _in_pool(self._local_pool(), tasks)
+
+    def map(self, function, tasks: list[tuple]) -> list:
+        """``function(*task)`` for every task, in order, where the chunks of a job would run (a module-level
+        function of picklable arguments: it travels to the processes or the cluster)."""
+        where, _ = self.placement(len(tasks))
+        if self.scheduler is not None:
+            futures = [self._client.submit(function, *task, retries=DASK_RETRIES, pure=False) for task in tasks]
+            try:
+                return self._client.gather(futures)
+            finally:
+                self._client.cancel(futures)
+        if where == "in-process":
+            return [function(*task) for task in tasks]
+        return list(self._local_pool().map(function, *zip(*tasks, strict=True)))
+
+    def _local_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
             methods = multiprocessing.get_all_start_methods()
             context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
             self._pool = ProcessPoolExecutor(max_workers=self.count, mp_context=context)
-        return _in_pool(self._pool, tasks)
+        return self._pool
 
     def close(self) -> None:
         """Stop the pool's processes now (not after their chunks) and close the Dask client."""
