@@ -105,8 +105,8 @@ def _ray(V, alpha, eta, angle, part):
     # β)/η, and squaring gives P cos 2β + Q sin 2β = S (P = (η² − 1 + 2V_z²)/2, Q = V_z w, S = V_z² − P), two roots
     # in closed form (one may be spurious, from the squaring: it only adds a cut). L_z keeps its sign between the
     # cuts, so its sign at each sub-interval's middle says where the refracted ray is below the surface.
-    p = 0.5 * (eta * eta - 1.0 + 2.0 * vz * vz)
-    q, radius = vz * w, np.hypot(0.5 * (eta * eta - 1.0 + 2.0 * vz * vz), vz * w)
+    p, q = 0.5 * (eta * eta - 1.0 + 2.0 * vz * vz), vz * w
+    radius = np.hypot(p, q)
     centre, spread = np.arctan2(q, p), np.arccos(np.clip((vz * vz - p) / radius, -1.0, 1.0))
     roots = np.stack(np.broadcast_arrays(*(np.mod(centre + sign * spread, 2.0 * np.pi) / 2.0 for sign in (-1, 1))))
     roots = _polished(roots, w, vz, eta)
@@ -194,7 +194,7 @@ def _switches(distribution: Distribution, V, alpha, eta, angle, part) -> np.ndar
     functions = [start, end - np.pi / 2 if part == "refraction" else end - (beta0 + np.pi / 2) / 2]
     lo, hi, empty = _window(V, eta, angle, part)
     if part == "refraction" and not np.all(eta > 1.0):
-        # A root of L_z entering the window at either end (where _ray's bisected end takes over from the window's).
+        # A root of L_z entering the window at either end (where _ray's closed-form end takes over from the window's).
         functions += [_scattered_z(part, w, vz, eta, lo), _scattered_z(part, w, vz, eta, hi)]
     _, _, s_lo, s_middle, s_split, s_hi, none = _ray_parts(V, alpha, eta, angle, part)
     functions.append(s_lo - s_split / (1.0 + s_split))  # the pole part emptying (the clip of s_middle)
