@@ -116,6 +116,8 @@ def _inner(part: str, distribution: Distribution, alpha: float, eta: float, shad
     cuts = np.sort(np.clip(np.stack(cuts, axis=1), 0.0, top), axis=1)
     y, wy = _graded(n)
     a, b = cuts[:, :-1, None], cuts[:, 1:, None]
+    used = np.any(b > a, axis=(0, 2))  # segments empty for every facet (cuts that coincide or lie past the top)
+    a, b = a[:, used], b[:, used]
     theta, w_theta = a + (b - a) * y, (b - a) * wy  # (S, segments, n)
     ct, st = np.cos(theta), np.sin(theta)
     F = fresnel_dielectric(ct, eta)

@@ -206,11 +206,13 @@ def _switches(distribution: Distribution, V, alpha, eta, angle, part) -> np.ndar
 
 
 def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, alpha: np.ndarray,
-                    eta: np.ndarray, part: str, edges: np.ndarray, opening: np.ndarray):
+                    eta: np.ndarray, part: str, edges: np.ndarray, graded: np.ndarray):
     """The integrand on the rectangle (x, v): x ∈ [i, i + 1] spans the case's azimuth panel [edges[i], edges[i+1]],
-    graded quadratically towards an edge where the window opens (``opening``; φ = e_i + (e_{i+1} − e_i) g(x − i), g
-    = f², 1 − (1 − f)² or (1 − cos πf)/2 by the ends): the window opens like √(φ − φ_c) there, which the grading
-    makes analytic — in φ itself the cubature bisected towards it (inside cells: 1.2 times the evaluations)."""
+    graded quadratically towards the ``graded`` edges (φ = e_i + (e_{i+1} − e_i) g(x − i), g = f², 1 − (1 − f)² or
+    (1 − cos πf)/2 by the ends): where the window opens (like √(φ − φ_c), which the grading makes analytic) and at
+    the kinks of the part bounds (where, on one side, a ray's end nears a feature just beyond it). In φ itself the
+    cubature bisected towards both: 16 μ × 16 α inside cells took 25.2 M evaluations with the openings graded, 31.0
+    M with neither, 21.4 M with both."""
     lam = distribution.smith_lambda
     lambda_v = lam(alpha**2 * (V[:, 0] ** 2 + V[:, 1] ** 2) / V[:, 2] ** 2)
     refraction = part == "refraction"
@@ -225,7 +227,7 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         panel = np.floor(x).astype(int)
         start, stop = edges[k, panel], edges[k, panel + 1]
         f = x - panel
-        left, right = opening[k, panel], opening[k, panel + 1]
+        left, right = graded[k, panel], graded[k, panel + 1]
         grade = np.select([left & right, left, right], [0.5 - 0.5 * np.cos(np.pi * f), f * f, f * (2.0 - f)], f)
         slope = np.select([left & right, left, right], [0.5 * np.pi * np.sin(np.pi * f), 2.0 * f, 2.0 - 2.0 * f], 1.0)
         phi, jacobian = start + (stop - start) * grade, (stop - start) * slope
@@ -365,13 +367,13 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     edges = [_distinct(np.concatenate([base[k], kinks[k]])) for k in range(K)]
     counts = np.array([e.size - 1 for e in edges])
     table = np.stack([np.pad(e, (0, counts.max() + 1 - e.size), mode="edge") for e in edges])
-    opening = np.stack([np.isin(row, o) for row, o in zip(table, openings, strict=True)])
+    graded = np.stack([np.isin(row, np.concatenate([o, k])) for row, o, k in zip(table, openings, kinks, strict=True)])
     cases = np.repeat(np.arange(K), counts)
     a0 = np.concatenate([np.arange(n, dtype=float) for n in counts])
     cases, a0 = np.repeat(cases, 3), np.repeat(a0, 3)
     b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
     initial = _Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
-    integrand = _part_integrand(distribution, shadowing, fixed, alpha, eta, part, table, opening)
+    integrand = _part_integrand(distribution, shadowing, fixed, alpha, eta, part, table, graded)
     result = adaptive_rectangles(integrand, initial, K, rtol=rtol, atol=atol, max_evaluations=max_evaluations,
                                  chunk=_PANELS_PER_CHUNK)
     # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight, p = |c|α), and
