@@ -116,6 +116,18 @@ def test_inside_transmission_at_a_low_view_within_its_own_estimate(alpha):
     assert abs(t.value[0, 0] - reference) <= t.error[0, 0] + REFERENCE_ERROR * reference
 
 
+def test_inside_cells_meet_the_tolerance_on_their_sum():
+    """Each part is integrated to rtol of itself; from inside R is the F = 1 albedo less the loss, both larger than
+    R, and their estimates added up to 1.3 rtol·E on these cells (μ = 0.869, 0.935): they are redone to rtol·E."""
+    mu, alpha = np.array([0.8693333333333333, 0.9346666666666665]), np.array([0.04373448295773113, 0.02])
+    result = bn.albedo(bn.load("ggx-dielectric", alpha=alpha, eta=1 / 1.5), np.arccos(mu), rtol=1e-9)
+    assert result.converged.all()
+    assert np.all(result.error[:, 0] <= 1e-9 * result.value[:, 0])
+    for k in range(2):
+        reference = sum(albedo_part("ggx", mu[k], alpha[k], 1 / 1.5, part) for part in "RT")
+        assert abs(result.value[k, 0] - reference) <= result.error[k, 0] + 2 * REFERENCE_ERROR
+
+
 @pytest.mark.parametrize("name", DIELECTRICS)
 def test_reflection_from_outside_by_both_routes(name):
     """From outside R is the BRDF's half-vector albedo with dielectric Fresnel; the window route (the F = 1 albedo
