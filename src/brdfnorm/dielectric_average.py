@@ -41,7 +41,7 @@ from .models.dielectric import refraction_shadowing
 from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
-ORDERS = (16, 20, 24, 32, 40, 48, 64, 80, 96)
+ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)
 #: The horizon's boundary layer (Λ turns on) spans directions with |ω_z| ≲ LAYER·α.
 _LAYER = 4.0
 #: Slope-radius nodes per array pass (memory: this times the θ' and φ' nodes of one order).
