@@ -59,16 +59,21 @@ _KINK_BISECTIONS = 56
 PARTS = ("refraction", "reflection-loss")
 
 
-def _window(V, eta, angle, part):
-    """The β-window on each ray: [lo, hi] ⊂ [0, π/2] (V·m > c*, and for reflection the reflected L above the
-    surface), and a mask of empty windows."""
+def _critical_window(V, eta, angle):
+    """Per ray: w = V·d̂, β₀ and the unclipped window [β₀ − h, β₀ + h] of the facet angles with V·m > c* (V·m =
+    A cos(β − β₀), A = √(V_z² + w²); h = 0 where even the best facet is past c*)."""
     vx, vy, vz = V
-    w = vx * np.cos(angle) + vy * np.sin(angle)  # V·d̂
-    amplitude = np.hypot(vz, w)
+    w = vx * np.cos(angle) + vy * np.sin(angle)
     beta0 = np.arctan2(w, vz)
     critical = np.sqrt(np.maximum(1.0 - eta * eta, 0.0))
-    half = np.arccos(np.clip(critical / amplitude, -1.0, 1.0))  # 0 where even the best facet is past c*
-    lo, hi = beta0 - half, beta0 + half  # V·m = A cos(β − β₀) > c*
+    half = np.arccos(np.clip(critical / np.hypot(vz, w), -1.0, 1.0))
+    return w, beta0, beta0 - half, beta0 + half
+
+
+def _clipped_window(beta0, start, end, part):
+    """The β-window [lo, hi] ⊂ [0, π/2] of :func:`_critical_window`'s [start, end] (and for reflection the
+    reflected L above the surface), and a mask of empty windows."""
+    lo, hi = start, end
     if part != "refraction":
         # The reflected L_z = 2(V·m) cos β − V_z = A cos(2β − β₀) (as A cos β₀ = V_z) is positive exactly for
         # |2β − β₀| < π/2: the horizon, in closed form.
@@ -93,14 +98,14 @@ def _ray(V, alpha, eta, angle, part):
     """Per ray (broadcast arrays): the direction d and the β-interval [b_lo, b_hi] of the part's window where
     the scattered L lies on its side of the surface (in closed form)."""
     dx, dy = alpha * np.cos(angle), alpha * np.sin(angle)
-    vx, vy, vz = V
-    lo, hi, empty = _window(V, eta, angle, part)
+    vz = V[2]
+    w, beta0, start, end = _critical_window(V, eta, angle)
+    lo, hi, empty = _clipped_window(beta0, start, end, part)
     # The window is exact already for reflection, and for refraction into a denser medium: there
     # L_z = −V_z/η + m_z(V·m/η − cos θ_t) < 0 always, as cos θ_t > V·m/η when η > 1.
     if part != "refraction" or np.all(eta > 1.0):
         return dx, dy, np.where(empty, 0.0, lo), np.where(empty, 0.0, hi), empty
 
-    w = vx * np.cos(angle) + vy * np.sin(angle)
     # L_z = 0 where the refracted ray grazes the surface: with c = V·m = w sin β + V_z cos β, cos θ_t = (c − V_z/cos
     # β)/η, and squaring gives P cos 2β + Q sin 2β = S (P = (η² − 1 + 2V_z²)/2, Q = V_z w, S = V_z² − P), two roots
     # in closed form (one may be spurious, from the squaring: it only adds a cut). L_z keeps its sign between the
@@ -183,16 +188,12 @@ def _switches(distribution: Distribution, V, alpha, eta, angle, part) -> np.ndar
     the azimuth, of the integrand at every fixed node of the parts' maps: inside a panel, between its nodes, no
     rule sees it (η = 1/1.5, α = 1, μ = 0.216: R was 4.7e-8 off with an estimate of 1.3e-10, from the kink where
     the pole part empties, 8e-4 inside a 0.19 rad wide panel), so :func:`_kinks` makes them panel edges."""
-    vx, vy, vz = V
-    w = vx * np.cos(angle) + vy * np.sin(angle)
-    beta0 = np.arctan2(w, vz)
-    critical = np.sqrt(np.maximum(1.0 - eta * eta, 0.0))
-    half = np.arccos(np.clip(critical / np.hypot(vz, w), -1.0, 1.0))
-    start, end = beta0 - half, beta0 + half
+    vz = V[2]
+    w, beta0, start, end = _critical_window(V, eta, angle)
     # The window's start reaching the pole (the clip at β = 0); its end reaching the horizontal facet (refraction)
-    # or passing the reflected direction's horizon (the min in _window).
+    # or passing the reflected direction's horizon (the min in _clipped_window).
     functions = [start, end - np.pi / 2 if part == "refraction" else end - (beta0 + np.pi / 2) / 2]
-    lo, hi, empty = _window(V, eta, angle, part)
+    lo, hi, empty = _clipped_window(beta0, start, end, part)
     if part == "refraction" and not np.all(eta > 1.0):
         # A root of L_z entering the window at either end (where _ray's closed-form end takes over from the window's).
         functions += [_scattered_z(part, w, vz, eta, lo), _scattered_z(part, w, vz, eta, hi)]
@@ -228,8 +229,9 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         start, stop = edges[k, panel], edges[k, panel + 1]
         f = x - panel
         left, right = graded[k, panel], graded[k, panel + 1]
-        grade = np.select([left & right, left, right], [0.5 - 0.5 * np.cos(np.pi * f), f * f, f * (2.0 - f)], f)
-        slope = np.select([left & right, left, right], [0.5 * np.pi * np.sin(np.pi * f), 2.0 * f, 2.0 - 2.0 * f], 1.0)
+        ends = [left & right, left, right]
+        grade = np.select(ends, [0.5 - 0.5 * np.cos(np.pi * f), f * f, f * (2.0 - f)], f)
+        slope = np.select(ends, [0.5 * np.pi * np.sin(np.pi * f), 2.0 * f, 2.0 - 2.0 * f], 1.0)
         phi, jacobian = start + (stop - start) * grade, (stop - start) * slope
         vx, vy, vz = V[k, 0], V[k, 1], V[k, 2]
         # Ray quantities per (panel, azimuth node), then broadcast over the radial nodes. Panels that differ only

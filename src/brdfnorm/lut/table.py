@@ -391,44 +391,29 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
     """
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.asarray(v, dtype=float).ravel() for n, v in params.items()}
-    total, total_error, albedo_converged, largest_e, integrals = kronrod_in_mu(
-        model, flat, M, lambda x: (x * x, 4.0 * x**3), rtol=rtol, method=method, max_panels=max_panels)
-    floor_error = MU_FLOOR**2 * largest_e
-    total_error = total_error + floor_error
-    converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
-    return total, total_error, converged, integrals
-
-
-def kronrod_in_mu(model: Model, flat: Mapping[str, np.ndarray], count: int, to_mu: Callable, *, rtol: float,
-                  method: str, max_panels: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
-    """2∫₀¹ E(μ) μ dμ for ``count`` combinations (``flat``: name -> (count,)) by globally adaptive G7/K15 in a
-    variable y ∈ [0, 1] with ``to_mu(y)`` = (μ, 2μ dμ/dy): a panel's error is |K15 − G7| plus the albedo errors
-    through the K15 weights, its albedos by :func:`_node_albedos` (nodes of zero weight are not evaluated).
-    Returns (value, error, every albedo converged, max|E|, albedo integrals computed), each (count,) but the last;
-    MU_FLOOR's bound is the caller's to add."""
-    ok, largest = np.ones(count, dtype=bool), np.zeros(count)
+    albedo_converged, largest_e = np.ones(M, dtype=bool), np.zeros(M)
     integrals = 0
 
     def evaluate(owner: np.ndarray, left: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         nonlocal integrals
-        y = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
-        mu, density = to_mu(y)
-        E, E_error = np.zeros(y.shape), np.zeros(y.shape)
-        good = np.ones(y.shape, dtype=bool)
-        live = density > 0
-        which = np.broadcast_to(owner[:, None], y.shape)[live]
-        E[live], E_error[live], good[live] = _node_albedos(
-            model, mu[live], density[live], {n: v[which] for n, v in flat.items()}, rtol, method)
-        integrals += int(live.sum())
-        ok[owner[~good.all(axis=1)]] = False
-        np.maximum.at(largest, owner, np.abs(E).max(axis=1))
+        x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
+        mu, density = x * x, 4.0 * x**3  # dμ 2μ = 4x³ dx
+        which = np.broadcast_to(owner[:, None], x.shape)
+        E, E_error, good = (a.reshape(x.shape) for a in _node_albedos(
+            model, mu.ravel(), density.ravel(), {n: v[which.ravel()] for n, v in flat.items()}, rtol, method))
+        integrals += x.size
+        albedo_converged[owner[~good.all(axis=1)]] = False
+        np.maximum.at(largest_e, owner, np.abs(E).max(axis=1))
         g, g_error, half = density * E, density * E_error, 0.5 * width
         kronrod = half * (g @ KRONROD_WEIGHTS)
         difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
 
-    total, total_error = adaptive_unit_interval(evaluate, count, rtol=rtol, max_panels=max_panels)
-    return total, total_error, ok, largest, integrals
+    total, total_error = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    floor_error = MU_FLOOR**2 * largest_e
+    total_error = total_error + floor_error
+    converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
+    return total, total_error, converged, integrals
 
 
 @dataclass(frozen=True)
