@@ -130,3 +130,16 @@ def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261121)
+
+
+@pytest.fixture
+def lobe_aligned_only(monkeypatch):
+    """The generic engine without its half-vector route (brdfnorm.halfvector_generic), for tests of the
+    lobe-aligned routes behind it."""
+    from brdfnorm import halfvector_generic
+
+    def nothing_kept(fixed, *args, **kwargs):
+        K = fixed.shape[0]
+        return np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
+
+    monkeypatch.setattr(halfvector_generic, "route", nothing_kept)

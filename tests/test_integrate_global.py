@@ -51,7 +51,7 @@ def test_radial_width_follows_an_ellipse_of_axis_ratio_lambda(lam):
     np.testing.assert_allclose((width * np.cos(beta)) ** 2 + (width * np.sin(beta) / lam) ** 2, 1.0, rtol=1e-13)
 
 
-def test_global_rule_alone_is_honest_at_grazing_views(rng, monkeypatch):
+def test_global_rule_alone_is_honest_at_grazing_views(rng, monkeypatch, lobe_aligned_only):
     # Beyond θ_o ≈ 75° the β map's clustering is held at LAMBDA_MIN and the elliptic radial width is narrowest:
     # every case the global rule settles (not the panels after it) must carry an estimate ≥ its true error.
     settled = []

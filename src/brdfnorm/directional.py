@@ -21,10 +21,11 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
-from . import validate
+from . import halfvector_generic, validate
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
 from .models.base import Lobe, Model, Over, mirror
@@ -253,10 +254,25 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
+    # A lobe of the upper hemisphere centred on the mirror direction: the half-vector route first.
+    def brdf(L: np.ndarray, V: np.ndarray, case: np.ndarray) -> np.ndarray:
+        return problem.model.evaluate(L, V, problem.case_params(case))
+
+    first = None if lower else partial(halfvector_generic.route, problem.fixed, brdf, _parameter_sets(problem))
     result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
-                                  nonfinite=nonfinite, max_evaluations=max_evaluations)
+                                  nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first)
     return (result.value * scale[:, None], result.error * scale[:, None], result.evaluations, result.converged,
             result.nonfinite_fraction, {"reason": result.reason})
+
+
+def _parameter_sets(problem: Problem) -> np.ndarray:
+    """A label per case (K,): cases with the same label have the same parameter values."""
+    K = problem.fixed.shape[0]
+    if not problem.per_case:
+        return np.zeros(K, dtype=np.intp)
+    values = np.column_stack([np.asarray(problem.params[name], dtype=float).reshape(K, -1)
+                              for name in sorted(problem.per_case)])
+    return np.unique(values, axis=0, return_inverse=True)[1].reshape(K)
 
 
 def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:

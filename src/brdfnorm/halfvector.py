@@ -275,9 +275,65 @@ def _grading_width(g: _Geometry) -> np.ndarray:
     return delta
 
 
+@dataclass(frozen=True)
+class SlopeNodes:
+    """The quantities of (H1) at a grid of nodes (R, n, n) that a weight function needs: the case index ``k``
+    (R, 1, 1) into the geometry, slope radius ``s`` along x = s d(φ), d = (``dx``, ``dy``), ``p`` = c·d,
+    ``one_sp`` = 1 + s p = (V·H)/(V_z H_z), ``n2`` = 1 + s²|d|² = 1/H_z², ``Lz`` = N·L (accurate at the horizon),
+    ``weight_t`` = du/dt of the radial coordinate, ``azimuth`` = dφ/dξ · multiplicity / 2π."""
+
+    k: np.ndarray
+    case: np.ndarray
+    s: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    p: np.ndarray
+    one_sp: np.ndarray
+    n2: np.ndarray
+    Lz: np.ndarray
+    weight_t: np.ndarray
+    azimuth: np.ndarray
+
+
+#: w of (H1) at the nodes, times ``weight_t`` and ``azimuth``: (R, n, n, C).
+SlopeWeight = Callable[[SlopeNodes], np.ndarray]
+
+
+def _microfacet_weight(g: _Geometry) -> SlopeWeight:
+    """w = G2(L, V) F(V·H) (1 + c·x) of the microfacet lobe (H1)."""
+    dist = g.distribution
+
+    def weight_of(n: SlopeNodes) -> np.ndarray:
+        k, s, Lz = n.k, n.s, n.Lz
+        ax, ay = g.ax[k], g.ay[k]
+        # a² = (α_x² L_x² + α_y² L_y²)/L_z² with |L| = 1: α_y²(1 − L_z²) + (α_x² − α_y²) L_x², whose second term
+        # vanishes for an isotropic lobe (the tables' case), saving L_x, L_y. 1 − L_z² = (1 − L_z)(1 + L_z) loses
+        # relative accuracy only where L_z → 1, where a² ~ α² eps is far below the tolerance.
+        tangent2 = np.maximum((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay * ay)
+        if np.any(ax != ay):
+            Lx = 2.0 * g.V[k, 2] * n.one_sp * s * n.dx / n.n2 - g.V[k, 0]
+            tangent2 += (ax * ax - ay * ay) * Lx * Lx
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lambda_l = dist.smith_lambda(tangent2 / (Lz * Lz))
+        G2 = shadowing_masking(g.shadowing, lambda_l, g.lambda_v[k])
+        weight = G2 * n.one_sp * n.weight_t * n.azimuth
+        weight = np.where(Lz > 0, weight, 0.0)[..., None]  # only t = t_h itself, where G2 = 0 anyway
+        if g.fresnel_params["fresnel"] == "none":
+            return weight
+        F = fresnel(_case_slice(g.fresnel_params, n.case), g.V[k, 2] * n.one_sp / np.sqrt(n.n2))  # F(V·H)
+        return weight * F
+
+    return weight_of
+
+
 def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegrand:
-    """(H1) on the rectangle (φ, v); ``linear``: φ is the azimuth from the offset itself (no φ-map), for the
-    global rule (:mod:`brdfnorm.halfvector_global`), which clusters its own nodes."""
+    """(H1) of the microfacet lobe on the rectangle (φ, v) (:func:`slope_integrand`)."""
+    return slope_integrand(g, _microfacet_weight(g), linear)
+
+
+def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
+    """The rectangle (φ, v) of (H1) with the weight ``weight_of``; ``linear``: φ is the azimuth from the offset
+    itself (no φ-map), for the global rule (:mod:`brdfnorm.halfvector_global`), which clusters its own nodes."""
     Vz = g.V[:, 2]
     cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
     offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
@@ -354,22 +410,8 @@ def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegr
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
         Lz = vz * gap_to_horizon * (d2 * s + q_minus_p) / n2
-        # a² = (α_x² L_x² + α_y² L_y²)/L_z² with |L| = 1: α_y²(1 − L_z²) + (α_x² − α_y²) L_x², whose second term
-        # vanishes for an isotropic lobe (the tables' case), saving L_x, L_y. 1 − L_z² = (1 − L_z)(1 + L_z) loses
-        # relative accuracy only where L_z → 1, where a² ~ α² eps is far below the tolerance.
-        tangent2 = np.maximum((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay * ay)
-        if np.any(ax != ay):
-            Lx = 2.0 * vz * one_sp * s * dx / n2 - g.V[k, 0]
-            tangent2 += (ax * ax - ay * ay) * Lx * Lx
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lambda_l = dist.smith_lambda(tangent2 / (Lz * Lz))
-        G2 = shadowing_masking(g.shadowing, lambda_l, g.lambda_v[k])
-        weight = G2 * one_sp * weight_t * (phi_jacobian * (g.multiplicity[k] / _TWO_PI))
-        weight = np.where(Lz > 0, weight, 0.0)[..., None]  # only t = t_h itself, where G2 = 0 anyway
-        if g.fresnel_params["fresnel"] == "none":
-            return weight
-        F = fresnel(_case_slice(g.fresnel_params, case), vz * one_sp / np.sqrt(n2))  # F(V·H), V·H = V·m/|m|
-        return weight * F
+        return weight_of(SlopeNodes(k, case, s, dx, dy, p, one_sp, n2, Lz, weight_t,
+                                    phi_jacobian * (g.multiplicity[k] / _TWO_PI)))
 
     return integrand
 
@@ -385,13 +427,25 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     estimate at rtol 1e-3, μ = 1.5e-6, α = 0.84; 4.7 times at rtol 1e-5; 1.3e-7 ≤ μ: 0.056 off, estimated 1e-8,
     at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
-    K = fixed.shape[0]
     # Per case (K, 1): both rules compare each case's estimate with max(atol, rtol·|E|) elementwise.
     rtol = np.where(fixed[:, 2] < GRAZING_MU, min(rtol, GRAZING_RTOL), rtol)[:, None]
     g = _geometry(distribution, fixed, params)
-    # An isotropic lobe is symmetric about the plane of N and V: with the azimuth map's zeros at φ = 0, π and
-    # its symmetry axes at φ = π/2, 3π/2, half the range [π/2, 3π/2], counted twice, is the whole integral.
-    symmetric = g.ax == g.ay
+    result = integrate_slopes(g, _microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
+                              max_evaluations=max_evaluations, use_global=use_global)
+    # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
+    mass, moment = distribution.truncated_moments()
+    truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
+    return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
+
+
+def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
+                     atol: float | np.ndarray, max_evaluations: int, use_global: bool = True,
+                     max_nodes: int = global_rule.MAX_NODES) -> CubatureResult:
+    """∫∫ w du dφ/2π over the rectangle of (H1) for every case of ``g``: the global rule first (``max_nodes`` per
+    radial piece), then the adaptive panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric
+    about the plane of N and V, so half the azimuth range, counted twice, is the whole integral (the azimuth map's
+    zeros at φ = 0, π and its symmetry axes at φ = π/2, 3π/2)."""
+    K = g.V.shape[0]
     g.multiplicity = np.where(symmetric, 2.0, 1.0)
     full = np.linspace(0.0, _TWO_PI, 5)
     pieces = np.arange(4.0)
@@ -402,16 +456,15 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
         index = np.flatnonzero(mask)
         cases.append(np.repeat(index, a0.size))
         bounds.append([np.tile(x.ravel(), index.size) for x in (a0, a1, b0, b1)])
-    # The global rule first (brdfnorm.halfvector_global), for every case whose feature its nodes resolve.
-    lam = global_rule.clustering(fixed[:, 2])
+    lam = global_rule.clustering(g.V[:, 2])
     tried = np.arange(K) if use_global else np.arange(0)
     value, error, evaluations, settled = global_rule.integrate_global(
-        _microfacet_integrand(g, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol, atol=atol,
-        width=global_rule.grading_width(fixed[:, 2], distribution.name))
+        slope_integrand(g, weight_of, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
+        atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name))
     initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:
-        panels = adaptive_rectangles(_microfacet_integrand(g), initial, K, rtol=rtol, atol=atol,
+        panels = adaptive_rectangles(slope_integrand(g, weight_of), initial, K, rtol=rtol, atol=atol,
                                      max_evaluations=max(max_evaluations - int(evaluations.max()), 1))
         shape = (K, max(value.shape[1], panels.value.shape[1]))  # 1 channel where no case ran on a side
         value, error = (np.broadcast_to(x, shape).copy() for x in (value, error))
@@ -419,12 +472,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
         error[~settled] = np.broadcast_to(panels.error, shape)[~settled]
         evaluations = evaluations + np.where(settled, 0, panels.evaluations)
         settled = settled | panels.converged
-    converged = settled
-    result = CubatureResult(value, error, evaluations, converged)
-    # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
-    mass, moment = distribution.truncated_moments()
-    truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
-    return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
+    return CubatureResult(value, error, evaluations, settled)
 
 
 # -- limits ---------------------------------------------------------------------------------------------------

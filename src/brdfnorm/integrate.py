@@ -103,6 +103,9 @@ _EPS = np.finfo(float).eps
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> (value (K, C), error
+#: (K, C), evaluations (K,), kept (K,)): a route tried before the others (``integrate_hemisphere``'s first_route).
+FirstRoute = Callable[..., tuple]
 
 
 class NonFiniteIntegrand(ArithmeticError):
@@ -223,6 +226,7 @@ def integrate_hemisphere(
     nonfinite: NonFinitePolicy = "raise",
     initial_panels: tuple[int, int] = (4, 2),
     max_nodes_per_call: int = 1_500_000,
+    first_route: FirstRoute | None = None,
 ) -> HemisphereResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
@@ -239,6 +243,9 @@ def integrate_hemisphere(
     nonfinite
         "raise": raise :class:`NonFiniteIntegrand` at the first NaN/Inf; "zero": count them as 0 and report
         the share of solid angle affected.
+    first_route
+        Tried before the global rule on the cases whose rounding noise is far below the tolerance (the
+        half-vector route of :mod:`brdfnorm.halfvector_generic`); the cases it keeps are final.
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
@@ -265,11 +272,17 @@ def integrate_hemisphere(
     # (Not at all where a quarter of the budget would not cover its first grid.)
     global_nodes = min(GLOBAL_NODES, max_evaluations // 4)
     quiet = np.flatnonzero((rtol == 0) | np.all(noise_bound(noise_amplitude, 1.0) < rtol / 16, axis=-1))
+    first = None
+    if first_route is not None and rtol > 0:
+        first = first_route(integrand, poles, widths, quiet, noise_amplitude, rtol=rtol, atol=atol,
+                            max_evaluations=max_evaluations // 4)
+        evaluations += first[2]
+        quiet = quiet[~first[3][quiet]]
     tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
                              noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
                              max_nodes_per_call=max_nodes_per_call)
     evaluations += tried.evaluations
-    remaining = np.flatnonzero(~tried.settled)
+    remaining = np.flatnonzero(~tried.settled & ~(first[3] if first else False))
     panels = _Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
                                       frame[0][remaining, 2], widths[remaining], supports[remaining]))
     history = []  # total error estimate per case and round (for the stall check)
@@ -371,12 +384,13 @@ def integrate_hemisphere(
             np.add.at(bad_total, pool.case, pool.bad)
             error[left] += noise[left]
 
+    routes = [(tried.value, tried.error, tried.settled)] + ([(first[0], first[1], first[3])] if first else [])
     if value.shape[1] == 0:
-        value = np.zeros((K, tried.value.shape[1]))
+        value = np.zeros((K, max(r[0].shape[1] for r in routes)))
         error = np.zeros_like(value)
-    value[tried.settled] = tried.value[tried.settled]
-    error[tried.settled] = tried.error[tried.settled]
-    converged |= tried.settled
+    for route_value, route_error, settled in routes:
+        value[settled], error[settled] = route_value[settled], route_error[settled]
+        converged |= settled
     reason[converged] = ""
     return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
 

@@ -1,0 +1,201 @@
+"""The generic engine's half-vector route: any specular lobe integrated in the slope coordinates of
+:mod:`brdfnorm.halfvector`, tried before the lobe-aligned coordinates of :mod:`brdfnorm.integrate`.
+
+What it computes
+----------------
+E(F) = ∫ g(ω) dω over the free direction ω, g the cosine-weighted BRDF with the fixed direction F. The reflection
+map ω = 2(F·H)H − F (dω = 4 (F·H) dω_H, Walter et al. 2007 eq. 14) turns it into an integral over the half vector
+H, which is written against the GGX slope distribution D_α of a width α chosen from the lobe's:
+
+    E = ∫ w · D_α(H) H_z dω_H = (1/2π) ∫∫ w du dφ,
+    w = g(ω) 4 (F·H) / (D_α(H) H_z) = g(ω) 4 (F·H) · π α² (1 + s²)² / (1 + α² s²)^{3/2},          (G1)
+
+s the standardized slope radius (H ∝ (x, y, 1), |x| = α s) and u(s) = s²/(1 + s²) GGX's radial measure. The
+rectangle (φ, v), its horizon in closed form, its pieces, and its cubature (a global tensor rule, then adaptive
+G7/K15 panels confirmed on their quarters) are those of :mod:`brdfnorm.halfvector`; only w differs (for the GGX
+lobe itself, w is (H1) exactly: ``examples/ggx.brdf`` settles with the same evaluation counts as the built-in
+GGX lobe).
+
+Why
+---
+A lobe centred on the mirror direction (Blinn-Phong, Phong, every microfacet lobe) is centred on H = N for every
+view: in H its width does not change with the view, and the horizon, which cuts the lobe off-centre in ω at
+grazing views, is the closed-form boundary s_h(φ) of the rectangle. In the lobe-aligned coordinates of
+:mod:`brdfnorm.integrate` the same lobe is stretched by the reflection and cut by a horizon that turns within
+c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks/README.md, issue 13, rounds 1–5).
+
+Where it is tried, and when its answer is kept
+----------------------------------------------
+- Only for isotropic lobes (:func:`rotation_invariant`, at each case's parameters), for cases whose rounding
+  noise is far below the tolerance (the same test as the global rule of :mod:`brdfnorm.tensor_rule`), whose
+  fixed direction is at least :data:`MU_MIN` above the horizon, and whose peak's half vector lies within the
+  lobe's core of N, or whose lobe is broad (:func:`specular`).
+- The half azimuth range counted twice only where a sample of directions and their mirror images in the plane
+  of N and F agree to rtol/64 (:func:`mirror_symmetric`); otherwise the full range.
+- A case is kept only if its cubature converged, every value was finite, and the estimate plus the
+  rounding-noise bound (:func:`brdfnorm.rounding.noise_bound` of the |g|-integral, integrated alongside as
+  one more channel) is within max(atol, rtol·|E|). Any other case goes on to the lobe-aligned routes as if this
+  one had not been tried (its evaluations are counted).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from . import halfvector_global as global_rule
+from .halfvector import SlopeNodes, _Geometry, integrate_slopes
+from .integrate import fibonacci_hemisphere
+from .models.microfacet import GGXDistribution
+from .rounding import noise_bound
+
+#: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
+#: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
+MU_MIN = 1e-3
+#: A lobe whose (ω-space) width is at least this is broad: where its peak lies matters little to the map.
+BROAD = 0.5
+#: Sampled directions per case for the mirror-symmetry test: a Fibonacci lattice and a polar grid in H.
+LATTICE = 96
+RINGS = (0.125, 0.5, 1.0, 2.0, 8.0)
+AZIMUTHS = 12
+#: Random direction pairs per case for the isotropy test.
+ISOTROPY_PAIRS = 48
+#: Evaluations this route may spend on a case before the lobe-aligned routes take it, and the least budget (what
+#: the engine passes: a quarter of its own) for which it is tried at all.
+BUDGET = 200_000
+MIN_BUDGET = 20_000
+
+_GGX = GGXDistribution()
+
+
+def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(eligible (K,), α (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of N (or
+    the lobe is broad), and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
+    half = poles + fixed
+    tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
+    width = np.asarray(widths, dtype=float)
+    eligible = (fixed[:, 2] >= MU_MIN) & ((tilt <= 0.5 * width) | (width >= BROAD))
+    alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
+    return eligible, alpha
+
+
+def reflect(fixed: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """ω = 2 (F·H) H − F."""
+    return 2.0 * np.einsum("...i,...i->...", fixed, H)[..., None] * H - fixed
+
+
+def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray,
+                     rtol: float) -> np.ndarray:
+    """Per case of ``cases``: g(ω) = g(ω') to rtol/64 of max |g| on a sample, ω' the mirror image of ω in the
+    plane of N and F (the plane :func:`brdfnorm.halfvector.integrate_slopes` folds the azimuth about)."""
+    F = fixed[cases]
+    azimuth = np.arctan2(F[:, 1], F[:, 0])
+    across = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros_like(azimuth)], axis=-1)  # normal of the plane
+    ring, phi = np.meshgrid(np.asarray(RINGS), np.arange(AZIMUTHS) * (2 * np.pi / AZIMUTHS) + 0.1)
+    slope = alpha[cases][:, None] * ring.ravel()  # |x| = α s at s = RINGS
+    H = np.stack([slope * np.cos(phi.ravel()), slope * np.sin(phi.ravel()), np.ones_like(slope)], axis=-1)
+    H /= np.linalg.norm(H, axis=-1, keepdims=True)
+    near = reflect(F[:, None, :], H)
+    lattice = np.broadcast_to(fibonacci_hemisphere(LATTICE), (cases.size, LATTICE, 3))
+    omega = np.concatenate([near, lattice], axis=1)  # (k, m, 3)
+    image = omega - 2.0 * np.einsum("kmi,ki->km", omega, across)[..., None] * across[:, None, :]
+    index = np.broadcast_to(cases[:, None], omega.shape[:2]).ravel()
+    with np.errstate(all="ignore"):
+        g = np.asarray(integrand(omega.reshape(-1, 3), index), dtype=float).reshape(omega.shape[:2] + (-1,))
+        g_image = np.asarray(integrand(image.reshape(-1, 3), index), dtype=float).reshape(g.shape)
+    inside = (omega[..., 2] > 0)[..., None]
+    g, g_image = np.where(inside, g, 0.0), np.where(inside, g_image, 0.0)
+    scale = np.max(np.abs(g), axis=(1, 2))
+    difference = np.max(np.abs(g - g_image), axis=(1, 2))
+    return np.isfinite(scale) & np.isfinite(difference) & (difference <= rtol / 64 * scale)
+
+
+def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.ndarray:
+    """Per case of ``cases``: f(R L, R V) = f(L, V) to rtol/64 of max |f| on random pairs, R rotations about N.
+    ``brdf(L, V, case)`` evaluates f for (M, 3) directions and the case index (M,) of each.
+
+    An anisotropic lobe is an ellipse in H, thinner than the map's azimuths where it is long (Ashikhmin-Shirley,
+    n_u = 1.6, n_v = 5112: 1.37 times the estimate at rtol 1e-9); the lobe-aligned routes take those."""
+    rng = np.random.default_rng(7)
+    z = rng.random((2, ISOTROPY_PAIRS))
+    phi = 2.0 * np.pi * rng.random((2, ISOTROPY_PAIRS))
+    r = np.sqrt(1.0 - z * z)
+    L, V = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    index = np.repeat(cases, ISOTROPY_PAIRS)
+    with np.errstate(all="ignore"):
+        reference = np.asarray(brdf(np.tile(L, (cases.size, 1)), np.tile(V, (cases.size, 1)), index), dtype=float)
+        scale = np.abs(reference).reshape(cases.size, -1).max(axis=1)
+        change = np.zeros(cases.size)
+        for angle in (0.7, 2.1):
+            c, s = np.cos(angle), np.sin(angle)
+            rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            turned = [np.tile(d @ rotation.T, (cases.size, 1)) for d in (L, V)]
+            rotated = np.asarray(brdf(*turned, index), dtype=float)
+            change = np.maximum(change, np.abs(rotated - reference).reshape(cases.size, -1).max(axis=1))
+    return np.isfinite(scale) & np.isfinite(change) & (change <= rtol / 64 * scale)
+
+
+def route(fixed: np.ndarray, brdf: Callable, parameter_set: np.ndarray, integrand: Callable, poles: np.ndarray,
+          widths: np.ndarray, quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
+          max_evaluations: int):
+    """(value (K, C), error (K, C), evaluations (K,), kept (K,)) of (G1) for the ``quiet`` cases that are
+    :func:`specular` and :func:`rotation_invariant` (module docstring), as
+    :func:`brdfnorm.integrate.integrate_hemisphere` tries it first: rows of cases not kept are to be ignored;
+    their evaluations are counted. ``parameter_set`` (K,) labels the cases by their parameter values (the same
+    label, the same f): isotropy is tested once per label."""
+    K = fixed.shape[0]
+    eligible, alpha = specular(fixed, poles, widths)
+    cases = quiet[eligible[quiet]] if max_evaluations >= MIN_BUDGET else quiet[:0]
+    budget = min(max_evaluations, BUDGET)
+    evaluations = np.zeros(K, dtype=np.int64)
+    kept = np.zeros(K, dtype=bool)
+    if cases.size:
+        labels, first = np.unique(parameter_set[cases], return_index=True)
+        invariant = np.zeros(parameter_set.max() + 1, dtype=bool)
+        invariant[labels] = rotation_invariant(brdf, cases[first], rtol)
+        evaluations[cases[first]] += 3 * ISOTROPY_PAIRS
+        cases = cases[invariant[parameter_set[cases]]]
+    if not cases.size:
+        return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
+    symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
+    evaluations[cases] += 2 * (LATTICE + len(RINGS) * AZIMUTHS)
+    F = fixed[cases]
+    g = _Geometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
+    failed = np.zeros(cases.size, dtype=bool)
+
+    def weight_of(n: SlopeNodes) -> np.ndarray:
+        root = np.sqrt(n.n2)
+        cos_fh = F[n.k, 2] * n.one_sp / root  # F·H
+        hx, hy = n.s * n.dx / root, n.s * n.dy / root
+        shape = np.broadcast_shapes(n.s.shape, n.Lz.shape, hx.shape)
+        omega = np.empty(shape + (3,))
+        omega[..., 0] = 2.0 * cos_fh * hx - F[n.k, 0]
+        omega[..., 1] = 2.0 * cos_fh * hy - F[n.k, 1]
+        omega[..., 2] = n.Lz  # N·ω with its relative accuracy at the horizon (halfvector's product form)
+        local = np.broadcast_to(n.k, shape)
+        values = np.asarray(integrand(omega.reshape(-1, 3), cases[local.ravel()]), dtype=float)
+        values = values.reshape(shape + (-1,))
+        a = g.ax[n.k]
+        jacobian = 4.0 * cos_fh * np.pi * a * a * (1.0 + n.s * n.s) ** 2 / (n.n2 * root) * n.weight_t * n.azimuth
+        inside = n.Lz > 0
+        finite = np.isfinite(values).all(axis=-1) | ~inside
+        if not finite.all():
+            failed[np.unique(np.broadcast_to(n.k, shape)[~finite])] = True
+        weighted = np.where((inside & finite)[..., None], values * jacobian[..., None], 0.0)
+        # g, and the largest |g| of its channels: the magnitude the noise bound scales with (one channel more).
+        return np.concatenate([weighted, np.abs(weighted).max(axis=-1, keepdims=True)], axis=-1)
+
+    with np.errstate(all="ignore"):
+        # Half the budget for the global rule (three radial pieces), the rest for the panels.
+        result = integrate_slopes(g, weight_of, symmetric, rtol=rtol, atol=atol, max_evaluations=budget,
+                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)))
+    value, error, magnitude = result.value[:, :-1], result.error[:, :-1], result.value[:, -1:]
+    error = error + noise_bound(np.broadcast_to(noise_amplitude[cases], value.shape), magnitude)
+    within = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=1)
+    ok = result.converged & ~failed & within & np.all(np.isfinite(value) & np.isfinite(error), axis=1)
+    out_value, out_error = np.zeros((K, value.shape[1])), np.zeros((K, value.shape[1]))
+    out_value[cases], out_error[cases] = value, error
+    evaluations[cases] += result.evaluations
+    kept[cases] = ok
+    return out_value, out_error, evaluations, kept
