@@ -127,6 +127,34 @@ def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
     return code, out, err
 
 
+def half_vector_gauss_legendre(model, V, order, panels):
+    """E(V) = ∫ f(L, V)(N·L) 4(V·H) dω_H by composite Gauss-Legendre in polar coordinates (θ_H, φ_H) of the half
+    vector about N: N·L > 0 is θ_H < (π/2 + atan2(sin θ_V cos(φ_H − φ_V), cos θ_V))/2 in closed form, so each
+    φ_H node integrates θ_H over [0, θ_max] (panels graded towards θ_H = 0, where the lobe peaks). Shares no code
+    with brdfnorm's integrators."""
+    x, w = np.polynomial.legendre.leggauss(order)
+
+    def nodes(edges):
+        half, mid = np.diff(edges)[:, None] / 2, (edges[:-1] + edges[1:])[:, None] / 2
+        return (mid + half * x).ravel(), (half * w).ravel()
+
+    # The lobe (N·H)^(n_u cos²φ_H + n_v sin²φ_H) narrows to a wedge about φ_H = ±π/2 away from the pole.
+    graded = np.concatenate([-0.002 * 2.0 ** np.arange(10)[::-1], [0.0], 0.002 * 2.0 ** np.arange(10)])
+    edges = np.mod(np.concatenate([np.pi / 2 + graded, 3 * np.pi / 2 + graded, np.linspace(0.0, 2 * np.pi, panels)]),
+                   2 * np.pi)
+    phi, w_phi = nodes(np.append(np.unique(edges), 2 * np.pi))
+    y, w_y = nodes(np.concatenate([[0.0], 0.002 * 2.0 ** np.arange(9), [1.0]]))
+    theta_v, phi_v = np.arccos(V[2]), np.arctan2(V[1], V[0])
+    top = (np.pi / 2 + np.arctan2(np.sin(theta_v) * np.cos(phi - phi_v), np.cos(theta_v))) / 2  # (nφ,)
+    t = top[:, None] * y[None, :]
+    H = np.stack([np.sin(t) * np.cos(phi)[:, None], np.sin(t) * np.sin(phi)[:, None], np.cos(t)], axis=-1)
+    vh = H @ V
+    L = 2.0 * vh[..., None] * H - V
+    f = model.eval(L.reshape(-1, 3), np.broadcast_to(V, (L.size // 3, 3)))[:, 0].reshape(t.shape)
+    g = f * np.maximum(L[..., 2], 0.0) * 4.0 * vh * np.sin(t) * top[:, None]
+    return w_phi @ g @ w_y
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261121)

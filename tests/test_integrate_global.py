@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ggx_albedo_reference, phong_like_reference
+from conftest import ggx_albedo_reference, half_vector_gauss_legendre, phong_like_reference
 
 import brdfnorm as bn
 from brdfnorm import integrate as engine
@@ -215,3 +215,20 @@ def test_a_stall_before_a_sudden_agreement_is_not_settled(theta_deg):
     model = bn.load(str(Path(__file__).resolve().parents[1] / "examples" / "oren_nayar.brdf"))
     result = _quiet(model, theta, rtol=1e-6)
     assert result.error[0] >= abs(result.value[0] - exact)
+
+
+def test_an_unresolved_azimuthal_wedge_does_not_settle_in_the_global_rule():
+    # Ashikhmin-Shirley with n_u = 1407, n_v = 2.3 is a wedge ~1/25 rad wide about its peak in the lobe-aligned
+    # azimuth β. At rtol 1e-5 the rule settled it at 128 × 255 nodes, the 64- and 128-azimuth rules agreeing to
+    # 4.5e-7 on a value 1.1e-6 off (0.7 of the error); the Fourier tail of the β profile (tensor_rule._azimuthal_tail)
+    # keeps it from settling there. Reference: composite Gauss-Legendre over the half vector, at two orders that
+    # must agree.
+    params = dict(nu=1407.321199972626, nv=2.306811896628435, Rs=0.03160002608104069, Rd=0.13596547178173649)
+    model = bn.load(str(Path(__file__).resolve().parents[1] / "examples" / "ashikhmin_shirley.brdf"), **params)
+    theta, phi = 1.0418883384140385, 3.860220958354151
+    V = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    coarse, reference = (half_vector_gauss_legendre(model, V, n, 16) for n in (24, 32))
+    assert abs(coarse - reference) < 1e-7  # the failure being guarded against was 1.1e-6 off
+    for rtol in (1e-4, 1e-5):
+        result = bn.albedo(model, theta, phi=phi, rtol=rtol, method="quadrature")
+        assert abs(result.value.ravel()[0] - reference) <= result.error.ravel()[0], rtol

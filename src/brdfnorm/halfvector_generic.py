@@ -154,7 +154,8 @@ def route(fixed: np.ndarray, brdf: Callable, parameter_set: np.ndarray, integran
         labels, first = np.unique(parameter_set[cases], return_index=True)
         invariant = np.zeros(parameter_set.max() + 1, dtype=bool)
         invariant[labels] = rotation_invariant(brdf, cases[first], rtol)
-        evaluations[cases[first]] += 3 * ISOTROPY_PAIRS
+        # Each case is charged the test as if it had run alone: the counts do not depend on how cases are batched.
+        evaluations[cases] += 3 * ISOTROPY_PAIRS
         cases = cases[invariant[parameter_set[cases]]]
     if not cases.size:
         return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
@@ -189,7 +190,8 @@ def route(fixed: np.ndarray, brdf: Callable, parameter_set: np.ndarray, integran
     with np.errstate(all="ignore"):
         # Half the budget for the global rule (three radial pieces), the rest for the panels.
         result = integrate_slopes(g, weight_of, symmetric, rtol=rtol, atol=atol, max_evaluations=budget,
-                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)))
+                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)),
+                                  azimuthal_tail=True)
     value, error, magnitude = result.value[:, :-1], result.error[:, :-1], result.value[:, -1:]
     error = error + noise_bound(np.broadcast_to(noise_amplitude[cases], value.shape), magnitude)
     within = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=1)
