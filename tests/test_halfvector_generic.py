@@ -12,12 +12,9 @@ from conftest import half_vector_gauss_legendre
 
 import brdfnorm as bn
 from brdfnorm import halfvector_generic
+from brdfnorm.directional import rotation_invariant
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-def ONE(L, V, case):  # noqa: N802  (a constant BRDF, isotropic)
-    return np.ones((L.shape[0], 1))
 
 
 @pytest.fixture
@@ -79,9 +76,9 @@ def test_anisotropic_lobe_is_left_to_the_lobe_aligned_routes(kept):
     def brdf(L, V, case):
         return model.evaluate(L, V, model.params)
 
-    assert not halfvector_generic.rotation_invariant(brdf, np.arange(1), 1e-9).any()
+    assert not rotation_invariant(brdf, np.arange(1), 1e-9).any()
     isotropic = bn.load(str(EXAMPLES / "ashikhmin_shirley.brdf"), **{**params, "nv": params["nu"]})
-    assert halfvector_generic.rotation_invariant(
+    assert rotation_invariant(
         lambda L, V, case: isotropic.evaluate(L, V, isotropic.params), np.arange(1), 1e-9).all()
     assert result.converged.all()
 
@@ -100,7 +97,7 @@ def test_mirror_symmetry_is_measured_not_assumed():
     assert not halfvector_generic.mirror_symmetric(lopsided, fixed, alpha, np.arange(1), 1e-9).any()
     # A lopsided lobe integrated over the full azimuth range: the exact integral of cos·(1 + 0.01 ω_y) is π.
     value, error, _, ok = halfvector_generic.route(
-        fixed, ONE, np.zeros(1, dtype=int), lopsided, fixed * [-1, -1, 1], np.array([1.0]), np.arange(1),
+        fixed, np.ones(1, dtype=bool), lopsided, fixed * [-1, -1, 1], np.array([1.0]), np.arange(1),
         np.zeros((1, 1)), rtol=1e-10, atol=0.0, max_evaluations=10**6)
     assert ok.all() and abs(value[0, 0] - np.pi) <= error[0, 0] <= 1e-10 * np.pi
 
@@ -122,7 +119,7 @@ def test_nonfinite_values_are_not_kept():
         return np.where(omega[:, 2:3] > 0.5, np.nan, 1.0)
 
     _, _, evaluations, ok = halfvector_generic.route(
-        fixed, ONE, np.zeros(1, dtype=int), broken, fixed, np.array([1.0]), np.arange(1), np.zeros((1, 1)),
+        fixed, np.ones(1, dtype=bool), broken, fixed, np.array([1.0]), np.arange(1), np.zeros((1, 1)),
         rtol=1e-8, atol=0.0, max_evaluations=10**6)
     assert not ok.any() and evaluations[0] > 0
 

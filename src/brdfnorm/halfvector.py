@@ -440,12 +440,11 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
 
 def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
                      atol: float | np.ndarray, max_evaluations: int, use_global: bool = True,
-                     max_nodes: int = global_rule.MAX_NODES, azimuthal_tail: bool = False) -> CubatureResult:
+                     max_nodes: int = global_rule.MAX_NODES) -> CubatureResult:
     """∫∫ w du dφ/2π over the rectangle of (H1) for every case of ``g``: the global rule first (``max_nodes`` per
-    radial piece; ``azimuthal_tail`` as in :func:`brdfnorm.halfvector_global.integrate_global`), then the adaptive
-    panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric about the plane of N and V, so half
-    the azimuth range, counted twice, is the whole integral (the azimuth map's zeros at φ = 0, π and its symmetry
-    axes at φ = π/2, 3π/2)."""
+    radial piece), then the adaptive panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric
+    about the plane of N and V, so half the azimuth range, counted twice, is the whole integral (the azimuth map's
+    zeros at φ = 0, π and its symmetry axes at φ = π/2, 3π/2)."""
     K = g.V.shape[0]
     g.multiplicity = np.where(symmetric, 2.0, 1.0)
     full = np.linspace(0.0, _TWO_PI, 5)
@@ -461,8 +460,7 @@ def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray
     tried = np.arange(K) if use_global else np.arange(0)
     value, error, evaluations, settled = global_rule.integrate_global(
         slope_integrand(g, weight_of, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
-        atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name),
-        azimuthal_tail=azimuthal_tail)
+        atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name))
     initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:

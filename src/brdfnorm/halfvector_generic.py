@@ -26,10 +26,10 @@ c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks
 
 Where it is tried, and when its answer is kept
 ----------------------------------------------
-- Only for isotropic lobes (:func:`rotation_invariant`, at each case's parameters), for cases whose rounding
-  noise is far below the tolerance (the same test as the global rule of :mod:`brdfnorm.tensor_rule`), whose
-  fixed direction is at least :data:`MU_MIN` above the horizon, and whose peak's half vector lies within the
-  lobe's core of N, or whose lobe is broad (:func:`specular`).
+- Only for isotropic lobes (:func:`brdfnorm.directional.rotation_invariant`, at each case's parameters), for
+  cases whose rounding noise is far below the tolerance (the same test as the global rule of
+  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, and whose
+  peak's half vector lies within the lobe's core of N, or whose lobe is broad (:func:`specular`).
 - The half azimuth range counted twice only where a sample of directions and their mirror images in the plane
   of N and F agree to rtol/64 (:func:`mirror_symmetric`); otherwise the full range.
 - A case is kept only if its cubature converged, every value was finite, and the estimate plus the
@@ -59,8 +59,6 @@ BROAD = 0.5
 LATTICE = 96
 RINGS = (0.125, 0.5, 1.0, 2.0, 8.0)
 AZIMUTHS = 12
-#: Random direction pairs per case for the isotropy test.
-ISOTROPY_PAIRS = 48
 #: Evaluations this route may spend on a case before the lobe-aligned routes take it, and the least budget (what
 #: the engine passes: a quarter of its own) for which it is tried at all.
 BUDGET = 200_000
@@ -111,52 +109,18 @@ def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, 
     return np.isfinite(scale) & np.isfinite(difference) & (difference <= rtol / 64 * scale)
 
 
-def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.ndarray:
-    """Per case of ``cases``: f(R L, R V) = f(L, V) to rtol/64 of max |f| on random pairs, R rotations about N.
-    ``brdf(L, V, case)`` evaluates f for (M, 3) directions and the case index (M,) of each.
-
-    An anisotropic lobe is an ellipse in H, thinner than the map's azimuths where it is long (Ashikhmin-Shirley,
-    n_u = 1.6, n_v = 5112: 1.37 times the estimate at rtol 1e-9); the lobe-aligned routes take those."""
-    rng = np.random.default_rng(7)
-    z = rng.random((2, ISOTROPY_PAIRS))
-    phi = 2.0 * np.pi * rng.random((2, ISOTROPY_PAIRS))
-    r = np.sqrt(1.0 - z * z)
-    L, V = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-    index = np.repeat(cases, ISOTROPY_PAIRS)
-    with np.errstate(all="ignore"):
-        reference = np.asarray(brdf(np.tile(L, (cases.size, 1)), np.tile(V, (cases.size, 1)), index), dtype=float)
-        scale = np.abs(reference).reshape(cases.size, -1).max(axis=1)
-        change = np.zeros(cases.size)
-        for angle in (0.7, 2.1):
-            c, s = np.cos(angle), np.sin(angle)
-            rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-            turned = [np.tile(d @ rotation.T, (cases.size, 1)) for d in (L, V)]
-            rotated = np.asarray(brdf(*turned, index), dtype=float)
-            change = np.maximum(change, np.abs(rotated - reference).reshape(cases.size, -1).max(axis=1))
-    return np.isfinite(scale) & np.isfinite(change) & (change <= rtol / 64 * scale)
-
-
-def route(fixed: np.ndarray, brdf: Callable, parameter_set: np.ndarray, integrand: Callable, poles: np.ndarray,
-          widths: np.ndarray, quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
-          max_evaluations: int):
-    """(value (K, C), error (K, C), evaluations (K,), kept (K,)) of (G1) for the ``quiet`` cases that are
-    :func:`specular` and :func:`rotation_invariant` (module docstring), as
-    :func:`brdfnorm.integrate.integrate_hemisphere` tries it first: rows of cases not kept are to be ignored;
-    their evaluations are counted. ``parameter_set`` (K,) labels the cases by their parameter values (the same
-    label, the same f): isotropy is tested once per label."""
+def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: np.ndarray, widths: np.ndarray,
+          quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float, max_evaluations: int):
+    """(value (K, C), error (K, C), evaluations (K,), kept (K,)) of (G1) for the ``quiet`` cases whose lobe is
+    ``isotropic`` (K,) and :func:`specular` (module docstring), as :func:`brdfnorm.integrate.integrate_hemisphere`
+    tries it first: rows of cases not kept are to be ignored; their evaluations are counted."""
     K = fixed.shape[0]
     eligible, alpha = specular(fixed, poles, widths)
+    eligible &= isotropic
     cases = quiet[eligible[quiet]] if max_evaluations >= MIN_BUDGET else quiet[:0]
     budget = min(max_evaluations, BUDGET)
     evaluations = np.zeros(K, dtype=np.int64)
     kept = np.zeros(K, dtype=bool)
-    if cases.size:
-        labels, first = np.unique(parameter_set[cases], return_index=True)
-        invariant = np.zeros(parameter_set.max() + 1, dtype=bool)
-        invariant[labels] = rotation_invariant(brdf, cases[first], rtol)
-        # Each case is charged the test as if it had run alone: the counts do not depend on how cases are batched.
-        evaluations[cases] += 3 * ISOTROPY_PAIRS
-        cases = cases[invariant[parameter_set[cases]]]
     if not cases.size:
         return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
@@ -190,8 +154,7 @@ def route(fixed: np.ndarray, brdf: Callable, parameter_set: np.ndarray, integran
     with np.errstate(all="ignore"):
         # Half the budget for the global rule (three radial pieces), the rest for the panels.
         result = integrate_slopes(g, weight_of, symmetric, rtol=rtol, atol=atol, max_evaluations=budget,
-                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)),
-                                  azimuthal_tail=True)
+                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)))
     value, error, magnitude = result.value[:, :-1], result.error[:, :-1], result.value[:, -1:]
     error = error + noise_bound(np.broadcast_to(noise_amplitude[cases], value.shape), magnitude)
     within = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=1)

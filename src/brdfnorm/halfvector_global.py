@@ -53,7 +53,6 @@ from .tensor_rule import (
     _FLOOR,
     MAX_LEVEL_B,
     START_LEVELS,
-    _azimuthal_tail,
     _doublings,
     _normalized,
     _sums,
@@ -148,10 +147,9 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
 
 def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symmetric: np.ndarray,
                      scale: np.ndarray, *, rtol: float | np.ndarray, atol: float | np.ndarray,
-                     max_nodes: int = MAX_NODES, width: np.ndarray | None = None, azimuthal_tail: bool = False):
+                     max_nodes: int = MAX_NODES, width: np.ndarray | None = None):
     """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases``; ``scale`` (K,)
-    turns the integrand's weight into one over the full azimuth range; ``azimuthal_tail``: the φ estimate is at
-    least :func:`brdfnorm.tensor_rule._azimuthal_tail` (for weights not known to be smooth in φ)."""
+    turns the integrand's weight into one over the full azimuth range."""
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
     width = np.zeros(K) if width is None else width
     evaluations = np.zeros(K, dtype=np.int64)
@@ -161,7 +159,7 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
     for start in range(0, cases.size, batch):
         part = cases[start:start + batch]
         v, e, ok = _integrate_batch(integrand, K, part, lam, width, symmetric, scale, rtol, atol, max_nodes,
-                                    evaluations, azimuthal_tail)
+                                    evaluations)
         if value is None:
             value, error = np.zeros((K, v.shape[1])), np.zeros((K, v.shape[1]))
         value[part], error[part], settled[part] = v[part], e[part], ok[part]
@@ -170,8 +168,7 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
     return value, error, evaluations, settled
 
 
-def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, atol, max_nodes, evaluations,
-                     azimuthal_tail):
+def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, atol, max_nodes, evaluations):
     level_b, level_u = START_LEVELS
     case, piece = np.repeat(cases, PIECES), np.tile(np.arange(PIECES), cases.size)
     M = 2**level_b
@@ -189,10 +186,7 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
         for group in groups:
             finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
-                grid = np.where(finite[:, None, None, None], group.grid, 0.0)
-                q, e_b, e_u, magnitude = _sums(grid, group.level_u)
-                if azimuthal_tail:
-                    e_b = np.maximum(e_b, _azimuthal_tail(grid, group.level_u))
+                q, e_b, e_u, magnitude = _sums(np.where(finite[:, None, None, None], group.grid, 0.0), group.level_u)
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
             sums.append((finite, q, e_b, e_u, magnitude))

@@ -227,6 +227,7 @@ def integrate_hemisphere(
     initial_panels: tuple[int, int] = (4, 2),
     max_nodes_per_call: int = 1_500_000,
     first_route: FirstRoute | None = None,
+    anisotropic: np.ndarray | None = None,
 ) -> HemisphereResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
@@ -246,6 +247,9 @@ def integrate_hemisphere(
     first_route
         Tried before the global rule on the cases whose rounding noise is far below the tolerance (the
         half-vector route of :mod:`brdfnorm.halfvector_generic`); the cases it keeps are final.
+    anisotropic
+        Per case (K,), True where the lobe is not rotation-invariant about N: the global rule's azimuth estimate
+        then also bounds the Fourier tail (:func:`brdfnorm.tensor_rule._azimuthal_tail`).
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
@@ -280,7 +284,7 @@ def integrate_hemisphere(
         quiet = quiet[~first[3][quiet]]
     tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
                              noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
-                             max_nodes_per_call=max_nodes_per_call)
+                             max_nodes_per_call=max_nodes_per_call, azimuthal_tail=anisotropic)
     evaluations += tried.evaluations
     remaining = np.flatnonzero(~tried.settled & ~(first[3] if first else False))
     panels = _Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
