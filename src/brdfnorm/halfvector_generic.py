@@ -28,8 +28,10 @@ Where it is tried, and when its answer is kept
 ----------------------------------------------
 - Only for isotropic lobes (:func:`brdfnorm.directional.rotation_invariant`, at each case's parameters), for
   cases whose rounding noise is far below the tolerance (the same test as the global rule of
-  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, and whose
-  peak's half vector lies within the lobe's core of N, or whose lobe is broad (:func:`specular`).
+  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, whose
+  peak's half vector lies within the lobe's core of N (:func:`specular`), and whose lobe has a power-law tail
+  (:func:`heavy_tailed`): Gaussian lobes cost both routes about the same evaluations, each cheaper in the
+  lobe-aligned coordinates.
 - The half azimuth range counted twice only where a sample of directions and their mirror images in the plane
   of N and F agree to rtol/64 (:func:`mirror_symmetric`); otherwise the full range.
 - A case is kept only if its cubature converged, every value was finite, and the estimate plus the
@@ -53,9 +55,11 @@ from .rounding import noise_bound
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
 MU_MIN = 1e-3
-#: A lobe whose (ω-space) width is at least this is broad: where its peak lies matters little to the map.
-BROAD = 0.5
-#: Sampled directions per case for the mirror-symmetry test: a Fibonacci lattice and a polar grid in H.
+#: The heavy-tail test: |g| at standardized slope radius FAR against the pole (:func:`heavy_tailed`).
+FAR = 8.0
+HEAVY = 1e-6
+#: Sampled directions per case for the mirror-symmetry test: a Fibonacci lattice and a polar grid in H (also the
+#: heavy-tail test's azimuths).
 LATTICE = 96
 RINGS = (0.125, 0.5, 1.0, 2.0, 8.0)
 AZIMUTHS = 12
@@ -68,14 +72,47 @@ _GGX = GGXDistribution()
 
 
 def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(eligible (K,), α (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of N (or
-    the lobe is broad), and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
+    """(eligible (K,), α (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of N, and
+    the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
     half = poles + fixed
     tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
     width = np.asarray(widths, dtype=float)
-    eligible = (fixed[:, 2] >= MU_MIN) & ((tilt <= 0.5 * width) | (width >= BROAD))
+    eligible = (fixed[:, 2] >= MU_MIN) & (tilt <= 0.5 * width)
     alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
     return eligible, alpha
+
+
+def _ring(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray, slopes: tuple,
+          extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(ω (k, m, 3), g (k, m, C) with 0 below the horizon, case of each row): ω = 2(F·H)H − F for H at standardized
+    slope radii ``slopes`` (slowest) × :data:`AZIMUTHS` azimuths, then the directions ``extra`` (m', 3)."""
+    F = fixed[cases]
+    ring, phi = np.meshgrid(np.asarray(slopes), np.arange(AZIMUTHS) * (2 * np.pi / AZIMUTHS) + 0.1, indexing="ij")
+    slope = alpha[cases][:, None] * ring.ravel()  # |x| = α s
+    H = np.stack([slope * np.cos(phi.ravel()), slope * np.sin(phi.ravel()), np.ones_like(slope)], axis=-1)
+    H /= np.linalg.norm(H, axis=-1, keepdims=True)
+    omega = reflect(F[:, None, :], H)
+    if extra is not None:
+        omega = np.concatenate([omega, np.broadcast_to(extra, (cases.size,) + extra.shape)], axis=1)
+    return omega, _values(integrand, omega, cases), cases
+
+
+def _values(integrand: Callable, omega: np.ndarray, cases: np.ndarray) -> np.ndarray:
+    index = np.broadcast_to(cases[:, None], omega.shape[:2]).ravel()
+    with np.errstate(all="ignore"):
+        g = np.asarray(integrand(omega.reshape(-1, 3), index), dtype=float).reshape(omega.shape[:2] + (-1,))
+    return np.where((omega[..., 2] > 0)[..., None], g, 0.0)
+
+
+def heavy_tailed(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray) -> np.ndarray:
+    """Per case of ``cases``: |g| at slope radius s = :data:`FAR` (α s from N in H) exceeds :data:`HEAVY` of |g| at
+    the pole. A power-law tail (GGX: (1 + s²)⁻² = 2.4e-4 there) is where the lobe-aligned coordinates need many
+    nodes near the horizon and this route does not; a Gaussian one (Blinn-Phong, Phong, Beckmann: below 1e-20)
+    costs both routes about the same evaluations, each cheaper in the lobe-aligned ones."""
+    _, g, _ = _ring(integrand, fixed, alpha, cases, (0.0, FAR))
+    pole, far = np.abs(g[:, :AZIMUTHS]).max(axis=(1, 2)), np.abs(g[:, AZIMUTHS:]).max(axis=(1, 2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return far > HEAVY * pole
 
 
 def reflect(fixed: np.ndarray, H: np.ndarray) -> np.ndarray:
@@ -87,23 +124,11 @@ def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, 
                      rtol: float) -> np.ndarray:
     """Per case of ``cases``: g(ω) = g(ω') to rtol/64 of max |g| on a sample, ω' the mirror image of ω in the
     plane of N and F (the plane :func:`brdfnorm.halfvector.integrate_slopes` folds the azimuth about)."""
-    F = fixed[cases]
-    azimuth = np.arctan2(F[:, 1], F[:, 0])
+    omega, g, _ = _ring(integrand, fixed, alpha, cases, RINGS, fibonacci_hemisphere(LATTICE))
+    azimuth = np.arctan2(fixed[cases, 1], fixed[cases, 0])
     across = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros_like(azimuth)], axis=-1)  # normal of the plane
-    ring, phi = np.meshgrid(np.asarray(RINGS), np.arange(AZIMUTHS) * (2 * np.pi / AZIMUTHS) + 0.1)
-    slope = alpha[cases][:, None] * ring.ravel()  # |x| = α s at s = RINGS
-    H = np.stack([slope * np.cos(phi.ravel()), slope * np.sin(phi.ravel()), np.ones_like(slope)], axis=-1)
-    H /= np.linalg.norm(H, axis=-1, keepdims=True)
-    near = reflect(F[:, None, :], H)
-    lattice = np.broadcast_to(fibonacci_hemisphere(LATTICE), (cases.size, LATTICE, 3))
-    omega = np.concatenate([near, lattice], axis=1)  # (k, m, 3)
     image = omega - 2.0 * np.einsum("kmi,ki->km", omega, across)[..., None] * across[:, None, :]
-    index = np.broadcast_to(cases[:, None], omega.shape[:2]).ravel()
-    with np.errstate(all="ignore"):
-        g = np.asarray(integrand(omega.reshape(-1, 3), index), dtype=float).reshape(omega.shape[:2] + (-1,))
-        g_image = np.asarray(integrand(image.reshape(-1, 3), index), dtype=float).reshape(g.shape)
-    inside = (omega[..., 2] > 0)[..., None]
-    g, g_image = np.where(inside, g, 0.0), np.where(inside, g_image, 0.0)
+    g_image = np.where((omega[..., 2] > 0)[..., None], _values(integrand, image, cases), 0.0)
     scale = np.max(np.abs(g), axis=(1, 2))
     difference = np.max(np.abs(g - g_image), axis=(1, 2))
     return np.isfinite(scale) & np.isfinite(difference) & (difference <= rtol / 64 * scale)
@@ -121,6 +146,9 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     budget = min(max_evaluations, BUDGET)
     evaluations = np.zeros(K, dtype=np.int64)
     kept = np.zeros(K, dtype=bool)
+    if cases.size:
+        evaluations[cases] += 2 * AZIMUTHS
+        cases = cases[heavy_tailed(integrand, fixed, alpha, cases)]
     if not cases.size:
         return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
