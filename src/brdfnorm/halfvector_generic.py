@@ -28,10 +28,11 @@ Where it is tried, and when its answer is kept
 ----------------------------------------------
 - Only for isotropic lobes (:func:`brdfnorm.directional.rotation_invariant`, at each case's parameters), for
   cases whose rounding noise is far below the tolerance (the same test as the global rule of
-  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, whose
-  peak's half vector lies within the lobe's core of N (:func:`specular`), and whose lobe has a power-law tail
-  (:func:`heavy_tailed`): Gaussian lobes cost both routes about the same evaluations, each cheaper in the
-  lobe-aligned coordinates.
+  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, and either
+  whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
+  whose peak's half vector lies within the lobe's core of N (:func:`specular`) and whose tail is a power law
+  (:func:`heavy_tailed`): narrow Gaussian lobes cost both routes about the same evaluations, each cheaper in
+  the lobe-aligned coordinates.
 - The half azimuth range counted twice only where a sample of directions and their mirror images in the plane
   of N and F agree to rtol/64 (:func:`mirror_symmetric`); otherwise the full range.
 - A case is kept only if its cubature converged, every value was finite, and the estimate plus the
@@ -55,6 +56,10 @@ from .rounding import noise_bound
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
 MU_MIN = 1e-3
+#: A lobe whose (ω-space) width is at least this is broad: taken wherever its peak lies, since a narrow feature at
+#: the mirror direction over it (a clear coat's spike over a diffuse base) lies at this route's pole, where the
+#: lobe-aligned coordinates about the base's peak can miss it entirely (examples/layered_series.brdf).
+BROAD = 0.5
 #: The heavy-tail test: |g| at standardized slope radius FAR against the pole (:func:`heavy_tailed`).
 FAR = 8.0
 HEAVY = 1e-6
@@ -72,14 +77,15 @@ _GGX = GGXDistribution()
 
 
 def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(eligible (K,), α (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of N, and
-    the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
+    """(eligible (K,), α (K,), broad (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of
+    N, or the lobe is broad, and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
     half = poles + fixed
     tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
     width = np.asarray(widths, dtype=float)
-    eligible = (fixed[:, 2] >= MU_MIN) & (tilt <= 0.5 * width)
+    broad = width >= BROAD
+    eligible = (fixed[:, 2] >= MU_MIN) & ((tilt <= 0.5 * width) | broad)
     alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
-    return eligible, alpha
+    return eligible, alpha, broad
 
 
 def _ring(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray, slopes: tuple,
@@ -140,15 +146,16 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     ``isotropic`` (K,) and :func:`specular` (module docstring), as :func:`brdfnorm.integrate.integrate_hemisphere`
     tries it first: rows of cases not kept are to be ignored; their evaluations are counted."""
     K = fixed.shape[0]
-    eligible, alpha = specular(fixed, poles, widths)
+    eligible, alpha, broad = specular(fixed, poles, widths)
     eligible &= isotropic
     cases = quiet[eligible[quiet]] if max_evaluations >= MIN_BUDGET else quiet[:0]
     budget = min(max_evaluations, BUDGET)
     evaluations = np.zeros(K, dtype=np.int64)
     kept = np.zeros(K, dtype=bool)
-    if cases.size:
-        evaluations[cases] += 2 * AZIMUTHS
-        cases = cases[heavy_tailed(integrand, fixed, alpha, cases)]
+    narrow = cases[~broad[cases]]
+    if narrow.size:
+        evaluations[narrow] += 2 * AZIMUTHS
+        cases = np.union1d(cases[broad[cases]], narrow[heavy_tailed(integrand, fixed, alpha, narrow)])
     if not cases.size:
         return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
