@@ -77,13 +77,13 @@ _GGX = GGXDistribution()
 
 
 def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(eligible (K,), α (K,), broad (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its half-width of
+    """(eligible (K,), α (K,), broad (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its width of
     N, or the lobe is broad, and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
     half = poles + fixed
     tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
     width = np.asarray(widths, dtype=float)
     broad = width >= BROAD
-    eligible = (fixed[:, 2] >= MU_MIN) & ((tilt <= 0.5 * width) | broad)
+    eligible = (fixed[:, 2] >= MU_MIN) & ((tilt <= width) | broad)
     alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
     return eligible, alpha, broad
 
