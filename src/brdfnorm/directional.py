@@ -254,7 +254,8 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-    # A lobe of the upper hemisphere centred on the mirror direction: the half-vector route first.
+    # The half-vector route first, on the upper hemisphere (brdfnorm.halfvector_generic says which lobes it takes);
+    # isotropy decides that and the global rule's azimuth estimate.
     isotropic = _isotropic_cases(problem, rtol)
     first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
     result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
@@ -311,7 +312,6 @@ def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.nda
             rotated = np.asarray(brdf(*turned, index), dtype=float)
             change = np.maximum(change, np.abs(rotated - reference).reshape(cases.size, -1).max(axis=1))
     return np.isfinite(scale) & np.isfinite(change) & (change <= rtol / 64 * scale)
-
 
 
 def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:

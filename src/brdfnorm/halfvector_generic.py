@@ -76,7 +76,7 @@ MIN_BUDGET = 20_000
 _GGX = GGXDistribution()
 
 
-def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(eligible (K,), α (K,), broad (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its width of
     N, or the lobe is broad, and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
     half = poles + fixed
