@@ -326,11 +326,6 @@ def _microfacet_weight(g: _Geometry) -> SlopeWeight:
     return weight_of
 
 
-def _microfacet_integrand(g: _Geometry, linear: bool = False) -> RectangleIntegrand:
-    """(H1) of the microfacet lobe on the rectangle (φ, v) (:func:`slope_integrand`)."""
-    return slope_integrand(g, _microfacet_weight(g), linear)
-
-
 def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
     """The rectangle (φ, v) of (H1) with the weight ``weight_of``; ``linear``: φ is the azimuth from the offset
     itself (no φ-map), for the global rule (:mod:`brdfnorm.halfvector_global`), which clusters its own nodes."""

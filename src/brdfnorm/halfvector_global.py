@@ -8,7 +8,7 @@ Fejér's second rule in v, both nested under doubling, error along each directio
 embedded coarser rules (:func:`brdfnorm.tensor_rule._sums`), plus the rounding floor.
 
 Azimuth nodes. At grazing views the horizon radius s_h(φ) varies over an azimuthal width ~V_z next to the zeros
-of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.halfvector._microfacet_integrand`
+of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.halfvector.slope_integrand`
 (called with ``linear=True``: φ is the azimuth from that offset, no φ-map of its own). The trapezoid runs on t
 with tensor_rule's periodic Möbius map :func:`brdfnorm.tensor_rule.beta_map`, tan φ = λ tan t: nodes 1/λ times
 denser at both zeros, λ = clip(1.2 √V_z, 0.05, 1). (Measured, GGX at α = 0.03, 0.2, 0.7, azimuths for a deviation
@@ -22,7 +22,7 @@ azimuthal features next to the zeros of p are ~μ wide, with structure out to O(
 α/V_z, exceeds the horizon radius s_h, so the horizon piece [s_split, s_h] spans decades of s (s_split = s_h²/(s_h
 + gap)) over which the slope density falls as a power: linear in s, Fejér's rule needed > 1000 radial nodes (μ ≲
 3e-3) or never converged (μ ≲ 3e-4). So for these lobes the horizon piece runs linear in ln s at every view (see
-``_microfacet_integrand``; linear in s where its ends are close; analytic in a wide strip for a power-law tail, not
+``slope_integrand``; linear in s where its ends are close; analytic in a wide strip for a power-law tail, not
 for Beckmann's e^{−s²}, where the sweep of ``tests/test_halfvector_global.py`` found estimates 10³× too small,
 hence GGX only), and below μ = :data:`GRADED_BELOW` the azimuth takes a periodic analogue of the panels' sinh
 grading: tan φ = δ sinh(κ sin t)/cos t, δ = μ, κ = arsinh(1/δ) — dφ/dt = δκ at the zeros, distances δ … 1 spread
