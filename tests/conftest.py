@@ -165,9 +165,10 @@ def lobe_aligned_only(monkeypatch):
     """The generic engine without its half-vector route (brdfnorm.halfvector_generic), for tests of the
     lobe-aligned routes behind it."""
     from brdfnorm import halfvector_generic
+    from brdfnorm.tensor_rule import GlobalResult
 
     def nothing_kept(fixed, *args, **kwargs):
         K = fixed.shape[0]
-        return np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
+        return GlobalResult(np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool))
 
     monkeypatch.setattr(halfvector_generic, "route", nothing_kept)

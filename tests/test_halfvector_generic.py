@@ -25,7 +25,7 @@ def kept(monkeypatch):
 
     def spy(*args, **kwargs):
         out = original(*args, **kwargs)
-        calls.append(out[3])
+        calls.append(out.settled)
         return out
 
     monkeypatch.setattr(halfvector_generic, "route", spy)
@@ -106,10 +106,11 @@ def test_mirror_symmetry_is_measured_not_assumed():
     assert halfvector_generic.mirror_symmetric(symmetric, fixed, alpha, np.arange(1), 1e-9).all()
     assert not halfvector_generic.mirror_symmetric(lopsided, fixed, alpha, np.arange(1), 1e-9).any()
     # A lopsided lobe integrated over the full azimuth range: the exact integral of cos·(1 + 0.01 ω_y) is π.
-    value, error, _, ok = halfvector_generic.route(
+    result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), lopsided, fixed * [-1, -1, 1], np.array([0.2]), np.arange(1),
         np.zeros((1, 1)), rtol=1e-10, atol=0.0, max_evaluations=10**6)
-    assert ok.all() and abs(value[0, 0] - np.pi) <= error[0, 0] <= 1e-10 * np.pi
+    assert result.settled.all()
+    assert abs(result.value[0, 0] - np.pi) <= result.error[0, 0] <= 1e-10 * np.pi
 
 
 def test_where_it_is_not_tried():
@@ -139,10 +140,10 @@ def test_nonfinite_values_are_not_kept():
     def broken(omega, case):
         return np.where(omega[:, 2:3] > 0.5, np.nan, 1.0)
 
-    _, _, evaluations, ok = halfvector_generic.route(
+    result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), broken, fixed, np.array([1.0]), np.arange(1), np.zeros((1, 1)),
         rtol=1e-8, atol=0.0, max_evaluations=10**6)
-    assert not ok.any() and evaluations[0] > 0
+    assert not result.settled.any() and result.evaluations[0] > 0
 
 
 def test_isotropy_is_tested_at_each_cases_parameters(kept):

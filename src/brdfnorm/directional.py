@@ -26,6 +26,7 @@ from functools import partial
 import numpy as np
 
 from . import halfvector_generic, validate
+from .brdffile import random_hemisphere
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
 from .models.base import Lobe, Model, Over, mirror
@@ -296,10 +297,7 @@ def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.nda
     vector; n_u = 1407, n_v = 2.3: 1.42 times at rtol 1e-5 in the lobe-aligned global rule). Such lobes skip the
     half-vector route, and the global rule bounds its azimuthal Fourier tail for them."""
     rng = np.random.default_rng(7)
-    z = rng.random((2, ISOTROPY_PAIRS))
-    phi = 2.0 * np.pi * rng.random((2, ISOTROPY_PAIRS))
-    r = np.sqrt(1.0 - z * z)
-    L, V = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+    L, V = random_hemisphere(rng, ISOTROPY_PAIRS), random_hemisphere(rng, ISOTROPY_PAIRS)
     index = np.repeat(cases, ISOTROPY_PAIRS)
     with np.errstate(all="ignore"):
         reference = np.asarray(brdf(np.tile(L, (cases.size, 1)), np.tile(V, (cases.size, 1)), index), dtype=float)

@@ -278,8 +278,8 @@ def _grading_width(g: _Geometry) -> np.ndarray:
 @dataclass(frozen=True)
 class SlopeNodes:
     """The quantities of (H1) at a grid of nodes (R, n, n) that a weight function needs: the case index ``k``
-    (R, 1, 1) into the geometry, slope radius ``s`` along x = s d(φ), d = (``dx``, ``dy``), ``p`` = c·d,
-    ``one_sp`` = 1 + s p = (V·H)/(V_z H_z), ``n2`` = 1 + s²|d|² = 1/H_z², ``Lz`` = N·L (accurate at the horizon),
+    (R, 1, 1) into the geometry, slope radius ``s`` along x = s d(φ), d = (``dx``, ``dy``), ``one_sp`` = 1 + s c·d =
+    (V·H)/(V_z H_z), ``n2`` = 1 + s²|d|² = 1/H_z², ``Lz`` = N·L (accurate at the horizon),
     ``weight_t`` = du/dt of the radial coordinate, ``azimuth`` = dφ/dξ · multiplicity / 2π."""
 
     k: np.ndarray
@@ -287,7 +287,6 @@ class SlopeNodes:
     s: np.ndarray
     dx: np.ndarray
     dy: np.ndarray
-    p: np.ndarray
     one_sp: np.ndarray
     n2: np.ndarray
     Lz: np.ndarray
@@ -405,7 +404,7 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
         Lz = vz * gap_to_horizon * (d2 * s + q_minus_p) / n2
-        return weight_of(SlopeNodes(k, case, s, dx, dy, p, one_sp, n2, Lz, weight_t,
+        return weight_of(SlopeNodes(k, case, s, dx, dy, one_sp, n2, Lz, weight_t,
                                     phi_jacobian * (g.multiplicity[k] / _TWO_PI)))
 
     return integrand

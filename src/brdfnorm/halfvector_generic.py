@@ -52,6 +52,7 @@ from .halfvector import SlopeNodes, _Geometry, integrate_slopes
 from .integrate import fibonacci_hemisphere
 from .models.microfacet import GGXDistribution
 from .rounding import noise_bound
+from .tensor_rule import GlobalResult
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
@@ -89,8 +90,8 @@ def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[
 
 
 def _ring(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray, slopes: tuple,
-          extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(ω (k, m, 3), g (k, m, C) with 0 below the horizon, case of each row): ω = 2(F·H)H − F for H at standardized
+          extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(ω (k, m, 3), g (k, m, C) with 0 below the horizon): ω = 2(F·H)H − F for H at standardized
     slope radii ``slopes`` (slowest) × :data:`AZIMUTHS` azimuths, then the directions ``extra`` (m', 3)."""
     F = fixed[cases]
     ring, phi = np.meshgrid(np.asarray(slopes), np.arange(AZIMUTHS) * (2 * np.pi / AZIMUTHS) + 0.1, indexing="ij")
@@ -100,7 +101,7 @@ def _ring(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.n
     omega = reflect(F[:, None, :], H)
     if extra is not None:
         omega = np.concatenate([omega, np.broadcast_to(extra, (cases.size,) + extra.shape)], axis=1)
-    return omega, _values(integrand, omega, cases), cases
+    return omega, _values(integrand, omega, cases)
 
 
 def _values(integrand: Callable, omega: np.ndarray, cases: np.ndarray) -> np.ndarray:
@@ -115,7 +116,7 @@ def heavy_tailed(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, case
     the pole. A power-law tail (GGX: (1 + s²)⁻² = 2.4e-4 there) is where the lobe-aligned coordinates need many
     nodes near the horizon and this route does not; a Gaussian one (Blinn-Phong, Phong, Beckmann: below 1e-20)
     costs both routes about the same evaluations, each cheaper in the lobe-aligned ones."""
-    _, g, _ = _ring(integrand, fixed, alpha, cases, (0.0, FAR))
+    _, g = _ring(integrand, fixed, alpha, cases, (0.0, FAR))
     pole, far = np.abs(g[:, :AZIMUTHS]).max(axis=(1, 2)), np.abs(g[:, AZIMUTHS:]).max(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):
         return far > HEAVY * pole
@@ -130,21 +131,22 @@ def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, 
                      rtol: float) -> np.ndarray:
     """Per case of ``cases``: g(ω) = g(ω') to rtol/64 of max |g| on a sample, ω' the mirror image of ω in the
     plane of N and F (the plane :func:`brdfnorm.halfvector.integrate_slopes` folds the azimuth about)."""
-    omega, g, _ = _ring(integrand, fixed, alpha, cases, RINGS, fibonacci_hemisphere(LATTICE))
+    omega, g = _ring(integrand, fixed, alpha, cases, RINGS, fibonacci_hemisphere(LATTICE))
     azimuth = np.arctan2(fixed[cases, 1], fixed[cases, 0])
     across = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros_like(azimuth)], axis=-1)  # normal of the plane
     image = omega - 2.0 * np.einsum("kmi,ki->km", omega, across)[..., None] * across[:, None, :]
-    g_image = np.where((omega[..., 2] > 0)[..., None], _values(integrand, image, cases), 0.0)
+    g_image = _values(integrand, image, cases)  # the image keeps ω_z: the plane is vertical
     scale = np.max(np.abs(g), axis=(1, 2))
     difference = np.max(np.abs(g - g_image), axis=(1, 2))
     return np.isfinite(scale) & np.isfinite(difference) & (difference <= rtol / 64 * scale)
 
 
 def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: np.ndarray, widths: np.ndarray,
-          quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float, max_evaluations: int):
-    """(value (K, C), error (K, C), evaluations (K,), kept (K,)) of (G1) for the ``quiet`` cases whose lobe is
-    ``isotropic`` (K,) and :func:`specular` (module docstring), as :func:`brdfnorm.integrate.integrate_hemisphere`
-    tries it first: rows of cases not kept are to be ignored; their evaluations are counted."""
+          quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
+          max_evaluations: int) -> GlobalResult:
+    """(G1) for the ``quiet`` cases whose lobe is ``isotropic`` (K,) and :func:`specular` (module docstring), as
+    :func:`brdfnorm.integrate.integrate_hemisphere` tries it first: ``settled`` says which cases it keeps (the
+    other rows are to be ignored; their evaluations are counted)."""
     K = fixed.shape[0]
     eligible, alpha, broad = specular(fixed, poles, widths)
     eligible &= isotropic
@@ -157,7 +159,7 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
         evaluations[narrow] += 2 * AZIMUTHS
         cases = np.union1d(cases[broad[cases]], narrow[heavy_tailed(integrand, fixed, alpha, narrow)])
     if not cases.size:
-        return np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept
+        return GlobalResult(np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept)
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
     evaluations[cases] += 2 * (LATTICE + len(RINGS) * AZIMUTHS)
     F = fixed[cases]
@@ -198,4 +200,4 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     out_value[cases], out_error[cases] = value, error
     evaluations[cases] += result.evaluations
     kept[cases] = ok
-    return out_value, out_error, evaluations, kept
+    return GlobalResult(out_value, out_error, evaluations, kept)

@@ -68,7 +68,7 @@ import numpy as np
 
 from .grazing_panels import starting_panels
 from .rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from .tensor_rule import START_NODES, integrate_global, map_grid, neck_u
+from .tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -103,9 +103,9 @@ _EPS = np.finfo(float).eps
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
-#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> (value (K, C), error
-#: (K, C), evaluations (K,), kept (K,)): a route tried before the others (``integrate_hemisphere``'s first_route).
-FirstRoute = Callable[..., tuple]
+#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> GlobalResult (``settled``:
+#: the cases it keeps): a route tried before the others (``integrate_hemisphere``'s first_route).
+FirstRoute = Callable[..., GlobalResult]
 
 
 class NonFiniteIntegrand(ArithmeticError):
@@ -280,13 +280,14 @@ def integrate_hemisphere(
     if first_route is not None and rtol > 0:
         first = first_route(integrand, poles, widths, quiet, noise_amplitude, rtol=rtol, atol=atol,
                             max_evaluations=max_evaluations // 4)
-        evaluations += first[2]
-        quiet = quiet[~first[3][quiet]]
+        evaluations += first.evaluations
+        quiet = quiet[~first.settled[quiet]]
     tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
                              noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
                              max_nodes_per_call=max_nodes_per_call, azimuthal_tail=anisotropic)
     evaluations += tried.evaluations
-    remaining = np.flatnonzero(~tried.settled & ~(first[3] if first else False))
+    routes = [tried] + ([first] if first else [])
+    remaining = np.flatnonzero(~np.any([route.settled for route in routes], axis=0))
     panels = _Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
                                       frame[0][remaining, 2], widths[remaining], supports[remaining]))
     history = []  # total error estimate per case and round (for the stall check)
@@ -388,13 +389,12 @@ def integrate_hemisphere(
             np.add.at(bad_total, pool.case, pool.bad)
             error[left] += noise[left]
 
-    routes = [(tried.value, tried.error, tried.settled)] + ([(first[0], first[1], first[3])] if first else [])
     if value.shape[1] == 0:
-        value = np.zeros((K, max(r[0].shape[1] for r in routes)))
+        value = np.zeros((K, max(route.value.shape[1] for route in routes)))
         error = np.zeros_like(value)
-    for route_value, route_error, settled in routes:
-        value[settled], error[settled] = route_value[settled], route_error[settled]
-        converged |= settled
+    for route in routes:
+        value[route.settled], error[route.settled] = route.value[route.settled], route.error[route.settled]
+        converged |= route.settled
     reason[converged] = ""
     return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
 
