@@ -1,0 +1,42 @@
+"""The globally adaptive bisection behind E_avg's μ integral (brdfnorm.lut.adaptive): its estimate must cover the
+true error where the integrand is not smooth inside a panel, against mpmath with the feature as a breakpoint."""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+import pytest
+
+from brdfnorm.lut.adaptive import adaptive_unit_interval
+from brdfnorm.lut.table import GAUSS_WEIGHTS, KRONROD_NODES, KRONROD_WEIGHTS
+
+#: A jump of the second derivative (c·x₊²) smoothed over WIDTH, as a rough dielectric's E(μ) has near μ = 1.
+WIDTH, JUMP = 1e-3, 25.0
+
+
+def _kinked(x0: float):
+    """The evaluate of a K15/G7 pair for exp(x) + c·((u + √(u² + d²))/2)², u = x − x0, and its integral."""
+    def f(x, sqrt=np.sqrt, exp=np.exp):
+        u = x - x0
+        return exp(x) + JUMP * (u + sqrt(u * u + WIDTH * WIDTH)) ** 2 / 4
+
+    def evaluate(owner, left, width):
+        g = f(left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0))
+        kronrod = 0.5 * width * (g @ KRONROD_WEIGHTS)
+        return kronrod, np.abs(kronrod - 0.5 * width * (g @ GAUSS_WEIGHTS))
+
+    with mpmath.workdps(30):
+        exact = mpmath.quad(lambda x: f(x, mpmath.sqrt, mpmath.exp), [0, x0 - 10 * WIDTH, x0, x0 + 10 * WIDTH, 1])
+    return evaluate, float(exact)
+
+
+@pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
+def test_estimate_covers_a_smoothed_kink_anywhere(rtol):
+    """Over 36 positions of the kink. With |K15 − G7| alone the worst was 1 200 times its estimate (x0 = 0.970,
+    rtol 1e-6: both rules missed the same 1.4e-6 on the panel [0.5, 1]); with the parents' discrepancies it is
+    0.29."""
+    for x0 in np.linspace(0.3, 0.99, 36):
+        evaluate, exact = _kinked(x0)
+        value, error = adaptive_unit_interval(evaluate, 1, rtol=rtol, max_panels=400)
+        assert abs(value[0] - exact) <= error[0] <= rtol * abs(value[0]), x0
+
