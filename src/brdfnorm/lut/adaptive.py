@@ -43,7 +43,7 @@ def adaptive_unit_interval(evaluate: Callable, count: int, *, rtol: float, max_p
         keep = ~split
         children = _halves(evaluate, owner[split], left[split], width[split], value[split])
         owner, left, width, value, error = (np.concatenate([kept[keep], new]) for kept, new in
-                                            zip((owner, left, width, value, error), children))
+                                            zip((owner, left, width, value, error), children, strict=True))
     return total, total_error
 
 
