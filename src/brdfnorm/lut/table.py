@@ -12,7 +12,8 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 * E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
   table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|), and for what that does not
   settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
-  pessimistic bound for the K15 value that is used); both add the albedo error estimates through |weights|.
+  pessimistic bound for the K15 value that is used, and at least the parent panel's bisection discrepancy); both
+  add the albedo error estimates through |weights|.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
@@ -383,7 +384,9 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
     In x = √μ the integral is ∫₀¹ 4x³ E(x²) dx: the weight vanishes where E has its boundary layer (μ ≲ α for a
     height-correlated microfacet lobe), so that layer needs no refinement. Globally adaptive (as QUADPACK):
     while a combination's summed panel errors exceed rtol·|E_avg|, its worst panels (error ≥ ¼ of its largest)
-    are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights; albedos
+    are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights, and at
+    least its parent's bisection discrepancy (:mod:`.adaptive`: a kink inside a panel can give K15 and G7 one
+    shared error); albedos
     are computed to rtol/4, looser where the weight 4x³ is below 1 (rtol/(4·4x³), at most NODE_RTOL_MAX). Nodes
     below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing directions); that changes the
     integral by at most MU_FLOOR²·max|E|, which is added to the error.
