@@ -78,6 +78,11 @@ def test_targets_and_memory(quick):
     results, _ = quick
     names = " ".join(t["target"] for t in results["targets"])
     assert "dblquad" in names and "MC float32" in names and "RSS" in names
+    # Issue 13's goals carry where their verdict is explained, and that place exists.
+    engine = [t for t in results["targets"] if "brdfnorm quadrature: ≥ 100× faster than dblquad" in t["target"]]
+    assert engine and all(t["why"] == bench.ENGINE_WHY for t in engine)
+    readme = (Path(bench.__file__).parent / "README.md").read_text(encoding="utf-8")
+    assert "#### Round 7" in readme and "round 7" in bench.ENGINE_WHY
     memory = results["workloads"]["memory"]
     assert memory["peak_rss_mib"] >= memory["baseline_rss_mib"] > 0
 
