@@ -856,6 +856,13 @@ def _engine_targets(results: dict, cfg: Config) -> list[dict]:
     return out
 
 
+def _met_text(target: dict, no: str) -> str:
+    """A target's 'met' column: yes, ``no`` (with where the verdict is explained, if the target says), or n/a."""
+    if target["met"] is False:
+        return no + (f" ({target['why']})" if "why" in target else "")
+    return "yes" if target["met"] else "n/a"
+
+
 def fmt_time(t) -> str:
     if t is None or not np.isfinite(t):
         return "—"
@@ -929,8 +936,7 @@ def markdown(results: dict) -> str:
         lines.append("")
     lines += ["## targets", "", "| target | measured | met |", "|---|---|---|"]
     for t in results["targets"]:
-        met = {True: "yes", False: "**no**", None: "n/a"}[t["met"]] + (f" ({t['why']})" if t["met"] is False
-                                                                        and "why" in t else "")
+        met = _met_text(t, "**no**")
         lines.append(f"| {t['target']} | {t['measured']} | {met} |")
     lines += ["", "Plots: `cost_vs_n.png` (cost per 90-angle row against the swept parameter), "
               "`work_precision.png` (error against time). Profile: `profile.txt`.", ""]
@@ -1015,8 +1021,7 @@ def print_tables(results: dict) -> None:
     for column in ("target", "measured", "met"):
         table.add_column(column)
     for t in results["targets"]:
-        table.add_row(t["target"], t["measured"], {True: "yes", False: "NO", None: "n/a"}[t["met"]]
-                      + (f" ({t['why']})" if t["met"] is False and "why" in t else ""))
+        table.add_row(t["target"], t["measured"], _met_text(t, "NO"))
     console.print(table)
 
 
