@@ -482,6 +482,12 @@ def random_hemisphere(rng: np.random.Generator, count: int) -> np.ndarray:
     return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
+def rotation_about_normal(angle: float) -> np.ndarray:
+    """The (3, 3) rotation by ``angle`` about N = +z (rows act on column vectors: d @ R.T turns directions d)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
 def rotation_asymmetry(model: Model, samples: int = 512, seed: int = 1) -> float:
     """Largest relative change of f(L, V) when both directions rotate about N (0 for an isotropic lobe)."""
     rng = np.random.default_rng(seed)
@@ -491,8 +497,7 @@ def rotation_asymmetry(model: Model, samples: int = 512, seed: int = 1) -> float
     with np.errstate(all="ignore"):
         reference = model.eval(L, V)
         for angle in (0.7, 2.1, 4.0):
-            c, s = np.cos(angle), np.sin(angle)
-            rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            rotation = rotation_about_normal(angle)
             rotated = model.eval(L @ rotation.T, V @ rotation.T)
             scale = np.maximum(np.abs(reference), np.abs(rotated))
             change = np.where(scale > 0, np.abs(rotated - reference) / np.where(scale > 0, scale, 1.0), 0.0)

@@ -26,7 +26,7 @@ from functools import partial
 import numpy as np
 
 from . import halfvector_generic, validate
-from .brdffile import random_hemisphere
+from .brdffile import random_hemisphere, rotation_about_normal
 from .errors import ArgumentError, ArgumentTypeError, EvaluationError
 from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
 from .models.base import Lobe, Model, Over, mirror
@@ -304,8 +304,7 @@ def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.nda
         scale = np.abs(reference).reshape(cases.size, -1).max(axis=1)
         change = np.zeros(cases.size)
         for angle in (0.7, 2.1):
-            c, s = np.cos(angle), np.sin(angle)
-            rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            rotation = rotation_about_normal(angle)
             turned = [np.tile(d @ rotation.T, (cases.size, 1)) for d in (L, V)]
             rotated = np.asarray(brdf(*turned, index), dtype=float)
             change = np.maximum(change, np.abs(rotated - reference).reshape(cases.size, -1).max(axis=1))
