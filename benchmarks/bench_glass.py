@@ -4,7 +4,7 @@ at rtol 1e-9, and its E_avg, against the μ-average of albedos (the generic E_av
 
 Usage: ``python benchmarks/bench_glass.py [--size 16] [--workers N] [--peer 2] [--out FILE.md]``. The cells run as
 ``brdfnorm lut`` runs them (a local process pool, all cores by default), and so does E_avg, the 3-D route of
-:mod:`brdfnorm.dielectric_average` over every (α, η). The peer computes E_avg for ``--peer``
+:mod:`brdfnorm.engine.routes.dielectric_average` over every (α, η). The peer computes E_avg for ``--peer``
 (α, η) combinations from each side by :func:`brdfnorm.lut.table.average_over_mu` and is extrapolated to all of
 them (labelled so); the two agree within their estimates or the script says otherwise. Goal (this 2-core machine):
 the whole 16³ table within 60 s.

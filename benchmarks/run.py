@@ -412,7 +412,8 @@ def w_ggx_table(cfg: Config, refs: References) -> dict:
 
 def w_microfacet_table(cfg: Config, refs: References) -> dict:
     """E(μ, α) tables of the built-in ggx lobe (F = 1, height-correlated), μ ∈ [1e-4, 1], α ∈ [1e-8, 1], rtol 1e-10,
-    by the half-vector method; the μ = 1 row checked against Arb enclosures (brdfnorm.certified) where available."""
+    by the half-vector method; the μ = 1 row checked against Arb enclosures (brdfnorm.engine.routes.certified) where
+    available."""
     sizes = (8,) if cfg.quick else (32, 128)
     out = {"title": "ggx E(μ, α) tables, rtol 1e-10 (half-vector method)", "status": "ok", "methods": {},
            "reference": "μ = 1 row: method='certified' (Arb ball arithmetic, 1-D reduction), where python-flint is "

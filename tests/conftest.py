@@ -162,10 +162,10 @@ def rng():
 
 @pytest.fixture
 def lobe_aligned_only(monkeypatch):
-    """The generic engine without its half-vector route (brdfnorm.halfvector_generic), for tests of the
+    """The generic engine without its half-vector route (brdfnorm.engine.routes.halfvector_generic), for tests of the
     lobe-aligned routes behind it."""
-    from brdfnorm import halfvector_generic
-    from brdfnorm.tensor_rule import GlobalResult
+    from brdfnorm.engine.machinery.tensor_rule import GlobalResult
+    from brdfnorm.engine.routes import halfvector_generic
 
     def nothing_kept(fixed, *args, **kwargs):
         K = fixed.shape[0]

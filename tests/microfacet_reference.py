@@ -1,7 +1,7 @@
 """An independent reference for the albedo of the ggx and beckmann lobes (F = 1), written for the tests.
 
 Plain fixed-order Gauss–Legendre in the half-vector CDF coordinates — not brdfnorm's adaptive cubature, not its
-coordinates (it shares only the slope-space statement of the integral, (H1) in brdfnorm.halfvector):
+coordinates (it shares only the slope-space statement of the integral, (H1) in brdfnorm.engine.routes.halfvector):
 
     E(V) = (1/π) ∫₀^π dφ ∫₀^{u_h(φ)} G2(L, V) (V·H)/(N·V N·H) du,
 

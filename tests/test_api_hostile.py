@@ -14,9 +14,9 @@ import pytest
 
 import brdfnorm as bn
 from brdfnorm.codegen import emit
+from brdfnorm.engine.routes.series import blinn_phong_albedo_series
 from brdfnorm.errors import BrdfnormError
 from brdfnorm.fit import fit, parse_form
-from brdfnorm.series import blinn_phong_albedo_series
 from brdfnorm.verify import check_exponents, verify
 
 BP = bn.load("blinn-phong", n=8)

@@ -1,4 +1,5 @@
-"""Method "azimuthal" (brdfnorm.azimuthal): isotropic GGX and Beckmann with F = 1 as a 1-D integral, the azimuth
+"""Method "azimuthal" (brdfnorm.engine.routes.azimuthal): isotropic GGX and Beckmann with F = 1 as a 1-D integral, the
+azimuth
 in closed form.
 
 Checked against routes that share nothing with it but the lobe: the closed form 1 − ln 2 (GGX, α = 1, μ = 1), the
@@ -21,7 +22,7 @@ import pytest
 from microfacet_reference import reference_albedo
 
 import brdfnorm as bn
-from brdfnorm import azimuthal
+from brdfnorm.engine.routes import azimuthal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.models.microfacet import BeckmannDistribution, GGXDistribution
 

@@ -1,4 +1,5 @@
-"""Certified albedo (brdfnorm.certified): enclosures against closed forms in Arb, independent 1-D routes, and the
+"""Certified albedo (brdfnorm.engine.routes.certified): enclosures against closed forms in Arb, independent 1-D routes,
+and the
 float64 engine's error estimates judged against the enclosures."""
 
 from __future__ import annotations
@@ -12,8 +13,8 @@ import pytest
 from conftest import phong_like_reference, run_cli
 
 import brdfnorm as bn
+from brdfnorm.engine.routes.series import blinn_phong_albedo_series
 from brdfnorm.errors import ArgumentError
-from brdfnorm.series import blinn_phong_albedo_series
 
 flint = pytest.importorskip("flint", reason="python-flint (brdfnorm[certified]) is not installed")
 arb = flint.arb
@@ -229,7 +230,8 @@ def test_verify_certified_checks_every_albedo_claim(capsys):
 
 
 def test_verify_certified_fails_a_closed_form_that_is_off_by_1e_minus_25(monkeypatch):
-    from brdfnorm import certified, verify
+    from brdfnorm import verify
+    from brdfnorm.engine.routes import certified
 
     exact = certified.NORMAL_INCIDENCE_CLOSED_FORMS["phong"]
     monkeypatch.setitem(certified.NORMAL_INCIDENCE_CLOSED_FORMS, "phong",
@@ -256,7 +258,7 @@ def test_report_factor_table_is_certified():
 
 
 def test_converged_says_whether_the_digits_were_reached(monkeypatch):
-    from brdfnorm import certified
+    from brdfnorm.engine.routes import certified
 
     m = bn.load("modified-phong", n=3.0)
     exact = bn.albedo(m, 0.7, method="certified", digits=30)
@@ -305,7 +307,7 @@ def _microfacet_reference(alpha: float, distribution: str, eta: float | None) ->
     ("ggx", 0.5, 1.5), ("ggx", 0.5, 0.6), ("beckmann", 0.7, 0.5),
 ])
 def test_microfacet_normal_incidence_against_mpmath(distribution, alpha, eta):
-    from brdfnorm import certified
+    from brdfnorm.engine.routes import certified
 
     params = {"alpha": alpha, "fresnel": "none" if eta is None else "dielectric", "eta": eta}
     work = certified._Integrator(25)
@@ -317,7 +319,7 @@ def test_microfacet_normal_incidence_against_mpmath(distribution, alpha, eta):
 
 
 def test_ggx_at_unit_alpha_encloses_one_minus_ln_2():
-    from brdfnorm import certified
+    from brdfnorm.engine.routes import certified
 
     work = certified._Integrator(30)
     with _precision(work.bits):
@@ -327,7 +329,7 @@ def test_ggx_at_unit_alpha_encloses_one_minus_ln_2():
 
 
 def test_mirror_like_microfacet_lobes_reflect_everything():
-    from brdfnorm import certified
+    from brdfnorm.engine.routes import certified
 
     for distribution in ("ggx", "beckmann"):
         work = certified._Integrator(25)

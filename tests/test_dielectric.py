@@ -10,7 +10,7 @@ from conftest import run_cli
 from dielectric_reference import albedo_part
 
 import brdfnorm as bn
-from brdfnorm import azimuthal, transmission
+from brdfnorm.engine.routes import azimuthal, dielectric
 from brdfnorm.errors import ArgumentError, ParameterError
 
 DIELECTRICS = ["ggx-dielectric", "beckmann-dielectric"]
@@ -110,7 +110,7 @@ def test_inside_transmission_at_a_low_view_within_its_own_estimate(alpha):
     """T alone (to rtol 1e-9 of itself) at μ = 0.02 from inside, where the kinks of the ray bounds left it up to
     18 times its estimate off (1.8e-12 against 2.5e-13 at α = 0.096)."""
     m, mu, eta = bn.load("ggx-dielectric"), 0.02, 1 / 1.5
-    t = transmission.part_albedo(m.distribution, np.array([[np.sqrt(1 - mu * mu), 0.0, mu]]), alpha, eta,
+    t = dielectric.part_albedo(m.distribution, np.array([[np.sqrt(1 - mu * mu), 0.0, mu]]), alpha, eta,
                                  "height-correlated", "refraction", rtol=1e-9)
     reference = albedo_part("ggx", mu, alpha, eta, "T")
     assert abs(t.value[0, 0] - reference) <= t.error[0, 0] + REFERENCE_ERROR * reference
@@ -136,7 +136,7 @@ def test_reflection_from_outside_by_both_routes(name):
     r = bn.albedo(bn.load(name, alpha=0.2, eta=1.5), theta, rtol=1e-10)
     m = bn.load(name)
     fixed = np.stack([np.sin(theta), 0 * theta, np.cos(theta)], axis=1)
-    loss = transmission.part_albedo(m.distribution, fixed, 0.2, 1.5, "height-correlated", "reflection-loss",
+    loss = dielectric.part_albedo(m.distribution, fixed, 0.2, 1.5, "height-correlated", "reflection-loss",
                                     rtol=1e-11)
     white = azimuthal.white_albedo(m.distribution, "height-correlated", fixed, np.full(3, 0.2), rtol=1e-12)
     window = white.value[:, 0] - loss.value[:, 0]
@@ -195,7 +195,7 @@ def test_grazing_reflection_where_the_best_lit_facets_swing_by_the_window_route(
     alpha, eta, mu = 0.8747781965192684, 1.757854900643098, 0.0005788704177390567
     m = bn.load("beckmann-dielectric")
     fixed = np.array([[np.sqrt(1 - mu * mu), 0.0, mu]])
-    loss = transmission.part_albedo(m.distribution, fixed, alpha, eta, "height-correlated", "reflection-loss",
+    loss = dielectric.part_albedo(m.distribution, fixed, alpha, eta, "height-correlated", "reflection-loss",
                                     rtol=1e-11)
     white = azimuthal.white_albedo(m.distribution, "height-correlated", fixed, np.array([alpha]), rtol=1e-12)
     brdf = bn.albedo(bn.load("beckmann", alpha=alpha, fresnel="dielectric", eta=eta), np.arccos(mu), rtol=1e-12)
@@ -212,7 +212,7 @@ def test_a_glass_cell_whose_layer_split_was_rounding_noise_converges():
     assert exact.converged.all() and exact.evaluations < 1_000_000
     _within_estimate(exact, "ggx", 0.2, 0.05, eta)
     m = bn.load("ggx-dielectric")
-    loss = transmission.part_albedo(m.distribution, np.array([[np.sqrt(0.96), 0.0, 0.2]]), 0.05, eta,
+    loss = dielectric.part_albedo(m.distribution, np.array([[np.sqrt(0.96), 0.0, 0.2]]), 0.05, eta,
                                     "height-correlated", "reflection-loss", rtol=1e-9)
     assert loss.converged.all() and loss.evaluations[0] < 1_000_000
 

@@ -1,5 +1,6 @@
 """E_avg of the glass tables (brdfnorm.lut.glass): the 3-D integral over the facet normal and the view about it
-(brdfnorm.dielectric_average), checked against the generic route — the μ-average of albedos (nested Clenshaw–Curtis
+(brdfnorm.engine.routes.dielectric_average), checked against the generic route — the μ-average of albedos (nested
+Clenshaw–Curtis
 in √μ + adaptive G7/K15 over the albedo cubature), which shares no integral with it — for honesty on a random
 sweep (true error ≤ estimate, estimate ≤ rtol·E_avg), through `lut.compute`, and for the fallback."""
 
@@ -11,7 +12,8 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
-from brdfnorm import dielectric_average, lut
+from brdfnorm import lut
+from brdfnorm.engine.routes import dielectric_average
 from brdfnorm.lut import glass
 from brdfnorm.lut.table import average_over_mu
 

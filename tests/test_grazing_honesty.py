@@ -1,8 +1,9 @@
 """The generic engine's error estimate at extremely grazing views (μ = cos θ_o ≲ 1e-3), where a half-vector lobe's
 peak lies c_P ≈ μ above the horizon and the lobe has two features of scale c_P that the plain coordinates' nodes
 missed, with the embedded rules agreeing on the miss: its neck (every azimuth within c_P·w of the peak) and the
-band next to β = ±π/2 where the horizon passes c_P below the peak (brdfnorm.tensor_rule.neck_u,
-brdfnorm.grazing_panels.starting_panels). Before the fix these settled "converged" with estimates 3–2500 times below
+band next to β = ±π/2 where the horizon passes c_P below the peak (brdfnorm.engine.machinery.tensor_rule.neck_u,
+brdfnorm.engine.machinery.grazing_panels.starting_panels). Before the fix these settled "converged" with estimates
+3–2500 times below
 their true errors."""
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The generic engine's half-vector route (brdfnorm.halfvector_generic): where it is taken, that its estimates
+"""The generic engine's half-vector route (brdfnorm.engine.routes.halfvector_generic): where it is taken, that its
+estimates
 cover its errors against routes that share none of its code, and where it must not be taken."""
 
 from __future__ import annotations
@@ -11,8 +12,8 @@ import pytest
 from conftest import half_vector_gauss_legendre
 
 import brdfnorm as bn
-from brdfnorm import halfvector_generic
-from brdfnorm.directional import rotation_invariant
+from brdfnorm.engine.methods import rotation_invariant
+from brdfnorm.engine.routes import halfvector_generic
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -35,7 +36,8 @@ def kept(monkeypatch):
 @pytest.mark.parametrize("roughness", [0.05, 0.3, 1.0])
 def test_ggx_brdf_agrees_with_the_one_dimensional_integral(kept, roughness):
     # examples/ggx.brdf with f0 = 1 is GGX with separable Smith shadowing and F = 1, whose albedo brdfnorm also
-    # computes as a 1-D integral over the light's elevation (brdfnorm.azimuthal: no code in common). The narrow
+    # computes as a 1-D integral over the light's elevation (brdfnorm.engine.routes.azimuthal: no code in common). The
+    # narrow
     # lobes take the route as heavy-tailed lobes at the mirror direction, roughness 1 (α = 1) as a broad one.
     model = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=roughness, f0=1.0)
     reference_model = bn.load("ggx", alpha=roughness**2, shadowing="separable")
@@ -52,7 +54,7 @@ def test_ggx_brdf_agrees_with_the_one_dimensional_integral(kept, roughness):
 @pytest.mark.parametrize("rtol", [1e-5, 1e-7, 1e-9, 1e-11])
 def test_estimates_cover_the_one_dimensional_integral_on_random_views(kept, rtol):
     # Random roughness (α = 2.5e-3 … 0.25) and views (μ ≥ 1e-3, through the azimuth too) of examples/ggx.brdf,
-    # F = 1, against brdfnorm.azimuthal.
+    # F = 1, against brdfnorm.engine.routes.azimuthal.
     rng = np.random.default_rng(int(-np.log10(rtol)))
     roughness = np.exp(rng.uniform(np.log(0.05), np.log(0.5), 30))
     theta = np.arccos(np.exp(rng.uniform(np.log(1e-3), 0.0, 30)))

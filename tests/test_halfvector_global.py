@@ -1,4 +1,5 @@
-"""The half-vector albedo's global tensor rule (brdfnorm.halfvector_global) on its own, with the adaptive panels
+"""The half-vector albedo's global tensor rule (brdfnorm.engine.routes.halfvector_global) on its own, with the adaptive
+panels
 switched off: every case it settles has an error estimate no smaller than its true error, over α from 1e-8 to 1,
 μ from 1e-4 (grazing) to 1, GGX and Beckmann, both shadowings, anisotropic lobes and every Fresnel.
 
@@ -17,8 +18,8 @@ import pytest
 from microfacet_reference import FRESNEL_LOBES, reference_albedo
 
 import brdfnorm as bn
-from brdfnorm import halfvector
-from brdfnorm.halfvector_global import azimuth_map, clustering
+from brdfnorm.engine.routes import halfvector
+from brdfnorm.engine.routes.halfvector_global import azimuth_map, clustering
 
 MUS = np.array([1e-4, 2e-3, 0.04, 0.15, 0.3, 0.55, 0.75, 1.0])
 ALPHAS = np.array([1e-8, 1e-4, 0.01, 0.07, 0.35, 1.0])

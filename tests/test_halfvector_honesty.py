@@ -1,4 +1,5 @@
-"""The half-vector albedo's error estimate is never below its true error (brdfnorm.halfvector), swept over the
+"""The half-vector albedo's error estimate is never below its true error (brdfnorm.engine.routes.halfvector), swept
+over the
 range the tables use and beyond: α from 1e-8 (a mirror) to 1, μ from 1e-4 (grazing) to 1, GGX and Beckmann, both
 shadowings, anisotropic lobes and every Fresnel.
 

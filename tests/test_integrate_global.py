@@ -1,4 +1,5 @@
-"""The global tensor rule (brdfnorm.tensor_rule) in front of the adaptive panels: its pieces against exact
+"""The global tensor rule (brdfnorm.engine.machinery.tensor_rule) in front of the adaptive panels: its pieces against
+exact
 values, and a randomized honesty probe of the whole engine against independent references (issue 13)."""
 
 from __future__ import annotations
@@ -11,9 +12,16 @@ import pytest
 from conftest import ggx_albedo_reference, half_vector_gauss_legendre, phong_like_reference
 
 import brdfnorm as bn
-from brdfnorm import integrate as engine
-from brdfnorm.integrate import integrate_hemisphere
-from brdfnorm.tensor_rule import LAMBDA_MIN, START_LEVELS, beta_map, fejer, integrate_global, radial_width_scale
+from brdfnorm.engine.machinery.tensor_rule import (
+    LAMBDA_MIN,
+    START_LEVELS,
+    beta_map,
+    fejer,
+    integrate_global,
+    radial_width_scale,
+)
+from brdfnorm.engine.routes import hemisphere as engine
+from brdfnorm.engine.routes.hemisphere import integrate_hemisphere
 
 NAIVE_GGX = Path(__file__).resolve().parent / "fixtures" / "ggx_naive.brdf"
 
@@ -93,8 +101,8 @@ def test_smooth_cases_settle_in_the_global_rule_with_few_evaluations():
 
 
 def test_unsettled_and_nonfinite_cases_go_to_the_panels():
-    from brdfnorm.integrate import lobe_frame
-    from brdfnorm.rounding import noise_bound
+    from brdfnorm.engine.machinery.rounding import noise_bound
+    from brdfnorm.engine.routes.hemisphere import lobe_frame
 
     def integrand(w, k):
         # Case 0: smooth. Case 1: NaN on half the hemisphere (the panels raise or zero it, never the rule).

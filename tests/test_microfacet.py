@@ -1,4 +1,5 @@
-"""The ggx and beckmann lobes and their half-vector albedo (brdfnorm.halfvector), against independent routes:
+"""The ggx and beckmann lobes and their half-vector albedo (brdfnorm.engine.routes.halfvector), against independent
+routes:
 a fixed Gauss–Legendre reference in CDF coordinates (tests/microfacet_reference.py), closed forms (1 − ln 2,
 the mirror limit with mpmath), the generic hemisphere engine, the `.brdf` files of the same lobes, and a
 complex-number Fresnel."""
@@ -12,7 +13,7 @@ from conftest import run_cli
 from microfacet_reference import reference_albedo
 
 import brdfnorm as bn
-from brdfnorm import azimuthal
+from brdfnorm.engine.routes import azimuthal
 from brdfnorm.errors import BrdfnormError, ParameterError
 from brdfnorm.models.microfacet import fresnel_conductor, fresnel_dielectric
 
@@ -278,7 +279,8 @@ def test_kulla_conty_interpolated_tables(capsys):
 
 @pytest.mark.parametrize("name", ["ggx", "beckmann"])
 def test_normal_incidence_agrees_with_certified_enclosures(name):
-    # brdfnorm.certified encloses E(V = N) by Arb ball arithmetic in a 1-D reduction (another engineer's route).
+    # brdfnorm.engine.routes.certified encloses E(V = N) by Arb ball arithmetic in a 1-D reduction (another engineer's
+    # route).
     pytest.importorskip("flint", reason="python-flint (the certified extra) is not installed")
     for params in ({"alpha": 1e-8}, {"alpha": 0.02}, {"alpha": 0.7, "shadowing": "separable"},
                    {"alpha": 0.3, "fresnel": "schlick", "f0": (0.9, 0.5, 0.1)},

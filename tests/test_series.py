@@ -1,4 +1,4 @@
-"""Seed 002's hypergeometric form of the Blinn-Phong albedo (brdfnorm.series) against independent routes.
+"""Seed 002's hypergeometric form of the Blinn-Phong albedo (brdfnorm.engine.routes.series) against independent routes.
 
 Routes: mpmath at 30 digits on seed 002's own one-dimensional form with its ₂F₁(n/4, n/4+½; 1; z) (not the
 Legendre rewriting the module uses), mpmath's 2-D quadrature of Equation 1, seed 000's closed form at θ_o = 0,
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from brdfnorm.closed_forms import blinn_phong_albedo_normal
+from brdfnorm.engine.routes.series import blinn_phong_albedo_series, legendre_ratio
 from brdfnorm.errors import ArgumentError, ParameterError
-from brdfnorm.series import blinn_phong_albedo_series, legendre_ratio
 
 EXPONENTS = [0.5, 1.0, 10.0, 512.0, 1e4]
 
@@ -119,7 +119,7 @@ def test_inner_integral_is_seed_002_hypergeometric_form(n, theta, phi):
 
 
 def test_agrees_with_adaptive_hemisphere_quadrature():
-    from brdfnorm.directional import albedo
+    from brdfnorm.engine.methods import albedo
     from brdfnorm.models import BlinnPhong
 
     for n in EXPONENTS:
@@ -171,7 +171,7 @@ def test_bad_input_raises_project_errors(kwargs, error):
 
 
 def test_registered_as_albedo_method_series():
-    from brdfnorm import directional as albedo
+    from brdfnorm.engine import methods as albedo
     from brdfnorm.models import BlinnPhong, PhongModified
 
     # "auto" picks the series for Blinn-Phong (other methods may come before it in AUTO_ORDER for other lobes).

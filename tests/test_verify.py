@@ -77,7 +77,7 @@ def test_peak_premises_hold_for_both_lobe_families(claims):
 
 
 def test_phong_one_dimensional_route_matches_hemisphere_cubature():
-    from brdfnorm.directional import albedo
+    from brdfnorm.engine.methods import albedo
     from brdfnorm.models import PhongModified, PhongOriginal
 
     n, theta = np.array([0.5, 7.0, 300.0]), np.radians(70.0)

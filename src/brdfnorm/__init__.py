@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .directional import AlbedoResult, albedo
+from .engine.methods import AlbedoResult, albedo
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
 from .normalization import NormalizationResult, normalize

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import validate
-from .directional import albedo, sweep_model
+from .engine.methods import albedo, sweep_model
 from .errors import ArgumentError
 from .models.base import Model, Over
 from .output.formats import Column, Records, channel_value, degrees

@@ -1,7 +1,8 @@
 """Run the seed articles' numerical claims (:mod:`brdfnorm.claims`), each a formula against independent numerics.
 
 :data:`CHECKS` names the claims (one module per seed in :mod:`brdfnorm.claims`); :func:`verify` runs them and
-:func:`certify` also checks the albedo-valued ones against guaranteed enclosures (:mod:`brdfnorm.certified`).
+:func:`certify` also checks the albedo-valued ones against guaranteed enclosures
+(:mod:`brdfnorm.engine.routes.certified`).
 """
 
 from __future__ import annotations
@@ -63,7 +64,8 @@ def verify(exponents: Sequence[float] = DEFAULT_EXPONENTS, only: Sequence[str] |
 
 
 #: Claims that are albedo values: id -> (model, view angle in degrees, whether the seed's formula is a closed form
-#: (checked in ball arithmetic, brdfnorm.certified.NORMAL_INCIDENCE_CLOSED_FORMS) or a numerical procedure (then it
+#: (checked in ball arithmetic, brdfnorm.engine.routes.certified.NORMAL_INCIDENCE_CLOSED_FORMS) or a numerical
+#: procedure (then it
 #: must agree within the claim's tolerance)).
 CERTIFIABLE: dict[str, tuple[str, float, bool]] = {
     "phong-original": ("phong", 0.0, True),
@@ -84,7 +86,7 @@ def certify(claim: Claim, digits: int = 30) -> Claim:
         return claim
     import flint
 
-    from . import certified
+    from .engine.routes import certified
     from .models import REGISTRY
 
     model_name, degrees, closed_form = CERTIFIABLE[claim.id]

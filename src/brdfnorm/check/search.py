@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 
-from ..directional import albedo
+from ..engine.methods import albedo
 from ..output.formats import format_error
 from .core import CheckResult, _fixed_name, _params_text
 from .space import _bind, _case_values, _params_at, _Points

@@ -98,7 +98,7 @@ def parametric(claim_id: str, source: str, statement: str, n, formula, numeric, 
 
 def quadrature_albedo(model_name: str, n: np.ndarray, theta: float = 0.0) -> np.ndarray:
     """brdfnorm's adaptive hemisphere cubature of the BRDF itself (no reduction to one dimension)."""
-    from ..directional import albedo
+    from ..engine.methods import albedo
     from ..models import REGISTRY
 
     model = REGISTRY[model_name](n=np.asarray(n, dtype=float)[:, None])

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import closed_forms
-from ..series import adaptive_gauss_legendre, blinn_phong_albedo_series
+from ..engine.routes.series import adaptive_gauss_legendre, blinn_phong_albedo_series
 from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
 
@@ -138,5 +138,5 @@ def blinn_phong_peak(_: np.ndarray) -> Claim:
     return _peak_premise(
         "blinn-phong-peak-at-normal", "Blinn-Phong: reflected energy is largest at L = N (\"no proof\")",
         lambda n, theta: blinn_phong_albedo_series(n, theta).value, closed_forms.blinn_phong_albedo_normal,
-        "E(θ) by seed 002's form (brdfnorm.series)",
+        "E(θ) by seed 002's form (brdfnorm.engine.routes.series)",
     )  # fmt: skip

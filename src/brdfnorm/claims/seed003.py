@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import closed_forms
-from ..series import adaptive_gauss_legendre
+from ..engine.routes.series import adaptive_gauss_legendre
 from . import GAUSSIAN_RANGE, SOURCES, TWO_PI, Claim, rel_error
 
 

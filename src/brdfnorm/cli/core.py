@@ -8,7 +8,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..directional import METHODS
+from ..engine.methods import METHODS
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize

@@ -4,7 +4,8 @@ The generic route, :func:`brdfnorm.lut.table.average_over_mu`, integrates 2∫�
 dielectric's E(μ) has a multi-scale grazing behaviour (E − E(0) grows like a small, drifting power of μ) and, from
 inside, the critical angle's near-kink and further edges: that route needed 270–360 albedos per value of the other
 axes from outside and 450–650 from inside (GGX α = 0.3, η = 1/1.5: 454 albedos, 23.5 s). Here E_avg is instead the
-3-D integral of :mod:`brdfnorm.dielectric_average`, over the facet normal and the view about it, with total internal
+3-D integral of :mod:`brdfnorm.engine.routes.dielectric_average`, over the facet normal and the view about it, with
+total internal
 reflection and every range's end on a cut (0.1–1.5 s per value at rtol 1e-9). A combination it does not settle,
 or a table computed with a forced albedo method, takes the generic route.
 """
@@ -16,7 +17,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..dielectric_average import average_albedo
+from ..engine.routes.dielectric_average import average_albedo
 from ..models.base import Model
 from ..parallel.executors import Workers
 from . import table as T

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..directional import albedo
+from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..parameters import resolve

@@ -27,7 +27,7 @@ Over = Literal["light", "view"]
 class Lobe:
     """Where the integrand f(L, V)(N·ω) peaks as a function of the integration direction ω.
 
-    A hint for the integrator (:mod:`brdfnorm.integrate`), never a correctness requirement:
+    A hint for the integrator (:mod:`brdfnorm.engine.routes.hemisphere`), never a correctness requirement:
     ``direction`` (..., 3) unit vector of the peak, ``width`` (...) its angular scale in radians,
     ``support`` (...) the angle around ``direction`` beyond which the integrand is exactly zero (π if none).
     """
@@ -121,7 +121,8 @@ class Model(ABC):
     def lobe(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> Lobe | None:
         """Peak of the integrand over the free direction, given the fixed one (a hint only).
 
-        None (the default) lets the integrator find it by sampling (:func:`brdfnorm.integrate.estimate_lobe`).
+        None (the default) lets the integrator find it by sampling
+        (:func:`brdfnorm.engine.routes.hemisphere.estimate_lobe`).
         """
         return None
 

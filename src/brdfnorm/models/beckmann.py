@@ -2,8 +2,9 @@
 
 D(H) = exp(−(x²/α_x² + y²/α_y²)) / (π α_x α_y cos⁴θ_H) for the slopes (x, y) of H,
 Λ(ω) = (erf(b) − 1)/2 + exp(−b²)/(2b√π), b = 1/(α_ω tan θ_ω); the shared pieces (G2, Fresnel, Kulla-Conty)
-are in :mod:`brdfnorm.models.microfacet`. Its albedo is integrated by :mod:`brdfnorm.azimuthal` (isotropic, F = 1) or
-:mod:`brdfnorm.halfvector`.
+are in :mod:`brdfnorm.models.microfacet`. Its albedo is integrated by :mod:`brdfnorm.engine.routes.azimuthal`
+(isotropic, F = 1) or
+:mod:`brdfnorm.engine.routes.halfvector`.
 """
 
 from __future__ import annotations

@@ -2,8 +2,9 @@
 
 D(H) = 1 / (π α_x α_y cos⁴θ_H (1 + x²/α_x² + y²/α_y²)²) for the slopes (x, y) of H,
 Λ(ω) = (−1 + √(1 + α_ω² tan²θ_ω))/2; the shared pieces (G2, Fresnel, Kulla-Conty) are in
-:mod:`brdfnorm.models.microfacet`. Its albedo is integrated by :mod:`brdfnorm.azimuthal` (isotropic, F = 1) or
-:mod:`brdfnorm.halfvector`.
+:mod:`brdfnorm.models.microfacet`. Its albedo is integrated by :mod:`brdfnorm.engine.routes.azimuthal` (isotropic, F =
+1) or
+:mod:`brdfnorm.engine.routes.halfvector`.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Rough dielectric interface with the GGX (Trowbridge-Reitz) distribution: reflection and refraction
-(Walter et al. 2007; :mod:`brdfnorm.models.dielectric`). Albedo by :mod:`brdfnorm.transmission`."""
+(Walter et al. 2007; :mod:`brdfnorm.models.dielectric`). Albedo by :mod:`brdfnorm.engine.routes.dielectric`."""
 
 from __future__ import annotations
 

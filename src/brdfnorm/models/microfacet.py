@@ -22,7 +22,8 @@ grey) and makes the lobe three-channel.
 
 Multiple scattering (``ms=kulla-conty``, Kulla & Conty 2017, "Revisiting physically based shading at
 Imageworks"): f_ms(L, V) = (1 − E(μ_L))(1 − E(μ_V)) / (π (1 − E_avg)) with E(μ, α) the lobe's own albedo and
-E_avg(α) = 2∫₀¹ E(μ) μ dμ, computed by :mod:`brdfnorm.microfacet_albedo`. With ``ms_table=N`` the renderer's way —
+E_avg(α) = 2∫₀¹ E(μ) μ dμ, computed by :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way
+—
 E on an N × N node grid over (μ, α) ∈ [0, 1]², interpolated bilinearly, E_avg on N nodes in α, linearly (the
 μ = 0 row is evaluated at μ = 1e-4); with ``ms_table=0`` exact values at every evaluation (slow: an albedo
 integral per direction — meant for checks). It is defined for F = 1 and isotropic α ≤ 1 only: with F ≠ 1 the
@@ -48,7 +49,8 @@ ALPHA_MIN = 1e-12
 class Distribution:
     """A slope distribution P22 with its Smith Λ and the radial coordinates the half-vector integral uses.
 
-    The half-vector integral (:mod:`brdfnorm.halfvector`) runs over the distribution's radial CDF u(s) of the
+    The half-vector integral (:mod:`brdfnorm.engine.routes.halfvector`) runs over the distribution's radial CDF u(s) of
+    the
     standardized slope radius s in three pieces, each in its own coordinate t: ``pole(t)`` and ``tail(t)``
     return (s, du/dt), ``pole_coordinate(s)`` and ``tail_coordinate(s)`` invert them; the piece next to the
     horizon is linear in s with du/ds = ``slope_density(s)``.
@@ -183,7 +185,7 @@ def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.nda
 # -- the model ---------------------------------------------------------------------------------------------
 
 #: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer
-#: (brdfnorm.microfacet_albedo), which registers its provider here when it is imported:
+#: (brdfnorm.engine.routes.microfacet), which registers its provider here when it is imported:
 #: ``provider(distribution, shadowing, size)`` -> an object with ``energies(mu_l, mu_v, alpha)``.
 #: Models stay below the integrator in the import graph.
 _COMPENSATION: Callable | None = None

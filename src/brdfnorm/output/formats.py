@@ -1,6 +1,6 @@
 """Result formats — ``table``, ``json``, ``csv`` — and the one value formatter of the product.
 
-A result (:class:`~brdfnorm.directional.AlbedoResult`, :class:`~brdfnorm.normalization.NormalizationResult`)
+A result (:class:`~brdfnorm.engine.methods.AlbedoResult`, :class:`~brdfnorm.normalization.NormalizationResult`)
 describes itself as :class:`Records`: a title, top-level fields (model, parameters, tolerances), the columns
 and one row per point. Each format of :data:`FORMATS` renders Records to text, so the command line, the report
 and the benchmarks print the same numbers the same way:

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..directional import warn_about
+from ..engine.methods import warn_about
 from .checkpoint import Checkpoint
 from .executors import OPTIONAL_FIELDS, ChunkResult, Workers, local_cores, run_chunk
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan

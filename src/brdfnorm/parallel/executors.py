@@ -82,7 +82,7 @@ def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
               values: Mapping[str, np.ndarray]) -> ChunkResult:
     """Compute chunk ``index`` of a job (the task every executor runs; importable by any worker)."""
     from .. import __version__
-    from ..directional import albedo
+    from ..engine.methods import albedo
     from ..normalization import normalize
 
     header = json.loads(header_json)

@@ -35,8 +35,8 @@ from typing import Literal
 import numpy as np
 
 from .. import validate
-from ..directional import albedo as compute_albedo
-from ..directional import resolve_method
+from ..engine.methods import albedo as compute_albedo
+from ..engine.methods import resolve_method
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 

@@ -1,6 +1,6 @@
 """Computed cells as the serial API's result objects, and normalization sweeps as cells jobs.
 
-:func:`albedo_result` gives the :class:`~brdfnorm.directional.AlbedoResult` that ``brdfnorm.albedo`` returns for the
+:func:`albedo_result` gives the :class:`~brdfnorm.engine.methods.AlbedoResult` that ``brdfnorm.albedo`` returns for the
 same cells; :func:`sweep_job` / :func:`normalization_result` (or :func:`normalize_sweep`, both in one call) give
 what ``brdfnorm.normalize`` with ``sweep=`` returns: ``at="normal"`` and ``at="view"`` are albedo cells (sweep
 value × direction), ``at="max"`` is one cell per sweep value of the ``"max"`` task (each cell runs the search of
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..directional import AlbedoResult
+from ..engine.methods import AlbedoResult
 from ..errors import ArgumentError
 from ..models import Model
 from ..normalization import AT, NormalizationResult

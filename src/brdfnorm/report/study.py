@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import closed_forms, load
-from ..directional import METHODS, albedo
+from ..engine.methods import METHODS, albedo
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..normalization import normalize
@@ -93,7 +93,8 @@ class FactorTable:
 
 @dataclass(frozen=True)
 class CertifiedFactors:
-    """Guaranteed enclosures of the albedo at L = N for every lobe and n of the factor table (brdfnorm.certified)."""
+    """Guaranteed enclosures of the albedo at L = N for every lobe and n of the factor table
+    (brdfnorm.engine.routes.certified)."""
 
     digits: int
     radius: dict[str, np.ndarray]  # lobe -> (S,) relative radius of the enclosure
@@ -102,7 +103,7 @@ class CertifiedFactors:
 
 
 def certified_factors(n: np.ndarray, quadrature: dict, error: dict, digits: int = 30) -> CertifiedFactors | None:
-    from .. import certified
+    from ..engine.routes import certified
     from ..errors import ArgumentError
 
     try:

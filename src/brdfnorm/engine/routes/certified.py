@@ -58,7 +58,7 @@ from decimal import ROUND_CEILING, ROUND_FLOOR, Context, Decimal
 
 import numpy as np
 
-from .errors import ArgumentError, EvaluationError
+from ...errors import ArgumentError, EvaluationError
 
 #: Default number of significant decimal digits asked of an enclosure.
 DEFAULT_DIGITS = 30

@@ -71,8 +71,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import roots_legendre
 
-from . import validate
-from .errors import ParameterError, ParameterTypeError
+from ... import validate
+from ...errors import ParameterError, ParameterTypeError
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
 _INNER_ORDER = 24
@@ -256,7 +256,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
 
 
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
-    """``brdfnorm.directional`` method adapter: a :class:`brdfnorm.directional.Problem` batch for ``blinn-phong``.
+    """``brdfnorm.engine.methods`` method adapter: a :class:`brdfnorm.engine.methods.Problem` batch for ``blinn-phong``.
 
     The lobe is reciprocal, so the light and view integrals coincide and both are (S5) at the fixed direction's
     polar angle. Returns (value (K, 1), error (K, 1), evaluations (K,), converged (K,), None).

@@ -28,10 +28,12 @@ and the domain a rectangle, after which adaptive Gauss-Kronrod cubature converge
    leave boundary layers (Smith G within α of the horizon, Fresnel) between all nodes.
 
 On the rectangle (β, u) ∈ [0, 2π] × [0, 1] each case is first integrated by one global tensor rule with degree
-doubling (:mod:`brdfnorm.tensor_rule`: periodic trapezoid in β × Fejér in u), which settles smooth lobes at low
+doubling (:mod:`brdfnorm.engine.machinery.tensor_rule`: periodic trapezoid in β × Fejér in u), which settles smooth
+lobes at low
 and middle angles in a few thousand evaluations. The cases it does not settle — and those whose rounding noise
 matters — are integrated by adaptive panels (starting from a grid cut further at two scales of a grazing peak's
-height above the horizon, where no node of the plain grid looks: :mod:`brdfnorm.grazing_panels`): a tensor-product
+height above the horizon, where no node of the plain grid looks: :mod:`brdfnorm.engine.machinery.grazing_panels`): a
+tensor-product
 Gauss-Kronrod rule (QUADPACK's G7/K15 pair, 225 nodes per panel) gives the estimate (K15 ⊗ K15) and two embedded
 lower-order estimates (G7 in β or in u); their differences are the panel's error estimate in each direction.
 This is the plain |K − G| estimate of the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the
@@ -66,9 +68,9 @@ from typing import Literal
 
 import numpy as np
 
-from .grazing_panels import starting_panels
-from .rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from .tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
+from ..machinery.grazing_panels import starting_panels
+from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
+from ..machinery.tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -246,10 +248,10 @@ def integrate_hemisphere(
         the share of solid angle affected.
     first_route
         Tried before the global rule on the cases whose rounding noise is far below the tolerance (the
-        half-vector route of :mod:`brdfnorm.halfvector_generic`); the cases it keeps are final.
+        half-vector route of :mod:`brdfnorm.engine.routes.halfvector_generic`); the cases it keeps are final.
     anisotropic
         Per case (K,), True where the lobe is not rotation-invariant about N: the global rule's azimuth estimate
-        then also bounds the Fourier tail (:func:`brdfnorm.tensor_rule._azimuthal_tail`).
+        then also bounds the Fourier tail (:func:`brdfnorm.engine.machinery.tensor_rule._azimuthal_tail`).
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
@@ -271,7 +273,8 @@ def integrate_hemisphere(
     nodes_per_panel = NODES.size**2
     noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call)
     evaluations += PROBE_EVALUATIONS
-    # The global tensor rule first (brdfnorm.tensor_rule), for every case whose rounding noise is far below its
+    # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
+    # below its
     # tolerance; the adaptive panels below take the cases it does not settle.
     # (Not at all where a quarter of the budget would not cover its first grid.)
     global_nodes = min(GLOBAL_NODES, max_evaluations // 4)

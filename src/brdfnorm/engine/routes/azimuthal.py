@@ -5,7 +5,8 @@ What it computes
 E(V) = ∫ f(L, V)(N·L) dL for f = D(H) G2(L, V) / (4 N·L N·V) — the single-scattering lobe of
 :mod:`brdfnorm.models.microfacet` with ``fresnel=none`` — for isotropic GGX (Walter et al. 2007, eq. 33):
 D(H) = α² / (π (1 + (α² − 1) cos²θ_H)²), and isotropic Beckmann (eq. 25): D(H) = e^{−tan²θ_H/α²}/(π α²
-cos⁴θ_H). The same integral as :mod:`brdfnorm.halfvector`, by another route; the tests compare the two, and
+cos⁴θ_H). The same integral as :mod:`brdfnorm.engine.routes.halfvector`, by another route; the tests compare the two,
+and
 both with the reference of ``tests/microfacet_reference.py``.
 
 The reduction (GGX)
@@ -77,7 +78,8 @@ Angles are carried both as θ and as elevations π/2 − θ (θ_L = θ_V + 2 ata
 from the one and cos θ from the other, so that both keep their relative accuracy (at a normal view the peak
 lies at θ_L ~ α: sin θ_L from π/2 − e_L was 1e-11 off there at α = 6e-6). G2's boundary layer at the horizon
 (Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels
-of its own; the rest is :func:`brdfnorm.series.adaptive_gauss_legendre` (15-point Gauss–Legendre panels bisected
+of its own; the rest is :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
+bisected
 while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
 halves, the error of the coarser value, while the finer one is kept).
 """
@@ -90,8 +92,8 @@ from math import gamma, pi
 import numpy as np
 from scipy.special import hyp1f1
 
+from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from .halfvector import CubatureResult, single_scattering_albedo
-from .models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from .series import adaptive_gauss_legendre
 
 _HALF_PI = 0.5 * np.pi

@@ -5,7 +5,7 @@ fixed (``over="light"``, the default). ``over="view"`` is the other reading: the
 ∫_H f(L, V)(N·V) dV; the two differ for non-reciprocal lobes such as the original Phong (2π/(n+1) against
 2π/(n+2) at normal incidence).
 
-Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.integrate`, any model),
+Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.engine.routes.hemisphere`, any model),
 ``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
 substituted silently), and those registered by other modules (``"series"`` for Blinn-Phong, seed 002's
 hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER`.
@@ -13,7 +13,7 @@ hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER
 A BRDF whose values are finite but near float64's limit (2e307) is integrated divided by a power of two, so
 that the sums do not overflow; a BRDF that is NaN or infinite is reported at a real (L, V) pair.
 
-(The module is ``brdfnorm.directional`` so that the function ``brdfnorm.albedo`` does not shadow it.)
+(The module is ``brdfnorm.engine.methods`` so that the function ``brdfnorm.albedo`` does not shadow it.)
 """
 
 from __future__ import annotations
@@ -25,13 +25,20 @@ from functools import partial
 
 import numpy as np
 
-from . import halfvector_generic, validate
-from .brdffile import random_hemisphere, rotation_about_normal
-from .errors import ArgumentError, ArgumentTypeError, EvaluationError
-from .integrate import NonFiniteIntegrand, NonFinitePolicy, estimate_lobe, fibonacci_hemisphere, integrate_hemisphere
-from .models.base import Lobe, Model, Over, mirror
-from .output.formats import Column, Records, channel_value, degrees, format_value
-from .registry import Registry
+from .. import validate
+from ..brdffile import random_hemisphere, rotation_about_normal
+from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
+from ..models.base import Lobe, Model, Over, mirror
+from ..output.formats import Column, Records, channel_value, degrees, format_value
+from ..registry import Registry
+from .routes import halfvector_generic
+from .routes.hemisphere import (
+    NonFiniteIntegrand,
+    NonFinitePolicy,
+    estimate_lobe,
+    fibonacci_hemisphere,
+    integrate_hemisphere,
+)
 
 
 @dataclass(frozen=True)
@@ -255,7 +262,8 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     else:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-    # The half-vector route first, on the upper hemisphere (brdfnorm.halfvector_generic says which lobes it takes);
+    # The half-vector route first, on the upper hemisphere (brdfnorm.engine.routes.halfvector_generic says which lobes
+    # it takes);
     # isotropy decides that and the global rule's azimuth estimate.
     isotropic = _isotropic_cases(problem, rtol)
     first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
@@ -480,43 +488,46 @@ def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model
     return model.with_params(**{name: values[:, None]}), name, values
 
 
-# Seed 002's hypergeometric form (brdfnorm.series): exact (≤ 1e-12 against quadrature) and far faster, for the
+# Seed 002's hypergeometric form (brdfnorm.engine.routes.series): exact (≤ 1e-12 against quadrature) and far faster,
+# for the
 # built-in Blinn-Phong lobe (reciprocal, so over the light and over the view alike).
-from .models.blinn_phong import BlinnPhong  # noqa: E402
-from .series import albedo_method as _series  # noqa: E402
+from ..models.blinn_phong import BlinnPhong  # noqa: E402
+from .routes.series import albedo_method as _series  # noqa: E402
 
 register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
                        "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
 
 # Isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables): the azimuth in closed form, a
-# 1-D integral (brdfnorm.azimuthal), tried before the half-vector cubature below.
-from . import azimuthal as _azimuthal  # noqa: E402
-from .microfacet_albedo import azimuthal_method as _azimuthal_method  # noqa: E402
-from .microfacet_albedo import halfvector_method as _microfacet  # noqa: E402
+# 1-D integral (brdfnorm.engine.routes.azimuthal), tried before the half-vector cubature below.
+from .routes import azimuthal as _azimuthal  # noqa: E402
+from .routes.microfacet import azimuthal_method as _azimuthal_method  # noqa: E402
+from .routes.microfacet import halfvector_method as _microfacet  # noqa: E402
 
 register_method(Method("azimuthal", _azimuthal.applies, _azimuthal_method,
                        "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
                 auto_priority=1)
 
 # Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
-# (brdfnorm.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates fail.
-from .models.microfacet import MicrofacetModel  # noqa: E402
+# (brdfnorm.engine.routes.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates
+# fail.
+from ..models.microfacet import MicrofacetModel  # noqa: E402
 
 register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
                        "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=2)
 
 # Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
-# (brdfnorm.transmission); the result reports both parts.
-from .models.dielectric import MicrofacetDielectric  # noqa: E402
-from .transmission import albedo_method as _dielectric  # noqa: E402
+# (brdfnorm.engine.routes.dielectric); the result reports both parts.
+from ..models.dielectric import MicrofacetDielectric  # noqa: E402
+from .routes.dielectric import albedo_method as _dielectric  # noqa: E402
 
 register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
                        "reflection + refraction over the facet normal, the slope distribution as measure"),
                 auto_priority=3)
 
-# Rigorous enclosures by Arb ball arithmetic (brdfnorm.certified; python-flint is an optional extra). Never chosen
+# Rigorous enclosures by Arb ball arithmetic (brdfnorm.engine.routes.certified; python-flint is an optional extra).
+# Never chosen
 # by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).
-from . import certified as _certified  # noqa: E402
+from .routes import certified as _certified  # noqa: E402
 
 register_method(Method("certified", _certified.applies, _certified.albedo_method,
                        "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)))

@@ -37,7 +37,8 @@ piece the integrand is analytic, with its nearest singularity (Λ's branch point
 comparable to the piece. The φ panels start at the zeros and extrema of p(φ) = c·d(φ), where s_h(φ) changes
 fastest at grazing views (over a φ-width ~ V_z).
 
-Cubature. First a global tensor rule per case and piece (:mod:`brdfnorm.halfvector_global`: periodic trapezoid
+Cubature. First a global tensor rule per case and piece (:mod:`brdfnorm.engine.routes.halfvector_global`: periodic
+trapezoid
 in φ × Fejér in v, degree doubling with node reuse), which settles most views with half the evaluations; the
 cases it does not settle (grazing views, μ ≲ 0.01) start afresh on the panels below.
 Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case): a
@@ -56,10 +57,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import ArgumentError
+from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
 from . import halfvector_global as global_rule
-from .errors import ArgumentError
-from .integrate import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
-from .models.microfacet import Distribution, fresnel, roughness, shadowing_masking
+from .hemisphere import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 
 _EPS = np.finfo(float).eps
 #: Roughness floor inside the integral (α = 0 is a mirror; 1e-150 differs from it by ~1e-300).
@@ -327,7 +328,8 @@ def _microfacet_weight(g: _Geometry) -> SlopeWeight:
 
 def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
     """The rectangle (φ, v) of (H1) with the weight ``weight_of``; ``linear``: φ is the azimuth from the offset
-    itself (no φ-map), for the global rule (:mod:`brdfnorm.halfvector_global`), which clusters its own nodes."""
+    itself (no φ-map), for the global rule (:mod:`brdfnorm.engine.routes.halfvector_global`), which clusters its own
+    nodes."""
     Vz = g.V[:, 2]
     cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
     offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
@@ -417,7 +419,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
 
     Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
     estimates at looser tolerances were found optimistic (GGX against the 1-D route of
-    :mod:`brdfnorm.azimuthal`, 150 random (μ ∈ [1e-6, 1e-2], α ∈ [1e-8, 1]) views: up to 5·10⁵ times the
+    :mod:`brdfnorm.engine.routes.azimuthal`, 150 random (μ ∈ [1e-6, 1e-2], α ∈ [1e-8, 1]) views: up to 5·10⁵ times the
     estimate at rtol 1e-3, μ = 1.5e-6, α = 0.84; 4.7 times at rtol 1e-5; 1.3e-7 ≤ μ: 0.056 off, estimated 1e-8,
     at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))

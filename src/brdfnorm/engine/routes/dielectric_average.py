@@ -38,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .models.dielectric import refraction_shadowing
-from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
+from ...models.dielectric import refraction_shadowing
+from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
 ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)

@@ -1,5 +1,6 @@
 """The generic engine's half-vector route: any specular lobe integrated in the slope coordinates of
-:mod:`brdfnorm.halfvector`, tried before the lobe-aligned coordinates of :mod:`brdfnorm.integrate`.
+:mod:`brdfnorm.engine.routes.halfvector`, tried before the lobe-aligned coordinates of
+:mod:`brdfnorm.engine.routes.hemisphere`.
 
 What it computes
 ----------------
@@ -12,7 +13,8 @@ H, which is written against the GGX slope distribution D_α of a width α chosen
 
 s the standardized slope radius (H ∝ (x, y, 1), |x| = α s) and u(s) = s²/(1 + s²) GGX's radial measure. The
 rectangle (φ, v), its horizon in closed form, its pieces, and its cubature (a global tensor rule, then adaptive
-G7/K15 panels confirmed on their quarters) are those of :mod:`brdfnorm.halfvector`; only w differs (for the GGX
+G7/K15 panels confirmed on their quarters) are those of :mod:`brdfnorm.engine.routes.halfvector`; only w differs (for
+the GGX
 lobe itself, w is (H1) exactly: ``examples/ggx.brdf`` settles with the same evaluation counts as the built-in
 GGX lobe).
 
@@ -21,14 +23,16 @@ Why
 A lobe centred on the mirror direction (Blinn-Phong, Phong, every microfacet lobe) is centred on H = N for every
 view: in H its width does not change with the view, and the horizon, which cuts the lobe off-centre in ω at
 grazing views, is the closed-form boundary s_h(φ) of the rectangle. In the lobe-aligned coordinates of
-:mod:`brdfnorm.integrate` the same lobe is stretched by the reflection and cut by a horizon that turns within
+:mod:`brdfnorm.engine.routes.hemisphere` the same lobe is stretched by the reflection and cut by a horizon that turns
+within
 c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks/README.md, issue 13, rounds 1–5).
 
 Where it is tried, and when its answer is kept
 ----------------------------------------------
-- Only for isotropic lobes (:func:`brdfnorm.directional.rotation_invariant`, at each case's parameters), for
+- Only for isotropic lobes (:func:`brdfnorm.engine.methods.rotation_invariant`, at each case's parameters), for
   cases whose rounding noise is far below the tolerance (the same test as the global rule of
-  :mod:`brdfnorm.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon, and either
+  :mod:`brdfnorm.engine.machinery.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon,
+  and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
   whose peak's half vector lies within the lobe's core of N (:func:`specular`) and whose tail is a power law
   (:func:`heavy_tailed`): narrow Gaussian lobes cost both routes about the same evaluations, each cheaper in
@@ -36,7 +40,8 @@ Where it is tried, and when its answer is kept
 - The half azimuth range counted twice only where a sample of directions and their mirror images in the plane
   of N and F agree to rtol/64 (:func:`mirror_symmetric`); otherwise the full range.
 - A case is kept only if its cubature converged, every value was finite, and the estimate plus the
-  rounding-noise bound (:func:`brdfnorm.rounding.noise_bound` of the |g|-integral, integrated alongside as
+  rounding-noise bound (:func:`brdfnorm.engine.machinery.rounding.noise_bound` of the |g|-integral, integrated
+  alongside as
   one more channel) is within max(atol, rtol·|E|). Any other case goes on to the lobe-aligned routes as if this
   one had not been tried (its evaluations are counted).
 """
@@ -47,12 +52,12 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ...models.microfacet import GGXDistribution
+from ..machinery.rounding import noise_bound
+from ..machinery.tensor_rule import GlobalResult
 from . import halfvector_global as global_rule
 from .halfvector import SlopeNodes, _Geometry, integrate_slopes
-from .integrate import fibonacci_hemisphere
-from .models.microfacet import GGXDistribution
-from .rounding import noise_bound
-from .tensor_rule import GlobalResult
+from .hemisphere import fibonacci_hemisphere
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
@@ -130,7 +135,7 @@ def reflect(fixed: np.ndarray, H: np.ndarray) -> np.ndarray:
 def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, cases: np.ndarray,
                      rtol: float) -> np.ndarray:
     """Per case of ``cases``: g(ω) = g(ω') to rtol/64 of max |g| on a sample, ω' the mirror image of ω in the
-    plane of N and F (the plane :func:`brdfnorm.halfvector.integrate_slopes` folds the azimuth about)."""
+    plane of N and F (the plane :func:`brdfnorm.engine.routes.halfvector.integrate_slopes` folds the azimuth about)."""
     omega, g = _ring(integrand, fixed, alpha, cases, RINGS, fibonacci_hemisphere(LATTICE))
     azimuth = np.arctan2(fixed[cases, 1], fixed[cases, 0])
     across = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros_like(azimuth)], axis=-1)  # normal of the plane
@@ -145,7 +150,8 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
           quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
           max_evaluations: int) -> GlobalResult:
     """(G1) for the ``quiet`` cases whose lobe is ``isotropic`` (K,) and :func:`specular` (module docstring), as
-    :func:`brdfnorm.integrate.integrate_hemisphere` tries it first: ``settled`` says which cases it keeps (the
+    :func:`brdfnorm.engine.routes.hemisphere.integrate_hemisphere` tries it first: ``settled`` says which cases it
+    keeps (the
     other rows are to be ignored; their evaluations are counted)."""
     K = fixed.shape[0]
     eligible, alpha, broad = specular(fixed, poles, widths)

@@ -1,16 +1,19 @@
-"""A global tensor rule for the half-vector albedo (H1) of :mod:`brdfnorm.halfvector`, tried before its panels.
+"""A global tensor rule for the half-vector albedo (H1) of :mod:`brdfnorm.engine.routes.halfvector`, tried before its
+panels.
 
 On the rectangle (φ, v) of (H1) each radial piece v ∈ [j, j + 1] (pole, tail, horizon layer) carries an integrand
 that is periodic and analytic in the azimuth φ and smooth in v. So each (case, piece) is first integrated by one
-tensor rule over the whole piece, as :mod:`brdfnorm.tensor_rule` does for the hemisphere engine and with its
+tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule` does for the hemisphere engine and
+with its
 helpers: the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM Review 56, 2014) ×
 Fejér's second rule in v, both nested under doubling, error along each direction d₁ + min(d₂, 9 d₁) from the
-embedded coarser rules (:func:`brdfnorm.tensor_rule._sums`), plus the rounding floor.
+embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule._sums`), plus the rounding floor.
 
 Azimuth nodes. At grazing views the horizon radius s_h(φ) varies over an azimuthal width ~V_z next to the zeros
-of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.halfvector.slope_integrand`
+of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.engine.routes.halfvector.slope_integrand`
 (called with ``linear=True``: φ is the azimuth from that offset, no φ-map of its own). The trapezoid runs on t
-with tensor_rule's periodic Möbius map :func:`brdfnorm.tensor_rule.beta_map`, tan φ = λ tan t: nodes 1/λ times
+with tensor_rule's periodic Möbius map :func:`brdfnorm.engine.machinery.tensor_rule.beta_map`, tan φ = λ tan t: nodes
+1/λ times
 denser at both zeros, λ = clip(1.2 √V_z, 0.05, 1). (Measured, GGX at α = 0.03, 0.2, 0.7, azimuths for a deviation
 below 1e-11 on every piece, over λ ∈ {1, 0.7, 0.5, 0.3, 0.2, 0.1, 0.05}: the best λ was 1 at μ = 0.6, 0.5–0.7 at
 0.3, 0.3–0.5 at 0.1, 0.3 at 0.04, 0.2 at 0.01, 0.1 at 0.002; 1.2 √μ follows it. At μ = 0.04 that is 256
@@ -49,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tensor_rule import (
+from ..machinery.tensor_rule import (
     _FLOOR,
     MAX_LEVEL_B,
     START_LEVELS,

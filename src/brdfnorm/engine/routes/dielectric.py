@@ -2,7 +2,8 @@
 microfacet normal with the slope distribution as the measure, exact from rough interfaces down to mirrors.
 
 Reflection is the microfacet BRDF with the exact dielectric Fresnel: from outside (η > 1) its half-vector albedo
-(:mod:`brdfnorm.halfvector`), from inside its F = 1 albedo by :func:`brdfnorm.azimuthal.white_albedo` less the loss
+(:mod:`brdfnorm.engine.routes.halfvector`), from inside its F = 1 albedo by
+:func:`brdfnorm.engine.routes.azimuthal.white_albedo` less the loss
 ∫ G2 (1 − F) over the facets below the critical angle (:data:`PARTS`), so that the Fresnel kink at total internal
 reflection is an edge of the domain rather than inside it (:func:`reflection_albedo`). Refraction follows the same
 route (Walter et al. 2007, §5.3: sampling the facet normal m with density D(m)(N·m), the refracted direction's
@@ -10,7 +11,7 @@ weight is |V·m| G2 (1 − F)/(|N·V| |N·m|), the same form as the reflected on
 
     E_T(V) = (1/2π) ∫₀^{2π} ∫ G2(L, V) (1 − F(V·m)) (1 + c·x) du dφ,    L = refract(V, m, η),        (T1)
 
-in the slope coordinates of :mod:`brdfnorm.halfvector` (m ∝ (x, y, 1), x = s d(φ), c = V_xy/V_z, u(s) the
+in the slope coordinates of :mod:`brdfnorm.engine.routes.halfvector` (m ∝ (x, y, 1), x = s d(φ), c = V_xy/V_z, u(s) the
 distribution's radial CDF), with G2 the refraction shadowing (Heitz's B(1 + Λ_V, 1 + Λ_L) when
 height-correlated).
 
@@ -29,11 +30,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...models.dielectric import MicrofacetDielectric, refraction_shadowing
+from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
+from ..machinery.grazing_panels import ladder
 from .azimuthal import white_albedo
-from .grazing_panels import ladder
 from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, single_scattering_albedo
-from .models.dielectric import MicrofacetDielectric, refraction_shadowing
-from .models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
@@ -54,7 +55,8 @@ _KINK_BISECTIONS = 56
 #: The window integrals: over the facets with V·m above the critical cosine c* (c* = 0 for η > 1), where
 #: 1 − F is analytic, "refraction" is ∫ G2_t (1 − F)(1 + c·x) and "reflection-loss" ∫ G2_r (1 − F)(1 + c·x) with
 #: the reflected direction's G2. The reflection is the lobe's F = 1 albedo (the half-vector integral of
-#: :mod:`brdfnorm.halfvector`) less that loss: R = ∫ G2_r F = ∫ G2_r − ∫_window G2_r (1 − F), since F = 1 outside
+#: :mod:`brdfnorm.engine.routes.halfvector`) less that loss: R = ∫ G2_r F = ∫ G2_r − ∫_window G2_r (1 − F), since F = 1
+#: outside
 #: the window (total internal reflection). Both integrands vanish continuously at the window's edge.
 PARTS = ("refraction", "reflection-loss")
 
@@ -391,7 +393,8 @@ def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.n
                       max_evaluations: int = 20_000_000) -> CubatureResult:
     """R(V) per case (``atol`` scalar or (K,)). From the rarer side (η > 1) F is analytic over every facet, so R is
     the microfacet BRDF's albedo with the exact dielectric Fresnel, by the half-vector route of
-    :mod:`brdfnorm.halfvector` (GGX, 16 μ × 16 α at η = 1.5, rtol 1e-9: 1.56 M evaluations against 4.67 M for the
+    :mod:`brdfnorm.engine.routes.halfvector` (GGX, 16 μ × 16 α at η = 1.5, rtol 1e-9: 1.56 M evaluations against 4.67 M
+    for the
     route below). Seen from inside (η < 1), and at views closer to the horizon than that route admits, R is the
     F = 1 albedo less the reflection loss, where total internal reflection's kink is the window's edge."""
     K = fixed.shape[0]

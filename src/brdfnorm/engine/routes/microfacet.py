@@ -1,11 +1,13 @@
 """The albedo methods of the microfacet lobes, and Kulla & Conty's energy-compensation tables they use.
 
-Methods (registered in :mod:`brdfnorm.directional`): ``"azimuthal"`` — isotropic GGX with F = 1 by the 1-D
-integral of :mod:`brdfnorm.azimuthal` — and ``"microfacet"`` — every ``ggx``/``beckmann`` lobe by the half-vector
-cubature of :mod:`brdfnorm.halfvector`. Both add, with ``ms=kulla-conty``, the compensation lobe of Kulla & Conty
+Methods (registered in :mod:`brdfnorm.engine.methods`): ``"azimuthal"`` — isotropic GGX with F = 1 by the 1-D
+integral of :mod:`brdfnorm.engine.routes.azimuthal` — and ``"microfacet"`` — every ``ggx``/``beckmann`` lobe by the
+half-vector
+cubature of :mod:`brdfnorm.engine.routes.halfvector`. Both add, with ``ms=kulla-conty``, the compensation lobe of Kulla
+& Conty
 2017 ("Revisiting physically based shading at Imageworks") in closed form (:func:`with_compensation`), from the
 tables :func:`compensation` builds: E(μ, α) and E_avg(α) of the F = 1 lobe (by
-:func:`brdfnorm.azimuthal.white_albedo`), read as a renderer reads them or exact.
+:func:`brdfnorm.engine.routes.azimuthal.white_albedo`), read as a renderer reads them or exact.
 """
 
 from __future__ import annotations
@@ -16,15 +18,15 @@ from functools import lru_cache
 
 import numpy as np
 
-from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
-from .models.microfacet import (
+from ...models.microfacet import (
     BeckmannDistribution,
     Distribution,
     GGXDistribution,
     MicrofacetModel,
     register_compensation,
 )
+from .azimuthal import white_albedo
+from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
 from .series import adaptive_gauss_legendre
 
 #: The μ = 0 row of a table is evaluated here (a renderer clamps μ there too).
@@ -54,7 +56,7 @@ def _albedo_method(single_scattering):
 
 #: Method ``"microfacet"``: every ggx/beckmann lobe by the half-vector cubature.
 halfvector_method = _albedo_method(single_scattering_albedo)
-#: Method ``"azimuthal"``: isotropic lobes with F = 1 by :mod:`brdfnorm.azimuthal`'s 1-D integral.
+#: Method ``"azimuthal"``: isotropic lobes with F = 1 by :mod:`brdfnorm.engine.routes.azimuthal`'s 1-D integral.
 azimuthal_method = _albedo_method(
     lambda distribution, fixed, params, **options: white_albedo(distribution, params["shadowing"], fixed,
                                                                 params["alpha"], **options))
@@ -96,7 +98,7 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
     """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
 
     In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
-    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.series.adaptive_gauss_legendre` over
+    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` over
     x ∈ [ln 1e-6, 0] converges fast; each node's E is computed to an absolute accuracy scaled by its weight,
     and the nodes' errors are added to the outer estimate (bounded by max(2μ²·err_E) times the x-range).
     """

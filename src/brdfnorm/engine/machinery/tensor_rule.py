@@ -1,6 +1,7 @@
 """The hemisphere integrator's coordinates, and a global tensor rule with degree doubling on them.
 
-Coordinates (shared with the adaptive panels of :mod:`brdfnorm.integrate`, which explains them): lobe-aligned
+Coordinates (shared with the adaptive panels of :mod:`brdfnorm.engine.routes.hemisphere`, which explains them):
+lobe-aligned
 polar angles (α, β) about the lobe's peak P, the horizon α_h(β) as the boundary, and the width-adapted radial map
 α = w tan(v·A(β)), v = 1 − (1 − u)^p (p = 2, or 3 for heavy tails), on the rectangle (β, u) ∈ [0, 2π) × [0, 1].
 
@@ -37,14 +38,16 @@ before any panel is cut, each case is integrated by one tensor rule over the who
 The error estimate of the M × N rule is built from the deviations of the embedded coarser rules, which cost no
 evaluation (every other node, every fourth node): along each direction d₁ + min(d₂, 9 d₁), with d₁ = |Q − Q(½)| and
 d₂ = |Q(½) − Q(¼)| (:func:`_sums`), plus the rounding floor and the integrand's float64 noise bound
-(:mod:`brdfnorm.rounding`). d₁ is the error of the *coarser* rule; the reported Q(M, N), with twice the nodes, is
+(:mod:`brdfnorm.engine.machinery.rounding`). d₁ is the error of the *coarser* rule; the reported Q(M, N), with twice
+the nodes, is
 far more accurate once convergence is geometric (its error is roughly the square of d₁, relative). The factor 10
 covers pre-asymptotic plateaus, where two rules agree better than either is accurate (a randomized probe found
 Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). The direction(s) whose estimate
 exceeds half the tolerance (the larger one where neither does) are doubled — only one where the other is within
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
 (:func:`_stalled`). A case goes to the adaptive panels of
-:mod:`brdfnorm.integrate` when it would need more than :data:`MAX_NODES` nodes — predicted early, from the last
+:mod:`brdfnorm.engine.routes.hemisphere` when it would need more than :data:`MAX_NODES` nodes — predicted early, from
+the last
 doubling's reduction, assuming each doubling squares it (geometric convergence), or from the radial level its
 lobe's neck needs at a grazing view (:func:`neck_u`: no case settles before its coarsest embedded rule has a node
 inside the neck) — when its integrand is not finite
@@ -106,7 +109,7 @@ def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
     of 5.4e-10, the global rule's Fejér nodes as blind at μ ≲ 1e-6 for GGX). The rules below put nodes inside
     it: the global rule by a minimum radial level (:func:`_neck_levels`; without it, broad Beckmann lobes at
     μ ≈ 1e-6…1e-4 settled up to 4.6 times outside their estimates on a random sweep), the panels by initial
-    edges graded towards the pole (:func:`brdfnorm.grazing_panels.starting_panels`)."""
+    edges graded towards the pole (:func:`brdfnorm.engine.machinery.grazing_panels.starting_panels`)."""
     P = frame[0]
     pz = np.maximum(P[:, 2], 0.0)
     w = widths * width_scale

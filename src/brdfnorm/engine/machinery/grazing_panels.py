@@ -1,7 +1,8 @@
 """The adaptive panels' starting grid at grazing views (:func:`starting_panels`, used by
-:func:`brdfnorm.integrate.integrate_hemisphere`): the plain β × u grid, cut further at the two scales of a peak
+:func:`brdfnorm.engine.routes.hemisphere.integrate_hemisphere`): the plain β × u grid, cut further at the two scales of
+a peak
 c_P ≪ 1 above the horizon that no node of the plain grid sees — the lobe's neck next to the pole
-(:func:`brdfnorm.tensor_rule.neck_u`) and the band next to the horizon's turn at β = ±π/2."""
+(:func:`brdfnorm.engine.machinery.tensor_rule.neck_u`) and the band next to the horizon's turn at β = ±π/2."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ BAND_GRADING = 8.0
 
 def ladder(start: np.ndarray, stop: float, factor: float = NECK_GRADING) -> tuple[np.ndarray, np.ndarray]:
     """Per case (R,), the rungs start·factor^k (R, 64) and which of them lie below ``stop``: geometrically graded
-    panel edges (also :func:`brdfnorm.transmission._azimuth_edges`)."""
+    panel edges (also :func:`brdfnorm.engine.routes.dielectric._azimuth_edges`)."""
     rungs = start[:, None] * factor ** np.arange(64)  # far past any stop for start ≥ 1e-38
     return rungs, rungs < stop
 
@@ -26,7 +27,8 @@ def starting_panels(cases: np.ndarray, edges_b: np.ndarray, edges_u: np.ndarray,
     two scales of c_P the plain grid's nodes do not see.
 
     * In u, at u_neck·4^k (k = 0, 1, … up to a quarter of the first regular edge): the lobe's neck
-      (:func:`brdfnorm.tensor_rule.neck_u`: the lobe of a half-vector BRDF covers every azimuth within c_P·w of
+      (:func:`brdfnorm.engine.machinery.tensor_rule.neck_u`: the lobe of a half-vector BRDF covers every azimuth within
+      c_P·w of
       its peak). Without these cuts no node of the first panel, nor of its halves in the confirmation, lies in
       the neck, and panels away from β = 0, π report ~0 there with a ~0 error (Beckmann α = 0.0176 at
       μ = 1.26e-4: 1.3e-6 missed, the estimate 5.4e-10).

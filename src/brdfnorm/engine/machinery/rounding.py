@@ -5,7 +5,7 @@ the 1 − (N·H)² of a GGX shader (Walter et al. 2007) — sees that cosine onl
 peak the rounded cosine is a staircase; once the lobe is narrow enough (n ≳ 1e7, α ≲ 1e-4) that staircase is
 a visible share of the lobe, and no quadrature can recover the albedo of the exact BRDF from the float64
 one. :func:`rounding_noise` measures the noise before integrating, :func:`noise_bound` turns it into a term
-of the error estimate (:mod:`brdfnorm.integrate` stops a case whose noise exceeds its tolerance, with the
+of the error estimate (:mod:`brdfnorm.engine.routes.hemisphere` stops a case whose noise exceeds its tolerance, with the
 reason "rounding-limited").
 """
 
