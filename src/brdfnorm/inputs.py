@@ -80,10 +80,15 @@ def element_count(shape: Iterable[object], limit: int, *, where: str,
         if dim < 1:
             raise error(f"{what} has a dimension of {dim}; every dimension must be at least 1", where)
         if dim > limit or count * dim > limit:
-            raise error(f"{what} ({' × '.join(str(d)[:20] for d in dims)}) holds more than {limit} elements",
-                        where)
+            shown = " × ".join(str(d) if isinstance(d, int) and d <= limit else f"{_big(d)}" for d in dims)
+            raise error(f"{what} ({shown}) holds more than {limit} elements", where)
         count *= dim
     return count
+
+
+def _big(dim: object) -> str:
+    """A dimension too large to print in full (``str`` of a 5 000-digit integer raises)."""
+    return f"~2^{dim.bit_length()}" if isinstance(dim, int) else "?"
 
 
 @contextmanager
