@@ -34,7 +34,7 @@ from ...models.dielectric import MicrofacetDielectric, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ..machinery.grazing_panels import ladder
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, single_scattering_albedo
+from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, fill_pieces, single_scattering_albedo
 
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
@@ -249,33 +249,27 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
         # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle), towards the start
         # of the second (which is s_lo where the first is empty) and towards s_hi in the last part (the boundary
         # layer and the square root alike). Each part on its own panels only.
-        shape = np.broadcast_shapes(local.shape, s_lo.shape)
-        s, density, length = np.empty(shape), np.empty(shape), np.empty(shape)
-        for kind in range(3):
-            rows = np.flatnonzero(piece == kind)
-            if not rows.size:
-                continue
-            at = local[rows]
+        def piece_nodes(kind, rows, at):
             if kind == 0:
                 t_lo, t_mid = distribution.pole_coordinate(s_lo[rows]), distribution.pole_coordinate(s_middle[rows])
-                s[rows], density[rows] = distribution.pole(t_lo + at * at * (t_mid - t_lo))
-                length[rows] = (t_mid - t_lo) * (2.0 * at)
-            elif kind == 1 and far:
+                radius, density = distribution.pole(t_lo + at * at * (t_mid - t_lo))
+                return radius, density, (t_mid - t_lo) * (2.0 * at)
+            if kind == 1 and far:
                 t_start, t_stop = _far_coordinate(s_middle[rows], a[rows]), _far_coordinate(s_split[rows], a[rows])
                 with np.errstate(invalid="ignore", divide="ignore"):  # empty rays (s = 0): masked below
                     t = t_start + at * at * (t_stop - t_start)
-                    s[rows] = 1.0 / (a[rows] * np.expm1(-t))
-                    density[rows] = distribution.slope_density(s[rows]) * (a[rows] * np.exp(-t)) * s[rows] ** 2
-                    length[rows] = (t_stop - t_start) * (2.0 * at)
-            elif kind == 1:
+                    radius = 1.0 / (a[rows] * np.expm1(-t))
+                    density = distribution.slope_density(radius) * (a[rows] * np.exp(-t)) * radius ** 2
+                    return radius, density, (t_stop - t_start) * (2.0 * at)
+            if kind == 1:
                 t_start = distribution.tail_coordinate(s_middle[rows])
                 t_stop = distribution.tail_coordinate(s_split[rows])
-                s[rows], density[rows] = distribution.tail(t_start + at * at * (t_stop - t_start))
-                length[rows] = (t_stop - t_start) * (2.0 * at)
-            else:
-                near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
-                s[rows], density[rows] = near, distribution.slope_density(near)
-                length[rows] = (s_hi[rows] - s_split[rows]) * (2.0 * (1.0 - at))
+                radius, density = distribution.tail(t_start + at * at * (t_stop - t_start))
+                return radius, density, (t_stop - t_start) * (2.0 * at)
+            near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
+            return near, distribution.slope_density(near), (s_hi[rows] - s_split[rows]) * (2.0 * (1.0 - at))
+
+        s, density, length = fill_pieces(piece, local, s_lo.shape, piece_nodes)
         x, y = s * dx, s * dy
         n = np.sqrt(1.0 + x * x + y * y)
         one_sp = 1.0 + (vx * x + vy * y) / vz

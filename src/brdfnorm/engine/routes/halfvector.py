@@ -377,13 +377,7 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
         local = v - piece[:, None, None]  # position in the piece, [0, 1], (R, 1, n)
         # Pole piece [0, s_middle] in the pole coordinate, tail piece [s_middle, s_split] in the tail
         # coordinate, horizon piece [s_split, s_h] linear in s; each computed on its own panels only.
-        shape = np.broadcast_shapes(local.shape, s_h.shape)
-        s, weight_t, gap_to_horizon = np.empty(shape), np.empty(shape), np.empty(shape)
-        for kind in range(3):
-            rows = np.flatnonzero(piece == kind)
-            if not rows.size:
-                continue
-            at = local[rows]
+        def piece_nodes(kind, rows, at):
             if kind == 0:
                 length = dist.pole_coordinate(s_middle[rows])
                 radius, density = dist.pole(at * length)
@@ -400,9 +394,10 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
                 length = s_end[rows] - s_split[rows]
                 radius = s_split[rows] + at * length
                 density, to_end = dist.slope_density(radius), length * (1.0 - at)
-            s[rows] = radius
-            weight_t[rows] = density * length
-            gap_to_horizon[rows] = s_h[rows] - radius if kind < 2 else (s_h[rows] - s_end[rows]) + to_end
+            gap = s_h[rows] - radius if kind < 2 else (s_h[rows] - s_end[rows]) + to_end
+            return radius, density * length, gap
+
+        s, weight_t, gap_to_horizon = fill_pieces(piece, local, s_h.shape, piece_nodes)
         one_sp = 1.0 + s * p
         n2 = 1.0 + s * s * d2
         Lz = vz * gap_to_horizon * (d2 * s + q_minus_p) / n2
@@ -410,6 +405,24 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
                                     phi_jacobian * (g.multiplicity[k] / _TWO_PI)))
 
     return integrand
+
+
+def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
+                piece_nodes: Callable[[int, np.ndarray, np.ndarray], tuple[np.ndarray, ...]]
+                ) -> tuple[np.ndarray, ...]:
+    """The radial nodes of panels that belong to different pieces (0 pole, 1 tail, 2 horizon layer), each piece
+    computed on its own panels only: ``piece_nodes(kind, rows, at)`` gives three arrays for the panel rows ``rows``
+    at their positions ``at`` ∈ [0, 1] within the piece; they are gathered into arrays of the broadcast shape of
+    ``local`` (R, 1, n) and ``shape``. Shared by this module's integrand and the refraction's
+    (:mod:`brdfnorm.engine.routes.dielectric`)."""
+    shape = np.broadcast_shapes(local.shape, shape)
+    out = tuple(np.empty(shape) for _ in range(3))
+    for kind in range(3):
+        rows = np.flatnonzero(piece == kind)
+        if rows.size:
+            for target, value in zip(out, piece_nodes(kind, rows, local[rows]), strict=True):
+                target[rows] = value
+    return out
 
 
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
