@@ -829,7 +829,7 @@ def targets(results: dict, cfg: Config) -> list[dict]:
 
 
 #: Where an unmet goal of issue 13 is explained (measured limits, and what was tried).
-ENGINE_WHY = "why: benchmarks/README.md, round 7"
+ENGINE_WHY = "why: benchmarks/README.md, issue 13's speed goals"
 
 
 def _engine_targets(results: dict, cfg: Config) -> list[dict]:
