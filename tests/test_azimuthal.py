@@ -185,6 +185,6 @@ def test_no_floating_point_warnings_over_the_parameter_range(name):
         # The Kulla-Conty tables' α = 0 column (the model's own α stops at 1e-12): the 1-D route at α = 0.
         distribution = {"ggx": GGXDistribution, "beckmann": BeckmannDistribution}[name]()
         mirror = azimuthal.white_albedo(distribution, "height-correlated",
-                                        bn.directional._directions(views, 0.0 * views), np.zeros(4), rtol=1e-10)
+                                        bn.engine.methods._directions(views, 0.0 * views), np.zeros(4), rtol=1e-10)
     assert result.method == "azimuthal" and result.converged.all() and np.all(np.isfinite(result.value))
     assert mirror.converged.all() and np.all(np.abs(mirror.value[:, 0] - 1.0) <= 1e-15)  # a mirror keeps it all
