@@ -91,6 +91,7 @@ def test_beckmann_normal_view_against_mpmath(alpha):
     assert true_error <= result.error[0] and true_error <= 1e-14
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", azimuthal.DISTRIBUTIONS)
 @pytest.mark.parametrize("shadowing", SHADOWINGS)
 def test_agrees_with_the_half_vector_cubature_and_gauss_legendre(name, shadowing):
@@ -112,6 +113,7 @@ def test_agrees_with_the_half_vector_cubature_and_gauss_legendre(name, shadowing
             assert abs(value[i, j] - fine) <= estimate[i, j] + own + 1e-15, (mu, alpha)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", azimuthal.DISTRIBUTIONS)
 @pytest.mark.parametrize("rtol", [1e-3, 1e-6, 1e-10])
 def test_estimates_bound_the_error_on_random_views_and_roughnesses(name, rtol):

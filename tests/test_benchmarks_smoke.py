@@ -30,6 +30,7 @@ def quick(tmp_path_factory) -> tuple[dict, Path]:
     return bench.run(quick=True, only=workloads, out_dir=out), out
 
 
+@pytest.mark.slow
 def test_outputs_written(quick):
     results, out = quick
     assert json.loads((out / "latest.json").read_text())["meta"]["quick"] is True
@@ -40,6 +41,7 @@ def test_outputs_written(quick):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_every_method_has_a_finite_error(quick):
     results, _ = quick
     measured = [w for w in results["workloads"].values() if "methods" in w]
@@ -58,6 +60,7 @@ def test_every_method_has_a_finite_error(quick):
             assert all(math.isfinite(p["rel_error"]) for p in points)
 
 
+@pytest.mark.slow
 def test_errors_are_real(quick):
     """brdfnorm and cubature at rtol 1e-9 land within 1e-8 of the mpmath / closed-form references."""
     results, _ = quick
@@ -74,6 +77,7 @@ def test_errors_are_real(quick):
     assert norm["methods"]["dblquad"]["max_rel_error"] > 0.5
 
 
+@pytest.mark.slow
 def test_targets_and_memory(quick):
     results, _ = quick
     names = " ".join(t["target"] for t in results["targets"])

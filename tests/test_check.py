@@ -105,6 +105,7 @@ def test_large_factor_blinn_phong_fails_and_its_maximum_matches_a_brute_force_gr
     assert abs(4.0 * (n0 + 8.0) / (8.0 * np.pi) * at_point - energy.value) <= energy.error + 1e-9
 
 
+@pytest.mark.slow
 def test_unguarded_cook_torrance_fails_energy_at_grazing_views_with_its_value_confirmed_by_dblquad():
     report = check(FIXTURES / "cook_torrance_unguarded.brdf", checks=("energy",), points=12)
     energy = report.results["energy"]
@@ -304,6 +305,7 @@ def test_cli_json_for_several_files(capsys):
     assert large["checks"]["energy"]["params"]["n"] >= 1 and large["checks"]["energy"]["value"] > 4
 
 
+@pytest.mark.slow
 def test_cli_summary_rows_and_failures(capsys):
     files = [str(EXAMPLES / "lambert.brdf"), str(FIXTURES / "cook_torrance_unguarded.brdf")]
     code, out, err = run_cli(capsys, "check", *files, "--points", "6", "--only", "energy")
@@ -334,6 +336,7 @@ def test_cli_missing_file_stops_before_any_work(capsys):
 
 # -- the report's audit section -----------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_report_audit_section_has_one_row_per_file(tmp_path):
     from brdfnorm.report import StudyConfig, build_report
 
@@ -370,6 +373,7 @@ def test_cli_file_names_are_text_not_markup(capsys, tmp_path):
     assert code == 0 and "[bold]x[/bold]lobe" in out and "plain.brdf" in out
 
 
+@pytest.mark.slow
 def test_builtin_microfacet_lobe_with_choice_parameters_against_certified_and_nquad():
     report = check("ggx", checks=("normalization", "energy"), sweep={"alpha": [0.5]},
                    fixed=("alpha_x", "alpha_y", "ms_table"), points=2)

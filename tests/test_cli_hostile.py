@@ -128,6 +128,7 @@ def test_output_keeps_an_existing_files_mode_and_a_symlink(tmp_path, capsys):
     assert link.is_symlink() and '"factor"' in real.read_text() and stat.S_IMODE(real.stat().st_mode) == 0o640
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("target", ["", "."])
 def test_report_refuses_dangerous_output_directories(tmp_path, target):
     (tmp_path / "keep.txt").write_text("precious")
@@ -143,6 +144,7 @@ def test_error_messages_quote_at_most_40_characters_of_a_value(capsys):
     assert "x" * 41 not in err
 
 
+@pytest.mark.slow
 def test_report_draws_a_mathtext_unsafe_file_name_as_text(tmp_path):
     name = "a$\\foo{$b.brdf"
     (tmp_path / name).write_text((ROOT / "examples" / "lambert.brdf").read_text())
@@ -186,6 +188,7 @@ def test_file_names_are_text_not_rich_markup(tmp_path, monkeypatch, capsys, argv
         assert "[a]x[/a]b.brdf" in out
 
 
+@pytest.mark.slow
 def test_three_concurrent_reports_to_one_directory_all_succeed_and_leave_nothing_behind(tmp_path):
     argv = [sys.executable, "-m", "brdfnorm", "report", "lambert", "--sweep", "reflectance=0.5,1", "-o", "same"]
     runs = [subprocess.Popen(argv, cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

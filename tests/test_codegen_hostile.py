@@ -62,6 +62,7 @@ def _check_comments_and_lines(source: str, language: str) -> None:
         assert not re.search(r"[\"'`]", code), line  # no string can start outside a comment
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(model=names, variable=names, second=names, two_d=st.booleans())
 def test_python_and_text_of_every_language_are_safe(model, variable, second, two_d):
@@ -74,6 +75,7 @@ def test_python_and_text_of_every_language_are_safe(model, variable, second, two
     _check_python(emit(result, "python", model, second=second), function, result, two_d)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CC is None or GLSLANG is None, reason="needs cc and glslangValidator")
 @settings(max_examples=15, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])

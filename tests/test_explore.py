@@ -114,6 +114,7 @@ def test_phong_albedo_at_the_view_matches_a_one_dimensional_reference(quality):
         assert abs(E - phong_like_reference(n, math.radians(theta), original=False)) <= err + 1e-14
 
 
+@pytest.mark.slow
 def test_coarse_max_factor_is_an_upper_bound_and_the_fine_one_is_searched():
     model = bn.load(str(GGX), roughness=0.3)
     coarse = evaluate_view(model, 30.0, "max", "coarse")
@@ -178,6 +179,7 @@ def shown_check(text: str) -> tuple[str, float, float, str]:
     return status, value, float(error), where.split(";")[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path, params, expected_status", [
     (GGX, {"roughness": 0.3}, "pass"),
     (ROOT / "examples" / "blinn_phong_gaussian.brdf", {"n": 100.0, "normalized": True}, "fail"),  # ~0.66 % gained

@@ -78,6 +78,7 @@ def assert_shows(text: str, expected: float) -> None:
     assert unit <= 1e-9 * abs(expected), f"only {number} shown: the refined readout should carry ~10 digits"
 
 
+@pytest.mark.slow
 def test_page_follows_the_slider_and_the_file(page, watched, capsys):
     refined(page)
     assert page.get_by_test_id("plot-lobe").locator(".main-svg").count() > 0

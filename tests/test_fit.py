@@ -165,6 +165,7 @@ def test_seed003_linear_fit_reproduces_the_published_coefficients(seed003_alpha)
     assert result.argmax == {"n": 1.0}
 
 
+@pytest.mark.slow
 def test_auto_on_the_seed003_sweep_meets_the_target(seed003_alpha):
     n, alpha = seed003_alpha
     result = fit(n, alpha, form="auto", target=1e-3)
@@ -181,6 +182,7 @@ def test_auto_on_the_seed003_sweep_meets_the_target(seed003_alpha):
 VIEW_FORM = "rational-sqrt:5/2@4~tau"
 
 
+@pytest.mark.slow
 def test_blinn_phong_view_fit_meets_the_goal_on_a_different_denser_grid(tmp_path):
     from brdfnorm.codegen import emit
 

@@ -85,6 +85,7 @@ def test_smith_variable_is_one_over_one_plus_two_lambda():
     assert smith_variable(np.array([0.0]), np.array([0.0]))[0] == 0.0
 
 
+@pytest.mark.slow
 def test_pareto_front_smith_beats_rationals_in_sqrt_mu(table):
     """``auto`` over ≤ 9 coefficients: the front is monotone, and the smith forms beat every rational in √μ of
     the same size several times over (the goal needs 14: :func:`test_goal_met_off_the_fitting_grid`)."""
@@ -175,6 +176,7 @@ def test_bad_uses_of_the_form():
         fit(np.full(20, 2.0), np.ones(20), np.ones(20), form="smith:1/1@1")
 
 
+@pytest.mark.slow
 def test_cli_prints_the_front_and_emits_code(capsys, table, tmp_path):
     path = lut.save(table, tmp_path / "E.npz")
     code, stdout, stderr = run_cli(capsys, "fit", "--lut", str(path), "--max-coefficients", "6", "--emit", "glsl")

@@ -24,6 +24,7 @@ def _quiet(route, *args, **kwargs):
         return route(*args, **kwargs)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "alpha", "eta"), [
     ("ggx", 0.3, 1.5), ("ggx", 0.02, 1 / 1.5), ("ggx", 0.002, 2.4), ("beckmann", 0.3, 1.5), ("beckmann", 1.0, 1 / 1.5),
 ])
@@ -97,6 +98,7 @@ def test_spread_over_processes_is_bit_identical():
         assert np.array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_the_mu_average_is_honest_over_a_kink_of_e_mu():
     """Beckmann α = 1, η = 1/1.5: E(μ)'' drops from −70 to −17 within Δ√μ ≈ 0.003 near μ = 0.99, inside the
     μ-average's last panel, where K15 and G7 shared an error: at rtol 1e-8 it was 5.7e-9 off with an estimate of

@@ -102,6 +102,7 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(CASES))
 def test_hostile_file_is_refused_with_bounded_memory(tmp_path, case):
     make, message = CASES[case]

@@ -61,6 +61,7 @@ def test_azimuth_map_is_periodic_symmetric_and_clusters_at_the_zeros_of_p():
     assert clustering(np.array([1.0, 1e-2, 1e-8])).tolist() == [1.0, 0.12, 0.05]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rtol", RTOLS)
 @pytest.mark.parametrize("name, shadowing", [("ggx", "height-correlated"), ("beckmann", "height-correlated"),
                                              ("ggx", "separable")])
@@ -79,6 +80,7 @@ def test_global_estimates_bound_the_error_against_gauss_legendre(global_only, re
         assert np.max(true_error) > 100 * np.max(own)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, params", FRESNEL_LOBES)
 def test_global_estimates_bound_the_error_anisotropic_and_fresnel(global_only, name, params):
     model = bn.load(name, **params)
@@ -112,6 +114,7 @@ def grazing_references():
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, shadowing", GRAZING_LOBES)
 def test_global_estimates_bound_the_error_at_grazing_views(global_only, grazing_references, name, shadowing):
     """μ = 1e-6 … 1e-2, where GGX takes the graded azimuth map and the horizon piece in ln s (Beckmann keeps the

@@ -37,6 +37,7 @@ def references():
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rtol", RTOLS)
 @pytest.mark.parametrize("name, shadowing", [("ggx", "height-correlated"), ("beckmann", "height-correlated"),
                                              ("ggx", "separable")])
@@ -54,6 +55,7 @@ def test_estimate_bounds_the_error_against_gauss_legendre(references, name, shad
         assert np.max(true_error) > 100 * np.max(own)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, params", FRESNEL_LOBES)
 def test_estimate_bounds_the_error_anisotropic_and_fresnel(name, params):
     model = bn.load(name, **params)
@@ -77,6 +79,7 @@ GRAZING_CASES = [(1.5e-6, 0.84), (3.4e-5, 0.0046), (2.6e-5, 0.011), (1.3e-7, 0.1
                  (1.2e-6, 5.2e-4), (1e-8, 0.35), (1e-8, 0.07)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shadowing", ["height-correlated", "separable"])
 @pytest.mark.parametrize("name", ["ggx", "beckmann"])
 def test_grazing_views_are_honest_at_loose_tolerances(name, shadowing):

@@ -59,6 +59,7 @@ def test_radial_width_follows_an_ellipse_of_axis_ratio_lambda(lam):
     np.testing.assert_allclose((width * np.cos(beta)) ** 2 + (width * np.sin(beta) / lam) ** 2, 1.0, rtol=1e-13)
 
 
+@pytest.mark.slow
 def test_global_rule_alone_is_honest_at_grazing_views(rng, monkeypatch, lobe_aligned_only):
     # Beyond θ_o ≈ 75° the β map's clustering is held at LAMBDA_MIN and the elliptic radial width is narrowest:
     # every case the global rule settles (not the panels after it) must carry an estimate ≥ its true error.
@@ -147,6 +148,7 @@ def _angles(rng, count: int) -> np.ndarray:
     return np.radians(np.concatenate([rng.uniform(0.0, 85.0, count - grazing.size), grazing]))
 
 
+@pytest.mark.slow
 def test_randomized_honesty_probe(rng):
     """Estimate ≥ true error on ~250 random cases of the whole engine (global rule, then panels) against
     independent references: seed 002's series (Blinn-Phong), a 1-D route by scipy quad (Phong, modified Phong),

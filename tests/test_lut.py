@@ -36,6 +36,7 @@ def test_cells_are_the_albedo_in_axis_order(table):
     assert table.meta["unconverged"] == 0 and table.meta["tables"]["E_avg"] == ["n"]
 
 
+@pytest.mark.slow
 def test_e_avg_against_quadpack_over_an_independent_albedo_route(table):
     """E_avg = 2∫ E(μ) μ dμ by QUADPACK over the cubature route, while the table used the series route in μ
     nodes of its own G7/K15 panels: they agree within the estimates, and the estimate is not too small."""

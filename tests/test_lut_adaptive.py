@@ -30,6 +30,7 @@ def _kinked(x0: float):
     return evaluate, float(exact)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
 def test_estimate_covers_a_smoothed_kink_anywhere(rtol):
     """Over 36 positions of the kink (|K15 − G7| alone failed at rtol 1e-6 and 1e-8 here; on 140 positions it was up

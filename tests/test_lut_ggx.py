@@ -34,12 +34,14 @@ def done_when(tmp_path_factory):
     return lut.load(out)
 
 
+@pytest.mark.slow
 def test_done_when_table_every_cell_converged(done_when):
     assert done_when["E"].shape == (32, 32) and done_when.meta["unconverged"] == 0
     assert done_when.meta["clamp"] == {"mu": 1e-4, "alpha": 1e-8}
     assert np.all(done_when["E_error"] <= 1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("i", [0, 1, 5, 16, 31])
 @pytest.mark.parametrize("j", [0, 1, 3, 10, 31])
 def test_done_when_cells_match_the_reference(done_when, i, j):
@@ -50,12 +52,14 @@ def test_done_when_cells_match_the_reference(done_when, i, j):
     assert error <= done_when["E_error"][i, j] + own  # the estimate is not smaller than the error
 
 
+@pytest.mark.slow
 def test_mirror_limit_and_closed_form(done_when):
     # α = 1e-8: a mirror with Smith shadowing ≈ 1 except within ~α of the horizon; E_avg = 1 to ~α².
     assert abs(done_when["E_avg"][0] - 1.0) <= 1e-12
     assert abs(done_when["E"][-1, -1] - (1.0 - np.log(2.0))) <= 1e-10  # E(μ = 1, α = 1) = 1 − ln 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.25, 1.0])
 def test_e_avg_against_gauss_legendre_over_the_reference(alpha):
     table = lut.compute(bn.load("ggx"), {"mu": [1.0], "alpha": [alpha]}, rtol=1e-10)
@@ -78,6 +82,7 @@ def test_dfg_pair_of_the_builtin(mu, alpha):
     assert abs(table["DFG_f0"][0, 0] + table["DFG_f90"][0, 0] - table["E"][0, 0]) <= 1e-9
 
 
+@pytest.mark.slow
 def test_cli_every_format_of_the_builtin(capsys, tmp_path):
     for fmt in ("npz", "exr", "csv", "json", "h", "glsl", "hlsl", "png"):
         out = tmp_path / f"E.{fmt}"
@@ -87,6 +92,7 @@ def test_cli_every_format_of_the_builtin(capsys, tmp_path):
         assert lut.load(out)["E"].shape == (4, 3)
 
 
+@pytest.mark.slow
 def test_report_microfacet_section(tmp_path):
     from brdfnorm.report import StudyConfig, build_report
 
@@ -102,6 +108,7 @@ def test_report_microfacet_section(tmp_path):
     assert residuals[16] > residuals[0]
 
 
+@pytest.mark.slow
 def test_benchmark_lut_workload_quick(tmp_path):
     import sys
     from pathlib import Path
@@ -130,6 +137,7 @@ def adaptive_e_avg():
     return value, error
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["microfacet", "azimuthal"])
 @pytest.mark.parametrize("rtol", [1e-3, 1e-5, 1e-7, 1e-10])
 def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol, method):
@@ -149,6 +157,7 @@ def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol, method):
         assert np.all(true[1:] >= 100 * reference_error[1:]), true
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.02, 0.3])
 def test_e_avg_loose_against_gauss_legendre_over_the_reference(alpha):
     """At rtol 1e-3 (albedos as loose as 1e-4) against Gauss–Legendre in μ over tests/ggx_reference.py."""

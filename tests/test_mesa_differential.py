@@ -88,6 +88,7 @@ def variant_values(parameters, variant: str) -> dict[str, object]:
 _compiled: dict[Path, MesaBrdf] = {}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("variant", VARIANTS)
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_numpy_evaluation_matches_mesa(gl, directions, path, variant):

@@ -46,6 +46,7 @@ def test_ggx_normal_incidence_alpha_one_is_one_minus_ln2(shadowing, method):
     assert result.error[0] >= true_error
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ggx", "beckmann"])
 @pytest.mark.parametrize("method", ["microfacet", "azimuthal"])
 def test_grid_agrees_with_gauss_legendre_reference(name, method):
@@ -64,6 +65,7 @@ def test_grid_agrees_with_gauss_legendre_reference(name, method):
             assert result.error[i, j, 0] + abs(reference - check) >= true_error, (mu, alpha)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ggx", "beckmann"])
 def test_separable_shadowing_agrees_with_reference(name):
     cases = [(1e-4, 0.3), (0.03, 0.02), (0.5, 1.0), (1e-4, 1e-4)]
@@ -257,6 +259,7 @@ def test_kulla_conty_furnace_with_exact_tables():
         assert abs(1.0 - total) <= 1e-9
 
 
+@pytest.mark.slow
 def test_kulla_conty_interpolated_tables(capsys):
     # Renderer-style tables: the furnace residual shrinks as the table grows, and the albedo method's closed
     # form for ∫ f_ms (N·L) dL agrees with the generic hemisphere engine on the compensated lobe.
@@ -277,6 +280,7 @@ def test_kulla_conty_interpolated_tables(capsys):
     assert code == 0, err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ggx", "beckmann"])
 def test_normal_incidence_agrees_with_certified_enclosures(name):
     # brdfnorm.engine.routes.certified encloses E(V = N) by Arb ball arithmetic in a 1-D reduction (another engineer's

@@ -21,6 +21,7 @@ def test_normal_factor_sweep_matches_closed_form():
     np.testing.assert_array_equal(result.values, values)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["phong", "blinn-phong"])
 def test_max_is_at_normal_incidence_for_the_seed_lobes(model):
     values = np.array([0.5, 5.0, 50.0, 500.0])
@@ -43,6 +44,7 @@ class TiltedDiffuse(Model):
         return normal_lobe(fixed)
 
 
+@pytest.mark.slow
 def test_max_search_finds_an_off_normal_anisotropic_maximum():
     result = bn.normalize(TiltedDiffuse(), at="max", rtol=1e-12)
     assert abs(result.phi[0, 0] - 1.0) < 1e-4

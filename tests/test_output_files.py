@@ -181,6 +181,7 @@ def test_sigterm_while_writing_a_file_removes_the_temporary(tmp_path):
     assert _listing(tmp_path) == ["started"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
 def test_signal_while_building_a_directory_removes_the_stage(tmp_path, signum):
     process = _python("""
@@ -197,6 +198,7 @@ def test_signal_while_building_a_directory_removes_the_stage(tmp_path, signum):
     assert _listing(tmp_path) == ["started"]
 
 
+@pytest.mark.slow
 def test_concurrent_writers_of_one_directory_serialize_and_leave_nothing_behind(tmp_path):
     code = """
         import sys

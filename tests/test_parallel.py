@@ -144,6 +144,7 @@ def test_chunks_are_fixed_by_the_job_and_group_neighbouring_cells():
 
 # -- identical tables wherever they are computed ---------------------------------------------------------------
 
+@pytest.mark.slow
 def test_one_process_and_a_local_pool_agree_bit_for_bit_with_albedo():
     job = _ggx_job()
     serial = albedo_cells(job, workers=1)
@@ -170,6 +171,7 @@ def test_a_cells_albedo_does_not_depend_on_its_batch():
         assert np.array_equal(serial.params[name], value), name
 
 
+@pytest.mark.slow
 def test_normalize_sweep_at_max_on_a_pool_matches_normalize(capsys):
     code, out, err = run_cli(capsys, "normalize", "blinn-phong-gaussian", "--sweep", "n=1:1000:6:log", "--at",
                              "max", "--rtol", "1e-8", "--workers", "2", "--chunk-cells", "2", "--json")
@@ -230,6 +232,7 @@ def dask_cluster(tmp_path_factory):
                 process.kill()
 
 
+@pytest.mark.slow
 def test_check_through_dask_equals_the_in_process_check(dask_cluster, capsys):
     from distributed import Client
 
@@ -261,6 +264,7 @@ def test_check_through_dask_equals_the_in_process_check(dask_cluster, capsys):
     assert timeless(remote) == timeless(local)
 
 
+@pytest.mark.slow
 def test_dask_table_equals_the_in_process_one_even_when_a_worker_dies(dask_cluster, capsys, monkeypatch):
     from distributed import Client
 
@@ -333,6 +337,7 @@ def _interrupt(directory: Path, sig: int, workers: int, chunks: int = 2) -> tupl
     return subprocess.CompletedProcess(process.args, process.returncode, out, err), saved
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig, workers", [(signal.SIGTERM, 2), (signal.SIGKILL, 1)])
 def test_an_interrupted_job_resumes_without_recomputing_finished_chunks(tmp_path, capsys, sig, workers):
     directory = tmp_path / "checkpoint"
@@ -449,6 +454,7 @@ def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
 
 # -- a check's albedo integrals through the parallel layer ---------------------------------------------------
 
+@pytest.mark.slow
 def test_check_on_two_local_workers_equals_the_in_process_check():
     serial = check(COOK_TORRANCE, **CHECK_ARGS)
     assert "parallel" not in serial.coverage and serial.status == "fail"  # a verdict with a worst case to compare
@@ -465,6 +471,7 @@ def _chunk_files(directory: Path) -> list[Path]:
     return sorted(directory.glob("*/chunk-*.npz"))
 
 
+@pytest.mark.slow
 def test_a_checkpointed_check_resumes_without_recomputing_finished_chunks(tmp_path, capsys):
     directory = tmp_path / "check-ck"
     args = {**CHECK_ARGS, "workers": 1, "chunk_cells": 8, "checkpoint": directory}
@@ -535,6 +542,7 @@ class LocalLobe(bn.Model):
         return np.full(L.shape[:-1] + (1,), 1 / np.pi)
 
 
+@pytest.mark.slow
 def test_a_check_stopped_by_sigterm_stops_its_workers_and_resumes(tmp_path):
     directory = tmp_path / "check-ck"
     process = subprocess.Popen([*CLI, "check", str(COOK_TORRANCE), "--points", "8", "--budget", "6e6evals",

@@ -129,6 +129,7 @@ def quick_report(tmp_path_factory) -> Path:
 
 # -- content ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_default_study_sections_and_images(default_report):
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
     assert page.section_ids == ["factors", "albedo", "folklore", "fits", "polar", "microfacet", "verify"]
@@ -146,6 +147,7 @@ def test_default_study_sections_and_images(default_report):
     assert sorted(p.name for p in default_report.iterdir()) == sorted([MARKER, "index.html", *sources])
 
 
+@pytest.mark.slow
 def test_factor_table_matches_independent_integrals(default_report):
     """Every number of the factor table: closed form and quadrature against mpmath 1-D integrals."""
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
@@ -172,6 +174,7 @@ def test_factor_table_matches_independent_integrals(default_report):
         assert all(cell[1] == 0.0 for cell in row[1:])  # seed 000's premise: the albedo peaks at L = N
 
 
+@pytest.mark.slow
 def test_folklore_table(default_report):
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
     for n_cell, exact, quad, folk, error in page.tables["folklore-table"]:
@@ -186,6 +189,7 @@ def test_folklore_table(default_report):
     assert row[4][1] == pytest.approx(0.075, rel=1e-13) and row[4][0] == "+7.50 %"
 
 
+@pytest.mark.slow
 def test_fit_table_reproduces_seed_003(default_report):
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
     rows = {row[0][0]: row for row in page.tables["fit-table"]}
@@ -200,6 +204,7 @@ def test_fit_table_reproduces_seed_003(default_report):
     assert rows["auto fit (minimax)"][2][1] < 1.1e-3  # fit's default target 1e-3 (on the subset), whole grid
 
 
+@pytest.mark.slow
 def test_verify_table(default_report):
     from brdfnorm.verify import verify
 
@@ -211,6 +216,7 @@ def test_verify_table(default_report):
         assert row[6][0] == ("✔ holds" if claim.ok else "✘ fails")
 
 
+@pytest.mark.slow
 def test_grazing_table_against_independent_integrals(quick_report):
     """The "energy kept" cells are E(θ_o)/E(0) − 1; for the Phong lobes E(θ_o) has a 1-D integral (conftest)."""
     config = StudyConfig.quick()
@@ -233,6 +239,7 @@ def test_grazing_table_against_independent_integrals(quick_report):
 
 # -- determinism and atomicity ------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_rebuild_is_byte_identical(quick_report, tmp_path):
     again = tmp_path / "again"
     build_report(again, config=StudyConfig.quick())
@@ -242,6 +249,7 @@ def test_rebuild_is_byte_identical(quick_report, tmp_path):
     assert mismatch == [] and errors == [] and match == names
 
 
+@pytest.mark.slow
 def test_failed_run_keeps_the_old_report(quick_report, tmp_path, monkeypatch):
     target = tmp_path / "report"
     shutil.copytree(quick_report, target)
@@ -261,6 +269,7 @@ def test_failed_run_keeps_the_old_report(quick_report, tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
+@pytest.mark.slow
 def test_replaces_a_previous_report_but_not_other_directories(quick_report, tmp_path):
     target = tmp_path / "report"
     shutil.copytree(quick_report, target)
@@ -320,6 +329,7 @@ def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
                           cwd=cwd)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make_target", [
     lambda tmp: tmp / "missing" / "report",  # parent does not exist
     lambda tmp: (tmp / "file.txt").write_text("x") and tmp / "file.txt",  # a file, not a directory
@@ -333,6 +343,7 @@ def test_cli_bad_output_directory(tmp_path, make_target):
     assert result.stdout == ""
 
 
+@pytest.mark.slow
 def test_cli_bad_sweep_and_model(tmp_path):
     result = run_cli("blinn-phong", "--sweep", "roughness=1,2", "-o", str(tmp_path / "r"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1 and "roughness" in result.stderr
@@ -364,6 +375,7 @@ window.addEventListener("load", () => {
 </script>"""
 
 
+@pytest.mark.slow
 def test_every_image_loads_in_chromium(default_report, tmp_path):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
     if chromium is None:

@@ -36,6 +36,7 @@ def seed_form(n: float, theta: float, dps: int = 30) -> mp.mpf:
         return 2 * mp.pi * 2 ** (-n / 2) * mp.quad(f, points)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("n", "degrees"),
     [
@@ -58,6 +59,7 @@ def test_matches_seed_form_at_30_digits(n, degrees):
     assert result.error <= 1e-12 * result.value
 
 
+@pytest.mark.slow
 def test_matches_equation_1_by_2d_quadrature():
     # Equation 1 of seed 002 (before any ₂F₁), integrated in Δθ and φ_i by mpmath: no shared derivation.
     n, theta = 10.0, 1.2

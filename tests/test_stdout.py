@@ -90,6 +90,7 @@ def emitted() -> dict[str, str]:
     return code
 
 
+@pytest.mark.slow
 @needs_glslang
 def test_stdout_glsl_compiles_as_it_stands_and_defines_the_function(tmp_path, emitted):
     path = tmp_path / "f.glsl"
@@ -103,6 +104,7 @@ def test_stdout_glsl_compiles_as_it_stands_and_defines_the_function(tmp_path, em
     assert done.returncode == 0, done.stdout
 
 
+@pytest.mark.slow
 @needs_glslang
 def test_stdout_hlsl_compiles_with_glslangs_hlsl_front_end(tmp_path, emitted):
     shader = tmp_path / "use.hlsl"
@@ -113,6 +115,7 @@ def test_stdout_hlsl_compiles_with_glslangs_hlsl_front_end(tmp_path, emitted):
     assert done.returncode == 0, done.stdout
 
 
+@pytest.mark.slow
 @needs_cc
 def test_stdout_c_compiles(tmp_path, emitted):
     path = tmp_path / "f.c"
@@ -122,6 +125,7 @@ def test_stdout_c_compiles(tmp_path, emitted):
     assert done.returncode == 0, done.stderr
 
 
+@pytest.mark.slow
 def test_stdout_python_imports_and_evaluates(tmp_path, emitted):
     path = tmp_path / "f.py"
     path.write_text(emitted["python"])
@@ -132,6 +136,7 @@ def test_stdout_python_imports_and_evaluates(tmp_path, emitted):
     assert np.all(np.isfinite(value)) and np.all(value > 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("language", ["glsl", "hlsl", "c", "python"])
 def test_issue_done_when_command_redirected_to_a_file_compiles(tmp_path, language):
     """`brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form auto --emit LANG > f.LANG` compiles as it
@@ -165,6 +170,7 @@ def test_issue_done_when_command_redirected_to_a_file_compiles(tmp_path, languag
     assert compiled.returncode == 0, compiled.stdout + compiled.stderr
 
 
+@pytest.mark.slow
 def test_report_prints_nothing_on_stdout(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     done = subprocess.run([sys.executable, "-m", "brdfnorm", "report", "lambert", "--sweep", "reflectance=0.5,1",
@@ -173,6 +179,7 @@ def test_report_prints_nothing_on_stdout(tmp_path):
     assert done.stdout == "" and "wrote" in done.stderr
 
 
+@pytest.mark.slow
 def test_info_piped_into_head_exits_0(tmp_path):
     """A closed pipe (`brdfnorm info FILE | head -1`) ends quietly with exit 0, not a BrokenPipeError; `true`
     exits before the table is written, so the write always meets a closed pipe."""
