@@ -79,9 +79,10 @@ PLUGINS: dict[str, tuple[Parameter, ...]] = {
                         _ior("ext_ior", 1.000277, "exterior"),
                         _colour("specular_reflectance", 1.0, None, "scale of the reflection (1 is physical)"),
                         _colour("specular_transmittance", 1.0, None, "scale of the refraction (1 is physical)")),
-    "roughplastic": (_DISTRIBUTION, _alpha(0.1), _ior("int_ior", 1.49, "interior"), _ior("ext_ior", 1.000277, "exterior"),
+    "roughplastic": (_DISTRIBUTION, _alpha(0.1), _ior("int_ior", 1.49, "interior"),
+                     _ior("ext_ior", 1.000277, "exterior"),
                      _colour("diffuse_reflectance", 0.5, 1.0, "reflectance of the diffuse base"),
-                     _colour("specular_reflectance", 1.0, None, "scale of the coating's reflection (1 is physical)"),
+                     _colour("specular_reflectance", 1.0, None, "scale of the coating reflection (1 is physical)"),
                      Parameter("nonlinear", "bool", False, description="account for internal scattering's tint")),
     "principled": (_colour("base_color", 0.5, 1.0, "base colour"), _unit("roughness", 0.5, "roughness"),
                    _unit("metallic", 0.0, "metallic"), _unit("specular", 0.5, "specular (sets the index)"),
@@ -380,6 +381,11 @@ def load_xml(path: str | os.PathLike) -> MitsubaModel:
     bsdf.attrib.pop("id", None)
     text = ElementTree.tostring(bsdf, encoding="unicode")
     return MitsubaModel(bsdf.get("type", "bsdf"), (), xml=text, source_path=where)
+
+
+def plugin_type(xml: str) -> str:
+    """The plugin type of a ``<bsdf>`` element's text (as :func:`load_xml` made it)."""
+    return ElementTree.fromstring(xml).get("type", "bsdf")
 
 
 def is_mitsuba(key: str) -> bool:
