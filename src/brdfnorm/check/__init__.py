@@ -76,7 +76,8 @@ def check(
     ``checks``: names from :data:`CHECKS`; ``sweep``: explicit values per float parameter; ``fixed``: names
     kept at the model's bound values, or ``"all"`` for all of them (the lobe as bound: only directions are
     searched, e.g. for an interactive view); ``tolerance``: on the albedo (energy, normalization) and on the relative
-    asymmetry (reciprocity), by default :func:`default_tolerance`; ``at``: the normalization convention; ``budget``: a :class:`Budget` or seconds
+    asymmetry (reciprocity), by default :func:`default_tolerance`; ``at``: the normalization convention;
+    ``budget``: a :class:`Budget` or seconds
     (default 20 s); ``points``: parameter points of the coarse grid; ``pairs``: uniform direction pairs per
     parameter point (as many grazing ones and a structured grid are added).
 
