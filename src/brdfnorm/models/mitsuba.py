@@ -110,9 +110,10 @@ def variant(mi) -> str:
     loaded a libLLVM ≥ :data:`MIN_LLVM`, else ``scalar_rgb``."""
     chosen = os.environ.get("BRDFNORM_MITSUBA_VARIANT")
     if chosen:
-        if chosen not in mi.variants():
-            raise ArgumentError(f"variant {chosen!r} is not one of this Mitsuba's: {', '.join(mi.variants())}",
-                                where="BRDFNORM_MITSUBA_VARIANT")
+        rgb = [v for v in mi.variants() if v.endswith("_rgb") and not v.startswith("cuda")]
+        if chosen not in rgb:
+            raise ArgumentError(f"expected one of this Mitsuba's RGB CPU variants ({', '.join(rgb)}), got "
+                                f"{chosen!r}", where="BRDFNORM_MITSUBA_VARIANT")
         return chosen
     import drjit as dr
 
@@ -139,6 +140,7 @@ class MitsubaModel(Model):
     def __init__(self, plugin: str, parameters: tuple[Parameter, ...], fixed: Mapping[str, object] | None = None,
                  *, xml: str | None = None, source_path: str | None = None, **values: object) -> None:
         self.mi = mitsuba_module()
+        self.variant = self.mi.variant()  # its plugin instances belong to this variant
         self.plugin = plugin
         self.name = f"{PREFIX}{plugin}"
         self.parameters = parameters
@@ -206,6 +208,8 @@ class MitsubaModel(Model):
         return props
 
     def _bsdf(self, values: tuple):
+        if self.mi.variant() != self.variant:  # another model (or the user) set another variant since
+            self.mi.set_variant(self.variant)
         cached = self._cache.get(values)
         if cached is not None:
             self._cache.move_to_end(values)
@@ -280,8 +284,10 @@ class MitsubaModel(Model):
         mi = self.mi
         if L.shape[0] == 0:
             return np.zeros((0, 3))
+        if mi.variant() != self.variant:
+            mi.set_variant(self.variant)
         ctx = mi.BSDFContext(mi.TransportMode.Importance)
-        if not mi.variant().startswith("scalar"):
+        if not self.variant.startswith("scalar"):
             L32, V32 = L.astype(np.float32), V.astype(np.float32)
             import drjit as dr
 
