@@ -156,6 +156,10 @@ def test_xml_file_and_refusals(mi, tmp_path):
                         '<string name="filename" value="x.png"/></texture></bsdf>')
     with pytest.raises(BrdfFileError, match="texture is not supported"):
         bn.load(textured)
+    (tmp_path / "measured.xml").write_text('<bsdf version="3.0.0" type="measured">'
+                                           '<string name="filename" value="/etc/hostname"/></bsdf>')
+    with pytest.raises(BrdfFileError, match="refers to another file"):
+        bn.load(tmp_path / "measured.xml")
     (tmp_path / "none.xml").write_text('<scene version="3.0.0"/>')
     with pytest.raises(BrdfFileError, match="no <bsdf>"):
         bn.load(tmp_path / "none.xml")

@@ -365,10 +365,15 @@ def load_plugin(plugin: str, **values: object) -> MitsubaModel:
 
 
 def _refuse_textures(root: ElementTree.Element, where: str) -> None:
+    """Textures vary over the surface; includes and ``filename`` properties would have Mitsuba read other files
+    (the XML is data: only what it holds is evaluated)."""
     for element in root.iter():
         if element.tag == "texture" or (element.tag in ("bsdf", "texture") and element.get("type") in TEXTURES):
             raise BrdfFileError(f"a {element.get('type', '')} texture is not supported: brdfnorm evaluates a BSDF "
                                 "that is the same everywhere on the surface (give a float, rgb or spectrum)", where)
+        if element.tag == "include" or element.get("name") == "filename":
+            raise BrdfFileError("refers to another file (an <include> or a filename property); brdfnorm reads only "
+                                "the XML it is given", where)
 
 
 def load_xml(path: str | os.PathLike) -> MitsubaModel:
