@@ -86,6 +86,17 @@ def test_grid_16x16_within_1e6(mi, distribution):
     assert np.all(r.error[..., 0] >= diff)
 
 
+def test_grazing_narrow_estimates_cover_float32(mi):
+    """At grazing views Mitsuba's float32 half vector cancels (wi + wo, x components), and the albedo of a narrow lobe
+    is off by up to 6 % at μ = 0.003, α = 0.002; the estimates still cover it (measured ratio ≥ 1.7, at α = 0.1). Without
+    the plateau charge they fell to 0.29 of the error here (docs/mitsuba.md)."""
+    theta = np.arccos([0.003, 0.01])[None, :]
+    alphas = np.array([0.002, 0.01, 0.1])[:, None]
+    r = _albedo(bn.load("mitsuba:roughconductor", distribution="ggx").with_params(alpha=alphas), theta, 1e-6)
+    exact = bn.albedo(bn.load("ggx", shadowing="separable").with_params(alpha=alphas), theta, rtol=1e-12).value
+    assert np.all(r.error[..., 0] >= np.abs(r.value[..., 0] - exact[..., 0]))
+
+
 def test_beckmann_is_walters_rational_g1(mi):
     """Finding: Mitsuba's Beckmann conductor uses Walter et al. 2007's rational approximation of G1 (eq. 27), not
     the exact erf form — pointwise it matches the former to float32 and differs from the latter by up to ~0.6%."""
