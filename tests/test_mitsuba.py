@@ -87,9 +87,9 @@ def test_grid_16x16_within_1e6(mi, distribution):
 
 
 def test_grazing_narrow_estimates_cover_float32(mi):
-    """At grazing views Mitsuba's float32 half vector cancels (wi + wo, x components), and the albedo of a narrow lobe
-    is off by up to 6 % at μ = 0.003, α = 0.002; the estimates still cover it (measured ratio ≥ 1.7, at α = 0.1). Without
-    the plateau charge they fell to 0.29 of the error here (docs/mitsuba.md)."""
+    """At grazing views Mitsuba's float32 half vector cancels (wi + wo, x components), and the albedo of a narrow
+    lobe is off by up to 6 % at μ = 0.003, α = 0.002; the estimates still cover it (measured ratio ≥ 1.7, at
+    α = 0.1). Without the plateau charge they fell to 0.29 of the error here (docs/mitsuba.md)."""
     theta = np.arccos([0.003, 0.01])[None, :]
     alphas = np.array([0.002, 0.01, 0.1])[:, None]
     r = _albedo(bn.load("mitsuba:roughconductor", distribution="ggx").with_params(alpha=alphas), theta, 1e-6)
