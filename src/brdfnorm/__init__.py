@@ -27,7 +27,9 @@ __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REG
 
 
 def load(name_or_path: str | Path, **params: object) -> Model:
-    """A built-in model by name (``brdfnorm models`` lists them) or a BRDF Explorer ``.brdf`` file by path."""
+    """A built-in model by name (``brdfnorm models`` lists them), a BRDF Explorer ``.brdf`` file by path, or a
+    Mitsuba 3 BSDF: ``mitsuba:PLUGIN`` with its properties as keywords, or a Mitsuba ``.xml`` file
+    (:mod:`brdfnorm.models.mitsuba`, the ``mitsuba`` extra)."""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise ArgumentTypeError(f"expected a model name or a path, got {type(name_or_path).__name__}",
                                 where="model")
@@ -36,6 +38,10 @@ def load(name_or_path: str | Path, **params: object) -> Model:
         raise ArgumentTypeError("expected a text path, got bytes", where="model")
     if key in REGISTRY:
         return REGISTRY[key](**params)
+    from .models import mitsuba
+
+    if mitsuba.is_mitsuba(key):  # Mitsuba itself is imported only when such a model is asked for
+        return mitsuba.load(key, **params)
     path = Path(key)
     if path.exists():
         if not path.is_file():  # a directory, FIFO (reading it would block), device or socket

@@ -59,7 +59,7 @@ def check(
     checks: Iterable[str] = DEFAULT_CHECKS,
     sweep: Mapping[str, object] | None = None,
     fixed: Iterable[str] | str = (),
-    tolerance: float = 1e-6,
+    tolerance: float | None = None,
     at: str = "normal",
     over: Over = "light",
     budget: Budget | float | None = None,
@@ -76,7 +76,8 @@ def check(
     ``checks``: names from :data:`CHECKS`; ``sweep``: explicit values per float parameter; ``fixed``: names
     kept at the model's bound values, or ``"all"`` for all of them (the lobe as bound: only directions are
     searched, e.g. for an interactive view); ``tolerance``: on the albedo (energy, normalization) and on the relative
-    asymmetry (reciprocity); ``at``: the normalization convention; ``budget``: a :class:`Budget` or seconds
+    asymmetry (reciprocity), by default :func:`default_tolerance`; ``at``: the normalization convention;
+    ``budget``: a :class:`Budget` or seconds
     (default 20 s); ``points``: parameter points of the coarse grid; ``pairs``: uniform direction pairs per
     parameter point (as many grazing ones and a structured grid are added).
 
@@ -94,7 +95,7 @@ def check(
     checks = tuple(dict.fromkeys(validate.choice(c, CHECKS, "checks") for c in checks))
     if not checks:
         raise ArgumentError("no check selected", where="checks")
-    tolerance = validate.real_number(tolerance, "tolerance")
+    tolerance = default_tolerance(model) if tolerance is None else validate.real_number(tolerance, "tolerance")
     if tolerance < 0:
         raise ArgumentError(f"must be ≥ 0, got {tolerance:g}", where="tolerance")
     at = validate.choice(at, AT, "at")
@@ -123,6 +124,20 @@ def check(
         if (workers, scheduler, checkpoint, chunk_cells) != (1, None, None, None) else None
     with spread or contextlib.nullcontext():
         return _run(model, checks, space, grid, tolerance, at, over, pairs, seed, _Meter(budget, spread))
+
+
+#: The energy and reciprocity tolerance of a float64 model.
+DEFAULT_TOLERANCE = 1e-6
+#: A model evaluated in lower precision (its ``epsilon``, Mitsuba's float32: 2⁻²⁴) is checked to this many units of
+#: it: float32 albedos carry error bars of ~1.5e-6 (brdfnorm.engine.machinery.rounding.EVALUATION_ULPS), which
+#: straddle 1 + 1e-6 for every lobe that keeps all its energy; 256 units (1.5e-5) is ten of those bars.
+RESOLVED_ULPS = 256
+
+
+def default_tolerance(model: Model) -> float:
+    """1e-6, or :data:`RESOLVED_ULPS` units of the model's evaluation epsilon where that is coarser."""
+    epsilon = getattr(model, "epsilon", None)
+    return DEFAULT_TOLERANCE if epsilon is None else max(DEFAULT_TOLERANCE, RESOLVED_ULPS * float(epsilon))
 
 
 def _run(model: Model, checks: tuple[str, ...], space, grid, tolerance: float, at: str, over: Over, pairs: int,

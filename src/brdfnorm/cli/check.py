@@ -78,8 +78,10 @@ def check_command(
     at: At = typer.Option(At.normal, "--at", help="Normalization convention for --normalized: normal (fixed "
                           "direction at N), max (largest over directions) or view (every direction)."),
     over: Over = typer.Option(Over.light, "--over", help="Albedo over the light (view fixed, default) or the view."),
-    tolerance: float = typer.Option(1e-6, "--tolerance", help="Allowed energy gain, |E − 1| for --normalized, "
-                                    "and relative asymmetry for reciprocity."),
+    tolerance: float | None = typer.Option(None, "--tolerance", help="Allowed energy gain, |E − 1| for "
+                                           "--normalized, and relative asymmetry for reciprocity (default 1e-6; "
+                                           "float32 models such as mitsuba: 256 units of float32, 1.5e-5).",
+                                           show_default=False),
     budget: str = typer.Option("20", "--budget", metavar="SECONDS|COUNTevals",
                                help="Work per model: seconds (default 20) or evaluations, e.g. 5e7evals."),
     points: int = typer.Option(48, "--points", help="Parameter points of the coarse grid (per bool combination "
@@ -99,7 +101,7 @@ def check_command(
         checks = parse_only(only) if only else DEFAULT_CHECKS + (("normalization",) if normalized else ())
         if normalized and "normalization" not in checks:
             checks = checks + ("normalization",)
-        if not (np.isfinite(tolerance) and tolerance >= 0):
+        if tolerance is not None and not (np.isfinite(tolerance) and tolerance >= 0):
             raise ArgumentError(f"must be finite and ≥ 0, got {tolerance!r}", where="--tolerance")
         if points < 1:
             raise ArgumentError(f"need at least 1 point, got {points}", where="--points")
@@ -126,7 +128,8 @@ def check_command(
             reports.append(report)
             typer.echo(f"{name}: {report.status}{_failed(report)} — {coverage_text(report)}", err=True)
         if json_output:
-            write_file(STDOUT, to_json({"tolerance": tolerance, "over": over.value, "checks": list(checks),
+            shown = tolerance if tolerance is not None or not reports else reports[0].tolerance
+            write_file(STDOUT, to_json({"tolerance": shown, "over": over.value, "checks": list(checks),
                                         "status": _overall(reports),
                                         "reports": [report_json(r) for r in reports]}) + "\n")
         elif len(reports) == 1:

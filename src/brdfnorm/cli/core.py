@@ -39,8 +39,8 @@ class NonFinite(str, Enum):
     zero = "zero"
 
 
-MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`) or a "
-                                "path to a BRDF Explorer .brdf file.")
+MODEL_ARGUMENT = typer.Argument(..., metavar="MODEL", help="A built-in model name (see `brdfnorm models`), a "
+                                "path to a BRDF Explorer .brdf file, mitsuba:PLUGIN or a Mitsuba .xml file.")
 METHOD_OPTION = typer.Option("auto", "--method",
                              help=" | ".join(("auto", *METHODS)) + " (where it applies; auto takes the first that "
                                   "does, never certified; azimuthal: isotropic ggx and beckmann without Fresnel, "

@@ -54,7 +54,8 @@ def parse_clamp(spec: str) -> tuple[str, float]:
 @app.command("lut")
 @parallel_options(chunk_cells=False)
 def lut_command(
-    model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name or a .brdf file."),
+    model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name, a .brdf file, "
+                                "mitsuba:PLUGIN or a Mitsuba .xml file."),
     param: list[str] = PARAM_OPTION,
     axis: list[str] = typer.Option(..., "--axis", metavar="NAME=SPEC", help=AXIS_HELP),
     grid: str = typer.Option("node", "--grid", help="node: START + i/(N−1)·(STOP − START) (default); texel: "

@@ -269,7 +269,7 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
     result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
                                   nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first,
-                                  anisotropic=~isotropic)
+                                  anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None))
     # Each case is charged the isotropy test as if it had run alone: counts do not depend on how cases are batched.
     evaluations = result.evaluations + 3 * ISOTROPY_PAIRS
     return (result.value * scale[:, None], result.error * scale[:, None], evaluations, result.converged,

@@ -58,10 +58,11 @@ MAX_TASK_INTEGRALS = 90
 
 @dataclass(frozen=True)
 class ModelSource:
-    """A model as the data it was built from: ``kind`` "builtin" (``name`` is the registry name) or "brdf"
-    (``name`` is the file's display path, ``text`` its content), and the bound parameter values."""
+    """A model as the data it was built from: ``kind`` "builtin" (``name`` is the registry name), "brdf"
+    (``name`` is the file's display path, ``text`` its content) or "mitsuba" (``name`` is ``mitsuba:PLUGIN``, or an
+    XML file's path with ``text`` its ``<bsdf>``), and the bound parameter values."""
 
-    kind: Literal["builtin", "brdf"]
+    kind: Literal["builtin", "brdf", "mitsuba"]
     name: str
     params: Mapping[str, object] = field(default_factory=dict)
     text: str | None = field(default=None, repr=False)
@@ -70,6 +71,7 @@ class ModelSource:
     def of(cls, model: Model) -> ModelSource:
         """The source of a built-in model or one read from a ``.brdf`` file, with its scalar parameter values."""
         from ..brdffile import BrdfModel
+        from ..models.mitsuba import MitsubaModel
 
         params = {}
         for p in model.parameters:
@@ -90,6 +92,10 @@ class ModelSource:
             return cls("brdf", model.brdf_file.path, params, model.brdf_file.text)
         if REGISTRY.get(model.name) is type(model):
             return cls("builtin", model.name, params)
+        if isinstance(model, MitsubaModel):
+            if model.xml is not None:
+                return cls("mitsuba", model.source_path or model.name, params, model.xml)
+            return cls("mitsuba", model.name, {**model.fixed, **params})
         raise ArgumentError(f"{type(model).__name__} cannot travel to other processes: only built-in lobes and "
                             ".brdf models have a source", where="model")
 
@@ -99,6 +105,12 @@ class ModelSource:
             if self.name not in REGISTRY:
                 raise ArgumentError(f"unknown built-in model {self.name!r}", where="model")
             return REGISTRY[self.name](**self.params)
+        if self.kind == "mitsuba":
+            from ..models import mitsuba
+
+            if self.text is not None:
+                return mitsuba.MitsubaModel(mitsuba.plugin_type(self.text), (), xml=self.text, source_path=self.name)
+            return mitsuba.load(self.name, **self.params)
         from ..brdffile import compile_brdf, parse_brdf
 
         return compile_brdf(parse_brdf(self.text or "", self.name), **self.params)

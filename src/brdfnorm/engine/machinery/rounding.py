@@ -7,6 +7,11 @@ a visible share of the lobe, and no quadrature can recover the albedo of the exa
 one. :func:`rounding_noise` measures the noise before integrating, :func:`noise_bound` turns it into a term
 of the error estimate (:mod:`brdfnorm.engine.routes.hemisphere` stops a case whose noise exceeds its tolerance, with the
 reason "rounding-limited").
+
+A model that evaluates in lower precision declares its unit roundoff as ``epsilon`` (Mitsuba's float32 variants:
+2⁻²⁴, :mod:`brdfnorm.models.mitsuba`). Its noise is then also at least :data:`EVALUATION_ULPS` units of it — a
+float32 evaluation's error is partly a bias (the rounded inputs, a fixed direction rounded for the whole integral)
+that no difference along a ray sees — and the plateau charge below scales with it.
 """
 
 from __future__ import annotations
@@ -32,7 +37,8 @@ _PLATEAU_WIDTH = 1e-5
 
 
 def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], frame, widths: np.ndarray,
-                   supports: np.ndarray, max_nodes_per_call: int = 1_500_000) -> np.ndarray:
+                   supports: np.ndarray, max_nodes_per_call: int = 1_500_000,
+                   epsilon: float | None = None) -> np.ndarray:
     """Relative amplitude (K, C) of each case's float64 evaluation noise around its peak.
 
     Along rays from the peak, at 1e-2, 0.3 and 1 widths w (or closer, to stay within half the horizon's
@@ -46,6 +52,10 @@ def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     A lobe narrower than 1e-5 rad is also charged ε/w²·(1e-5/w)²: its core may be a plateau of rounding, the
     cosine 1 across it, which no difference sees (Phong at n = 1e20), or a staircase coarser than the fine
     step (GGX at α = 1e-6). Rays with a non-finite sample are left out (the integrator raises or zeroes).
+
+    ``epsilon``: the unit roundoff of a model evaluated in lower precision than float64 (None: float64). The
+    plateau charge then uses it, over a width scaled by √(epsilon/ε) (where a cosine near 1 has as few values
+    across the lobe as float64's has across 1e-5 rad), and the noise is at least :data:`EVALUATION_ULPS` × epsilon.
     """
     P, T, B = frame
     K = P.shape[0]
@@ -82,8 +92,12 @@ def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     with np.errstate(invalid="ignore", divide="ignore"):  # so a ray along a fast-decaying sliver does not count
         mean_square = (np.where(usable, rms**2, 0.0).sum(axis=(1, 2)) / np.maximum(usable.sum(axis=(1, 2)), 1))
         relative = np.where(peak > 0, np.sqrt(mean_square) / peak, 0.0)
-    plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
-    return np.minimum(1.0, np.maximum(relative, plateau))
+    if epsilon is None or epsilon <= _EPS:
+        plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
+        return np.minimum(1.0, np.maximum(relative, plateau))
+    plateau_width = _PLATEAU_WIDTH * np.sqrt(epsilon / _EPS)
+    plateau = epsilon / widths[:, None] ** 2 * (plateau_width / widths[:, None]) ** 2
+    return np.minimum(1.0, np.maximum(np.maximum(relative, plateau), EVALUATION_ULPS * epsilon))
 
 
 def noise_bound(amplitude: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
@@ -97,3 +111,8 @@ def noise_bound(amplitude: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
 #: true error is 0.87 of the estimate, while a margin above ~1.3 would charge (N·H)^1e4 at 86° more than
 #: the rtol 1e-12 it honours (tests/test_series.py). The tests' probe cases stay within 0.8 of it.
 _NOISE_MARGIN = 1.25
+
+#: Least relative noise charged to a model evaluated in lower precision, in units of its declared epsilon: a
+#: calibration on Mitsuba's float32 BSDFs (tests/test_mitsuba.py), whose values differ from a float64 evaluation of
+#: the same formulas by up to ~60 units at grazing directions and whose albedos by a few units.
+EVALUATION_ULPS = 16.0

@@ -230,6 +230,7 @@ def integrate_hemisphere(
     max_nodes_per_call: int = 1_500_000,
     first_route: FirstRoute | None = None,
     anisotropic: np.ndarray | None = None,
+    epsilon: float | None = None,
 ) -> HemisphereResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
@@ -252,6 +253,9 @@ def integrate_hemisphere(
     anisotropic
         Per case (K,), True where the lobe is not rotation-invariant about N: the global rule's azimuth estimate
         then also bounds the Fourier tail (:func:`brdfnorm.engine.machinery.tensor_rule._azimuthal_tail`).
+    epsilon
+        The unit roundoff of the integrand's evaluation where it is coarser than float64's (a model's ``epsilon``,
+        2⁻²⁴ for float32): the rounding-noise bound is charged at least that (:func:`rounding_noise`).
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
@@ -271,7 +275,7 @@ def integrate_hemisphere(
     confirmed = np.zeros(K, dtype=bool)
     reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
-    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call)
+    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call, epsilon)
     evaluations += PROBE_EVALUATIONS
     # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
     # below its
