@@ -1,0 +1,1 @@
+"""``brdfnorm.audit``: how wrong is a table someone ships, in which convention — and its exact replacement."""
