@@ -201,6 +201,7 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
     literal = Literal(name=name, dtype=dtype, declared=declared, start=start)
     depth = 0
     sign = 1.0
+    sign_at: int | None = None
     literal_ok = True
     # the nesting: counts of children per open bracket, to find a regular shape
     stack: list[list[int]] = []
@@ -230,7 +231,8 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
             if not opened:
                 return None  # a scalar initializer
             literal.values.append(sign * token[1])
-            literal.spans.append(token[2])
+            literal.spans.append((token[2][0] if sign_at is None else sign_at, token[2][1]))
+            sign_at = None
             literal.hex = literal.hex or token[3]
             literal.suffix = literal.suffix or token[4]
             sign = 1.0
@@ -254,6 +256,7 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
                 break
         elif char == "-":
             sign = -sign
+            sign_at = token[2] if sign_at is None else sign_at  # the rewrite replaces the sign with the number
         elif char == "+" or char == ",":
             pass
         elif char == ";" and depth == 0:
