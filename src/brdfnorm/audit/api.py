@@ -85,9 +85,11 @@ class AuditResult:
 
 def _bad_cells(source: Source, limit: int = 20) -> dict:
     values = source.values
+    slack = max(source.step(), 1e-12)  # rounding of a stored 1.0 is not a violation
     out = {}
-    for name, mask in (("non_finite", ~np.isfinite(values)), ("negative", np.isfinite(values) & (values < 0)),
-                       ("above_one", np.isfinite(values) & (values > 1))):
+    for name, mask in (("non_finite", ~np.isfinite(values)),
+                       ("negative", np.isfinite(values) & (values < -slack)),
+                       ("above_one", np.isfinite(values) & (values > 1 + slack))):
         where = np.argwhere(mask)
         out[name] = {"count": int(len(where)),
                      "cells": [[int(i) for i in w] for w in where[:limit]],

@@ -51,6 +51,8 @@ def decode(data: bytes, where: str) -> tuple[np.ndarray, int, dict[str, str]]:
         elif kind == b"IEND":
             break
         position += 12 + length
+    else:
+        raise TableFileError("truncated PNG: no IEND chunk", where)
     if header is None:
         raise TableFileError("no IHDR chunk", where)
     width, height, depth, colour, _, _, interlace = header

@@ -300,11 +300,11 @@ def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
     flat = np.array(literal.values)
     if literal.declared and all(d > 0 for d in literal.declared):
         declared = element_count(literal.declared, MAX_ELEMENTS, where=where, what=f"the declared shape of {name}")
-        if declared != flat.size and declared % flat.size and flat.size % declared:
-            raise TableFileError(f"{name} declares {declared} elements; its initializer holds {flat.size}", where)
         if flat.size < declared:
             raise TableFileError(f"{name} declares {declared} elements; its initializer holds {flat.size} "
                                  "(truncated?)", where)
+        if flat.size % declared:
+            raise TableFileError(f"{name} declares {declared} elements; its initializer holds {flat.size}", where)
     stored = dtype or literal.dtype or "float32"
     if shape is None:
         if literal.declared and int(np.prod(literal.declared)) == flat.size:
