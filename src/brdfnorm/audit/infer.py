@@ -152,6 +152,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     keep = STAGE2_F90 if any(Reference.needs_f90(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
     finals = [_stage2(values, names, c, reference, step, chosen) for _, c in scored[:max(keep, 2)]]
     finals.sort(key=lambda h: h.score)
+    finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
     return Inference(finals[0], finals[1:1 + keep_runners], len(candidates),
                      dict(reference.computed))
 
@@ -225,3 +226,35 @@ def _stage2(values, names, c: Convention, reference, step, chosen) -> Hypothesis
                   for f in ALPHA_FLOORS]
         best = min(trials, key=lambda h: (h.score, ALPHA_FLOORS.index(h.convention.alpha_floor)))
     return best
+
+
+def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, meanings) -> Hypothesis:
+    """Channels the best geometry leaves unfitted with cheap meanings try the F90 ones (an LTC table's Fresnel
+    channel beside its albedo): first on the stage-1 subset, in full only where that beats the current meaning."""
+    c = best.convention
+    current = {fit.channel: fit for fit in best.channels}
+    grid = values.shape[:-1]
+    index = [_subset(n, SUBSET_F90) for n in grid]
+    coords = coordinates(c, grid, _mesh(grid, index))
+    sample = values[np.ix_(*index)]
+    picks = list(c.meanings)
+    changed = False
+    for channel in chosen:
+        fit = current.get(names[channel])
+        extra = [m for m in meanings[channel] if Reference.needs_f90(m) and m != c.meanings[channel]]
+        if fit is None or fit.fits or not extra or fit.meaning is None:
+            continue
+        data = sample[..., channel]
+        ok = np.isfinite(data)
+        for meaning in extra:
+            exact, _ = _exact(reference, c, meaning, coords)
+            if ok.any() and float(np.max(np.abs(data[ok] - exact[ok]))) < fit.max:
+                candidate = _full(values, replace(c, meanings=tuple(
+                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, step, [channel])
+                if candidate.channels[0].max < current[names[channel]].max:
+                    current[names[channel]] = candidate.channels[0]
+                    picks[channel] = meaning
+                    changed = True
+    if not changed:
+        return best
+    return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])
