@@ -261,3 +261,17 @@ def test_formula_error_is_measured_against_an_independent_e_avg(capsys):
     alpha = np.linspace(0, 1, 65) ** 2
     exact = lut.compute(bn.load("ggx"), {"mu": [1.0], "alpha": np.maximum(alpha, 1e-8)}, rtol=1e-10)["E_avg"]
     assert row["max"] == pytest.approx(float(np.max(1.0 - exact)), abs=1e-7)
+
+
+def test_axis_values_given_outright(capsys, tmp_path):
+    alpha = np.linspace(0.05, 1.0, N)
+    e = _table(mu=T_TEXEL, alpha=alpha)
+    assert not _quick(e).fits  # α from 0.05 is no declared grid: never a silent guess
+    r = _quick(e, axes={"alpha": alpha})
+    assert r.fits and r.best.convention.roughness == "explicit" and r.best.channels[0].max < 1e-12
+    np.savez(tmp_path / "t.npz", E=e)
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "t.npz"), "--axis", f"alpha=0.05:1:{N}", "--json",
+                             "--no-interpolation")
+    assert code == 0, err
+    rows = json.loads(out)["resolution"]["0"]
+    assert [row["size"] for row in rows] == [8, 16, 32, 64, 128] and rows[-1]["max"] < rows[0]["max"]

@@ -114,13 +114,35 @@ def _as_source(table, options: dict) -> Source:
     return step_source
 
 
+def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
+    out = {}
+    for name, values in (axes or {}).items():
+        array = np.asarray(values, dtype=float)
+        if name == "r":
+            name, array = "alpha", array * array
+        if name not in ("mu", "theta", "alpha", "f0"):
+            raise ArgumentError(f"axis {name!r}: known axes are mu, theta, alpha, r (alpha = r^2), f0", where="--axis")
+        if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
+            raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
+        steps = np.diff(array)
+        if not (np.all(steps > 0) or np.all(steps < 0)):
+            raise ArgumentError(f"axis {name}: values must increase or decrease monotonically", where="--axis")
+        out[name] = array
+    if "mu" in out and "theta" in out:
+        raise ArgumentError("give mu or theta, not both", where="--axis")
+    return out
+
+
 def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None, dense: bool = True,
           sweep: bool = True, fix: bool = True, params: dict | None = None, read: dict | None = None,
-          **convention: str) -> AuditResult:
+          axes: dict[str, np.ndarray] | None = None, **convention: str) -> AuditResult:
     """Audit ``table`` (an array (*grid[, channels]) or a path, read with ``read`` options: fmt, array, shape,
     dtype, order, scale) as a table of ``model`` (a name or a Model, with ``params``). ``convention`` pins parts
     of the convention (axes, direction, roughness, f0, flip, shadowing, mu_floor, alpha_floor, channels; see
-    :mod:`.conventions`). ``dense`` measures the interpolation error, ``sweep`` the error against resolution."""
+    :mod:`.conventions`); ``axes`` gives the values of an axis outright (``mu``, ``theta`` in radians, ``alpha``,
+    ``r`` with α = r², ``f0``: values in array order, monotonic). ``dense`` measures the interpolation error,
+    ``sweep`` the error against resolution."""
+    explicit = _explicit_axes(axes)
     from .. import load
 
     started = time.perf_counter()
@@ -142,7 +164,8 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         else:
             raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="--channel")
         chosen = [k]
-    inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen)
+    inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
+                      explicit=explicit)
     result = AuditResult(source, inference, _bad_cells(source), model=m.name)
     best = inference.best
     grid = source.grid_shape

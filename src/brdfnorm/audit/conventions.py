@@ -52,6 +52,9 @@ class Convention:
     mu_floor: float = 1e-4
     alpha_floor: float = 1e-8
     meanings: tuple[str | None, ...] = field(default=())
+    #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
+    #: 'f0', values); such an axis is ``explicit`` and never flipped.
+    explicit: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
     def geometry(self) -> tuple:
         """What the direction and roughness values depend on (for sharing reference values)."""
@@ -61,8 +64,9 @@ class Convention:
     def describe(self) -> dict:
         axes = {}
         if self.direction_axis is not None:
-            axes[self.direction_axis] = ("mu" if self.direction.startswith(("mu", "ltc")) else "theta")
-        axes[self.roughness_axis] = "alpha" if self.roughness.startswith("alpha") else "roughness (alpha = r^2)"
+            theta = self.direction.startswith("theta") or any(n == "theta" for n, _ in self.explicit)
+            axes[self.direction_axis] = "theta" if theta else "mu"
+        axes[self.roughness_axis] = ("roughness (alpha = r^2)" if self.roughness.startswith("r2") else "alpha")
         if self.f0_axis is not None:
             axes[self.f0_axis] = "f0"
         return {"axes": [axes[i] for i in sorted(axes)], "flipped": [bool(f) for f in self.flips],
@@ -112,23 +116,64 @@ def alpha_of(kind: str, t: np.ndarray) -> np.ndarray:
     raise ArgumentError(f"unknown roughness convention {kind!r} (known: {', '.join(ROUGHNESS)})", where="--as")
 
 
+def _explicit(c: Convention, role: str) -> tuple[str, np.ndarray] | None:
+    for name, values in c.explicit:
+        if name == role or (role == "mu" and name == "theta"):
+            return name, np.asarray(values, dtype=float)
+    return None
+
+
+def _kind(c: Convention, role: str) -> str:
+    return {"mu": c.direction, "alpha": c.roughness, "f0": c.f0}[role]
+
+
+def unit_positions(c: Convention, role: str, n: int, index: np.ndarray, flip: bool) -> np.ndarray:
+    """The unit coordinate t of samples ``index`` of the axis of ``role`` (mu, alpha, f0): where a GPU fetch
+    puts them. Explicit values are placed linearly between their first and last value."""
+    given = _explicit(c, role)
+    if given is not None:
+        values = given[1]
+        span = values[-1] - values[0]
+        return (values[np.asarray(index, dtype=int)] - values[0]) / (span if span else 1.0)
+    kind = _kind(c, role)
+    return positions("node" if kind == "ltc" else kind, n, index, flip)
+
+
+def role_value(c: Convention, role: str, t: np.ndarray) -> np.ndarray:
+    """μ, α or f0 at unit coordinate t (before the floors)."""
+    given = _explicit(c, role)
+    if given is not None:
+        name, values = given
+        value = values[0] + t * (values[-1] - values[0])
+        return np.cos(value) if name == "theta" else value
+    if role == "mu":
+        return mu_of(c.direction, t)
+    if role == "alpha":
+        return alpha_of(c.roughness, t)
+    return t
+
+
+def axis_roles(c: Convention) -> dict[int, str]:
+    roles = {c.roughness_axis: "alpha"}
+    if c.direction_axis is not None:
+        roles[c.direction_axis] = "mu"
+    if c.f0_axis is not None:
+        roles[c.f0_axis] = "f0"
+    return roles
+
+
 def coordinates(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) -> dict[str, np.ndarray]:
     """μ, α (and f0) at the samples ``index`` (one index vector per array axis), floors applied."""
     out = {}
-    if c.direction_axis is not None:
-        a = c.direction_axis
-        t = positions(c.direction if c.direction != "ltc" else "node", shape[a], index[a], c.flips[a])
-        out["mu"] = np.maximum(mu_of(c.direction, t), c.mu_floor)
-    a = c.roughness_axis
-    out["alpha"] = np.maximum(alpha_of(c.roughness, positions(c.roughness, shape[a], index[a], c.flips[a])),
-                              c.alpha_floor)
-    if c.f0_axis is not None:
-        a = c.f0_axis
-        out["f0"] = positions(c.f0, shape[a], index[a], c.flips[a])
+    for axis, role in axis_roles(c).items():
+        value = role_value(c, role, unit_positions(c, role, shape[axis], index[axis], c.flips[axis]))
+        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor, "f0": -np.inf}[role]
+        out[role] = np.maximum(value, floor)
     return out
 
 
-def geometries(grid_ndim: int, pinned: dict[str, str]) -> list[Convention]:
+def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.ndarray] | None = None,
+               shape: tuple[int, ...] | None = None) -> list[Convention]:
     """Every geometry (axis roles, flips, positions, shadowing) of a grid of ``grid_ndim`` axes, with pinned
     parts fixed (``pinned``: direction=..., roughness=..., shadowing=..., axes=mu,alpha, flip=0/1 per axis)."""
     out = []
@@ -169,13 +214,27 @@ def geometries(grid_ndim: int, pinned: dict[str, str]) -> list[Convention]:
             flip_sets = [tuple(bool(int(x)) for x in pinned["flip"].split(","))]
             if len(flip_sets[0]) != grid_ndim:
                 raise ArgumentError(f"flip=: one 0/1 per array axis ({grid_ndim})", where="--as")
+        given = explicit or {}
+        fixed_axes = []
+        if d is not None and ("mu" in given or "theta" in given):
+            directions, fixed_axes = ["explicit"], fixed_axes + [d]
+        if "alpha" in given:
+            roughness, fixed_axes = ["explicit"], fixed_axes + [r]
+        if f is not None and "f0" in given:
+            f0s, fixed_axes = ["explicit"], fixed_axes + [f]
+        roles = {d: ("theta" if "theta" in given else "mu"), r: "alpha", f: "f0"}
+        if shape is not None and any(len(given[roles[a]]) != shape[a] for a in fixed_axes):
+            continue  # the given values do not fit this axis
+        chosen = tuple(sorted((roles[a], tuple(float(v) for v in given[roles[a]])) for a in fixed_axes))
         for direction, rough, f0, flips, shadowing in itertools.product(
                 directions, roughness, f0s, flip_sets, _pinned(pinned, "shadowing", SHADOWING)):
+            if any(flips[a] for a in fixed_axes):
+                continue
             out.append(Convention(direction_axis=d, roughness_axis=r, f0_axis=f,
                                   direction=direction or "mu-node", roughness=rough, f0=f0 or "f0-node",
                                   flips=flips, shadowing=shadowing,
                                   mu_floor=float(pinned.get("mu_floor", 1e-4)),
-                                  alpha_floor=float(pinned.get("alpha_floor", 1e-8))))
+                                  alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen))
     if not out:
         raise ArgumentError("the pinned parts leave no convention to test", where="--as")
     return out

@@ -137,13 +137,18 @@ def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> t
 
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
-          audit_channels: list[int] | None = None, keep_runners: int = 3) -> Inference:
+          audit_channels: list[int] | None = None, keep_runners: int = 3,
+          explicit: dict[str, np.ndarray] | None = None) -> Inference:
     """The best conventions for ``values`` (*grid, channels) — see the module docstring."""
     grid = values.shape[:-1]
     ndim = len(grid)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1])
-    candidates = geometries(ndim, pins)
+    candidates = geometries(ndim, pins, explicit, grid)
+    if not candidates:
+        sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
+        raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
+                            where="--axis")
     cheap = [[m for m in meanings[k] if not Reference.needs_f90(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
     loose = 10.0 * (step + 1e-3)

@@ -3,7 +3,7 @@ for exact tables of 8 … 128 samples per axis (error against resolution).
 
 A GPU fetches a table by linear interpolation between its samples in each axis's unit coordinate t, clamped at
 the ends (clamp-to-edge: below the first texel centre it returns the first texel). Here each axis's samples sit
-where the audited convention puts them (:func:`.conventions.positions`), and the interpolant is compared with the
+where the audited convention puts them (:func:`.conventions.unit_positions`), and the interpolant is compared with the
 exact quantity at dense points: the texel centres (j + ½)/(8N) of a grid 8× finer than the table on every axis,
 all of them when there are at most ``max_points``, else a seeded random subset of them of that size (stated in
 the result). The exact values come from :class:`.reference.Reference` (shared cache), so the dense points are
@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .conventions import Convention, alpha_of, mu_of, positions
+from .conventions import Convention, axis_roles, role_value, unit_positions
 from .reference import Reference
 
 SWEEP_SIZES = (8, 16, 32, 64, 128)
@@ -37,17 +37,6 @@ class DenseError:
     of_grid: int  # size of the 8× grid the points were taken from
 
 
-def _axis_kinds(c: Convention, ndim: int) -> list[tuple[str, str]]:
-    """Per array axis: (role, position kind)."""
-    kinds = [("", "")] * ndim
-    if c.direction_axis is not None:
-        kinds[c.direction_axis] = ("mu", "node" if c.direction == "ltc" else c.direction.split("-")[1])
-    kinds[c.roughness_axis] = ("alpha", c.roughness.split("-")[1])
-    if c.f0_axis is not None:
-        kinds[c.f0_axis] = ("f0", c.f0.split("-")[1])
-    return kinds
-
-
 def dense_points(c: Convention, shape: tuple[int, ...], max_points: int, seed: int = 7) -> tuple[list[np.ndarray],
                                                                                                   int]:
     """Unit coordinates t (one array per axis, each of P points) on the 8× texel-centre grid."""
@@ -65,23 +54,21 @@ def dense_points(c: Convention, shape: tuple[int, ...], max_points: int, seed: i
 def physical(c: Convention, t: list[np.ndarray]) -> dict[str, np.ndarray]:
     """μ, α, f0 at unit coordinates ``t`` (floors applied)."""
     out = {}
-    if c.direction_axis is not None:
-        out["mu"] = np.maximum(mu_of(c.direction, t[c.direction_axis]), c.mu_floor)
-    out["alpha"] = np.maximum(alpha_of(c.roughness, t[c.roughness_axis]), c.alpha_floor)
-    if c.f0_axis is not None:
-        out["f0"] = t[c.f0_axis]
+    for axis, role in axis_roles(c).items():
+        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor, "f0": -np.inf}[role]
+        out[role] = np.maximum(role_value(c, role, t[axis]), floor)
     return out
 
 
 def interpolate(table: np.ndarray, c: Convention, t: list[np.ndarray]) -> np.ndarray:
     """Multilinear interpolation of ``table`` (stored order, flips included) at unit coordinates ``t``."""
-    kinds = _axis_kinds(c, table.ndim)
+    roles = axis_roles(c)
     index = [slice(None, None, -1) if c.flips[a] else slice(None) for a in range(table.ndim)]
     table = table[tuple(index)]  # increasing t along every axis
     lows, weights = [], []
-    for axis, (_, kind) in enumerate(kinds):
+    for axis in range(table.ndim):
         n = table.shape[axis]
-        p = positions(kind, n, np.arange(n), False)
+        p = unit_positions(c, roles[axis], n, np.arange(n), False)
         x = np.clip(t[axis], p[0], p[-1])
         i = np.clip(np.searchsorted(p, x, side="right") - 1, 0, max(n - 2, 0))
         span = p[np.minimum(i + 1, n - 1)] - p[i]
@@ -137,8 +124,11 @@ def sweep(c: Convention, meaning: str, reference: Reference, points: tuple[list[
         if size ** pairs_axes > budget:
             out.append({"size": size, "skipped": f"more than {budget} exact cells"})
             continue
-        table = exact_table(plain, meaning, reference, (size,) * ndim)
-        e = dense_error(table, plain, meaning, reference, points)
+        # explicit axes (--axis) become `size` nodes over the same range
+        sized = replace(plain, explicit=tuple((name, tuple(np.linspace(v[0], v[-1], size)))
+                                              for name, v in plain.explicit))
+        table = exact_table(sized, meaning, reference, (size,) * ndim)
+        e = dense_error(table, sized, meaning, reference, points)
         out.append({"size": size, "max": e.max, "rms": e.rms})
     return out
 

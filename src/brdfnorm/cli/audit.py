@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import typer
 
 from ..errors import ArgumentError
@@ -39,6 +40,10 @@ def audit_command(
                                   "direction=mu-node|mu-texel|theta-node|theta-texel|ltc roughness=alpha-node|"
                                   "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable "
                                   "mu_floor=1e-4 alpha_floor=1e-8 channels=DFG_f0,DFG_f90"),
+    axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
+                                   "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "
+                                   "(spaced by --grid) or V,V,... in array order."),
+    grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:COUNT is spaced."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable result on stdout."),
     report: str = typer.Option(None, "--report", metavar="DIR", help="Write error maps and plots (PNG) there."),
     fix: bool = typer.Option(False, "--fix", help="Write the exact table in the input's format and layout (-o)."),
@@ -69,8 +74,14 @@ def audit_command(
         read = {"fmt": fmt, "array": array, "shape": parse_shape(shape), "dtype": dtype, "order": order,
                 "scale": scale}
         pins = dict(p.partition("=")[::2] for p in pin)
+        axes = {}
+        for spec in axis:
+            from .lut import parse_axis
+
+            name, values = parse_axis(spec, grid)
+            axes[name] = np.radians(values) if name == "theta" else values
         result = audit(file, m, channel=channel, dense=not no_dense, sweep=not no_sweep, fix=fix, read=read,
-                       **pins)
+                       axes=axes, **pins)
         payload = result.to_json()
         if report is not None:
             from ..audit.report import figures
