@@ -275,3 +275,20 @@ def test_axis_values_given_outright(capsys, tmp_path):
     assert code == 0, err
     rows = json.loads(out)["resolution"]["0"]
     assert [row["size"] for row in rows] == [8, 16, 32, 64, 128] and rows[-1]["max"] < rows[0]["max"]
+
+
+def test_e_avg_fit_example_glsl_and_expression_agree_with_lut(capsys):
+    code, out, err = run_cli(capsys, "audit", "--formula", "examples/audit/e_avg_fit.glsl", "--function",
+                             "EavgApprox", "--args", "roughness=r", "--quantity", "E_avg", "--json")
+    assert code == 0, err
+    (glsl,) = json.loads(out)["results"]
+    with open("examples/audit/e_avg_fit.txt") as handle:
+        expression = handle.read().strip()
+    code, out, err = run_cli(capsys, "audit", "--formula", expression, "--json")
+    (python,) = json.loads(out)["results"]
+    r = np.linspace(0, 1, glsl["points"])
+    exact = lut.compute(bn.load("ggx"), {"mu": [1.0], "alpha": np.maximum(r * r, 1e-8)}, rtol=1e-10)["E_avg"]
+    fitted = compile_expression(expression, ARGUMENTS)({"r": r})
+    assert python["max"] == pytest.approx(glsl["max"], rel=1e-12)
+    assert glsl["max"] == pytest.approx(float(np.max(np.abs(fitted - exact))), abs=1e-8)
+    assert 1e-4 < glsl["max"] < 2e-4

@@ -147,10 +147,11 @@ def _fix_text(source: Source, table: np.ndarray, meta: dict) -> str:
     text = source.layout["text"]
     values = _squeezed(source, stored_values(source, table))
     flat = values.reshape(source.layout["shape"]).ravel(order=source.layout["order"])
-    spans = source.layout["spans"]
-    width = max((e - s - 2 for s, e in spans if text[s:e].lower().startswith("0x")), default=4)
+    starts, ends = source.layout["starts"], source.layout["ends"]
+    width = max((e - s - 2 for s, e in zip(starts, ends, strict=True) if text[s:e].lower().startswith("0x")),
+                default=4)
     pieces, last = [], 0
-    for (start, end), value in zip(spans, flat.tolist(), strict=True):
+    for start, end, value in zip(starts, ends, flat.tolist(), strict=True):
         pieces.append(text[last:start])
         pieces.append(_number_text(value, source.stored, source.layout["hex"], width))
         last = end

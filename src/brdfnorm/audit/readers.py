@@ -297,7 +297,7 @@ def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
     by_name = {lit.name or f"#{i}": lit for i, lit in enumerate(literals)}
     name = _pick(list(by_name), array, where)
     literal = by_name[name]
-    flat = np.array(literal.values)
+    flat = np.frombuffer(literal.values, dtype=np.float64)
     if literal.declared and all(d > 0 for d in literal.declared):
         declared = element_count(literal.declared, MAX_ELEMENTS, where=where, what=f"the declared shape of {name}")
         if flat.size < declared:
@@ -327,8 +327,8 @@ def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
     values, factor = _normalize(raw, stored, scale, where)
     values, names = _with_channels(values)
     return Source(where, "text", name, values, names, stored, factor,
-                  layout={"text": text, "spans": literal.spans, "hex": literal.hex, "suffix": literal.suffix,
-                          "order": order, "shape": tuple(shape), "start": literal.start})
+                  layout={"text": text, "starts": literal.starts, "ends": literal.ends, "hex": literal.hex,
+                          "suffix": literal.suffix, "order": order, "shape": tuple(shape), "start": literal.start})
 
 
 def _read_raw(data, where, *, array, shape, dtype, order, scale) -> Source:

@@ -12,6 +12,7 @@ that :mod:`.fix` can write exact values back in place.
 
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,8 +20,8 @@ import numpy as np
 from ..errors import TableFileError
 from ..inputs import element_count
 
-#: The most numbers one file may hold (the file's byte cap bounds it too; this keeps the Python lists small).
-MAX_NUMBERS = 16 * 1024 * 1024
+#: The most numbers one file may hold (128³ × 4 channels; kept in typed arrays, 24 bytes a number with its span).
+MAX_NUMBERS = 128**3 * 4
 
 #: Declared element types -> the dtype their values are stored in (integers are normalized by their maximum).
 C_TYPES = {
@@ -46,8 +47,9 @@ class Literal:
     """One array initializer: its name, numbers (with their text spans and spelling), nested shape if regular."""
 
     name: str
-    values: list[float] = field(default_factory=list)
-    spans: list[tuple[int, int]] = field(default_factory=list)
+    values: array = field(default_factory=lambda: array("d"))
+    starts: array = field(default_factory=lambda: array("q"))  # text offsets of each number (its sign included)
+    ends: array = field(default_factory=lambda: array("q"))
     hex: bool = False
     suffix: str = ""
     dtype: str | None = None  # from the declaration or typed array, if any
@@ -231,7 +233,8 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
             if not opened:
                 return None  # a scalar initializer
             literal.values.append(sign * token[1])
-            literal.spans.append((token[2][0] if sign_at is None else sign_at, token[2][1]))
+            literal.starts.append(token[2][0] if sign_at is None else sign_at)
+            literal.ends.append(token[2][1])
             sign_at = None
             literal.hex = literal.hex or token[3]
             literal.suffix = literal.suffix or token[4]

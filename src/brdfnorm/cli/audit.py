@@ -74,6 +74,8 @@ def audit_command(
         read = {"fmt": fmt, "array": array, "shape": parse_shape(shape), "dtype": dtype, "order": order,
                 "scale": scale}
         pins = dict(p.partition("=")[::2] for p in pin)
+        if "shadowing" in m.params and any(p.partition("=")[0].strip() == "shadowing" for p in param):
+            pins.setdefault("shadowing", str(m.params["shadowing"]))  # -p shadowing=... pins it
         axes = {}
         for spec in axis:
             from .lut import parse_axis
@@ -122,7 +124,8 @@ def _formula(m, formula: str, function: str | None, args: str | None, quantity: 
         uses = {n.id for n in ast.walk(ast.parse(formula.strip(), mode="eval")) if isinstance(n, ast.Name)}
     quantities = [q.strip() for q in quantity.split(",")] if quantity else (
         ["E"] if uses & {"mu", "theta"} else ["E_avg"])
-    rows = audit_formula(evaluate, uses, quantities, Reference(m))
+    rows = audit_formula(evaluate, uses, quantities, Reference(m),
+                         shadowing=str(m.params.get("shadowing", "height-correlated")))
     if json_out:
         typer.echo(json.dumps({"formula": formula, "function": function, "model": m.name, "results": rows}))
         return
