@@ -292,3 +292,21 @@ def test_e_avg_fit_example_glsl_and_expression_agree_with_lut(capsys):
     assert python["max"] == pytest.approx(glsl["max"], rel=1e-12)
     assert glsl["max"] == pytest.approx(float(np.max(np.abs(fitted - exact))), abs=1e-8)
     assert 1e-4 < glsl["max"] < 2e-4
+
+
+def test_npz_declaring_a_huge_array_is_refused_before_loading(capsys, tmp_path):
+    import io
+    import zipfile
+
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False, "shape": (100000, 100000)})
+    with zipfile.ZipFile(tmp_path / "big.npz", "w") as archive:
+        archive.writestr("E.npy", header.getvalue() + b"\0" * 64)
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "big.npz"))
+    assert code == 2 and "big.npz" in err and "more than" in err and err.count("\n") == 1
+
+
+def test_deeply_nested_json_is_one_error(capsys, tmp_path):
+    (tmp_path / "deep.json").write_text("[" * 100000 + "]" * 100000)
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "deep.json"))
+    assert code == 2 and "deep.json" in err and err.count("\n") == 1

@@ -13,7 +13,8 @@ Two stages, both against exact values (:mod:`.reference`):
 
 A hypothesis *fits* a channel when its maximum residual is within the tolerance
 
-    tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + 5 σ̂,
+    tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + k σ̂,
+    k = max(5, √(2 ln 2n) + 1) for n cells (the largest of n Gaussian draws is about √(2 ln 2n) σ),
 
 σ̂ the noise of the residual estimated from its second differences along each axis (median absolute deviation
 / 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not). The
@@ -198,7 +199,8 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
     magnitude = np.where(ok, np.abs(residual), -1.0)
     worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(magnitude)), residual.shape))
     sigma = noise_sigma(np.where(ok, residual, 0.0))
-    tolerance = step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok])) + NOISE_FACTOR * sigma
+    factor = max(NOISE_FACTOR, float(np.sqrt(2.0 * np.log(2.0 * residual.size))) + 1.0)
+    tolerance = step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok])) + factor * sigma
     if not ok.all():  # a table with non-finite cells does not fit, whatever its other cells do
         tolerance = -1.0
     r = residual[ok]

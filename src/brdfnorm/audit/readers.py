@@ -32,7 +32,7 @@ from .textarrays import find_literals
 MAX_ELEMENTS = 16 * 1024 * 1024
 #: Byte caps per kind of file (text numbers take ~10 bytes each).
 MAX_BINARY_BYTES = 256 * 1024**2
-MAX_TEXT_BYTES = 96 * 1024**2
+MAX_TEXT_BYTES = 64 * 1024**2
 DTYPES = ("float16", "float32", "float64", "uint8", "uint16", "uint32", "int8", "int16", "int32")
 TEXT_EXTENSIONS = {"h": "text", "hpp": "text", "c": "text", "cpp": "text", "cc": "text", "inl": "text",
                    "glsl": "text", "hlsl": "text", "frag": "text", "vert": "text", "fx": "text", "fxh": "text",
@@ -151,6 +151,14 @@ def _read_npz(data, where, *, array, shape, dtype, order, scale) -> Source:
         for info in entries.values():
             if info.file_size > MAX_ELEMENTS * 8 + 4096:
                 raise TableFileError(f"array {info.filename} inflates to {info.file_size} bytes", where)
+            with archive.open(info) as member:  # the declared shape, before numpy allocates it
+                version = np.lib.format.read_magic(member)
+                read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                    np.lib.format.read_array_header_2_0
+                declared, _, kind = read_header(member)
+                if kind.hasobject:
+                    raise TableFileError(f"array {info.filename} holds Python objects", where)
+                element_count(declared or (1,), MAX_ELEMENTS, where=where, what=f"array {info.filename[:-4]}")
     arrays = np.load(io.BytesIO(data), allow_pickle=False)
     numeric = [n for n in entries if arrays[n].dtype.kind in "fiu" and arrays[n].size > 1]
     name = _pick(numeric, array, where)
@@ -174,6 +182,11 @@ def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
     with tempfile.TemporaryDirectory() as scratch:
         target = Path(scratch) / "in.exr"
         target.write_bytes(data)
+        with OpenEXR.File(str(target), header_only=True) as image:  # the size first, then the pixels
+            width, height = _window_size(image.header())
+            count = max(1, len(image.header().get("channels", [None])))
+            element_count((height, width, count), MAX_ELEMENTS, where=where, what="the image (height × width × "
+                          "channels)")
         with OpenEXR.File(str(target), separate_channels=True) as image:
             header = dict(image.header())
             channels = {n: np.array(c.pixels) for n, c in image.channels().items()}
@@ -188,6 +201,11 @@ def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
     return Source(where, "exr", array or "", values, names, stored, factor,
                   layout={"pixel": {n: channels[n].dtype.name for n in names}, "all": list(channels),
                           "window": str(window)})
+
+
+def _window_size(header: dict) -> tuple[int, int]:
+    low, high = header["dataWindow"]
+    return int(high[0]) - int(low[0]) + 1, int(high[1]) - int(low[1]) + 1
 
 
 def _read_png(data, where, *, array, shape, dtype, order, scale) -> Source:
@@ -258,7 +276,7 @@ def _read_csv(data, where, *, array, shape, dtype, order, scale) -> Source:
 def _json_arrays(node, path: tuple, found: dict, depth: int = 0) -> None:
     """Numeric (nested) lists in a JSON document by key path."""
     if depth > 64:
-        raise TableFileError("nested too deeply", "")
+        raise RecursionError  # inputs.parsing: "nested too deeply to read", naming the file
     if isinstance(node, list) and node and all(isinstance(v, (int, float, list)) and not isinstance(v, bool)
                                                for v in node):
         found[path] = node
