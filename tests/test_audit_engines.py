@@ -159,3 +159,23 @@ def test_schlick_identity():
         m = GGX.with_params(fresnel="schlick", f0=f0, f90=1.0)
         e = lut.compute(m, {"alpha": t, "mu": t}, rtol=1e-9, average=False)["E"]
         assert np.max(np.abs(e - (f0 * dfg["DFG_f0"] + dfg["DFG_f90"]))) < 1e-7
+
+
+def test_noisy_64_table_transposed_and_flipped():
+    t = (np.arange(64) + 0.5) / 64
+    e = lut.compute(GGX, {"mu": t, "alpha": t * t}, rtol=1e-9, average=False)["E"]
+    noisy = (e + np.random.default_rng(5).normal(0.0, 1e-3, e.shape)).T[::-1]
+    r = audit(noisy, "ggx", dense=False, sweep=False)
+    c = r.best.convention
+    assert r.fits and (c.direction_axis, c.flips, c.direction, c.roughness) == (1, (True, False), "mu-texel",
+                                                                                "r2-texel")
+    assert 0.9e-3 < r.best.channels[0].rms < 1.1e-3 and abs(r.best.channels[0].noise - 1e-3) < 2e-4
+    assert not r.runners_up[0].fits
+
+
+@pytest.mark.parametrize("made, audited", [("beckmann", "ggx"), ("ggx", "beckmann")])
+def test_other_model_32_fits_nothing(made, audited):
+    t = (np.arange(32) + 0.5) / 32
+    e = lut.compute(bn.load(made), {"mu": t, "alpha": t}, rtol=1e-9, average=False)["E"]
+    r = audit(e, audited, dense=False, sweep=False)
+    assert not r.fits and not any(h.fits for h in r.runners_up)

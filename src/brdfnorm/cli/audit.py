@@ -94,6 +94,10 @@ def audit_command(
 
             write_file(output, write(result.source, result.fixed, output, result.fix_meta()))
             payload["fixed"] = output
+            if not result.fits:  # never a silent guess: the replacement follows the closest convention only
+                typer.echo(f"warning: no hypothesis fits; {output} follows the closest convention "
+                           f"({result.best.convention.text()}) — check it, or pin the convention with --as/--axis",
+                           err=True)
         if json_out:
             typer.echo(json.dumps(payload, default=float))
         else:
