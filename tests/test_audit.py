@@ -310,3 +310,14 @@ def test_deeply_nested_json_is_one_error(capsys, tmp_path):
     (tmp_path / "deep.json").write_text("[" * 100000 + "]" * 100000)
     code, out, err = run_cli(capsys, "audit", str(tmp_path / "deep.json"))
     assert code == 2 and "deep.json" in err and err.count("\n") == 1
+
+
+def test_random_and_zero_channels_never_fit_and_are_kept_by_the_fix(capsys, tmp_path):
+    e = _base()
+    rng = np.random.default_rng(2)
+    data = np.stack([e, np.zeros_like(e), rng.random(e.shape)], axis=-1)
+    r = _quick(data)
+    fits = {c.channel: c.fits for c in r.best.channels}
+    assert fits == {"0": True, "1": False, "2": False}
+    assert [c.too_noisy for c in r.best.channels] == [False, False, True]
+    assert np.array_equal(r.fixed[..., 1:], data[..., 1:]) and np.max(np.abs(r.fixed[..., 0] - e)) < 1e-12

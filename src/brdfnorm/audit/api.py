@@ -170,7 +170,9 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
     best = inference.best
     grid = source.grid_shape
     if dense or sweep:
-        for fit in best.channels:
+        # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
+        measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
+        for fit in measured:
             if fit.meaning is None or fit.meaning == "E_avg" and len(grid) != 1:
                 continue
             points = quality.dense_points(best.convention, grid, quality.budget_points(fit.meaning))
@@ -185,7 +187,9 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
                                                                len(grid))
     if fix:
         fixed = np.array(source.values, dtype=float)
-        for fit in best.channels:
+        # channels that fit are replaced (the closest one when none fits); the others are written back as read
+        replaced = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
+        for fit in replaced:
             if fit.meaning is not None and fit.exact is not None:
                 fixed[..., source.channel_names.index(fit.channel)] = fit.exact
         result.fixed = fixed

@@ -14,10 +14,11 @@ Two stages, both against exact values (:mod:`.reference`):
 A hypothesis *fits* a channel when its maximum residual is within the tolerance
 
     tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + k σ̂,
-    k = max(5, √(2 ln 2n) + 1) for n cells (the largest of n Gaussian draws is about √(2 ln 2n) σ),
 
 σ̂ the noise of the residual estimated from its second differences along each axis (median absolute deviation
-/ 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not). The
+/ 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not), and
+k = max(5, √(2 ln 2n) + 1) for n cells. A channel whose σ̂ exceeds MAX_NOISE_SHARE of the exact table's standard
+deviation never fits (data that are mostly noise would fit any hypothesis). The
 result is never a silent best guess: :class:`Inference` says whether the best fits, and whether the runner-up
 fits too (then the table does not decide between them).
 """
@@ -39,6 +40,8 @@ STAGE2_F90 = 2
 SUBSET = 6
 SUBSET_F90 = 3
 NOISE_FACTOR = 5.0
+#: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
+MAX_NOISE_SHARE = 0.05
 
 
 @dataclass
@@ -55,15 +58,21 @@ class ChannelFit:
     noise: float
     residual: np.ndarray | None = None  # table − exact, over the grid
     exact: np.ndarray | None = None
+    spread: float = 0.0  # standard deviation of the exact values over the table
+
+    @property
+    def too_noisy(self) -> bool:
+        """Noise above MAX_NOISE_SHARE of the table's own spread: random data would 'fit' anything."""
+        return bool(self.noise > MAX_NOISE_SHARE * self.spread)
 
     @property
     def fits(self) -> bool:
-        return self.meaning is not None and bool(self.max <= self.tolerance)
+        return self.meaning is not None and bool(self.max <= self.tolerance) and not self.too_noisy
 
     def summary(self) -> dict:
         return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "max": self.max,
                 "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
-                "tolerance": self.tolerance, "noise_sigma": self.noise}
+                "tolerance": self.tolerance, "noise_sigma": self.noise, "too_noisy": self.too_noisy}
 
 
 @dataclass
@@ -205,7 +214,8 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
         tolerance = -1.0
     r = residual[ok]
     return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
-                      float(np.median(np.abs(r))), worst, tolerance, sigma, residual, exact)
+                      float(np.median(np.abs(r))), worst, tolerance, sigma, residual, exact,
+                      float(np.std(exact[ok])))
 
 
 def _full(values, c: Convention, reference, names, step, chosen) -> Hypothesis:

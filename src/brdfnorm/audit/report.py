@@ -15,7 +15,7 @@ def _g(x: float) -> str:
 
 
 def _channel_line(c: dict) -> str:
-    verdict = "fits" if c["fits"] else "does not fit"
+    verdict = "fits" if c["fits"] else ("too noisy to decide" if c.get("too_noisy") else "does not fit")
     return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}, "
             f"median {_g(c['median'])}, RMS {_g(c['rms'])}; tolerance {_g(c['tolerance'])} "
             f"(noise σ {_g(c['noise_sigma'])}): {verdict}")
