@@ -3,10 +3,13 @@
 >>> import numpy as np, brdfnorm as bn
 >>> from brdfnorm import lut
 >>> from brdfnorm.audit import audit
->>> t = lut.compute(bn.load("ggx"), {"mu": (np.arange(8) + 0.5) / 8, "alpha": np.linspace(0.1, 1, 8)}, average=False)
->>> r = audit(t["E"], "ggx", direction="mu-texel", roughness="alpha-node", dense=False, sweep=False)
->>> r.fits, r.best.convention.direction
-(True, 'mu-texel')
+>>> axes = {"mu": (np.arange(8) + 0.5) / 8, "alpha": np.maximum(np.linspace(0, 1, 8), 1e-8)}
+>>> t = lut.compute(bn.load("ggx"), axes, average=False)
+>>> r = audit(t["E"], "ggx", shadowing="height-correlated", dense=False, sweep=False)
+>>> r.fits, r.best.convention.direction, r.best.convention.roughness
+(True, 'mu-texel', 'alpha-node')
+>>> audit(t["E"], "ggx", axes={"alpha": np.linspace(0.1, 1, 8)}, dense=False, sweep=False).fits
+False
 """
 
 from __future__ import annotations
