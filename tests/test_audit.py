@@ -321,3 +321,18 @@ def test_random_and_zero_channels_never_fit_and_are_kept_by_the_fix(capsys, tmp_
     assert fits == {"0": True, "1": False, "2": False}
     assert [c.too_noisy for c in r.best.channels] == [False, False, True]
     assert np.array_equal(r.fixed[..., 1:], data[..., 1:]) and np.max(np.abs(r.fixed[..., 0] - e)) < 1e-12
+
+
+@pytest.mark.parametrize("ext, options", [("npz", ["--array", "E"]), ("json", ["--array", "tables.E"]),
+                                          ("h", ["--array", "lut_E"]), ("exr", ["--array", "E"]),
+                                          ("csv", ["--array", "E", "--shape", f"{N},{N}"]), ("png", [])])
+def test_brdfnorm_lut_files_are_audited(capsys, tmp_path, ext, options):
+    path = tmp_path / f"own.{ext}"
+    code, out, err = run_cli(capsys, "lut", "ggx", "--axis", f"mu=0:1:{N}", "--axis", f"alpha=0:1:{N}", "--grid",
+                             "texel", "--no-average", "-o", str(path), *(["--table", "E"] if ext == "png" else []))
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "audit", str(path), *options, "--no-sweep", "--no-interpolation", "--json")
+    assert code == 0, err
+    best = json.loads(out)["best"]
+    assert (best["convention"]["direction"], best["convention"]["roughness"]) == ("mu-texel", "alpha-texel")
+    assert best["channels"][0]["max"] <= 1e-5  # PNG: 16-bit codes over [lo, hi]; float32 formats: 6e-8

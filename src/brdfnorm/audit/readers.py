@@ -132,6 +132,13 @@ def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | 
     finite = np.isfinite(source.values)
     if not finite.any():
         raise TableFileError("no finite values in the table", where)
+    size = source.values.shape[0]
+    if source.values.ndim == 2 and shape is None and size >= 16:
+        for power in (2, 3):
+            root = round(size ** (1 / power))
+            if root**power == size:
+                source.notes.append(f"a 1-D array of {size} values: if it is a flattened table, give --shape "
+                                    f"{','.join([str(root)] * power)}")
     return source
 
 
