@@ -336,3 +336,47 @@ def test_brdfnorm_lut_files_are_audited(capsys, tmp_path, ext, options):
     best = json.loads(out)["best"]
     assert (best["convention"]["direction"], best["convention"]["roughness"]) == ("mu-texel", "alpha-texel")
     assert best["channels"][0]["max"] <= 1e-5  # PNG: 16-bit codes over [lo, hi]; float32 formats: 6e-8
+
+
+def test_interpolation_error_against_scipy_and_the_quadrature_route():
+    """The GPU interpolation error: our multilinear interpolant equals scipy's RegularGridInterpolator (clamped
+    to the samples, as clamp-to-edge does), and the exact value at the worst point agrees with the generic
+    quadrature method (not the route the reference uses)."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    from brdfnorm.audit import quality
+    from brdfnorm.audit.conventions import Convention
+    from brdfnorm.audit.reference import Reference
+
+    e = _base()[:, ::-1]
+    c = Convention(direction="mu-texel", roughness="alpha-node", flips=(False, True), meanings=("E",))
+    points = quality.dense_points(c, e.shape, 4096)
+    t = points[0]
+    ours = quality.interpolate(e, c, t)
+    grid = (T_TEXEL, T_NODE)
+    scipy_values = RegularGridInterpolator(grid, e[:, ::-1])(np.stack([np.clip(t[0], T_TEXEL[0], T_TEXEL[-1]),
+                                                                     np.clip(t[1], 0, 1)], axis=-1))
+    assert np.max(np.abs(ours - scipy_values)) < 1e-14
+    error = quality.dense_error(e, c, "E", Reference(bn.load("ggx")), points)
+    assert error.points == 4096 and error.of_grid == 64 * 64
+    worst = error.worst
+    ggx = bn.load("ggx").with_params(alpha=max(worst["alpha"], 1e-8))
+    exact = bn.albedo(ggx, np.arccos(worst["mu"]), rtol=1e-9, method="quadrature").value[0]
+    k = int(np.argmin(np.abs(points[0][0] - worst["mu"]) + np.abs(points[0][1] - worst["alpha"])))
+    assert abs(abs(ours[k] - exact) - error.max) < 1e-7
+
+
+def test_resolution_sweep_matches_tables_made_by_lut():
+    from brdfnorm.audit import quality
+    from brdfnorm.audit.conventions import Convention
+    from brdfnorm.audit.reference import Reference
+
+    c = Convention(direction="mu-texel", roughness="r2-texel", meanings=("E",))
+    reference = Reference(bn.load("ggx"))
+    points = quality.dense_points(c, (N, N), 2048)
+    rows = quality.sweep(c, "E", reference, points, 2, sizes=(8, 16))
+    for row in rows:
+        t = (np.arange(row["size"]) + 0.5) / row["size"]
+        table = lut.compute(bn.load("ggx"), {"mu": t, "alpha": t * t}, rtol=1e-10, average=False)["E"]
+        assert quality.dense_error(table, c, "E", reference, points).max == pytest.approx(row["max"], abs=1e-8)
+    assert rows[1]["max"] < rows[0]["max"]
