@@ -179,3 +179,22 @@ def test_other_model_32_fits_nothing(made, audited):
     e = lut.compute(bn.load(made), {"mu": t, "alpha": t}, rtol=1e-9, average=False)["E"]
     r = audit(e, audited, dense=False, sweep=False)
     assert not r.fits and not any(h.fits for h in r.runners_up)
+
+
+def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path):
+    """A table made in the LTC convention whose grazing columns are off by up to 6e-2 (as Monte-Carlo fitted
+    albedos are): no hypothesis fits, and the closest is the LTC convention with the worst cell at grazing."""
+    n = 32
+    t = np.linspace(0, 1, n)
+    mu = np.maximum(1.0 - t * t, np.cos(1.57))
+    e = lut.compute(GGX, {"alpha": np.maximum(t * t, 1e-5), "mu": mu}, rtol=1e-9, average=False)["E"]
+    biased = e - 0.06 * np.exp(-mu / 0.05)[None, :] * t[:, None]
+    np.save(tmp_path / "t.npy", biased)
+    np.savez(tmp_path / "t.npz", E=biased)
+    code, r = _cli_json(capsys, str(tmp_path / "t.npz"), "--no-sweep", "--no-interpolation", "--report",
+                        str(tmp_path))
+    assert code == 1 and r["verdict"] == "no hypothesis fits"
+    best = r["best"]
+    assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
+    assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.07
+    assert (tmp_path / "error_map_0.png").exists()

@@ -202,8 +202,10 @@ def domain(uses: set[str], size: int) -> dict[str, np.ndarray]:
 
 
 def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Reference,
-                  shadowing: str = "height-correlated", size: int | None = None) -> list[dict]:
-    """Max/RMS error of each component against its quantity, with the argmax (μ, α)."""
+                  shadowing: str = "height-correlated", size: int | None = None,
+                  arrays: dict | None = None) -> list[dict]:
+    """Max/RMS error of each component against its quantity, with the argmax (μ, α); ``arrays`` (if given)
+    receives quantity -> (signed error, μ grid or None, α grid) for the figures."""
     for q in quantities:
         if q not in QUANTITIES:
             raise ArgumentError(f"unknown quantity {q!r} (known: {', '.join(QUANTITIES)})", where="--quantity")
@@ -222,6 +224,8 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
     for q, value in zip(quantities, values, strict=False):
         exact, error = reference.meaning(q, shadowing, env.get("mu"), alpha)
         diff = np.broadcast_to(value, exact.shape) - exact
+        if arrays is not None:
+            arrays[q] = (diff, env.get("mu"), alpha)
         magnitude = np.where(np.isfinite(diff), np.abs(diff), np.inf)
         k = np.unravel_index(int(np.argmax(magnitude)), diff.shape)
         at = {"alpha": float(alpha[k])}

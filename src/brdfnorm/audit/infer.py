@@ -59,6 +59,7 @@ class ChannelFit:
     residual: np.ndarray | None = None  # table − exact, over the grid
     exact: np.ndarray | None = None
     spread: float = 0.0  # standard deviation of the exact values over the table
+    worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
 
     @property
     def too_noisy(self) -> bool:
@@ -72,7 +73,8 @@ class ChannelFit:
     def summary(self) -> dict:
         return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "max": self.max,
                 "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
-                "tolerance": self.tolerance, "noise_sigma": self.noise, "too_noisy": self.too_noisy}
+                "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
+                "too_noisy": self.too_noisy}
 
 
 @dataclass
@@ -226,7 +228,10 @@ def _full(values, c: Convention, reference, names, step, chosen) -> Hypothesis:
         if channel not in chosen or meaning is None:
             continue
         exact, error = _exact(reference, c, meaning, coords)
-        fits.append(_fit(values[..., channel], exact, error, names[channel], meaning, step))
+        fit = _fit(values[..., channel], exact, error, names[channel], meaning, step)
+        if fit.worst:
+            fit.worst_at = {k: float(np.broadcast_to(v, grid)[fit.worst]) for k, v in coords.items()}
+        fits.append(fit)
     return Hypothesis(c, fits)
 
 

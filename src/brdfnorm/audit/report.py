@@ -16,7 +16,9 @@ def _g(x: float) -> str:
 
 def _channel_line(c: dict) -> str:
     verdict = "fits" if c["fits"] else ("too noisy to decide" if c.get("too_noisy") else "does not fit")
-    return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}, "
+    at = ", ".join(f"{k}={_g(v)}" for k, v in c.get("worst_at", {}).items())
+    return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}"
+            f"{f' ({at})' if at else ''}, "
             f"median {_g(c['median'])}, RMS {_g(c['rms'])}; tolerance {_g(c['tolerance'])} "
             f"(noise σ {_g(c['noise_sigma'])}): {verdict}")
 
@@ -98,6 +100,39 @@ def figures(result, directory: str) -> list[str]:
         axes.set_ylabel("interpolation error")
         axes.legend()
         path = target / "error_vs_resolution.png"
+        figure.savefig(path, dpi=100)
+        plt.close(figure)
+        written.append(str(path))
+    return written
+
+
+def formula_figures(arrays: dict, directory: str) -> list[str]:
+    """The signed error of a formula over its domain: a map over (μ, α) or a curve over α, one PNG a quantity."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    target = Path(directory)
+    if not target.is_dir():
+        raise OutputError(f"directory {directory!r} does not exist", where="--report")
+    written = []
+    for quantity, (diff, mu, alpha) in arrays.items():
+        figure, axes = plt.subplots(figsize=(6, 5))
+        finite = diff[np.isfinite(diff)]
+        limit = float(np.max(np.abs(finite))) if finite.size else 1.0
+        if mu is None:
+            axes.plot(alpha, diff)
+            axes.set_xlabel("alpha")
+            axes.set_ylabel(f"formula − exact {quantity}")
+        else:
+            image = axes.pcolormesh(alpha[0], mu[:, 0], diff, cmap="RdBu_r", vmin=-limit, vmax=limit,
+                                    shading="nearest")
+            figure.colorbar(image, ax=axes, label=f"formula − exact {quantity}")
+            axes.set_xlabel("alpha")
+            axes.set_ylabel("mu = cos θ")
+        axes.set_title(f"{quantity}: max |error| {limit:.3g}")
+        path = target / f"formula_error_{quantity}.png"
         figure.savefig(path, dpi=100)
         plt.close(figure)
         written.append(str(path))

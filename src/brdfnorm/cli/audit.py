@@ -62,7 +62,7 @@ def audit_command(
     with guarded(debug):
         m = load_model(model, param)
         if formula is not None:
-            _formula(m, formula, function, args, quantity, json_out)
+            _formula(m, formula, function, args, quantity, json_out, report)
             return
         if file is None:
             raise ArgumentError("give a table FILE or --formula", where="audit")
@@ -110,7 +110,8 @@ def audit_command(
             raise typer.Exit(1)
 
 
-def _formula(m, formula: str, function: str | None, args: str | None, quantity: str | None, json_out: bool) -> None:
+def _formula(m, formula: str, function: str | None, args: str | None, quantity: str | None, json_out: bool,
+             report: str | None) -> None:
     from ..audit.formula import ARGUMENTS, audit_formula, compile_expression, compile_glsl, parse_args
     from ..audit.reference import Reference
 
@@ -128,10 +129,17 @@ def _formula(m, formula: str, function: str | None, args: str | None, quantity: 
         uses = {n.id for n in ast.walk(ast.parse(formula.strip(), mode="eval")) if isinstance(n, ast.Name)}
     quantities = [q.strip() for q in quantity.split(",")] if quantity else (
         ["E"] if uses & {"mu", "theta"} else ["E_avg"])
+    arrays: dict = {}
     rows = audit_formula(evaluate, uses, quantities, Reference(m),
-                         shadowing=str(m.params.get("shadowing", "height-correlated")))
+                         shadowing=str(m.params.get("shadowing", "height-correlated")), arrays=arrays)
+    figures = []
+    if report is not None:
+        from ..audit.report import formula_figures
+
+        figures = formula_figures(arrays, report)
     if json_out:
-        typer.echo(json.dumps({"formula": formula, "function": function, "model": m.name, "results": rows}))
+        typer.echo(json.dumps({"formula": formula, "function": function, "model": m.name, "results": rows,
+                               "figures": figures}))
         return
     for row in rows:
         at = ", ".join(f"{k}={v:.4g}" for k, v in row["at"].items())
