@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
-from ..inputs import element_count, parsing, read_bounded
+from ..inputs import element_count, parsing, read_bounded, regular_file
 from . import pngio
 from .textarrays import find_literals
 
@@ -119,6 +119,7 @@ def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | 
                scale: float | None = None) -> Source:
     """Read the table in ``path`` (see the module docstring); ``array`` picks one of several."""
     where = os.fspath(path)
+    regular_file(where)  # a missing file or a directory is said so before its extension is judged
     kind = format_of(where, fmt)
     if dtype is not None and dtype not in DTYPES:
         raise ArgumentError(f"unknown dtype {dtype!r} (known: {', '.join(DTYPES)})", where="--dtype")
