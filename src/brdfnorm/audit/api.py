@@ -26,7 +26,7 @@ from ..models.base import Model
 from . import quality
 from .conventions import parse_pins
 from .infer import Hypothesis, Inference, infer
-from .readers import Source, read_table
+from .readers import DTYPES, Source, read_table
 from .reference import Reference
 
 
@@ -113,8 +113,12 @@ def _as_source(table, options: dict) -> Source:
         else:
             array, names = array[..., None], ["0"]
     stored = options.get("dtype") or "float64"
-    step_source = Source("<array>", "array", "", array, names, stored, 1.0)
-    return step_source
+    if stored not in DTYPES:
+        raise ArgumentError(f"unknown dtype {stored!r} (known: {', '.join(DTYPES)})", where="dtype")
+    # an array holds table values; ``dtype`` says how they were stored (its step sets the tolerance)
+    scale = options.get("scale") or (float(np.iinfo(np.dtype(stored)).max) if stored.startswith(("uint", "int"))
+                                     else 1.0)
+    return Source("<array>", "array", "", array, names, stored, scale)
 
 
 def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:

@@ -167,7 +167,8 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     if (not scored or scored[0][0] > loose) and any(Reference.needs_f90(m) for ms in meanings for m in ms):
         scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
     keep = STAGE2_F90 if any(Reference.needs_f90(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
-    finals = [_stage2(values, names, c, reference, step, chosen) for _, c in scored[:max(keep, 2)]]
+    search = ("mu_floor" not in pins, "alpha_floor" not in pins)
+    finals = [_stage2(values, names, c, reference, step, chosen, search) for _, c in scored[:max(keep, 2)]]
     finals.sort(key=lambda h: h.score)
     finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
     return Inference(finals[0], finals[1:1 + keep_runners], len(candidates),
@@ -235,19 +236,27 @@ def _full(values, c: Convention, reference, names, step, chosen) -> Hypothesis:
     return Hypothesis(c, fits)
 
 
-def _stage2(values, names, c: Convention, reference, step, chosen) -> Hypothesis:
+def _stage2(values, names, c: Convention, reference, step, chosen, search=(True, True)) -> Hypothesis:
     """Full-table residuals of ``c`` with its endpoint clamps searched where the grid reaches below them."""
     grid = values.shape[:-1]
     raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, _mesh(grid, [np.arange(n) for n in grid]))
     best = _full(values, c, reference, names, step, chosen)
-    if "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
-        trials = [_full(values, replace(c, mu_floor=f), reference, names, step, chosen) for f in MU_FLOORS]
-        best = min(trials, key=lambda h: (h.score, MU_FLOORS.index(h.convention.mu_floor)))
-    if float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
+    if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
+        trials = [_full(values, replace(c, mu_floor=f), reference, names, step, chosen) for f in MU_FLOORS
+                  if f != c.mu_floor]
+        best = _clamp_choice(best, trials)
+    if search[1] and float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
         trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, step, chosen)
-                  for f in ALPHA_FLOORS]
-        best = min(trials, key=lambda h: (h.score, ALPHA_FLOORS.index(h.convention.alpha_floor)))
+                  for f in ALPHA_FLOORS if f != best.convention.alpha_floor]
+        best = _clamp_choice(best, trials)
     return best
+
+
+def _clamp_choice(default: Hypothesis, trials: list[Hypothesis]) -> Hypothesis:
+    """Another clamp replaces the default only if it at least halves the maximum residual: a clamp changes one
+    boundary row, and noise in that row must not pick one."""
+    challenger = min(trials, key=lambda h: h.score)
+    return challenger if challenger.score < 0.5 * default.score else default
 
 
 def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, meanings) -> Hypothesis:
