@@ -196,5 +196,5 @@ def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path)
     assert code == 1 and r["verdict"] == "no hypothesis fits"
     best = r["best"]
     assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
-    assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.07
+    assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.1
     assert (tmp_path / "error_map_0.png").exists()
