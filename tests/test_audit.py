@@ -381,3 +381,14 @@ def test_resolution_sweep_matches_tables_made_by_lut():
         table = lut.compute(bn.load("ggx"), {"mu": t, "alpha": t * t}, rtol=1e-10, average=False)["E"]
         assert quality.dense_error(table, c, "E", reference, points).max == pytest.approx(row["max"], abs=1e-8)
     assert rows[1]["max"] < rows[0]["max"]
+
+
+def test_channels_override(tmp_path):
+    from brdfnorm.audit.readers import read_table
+
+    np.savez(tmp_path / "t.npz", T=np.random.default_rng(0).random((8, 8, 4)))
+    assert read_table(tmp_path / "t.npz").channel_names == ["0", "1", "2", "3"]
+    as_grid = read_table(tmp_path / "t.npz", channels=False)
+    assert as_grid.channel_names == ["0"] and as_grid.grid_shape == (8, 8, 4)
+    np.savez(tmp_path / "u.npz", T=np.zeros((8, 8, 8)))
+    assert read_table(tmp_path / "u.npz", channels=True).channel_names == [str(i) for i in range(8)]

@@ -116,8 +116,9 @@ def _with_channels(array: np.ndarray, names: list[str] | None = None) -> tuple[n
 
 def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | None = None,
                shape: tuple[int, ...] | None = None, dtype: str | None = None, order: str = "C",
-               scale: float | None = None) -> Source:
-    """Read the table in ``path`` (see the module docstring); ``array`` picks one of several."""
+               scale: float | None = None, channels: bool | None = None) -> Source:
+    """Read the table in ``path`` (see the module docstring); ``array`` picks one of several; ``channels``
+    overrides the guess whether the last axis holds channels (True) or is a grid axis (False)."""
     where = os.fspath(path)
     regular_file(where)  # a missing file or a directory is said so before its extension is judged
     kind = format_of(where, fmt)
@@ -130,6 +131,11 @@ def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | 
     data = read_bounded(where, MAX_TEXT_BYTES if kind in ("text", "csv", "json") else MAX_BINARY_BYTES)
     with parsing(where):
         source = READERS[kind](data, where, array=array, shape=shape, dtype=dtype, order=order, scale=scale)
+    if channels is False and source.channel_names != ["0"] and kind not in ("png", "exr"):
+        source.values, source.channel_names = source.values[..., None], ["0"]
+    elif channels is True and source.channel_names == ["0"] and source.values.ndim >= 3:
+        source.values = source.values[..., 0]
+        source.channel_names = [str(i) for i in range(source.values.shape[-1])]
     finite = np.isfinite(source.values)
     if not finite.any():
         raise TableFileError("no finite values in the table", where)

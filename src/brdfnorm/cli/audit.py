@@ -31,6 +31,8 @@ def audit_command(
     shape: str = typer.Option(None, "--shape", help="Shape of a flat array, e.g. 64,64 or 64,64,4 (channels last)."),
     dtype: str = typer.Option(None, "--dtype", help="Storage type: float16 (half bit patterns in 16-bit integers), "
                               "float32, float64, uint8, uint16, ..."),
+    channels_last: bool = typer.Option(None, "--channels/--no-channels", help="Whether the last axis holds "
+                                       "channels (default: a last axis of at most 4 after larger ones does)."),
     order: str = typer.Option("C", "--order", help="C: last index fastest; F: first index fastest."),
     channel: str = typer.Option(None, "--channel", help="Audit one channel, by name or index."),
     scale: float = typer.Option(None, "--scale", help="Stored value = table value × SCALE (default: an integer "
@@ -72,7 +74,7 @@ def audit_command(
         from ..audit.readers import parse_shape
 
         read = {"fmt": fmt, "array": array, "shape": parse_shape(shape), "dtype": dtype, "order": order,
-                "scale": scale}
+                "scale": scale, "channels": channels_last}
         pins = dict(p.partition("=")[::2] for p in pin)
         if "shadowing" in m.params and any(p.partition("=")[0].strip() == "shadowing" for p in param):
             pins.setdefault("shadowing", str(m.params["shadowing"]))  # -p shadowing=... pins it
