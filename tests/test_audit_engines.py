@@ -198,3 +198,16 @@ def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path)
     assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
     assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.1
     assert (tmp_path / "error_map_0.png").exists()
+
+
+def test_large_split_sum_ranks_on_a_subgrid_and_measures_the_best_in_full():
+    n = 36  # 1 296 cells: above SUBGRID_CELLS
+    t = (np.arange(n) + 0.5) / n
+    table = lut.compute(GGX, {"mu": t, "alpha": t * t}, channels=["dfg"], rtol=1e-7, average=False)
+    data = np.stack([table["DFG_f90"], table["DFG_f0"]], -1)[::-1]
+    r = audit(data, "ggx", dense=False, sweep=False)
+    c = r.best.convention
+    assert r.fits and c.meanings == ("DFG_f90", "DFG_f0") and c.flips == (True, False)
+    assert all(f.cells == n * n and not f.sampled for f in r.best.channels)
+    assert all(f.sampled and f.cells < n * n for h in r.runners_up for f in h.channels)
+    assert max(f.max for f in r.best.channels) < 2e-6  # F90's rtol 1e-6 in the reference and 1e-7 in the table

@@ -20,7 +20,8 @@ def _channel_line(c: dict) -> str:
     return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}"
             f"{f' ({at})' if at else ''}, "
             f"median {_g(c['median'])}, RMS {_g(c['rms'])}; tolerance {_g(c['tolerance'])} "
-            f"(noise σ {_g(c['noise_sigma'])}): {verdict}")
+            f"(noise σ {_g(c['noise_sigma'])}): {verdict}"
+            + (f" [on a subgrid of {c['cells']} cells]" if c.get("sampled") else ""))
 
 
 def text(result: dict) -> str:
