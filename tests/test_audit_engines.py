@@ -211,3 +211,16 @@ def test_large_split_sum_ranks_on_a_subgrid_and_measures_the_best_in_full():
     assert all(f.cells == n * n and not f.sampled for f in r.best.channels)
     assert all(f.sampled and f.cells < n * n for h in r.runners_up for f in h.channels)
     assert max(f.max for f in r.best.channels) < 2e-6  # F90's rtol 1e-6 in the reference and 1e-7 in the table
+
+
+def test_report_figures_for_one_and_three_axes(tmp_path):
+    from brdfnorm.audit.report import figures
+
+    t = (np.arange(8) + 0.5) / 8
+    dfg = lut.compute(GGX, {"alpha": t, "mu": t}, channels=["dfg"], rtol=1e-7, average=False)
+    r = audit(t[:, None, None] * dfg["DFG_f0"][None] + dfg["DFG_f90"][None], "ggx", sweep=False)
+    assert r.fits and figures(r, str(tmp_path / ".")) == [str(tmp_path / "error_map_0.png")]
+    g = np.linspace(0, 1, 16)
+    e_avg = lut.compute(GGX, {"mu": [1.0], "alpha": np.maximum(g, 1e-8)}, rtol=1e-10)["E_avg"]
+    r = audit(e_avg, "ggx")
+    assert r.fits and len(figures(r, str(tmp_path))) == 2

@@ -75,16 +75,26 @@ def figures(result, directory: str) -> list[str]:
     for fit in result.best.channels:
         if fit.residual is None:
             continue
-        residual = np.atleast_2d(fit.residual)
+        residual = fit.residual
         limit = float(np.nanmax(np.abs(residual))) or 1e-16
-        figure, axes = plt.subplots(figsize=(6, 5))
-        image = axes.imshow(residual, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="upper",
-                            interpolation="nearest", aspect="auto")
-        figure.colorbar(image, ax=axes, label=f"table − exact {fit.meaning}")
         describe = result.best.convention.describe()["axes"]
-        axes.set_xlabel(f"array axis 1 ({describe[1] if len(describe) > 1 else ''})")
-        axes.set_ylabel(f"array axis 0 ({describe[0]})")
-        axes.set_title(f"channel {fit.channel}: max |error| {limit:.3g}")
+        figure, axes = plt.subplots(figsize=(6, 5))
+        title = f"channel {fit.channel}: max |error| {limit:.3g}"
+        if residual.ndim == 1:
+            axes.plot(np.arange(residual.size), residual, "o-")
+            axes.set_xlabel(f"array index ({describe[0]})")
+            axes.set_ylabel(f"table − exact {fit.meaning}")
+        else:
+            offset = 0
+            if residual.ndim == 3:  # the slice through the worst cell along the first axis
+                residual, offset = residual[fit.worst[0]], 1
+                title += f"\nslice {describe[0]} index {fit.worst[0]}"
+            image = axes.imshow(residual, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="upper",
+                                interpolation="nearest", aspect="auto")
+            figure.colorbar(image, ax=axes, label=f"table − exact {fit.meaning}")
+            axes.set_xlabel(f"array axis {offset + 1} ({describe[offset + 1]})")
+            axes.set_ylabel(f"array axis {offset} ({describe[offset]})")
+        axes.set_title(title)
         path = target / f"error_map_{fit.channel}.png"
         figure.savefig(path, dpi=100)
         plt.close(figure)
