@@ -224,3 +224,28 @@ def test_report_figures_for_one_and_three_axes(tmp_path):
     e_avg = lut.compute(GGX, {"mu": [1.0], "alpha": np.maximum(g, 1e-8)}, rtol=1e-10)["E_avg"]
     r = audit(e_avg, "ggx")
     assert r.fits and len(figures(r, str(tmp_path))) == 2
+
+
+def test_ltc_fresnel_channel_is_found_beside_the_albedo(capsys, tmp_path):
+    """The LTC magnitude table's layout (E, Fresnel moment, 0, unrelated): the albedo channel sets the convention,
+    the Fresnel channel then fits DFG_f90 (the retry of F90 meanings), the zero and random channels fit nothing
+    and --fix writes them back unchanged."""
+    n = 16
+    t = np.linspace(0, 1, n)
+    mu = np.maximum(1.0 - t * t, np.cos(1.57))
+    table = lut.compute(GGX, {"alpha": np.maximum(t * t, 1e-5), "mu": mu}, rtol=1e-8, average=False,
+                        channels=["dfg"])
+    other = np.random.default_rng(0).random((n, n))
+    data = np.stack([table["E"], table["DFG_f90"], np.zeros((n, n)), other], axis=-1).astype(np.float32)
+    path = tmp_path / "ltc.js"
+    path.write_text("const g_ltc_2 = new Float32Array([" + ",".join(f"{v:.9g}" for v in data.ravel()) + "]);\n")
+    fixed = tmp_path / "fixed.js"
+    code, r = _cli_json(capsys, str(path), "--shape", "16,16,4", "--no-sweep", "--fix", "-o", str(fixed))
+    assert code == 0 and r["best"]["convention"]["direction"] == "ltc"
+    channels = r["best"]["channels"]
+    assert [c["meaning"] for c in channels[:2]] == ["E", "DFG_f90"] and [c["fits"] for c in channels] == [
+        True, True, False, False]
+    from brdfnorm.audit.readers import read_table
+
+    again = read_table(fixed, shape=(16, 16, 4)).values
+    assert np.array_equal(again[..., 2:].astype(np.float32), data[..., 2:])  # the same float32 values
