@@ -34,6 +34,11 @@ class Reference:
         names = {p.name for p in model.parameters}
         if "alpha" not in names:
             raise_unsupported(model)
+        if "fresnel" in names and str(model.params.get("fresnel")) != "none":
+            from ..errors import ArgumentError
+
+            raise ArgumentError("audits tabulate the lobe with its Fresnel off (Fresnel enters as the split-sum "
+                                "channels and E_f0's Schlick axis); drop -p fresnel=...", where="--model")
         self.model = model.with_params(fresnel="none") if "fresnel" in names else model
         self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
         self.computed = {"E": 0, "F90": 0, "E_avg": 0}
