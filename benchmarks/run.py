@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_audit import audit_targets, w_audit  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
 from bench_parallel import w_parallel  # noqa: E402
 
@@ -819,6 +820,7 @@ def targets(results: dict, cfg: Config) -> list[dict]:
             out.append({"target": f"{size}×{size} ggx E table at rtol 1e-10 (α from 1e-8) ≤ {goal:g} s",
                         "measured": f"{fmt_time(line['time_s'])}; {line['note']}", "met": bool(line["time_s"] <= goal)})
     out += _engine_targets(results, cfg)
+    out += audit_targets(results)
     mem = results.get("memory", {})
     if "peak_rss_mib" in mem:
         out.append({"target": f"peak RSS of the {cfg.sweep_n.size}×{cfg.table_angles.size} table < 1 GB",
@@ -1034,7 +1036,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "fit": lambda c, r, _: w_fit(c, r), "eval": lambda c, r, _: w_eval(c, r),
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
-    "engine": lambda c, r, _: w_engine(c, r),
+    "engine": lambda c, r, _: w_engine(c, r), "audit": lambda c, r, _: w_audit(c, r),
 })
 
 

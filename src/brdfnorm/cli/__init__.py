@@ -11,7 +11,7 @@ from .application import app
 
 # isort: split
 # Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
-from . import check, core, explore, fit, info, lut, report, verify  # noqa: F401
+from . import audit, check, core, explore, fit, info, lut, report, verify  # noqa: F401
 
 
 def main(argv: list[str] | None = None) -> None:

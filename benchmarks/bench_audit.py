@@ -1,0 +1,102 @@
+#!/usr/bin/env python
+"""Time ``brdfnorm audit`` (issue 29) on the issue's workloads: a 64×64 E table (inference + dense interpolation
+error + resolution sweep; goal ≤ 10 s on the 2-core machine), a 32³ uint16 E(f0) table (goal ≤ 60 s), and a 16×16
+half-float split-sum table. The tables are made by ``brdfnorm.lut`` first (not timed); each audit must name the
+convention it was made in, or the script says so and exits 1.
+
+Usage: ``python benchmarks/bench_audit.py [--out FILE.md]``; ``benchmarks/run.py`` runs it as the ``audit``
+workload (``--only audit``) and puts the two goals in its targets table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "src"))
+
+import brdfnorm as bn  # noqa: E402
+from brdfnorm import lut  # noqa: E402
+from brdfnorm.audit import audit  # noqa: E402
+
+
+def w_audit(cfg=None, refs=None) -> dict:
+    """The workload as benchmarks/run.py reports it: one entry per audited table (seconds, goal, named, errors)."""
+    ggx = bn.load("ggx")
+    cases = {}
+
+    t = (np.arange(64) + 0.5) / 64
+    e64 = lut.compute(ggx, {"mu": t, "alpha": t * t}, rtol=1e-9, average=False)["E"].astype(np.float32)
+    wall = time.perf_counter()
+    r = audit(e64, "ggx", read={"dtype": "float32"})
+    cases["64x64"] = _case("64×64 float32 E (mu-texel, r2-texel), inference + interpolation + sweep",
+                           time.perf_counter() - wall, 10.0,
+                           r.fits and (r.best.convention.direction, r.best.convention.roughness) == ("mu-texel",
+                                                                                                   "r2-texel"), r)
+
+    t = (np.arange(32) + 0.5) / 32
+    dfg = lut.compute(ggx, {"alpha": t, "mu": t}, channels=["dfg"], rtol=1e-7, average=False)
+    e32 = np.rint((t[:, None, None] * dfg["DFG_f0"][None] + dfg["DFG_f90"][None]) * 65535) / 65535
+    wall = time.perf_counter()
+    r = audit(e32, "ggx", read={"dtype": "uint16"})
+    cases["32x32x32"] = _case("32³ uint16 E(f0, α, μ), inference + interpolation + sweep",
+                              time.perf_counter() - wall, 60.0, r.fits and r.best.convention.meanings == ("E_f0",), r)
+
+    t = (np.arange(16) + 0.5) / 16
+    dfg = lut.compute(ggx, {"alpha": t * t, "mu": t}, channels=["dfg"], rtol=1e-8, average=False)
+    half = np.stack([dfg["DFG_f0"], dfg["DFG_f90"]], -1).astype(np.float16).astype(float)
+    wall = time.perf_counter()
+    r = audit(half, "ggx", read={"dtype": "float16"})
+    cases["16x16-dfg"] = _case("16×16 half split-sum (DFG_f0, DFG_f90), inference + interpolation + sweep",
+                               time.perf_counter() - wall, None,
+                               r.fits and r.best.convention.meanings == ("DFG_f0", "DFG_f90"), r)
+    named = all(c["named"] for c in cases.values())
+    return {"title": "brdfnorm audit of tables made in known conventions (issue 29)",
+            "status": "ok" if named else "a convention was not named", "cases": cases,
+            "load_average": os.getloadavg()[0]}
+
+
+def _case(title: str, seconds: float, goal: float | None, named: bool, r) -> dict:
+    return {"title": title, "seconds": seconds, "goal_s": goal, "named": bool(named),
+            "max_residual": max(c.max for c in r.best.channels),
+            "interpolation_max": max((v["max"] for v in r.interpolation.values()), default=float("nan"))}
+
+
+def audit_targets(results: dict) -> list[dict]:
+    """The issue's speed goals, for benchmarks/run.py's targets table."""
+    out = []
+    for case in results.get("audit", {}).get("cases", {}).values():
+        if case["goal_s"] is not None:
+            out.append({"target": f"audit of a {case['title']} ≤ {case['goal_s']:g} s",
+                        "measured": f"{case['seconds']:.3g} s; convention named: {case['named']}",
+                        "met": bool(case["seconds"] <= case["goal_s"] and case["named"])})
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path)
+    args = parser.parse_args(argv)
+    result = w_audit()
+    lines = ["| audit | seconds | goal | convention named | max residual | GPU interpolation max error |",
+             "|---|---|---|---|---|---|"]
+    for case in result["cases"].values():
+        goal_text = f"≤ {case['goal_s']:g} s" if case["goal_s"] else "—"
+        lines.append(f"| {case['title']} | {case['seconds']:.2f} | {goal_text} | {case['named']} | "
+                     f"{case['max_residual']:.3g} | {case['interpolation_max']:.3g} |")
+    lines.append(f"\nload average {result['load_average']:.1f}")
+    text = "\n".join(lines)
+    print(text)
+    if args.out:
+        args.out.write_text(text + "\n")
+    return 0 if result["status"] == "ok" else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

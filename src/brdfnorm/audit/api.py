@@ -1,0 +1,204 @@
+"""``brdfnorm.audit.audit``: read (or take) a table, infer its convention, measure its errors, make its fix.
+
+>>> import numpy as np, brdfnorm as bn
+>>> from brdfnorm import lut
+>>> from brdfnorm.audit import audit
+>>> axes = {"mu": (np.arange(8) + 0.5) / 8, "alpha": np.maximum(np.linspace(0, 1, 8), 1e-8)}
+>>> t = lut.compute(bn.load("ggx"), axes, average=False)
+>>> r = audit(t["E"], "ggx", shadowing="height-correlated", dense=False, sweep=False)
+>>> r.fits, r.best.convention.direction, r.best.convention.roughness
+(True, 'mu-texel', 'alpha-node')
+>>> audit(t["E"], "ggx", axes={"alpha": np.linspace(0.1, 1, 8)}, dense=False, sweep=False).fits
+False
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import __version__
+from ..errors import ArgumentError
+from ..models.base import Model
+from . import quality
+from .conventions import parse_pins
+from .infer import Hypothesis, Inference, infer
+from .readers import DTYPES, Source, read_table
+from .reference import Reference
+
+
+@dataclass
+class AuditResult:
+    """What an audit found: the best convention (``best``), the next ones (``runners_up``), per-channel error
+    statistics and residual arrays (``best.channels``), interpolation error at dense points, error against
+    resolution, cells that are not finite / negative / above 1, and the exact table in the input's layout."""
+
+    source: Source
+    inference: Inference
+    bad_cells: dict
+    interpolation: dict = field(default_factory=dict)
+    resolution: dict = field(default_factory=dict)
+    fixed: np.ndarray | None = None
+    seconds: float = 0.0
+    model: str = ""
+
+    @property
+    def best(self) -> Hypothesis:
+        return self.inference.best
+
+    @property
+    def runners_up(self) -> list[Hypothesis]:
+        return self.inference.runners_up
+
+    @property
+    def fits(self) -> bool:
+        return self.inference.fits
+
+    @property
+    def stats(self) -> list[dict]:
+        return [c.summary() for c in self.best.channels]
+
+    @property
+    def errors(self) -> dict[str, np.ndarray]:
+        return {c.channel: c.residual for c in self.best.channels}
+
+    def to_json(self) -> dict:
+        def hyp(h: Hypothesis) -> dict:
+            return {"convention": h.convention.describe(), "text": h.convention.text(), "fits": h.fits,
+                    "channels": [c.summary() for c in h.channels]}
+
+        return {
+            "file": self.source.path, "format": self.source.fmt, "array": self.source.name, "model": self.model,
+            "shape": list(self.source.grid_shape), "channels": self.source.channel_names,
+            "storage": self.source.stored, "storage_step": self.source.step(),
+            "verdict": "fits" if self.fits else "no hypothesis fits", "ambiguous": self.inference.ambiguous,
+            "best": hyp(self.best), "runners_up": [hyp(h) for h in self.runners_up],
+            "hypotheses_tested": self.inference.tested, "reference_cells": self.inference.reference_cells,
+            "bad_cells": self.bad_cells, "interpolation": self.interpolation, "resolution": self.resolution,
+            "notes": self.source.notes, "seconds": self.seconds, "brdfnorm": __version__,
+        }
+
+    def fix_meta(self) -> dict:
+        return {"brdfnorm": __version__, "made_by": "brdfnorm audit --fix", "model": self.model,
+                "convention": self.best.convention.describe(), "replaces": os.path.basename(self.source.path)}
+
+
+def _bad_cells(source: Source, limit: int = 20) -> dict:
+    values = source.values
+    slack = max(source.step(), 1e-12)  # rounding of a stored 1.0 is not a violation
+    out = {}
+    for name, mask in (("non_finite", ~np.isfinite(values)),
+                       ("negative", np.isfinite(values) & (values < -slack)),
+                       ("above_one", np.isfinite(values) & (values > 1 + slack))):
+        where = np.argwhere(mask)
+        out[name] = {"count": int(len(where)),
+                     "cells": [[int(i) for i in w] for w in where[:limit]],
+                     "values": [float(values[tuple(w)]) for w in where[:limit]]}
+    return out
+
+
+def _as_source(table, options: dict) -> Source:
+    if isinstance(table, (str, os.PathLike)):
+        return read_table(table, **options)
+    array = np.asarray(table, dtype=float)
+    if array.ndim == 0 or array.size < 2:
+        raise ArgumentError("an audit needs a table of at least two values", where="table")
+    names = options.pop("channel_names", None)
+    if names is None:
+        if array.ndim >= 3 and array.shape[-1] <= 4 and min(array.shape[:-1]) > 4:
+            names = [str(i) for i in range(array.shape[-1])]
+        else:
+            array, names = array[..., None], ["0"]
+    stored = options.get("dtype") or "float64"
+    if stored not in DTYPES:
+        raise ArgumentError(f"unknown dtype {stored!r} (known: {', '.join(DTYPES)})", where="dtype")
+    # an array holds table values; ``dtype`` says how they were stored (its step sets the tolerance)
+    scale = options.get("scale") or (float(np.iinfo(np.dtype(stored)).max) if stored.startswith(("uint", "int"))
+                                     else 1.0)
+    return Source("<array>", "array", "", array, names, stored, scale)
+
+
+def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
+    out = {}
+    for name, values in (axes or {}).items():
+        array = np.asarray(values, dtype=float)
+        if name == "r":
+            name, array = "alpha", array * array
+        if name not in ("mu", "theta", "alpha", "f0"):
+            raise ArgumentError(f"axis {name!r}: known axes are mu, theta, alpha, r (alpha = r^2), f0", where="--axis")
+        if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
+            raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
+        steps = np.diff(array)
+        if not (np.all(steps > 0) or np.all(steps < 0)):
+            raise ArgumentError(f"axis {name}: values must increase or decrease monotonically", where="--axis")
+        out[name] = array
+    if "mu" in out and "theta" in out:
+        raise ArgumentError("give mu or theta, not both", where="--axis")
+    return out
+
+
+def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None, dense: bool = True,
+          sweep: bool = True, fix: bool = True, params: dict | None = None, read: dict | None = None,
+          axes: dict[str, np.ndarray] | None = None, **convention: str) -> AuditResult:
+    """Audit ``table`` (an array (*grid[, channels]) or a path, read with ``read`` options: fmt, array, shape,
+    dtype, order, scale) as a table of ``model`` (a name or a Model, with ``params``). ``convention`` pins parts
+    of the convention (axes, direction, roughness, f0, flip, shadowing, mu_floor, alpha_floor, channels; see
+    :mod:`.conventions`); ``axes`` gives the values of an axis outright (``mu``, ``theta`` in radians, ``alpha``,
+    ``r`` with α = r², ``f0``: values in array order, monotonic). ``dense`` measures the interpolation error,
+    ``sweep`` the error against resolution."""
+    explicit = _explicit_axes(axes)
+    from .. import load
+
+    started = time.perf_counter()
+    m = load(model) if isinstance(model, str) else model
+    if params:
+        m = m.with_params(**params)
+    source = _as_source(table, dict(read or {}))
+    pins = parse_pins(convention)
+    reference = Reference(m)
+    chosen = None
+    if channel is not None:
+        names = source.channel_names
+        if isinstance(channel, int) or str(channel).isdigit():
+            k = int(channel)
+            if not 0 <= k < len(names):
+                raise ArgumentError(f"channel index {k} outside 0..{len(names) - 1}", where="--channel")
+        elif channel in names:
+            k = names.index(channel)
+        else:
+            raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="--channel")
+        chosen = [k]
+    inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
+                      explicit=explicit)
+    result = AuditResult(source, inference, _bad_cells(source), model=m.name)
+    best = inference.best
+    grid = source.grid_shape
+    if dense or sweep:
+        # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
+        measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
+        for fit in measured:
+            if fit.meaning is None or fit.meaning == "E_avg" and len(grid) != 1:
+                continue
+            points = quality.dense_points(best.convention, grid, quality.budget_points(fit.meaning))
+            k = source.channel_names.index(fit.channel)
+            if dense:
+                e = quality.dense_error(source.values[..., k], best.convention, fit.meaning, reference, points)
+                result.interpolation[fit.channel] = {"max": e.max, "rms": e.rms, "worst": e.worst,
+                                                     "points": e.points, "of_grid": e.of_grid,
+                                                     "density": quality.DENSITY}
+            if sweep:
+                result.resolution[fit.channel] = quality.sweep(best.convention, fit.meaning, reference, points,
+                                                               len(grid))
+    if fix:
+        fixed = np.array(source.values, dtype=float)
+        # channels that fit are replaced (the closest one when none fits); the others are written back as read
+        replaced = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
+        for fit in replaced:
+            if fit.meaning is not None and fit.exact is not None:
+                fixed[..., source.channel_names.index(fit.channel)] = fit.exact
+        result.fixed = fixed
+    result.seconds = time.perf_counter() - started
+    return result

@@ -1,0 +1,283 @@
+"""The declared space of table conventions an audit searches, and the sample positions each one implies.
+
+A convention (:class:`Convention`) says, for a table of a microfacet lobe's energy over the view direction and
+the roughness (and, for three axes, Schlick's f0):
+
+* which array axis is the view direction and which the roughness (and f0), and whether each runs reversed;
+* where the direction samples sit: μ = cos θ_o at nodes i/(N−1) (``mu-node``) or texel centres (i + ½)/N
+  (``mu-texel``), θ_o = t·π/2 at nodes or texel centres (``theta-node``, ``theta-texel``), or the LTC tables'
+  μ = 1 − t², t = i/(N−1) (``ltc``; Heitz et al. 2016's fitting code, which also clamps θ ≤ 1.57);
+* where the roughness samples sit and what they mean: α = t (``alpha-node``, ``alpha-texel``) or α = t²
+  (``r2-node``, ``r2-texel``: the axis is the perceptual roughness r, α = r²);
+* endpoint clamps: μ ≥ ``mu_floor`` and α ≥ ``alpha_floor`` (searched among :data:`MU_FLOORS`, :data:`ALPHA_FLOORS`
+  where the grid reaches below them);
+* Smith shadowing: ``height-correlated`` or ``separable``;
+* per channel, its meaning (:data:`MEANINGS`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ArgumentError
+
+DIRECTIONS = ("mu-node", "mu-texel", "theta-node", "theta-texel", "ltc")
+ROUGHNESS = ("alpha-node", "alpha-texel", "r2-node", "r2-texel")
+F0_POSITIONS = ("f0-node", "f0-texel")
+SHADOWING = ("height-correlated", "separable")
+#: Channel meanings. DFG_f0 = ∫ f cos (1 − (1 − V·H)⁵) (Karis's split-sum scale), DFG_f90 = ∫ f cos (1 − V·H)⁵
+#: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ.
+MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg")
+#: μ clamps searched where a grid reaches μ = 0: 1e-4 (brdfnorm lut's usual), cos(1.57) (LTC's θ ≤ 1.57), ...
+MU_FLOORS = (1e-4, float(np.cos(1.57)), 1e-3, 1e-2, 1e-5, 1e-6)
+#: α clamps searched where a grid reaches α = 0 (1e-8 stands for the α → 0 limit).
+ALPHA_FLOORS = (1e-8, 1e-5, 1e-4, 1e-3, 2e-3, 1e-2)
+
+
+@dataclass(frozen=True)
+class Convention:
+    """One hypothesis: axis roles and flips, sample positions, clamps, shadowing, channel meanings."""
+
+    direction_axis: int | None = 0  # None: a table without a direction axis (E_avg over roughness)
+    roughness_axis: int = 1
+    f0_axis: int | None = None
+    direction: str = "mu-node"
+    roughness: str = "alpha-node"
+    f0: str = "f0-node"
+    flips: tuple[bool, ...] = (False, False)
+    shadowing: str = "height-correlated"
+    mu_floor: float = 1e-4
+    alpha_floor: float = 1e-8
+    meanings: tuple[str | None, ...] = field(default=())
+    #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
+    #: 'f0', values); such an axis is ``explicit`` and never flipped.
+    explicit: tuple[tuple[str, tuple[float, ...]], ...] = ()
+
+    def geometry(self) -> tuple:
+        """What the direction and roughness values depend on (for sharing reference values)."""
+        return (self.direction_axis, self.roughness_axis, self.f0_axis, self.direction, self.roughness, self.f0,
+                self.flips, self.shadowing)
+
+    def describe(self) -> dict:
+        axes = {}
+        if self.direction_axis is not None:
+            theta = self.direction.startswith("theta") or any(n == "theta" for n, _ in self.explicit)
+            axes[self.direction_axis] = "theta" if theta else "mu"
+        axes[self.roughness_axis] = ("roughness (alpha = r^2)" if self.roughness.startswith("r2") else "alpha")
+        if self.f0_axis is not None:
+            axes[self.f0_axis] = "f0"
+        return {"axes": [axes[i] for i in sorted(axes)], "flipped": [bool(f) for f in self.flips],
+                "direction": self.direction, "roughness": self.roughness,
+                **({"f0": self.f0} if self.f0_axis is not None else {}),
+                "mu_floor": self.mu_floor, "alpha_floor": self.alpha_floor, "shadowing": self.shadowing,
+                "channels": list(self.meanings)}
+
+    def text(self) -> str:
+        d = self.describe()
+        parts = [f"axes ({', '.join(d['axes'])})"]
+        flipped = [a for a, f in zip(d["axes"], d["flipped"], strict=True) if f]
+        if flipped:
+            parts.append("reversed: " + ", ".join(flipped))
+        parts += [self.direction if self.direction_axis is not None else "", self.roughness,
+                  f"mu>={self.mu_floor:g}", f"alpha>={self.alpha_floor:g}", self.shadowing,
+                  "channels " + "/".join(m or "?" for m in self.meanings)]
+        return "; ".join(p for p in parts if p)
+
+
+def positions(kind: str, n: int, index: np.ndarray, flip: bool) -> np.ndarray:
+    """The unit coordinate t of samples ``index`` of an ``n``-sample axis (node or texel), reversed if ``flip``."""
+    index = np.asarray(index, dtype=float)
+    if flip:
+        index = n - 1 - index
+    if kind.endswith("texel"):
+        return (index + 0.5) / n
+    return index / (n - 1) if n > 1 else np.zeros_like(index)
+
+
+def mu_of(kind: str, t: np.ndarray) -> np.ndarray:
+    """μ at unit coordinate t for a direction convention (before the floor)."""
+    if kind.startswith("mu"):
+        return t
+    if kind.startswith("theta"):
+        return np.cos(np.clip(t, 0.0, 1.0) * (np.pi / 2))
+    if kind == "ltc":
+        return 1.0 - t * t
+    raise ArgumentError(f"unknown direction convention {kind!r} (known: {', '.join(DIRECTIONS)})", where="--as")
+
+
+def alpha_of(kind: str, t: np.ndarray) -> np.ndarray:
+    if kind.startswith("alpha"):
+        return t
+    if kind.startswith("r2"):
+        return t * t
+    raise ArgumentError(f"unknown roughness convention {kind!r} (known: {', '.join(ROUGHNESS)})", where="--as")
+
+
+def _explicit(c: Convention, role: str) -> tuple[str, np.ndarray] | None:
+    for name, values in c.explicit:
+        if name == role or (role == "mu" and name == "theta"):
+            return name, np.asarray(values, dtype=float)
+    return None
+
+
+def _kind(c: Convention, role: str) -> str:
+    return {"mu": c.direction, "alpha": c.roughness, "f0": c.f0}[role]
+
+
+def unit_positions(c: Convention, role: str, n: int, index: np.ndarray, flip: bool) -> np.ndarray:
+    """The unit coordinate t of samples ``index`` of the axis of ``role`` (mu, alpha, f0): where a GPU fetch
+    puts them. Explicit values are placed linearly between their first and last value."""
+    given = _explicit(c, role)
+    if given is not None:
+        values = given[1]
+        span = values[-1] - values[0]
+        return (values[np.asarray(index, dtype=int)] - values[0]) / (span if span else 1.0)
+    kind = _kind(c, role)
+    return positions("node" if kind == "ltc" else kind, n, index, flip)
+
+
+def role_value(c: Convention, role: str, t: np.ndarray) -> np.ndarray:
+    """μ, α or f0 at unit coordinate t (before the floors)."""
+    given = _explicit(c, role)
+    if given is not None:
+        name, values = given
+        value = values[0] + t * (values[-1] - values[0])
+        return np.cos(value) if name == "theta" else value
+    if role == "mu":
+        return mu_of(c.direction, t)
+    if role == "alpha":
+        return alpha_of(c.roughness, t)
+    return t
+
+
+def axis_roles(c: Convention) -> dict[int, str]:
+    roles = {c.roughness_axis: "alpha"}
+    if c.direction_axis is not None:
+        roles[c.direction_axis] = "mu"
+    if c.f0_axis is not None:
+        roles[c.f0_axis] = "f0"
+    return roles
+
+
+def coordinates(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """μ, α (and f0) at the samples ``index`` (one index vector per array axis), floors applied."""
+    out = {}
+    for axis, role in axis_roles(c).items():
+        value = role_value(c, role, unit_positions(c, role, shape[axis], index[axis], c.flips[axis]))
+        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor, "f0": -np.inf}[role]
+        out[role] = np.maximum(value, floor)
+    return out
+
+
+def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.ndarray] | None = None,
+               shape: tuple[int, ...] | None = None) -> list[Convention]:
+    """Every geometry (axis roles, flips, positions, shadowing) of a grid of ``grid_ndim`` axes, with pinned
+    parts fixed (``pinned``: direction=..., roughness=..., shadowing=..., axes=mu,alpha, flip=0/1 per axis)."""
+    out = []
+    if grid_ndim == 1:
+        roles = [(None, 0, None)]
+    elif grid_ndim == 2:
+        roles = [(0, 1, None), (1, 0, None)]
+    elif grid_ndim == 3:
+        roles = [perm for perm in itertools.permutations(range(3))]
+    else:
+        raise ArgumentError(f"tables of 1, 2 or 3 axes are audited; this one has {grid_ndim}", where="--shape")
+    names = {"mu": 0, "theta": 0, "alpha": 1, "roughness": 1, "r": 1, "f0": 2}
+    if "axes" in pinned:
+        wanted = [names.get(a.strip()) for a in pinned["axes"].split(",")]
+        if None in wanted or len(wanted) != grid_ndim:
+            raise ArgumentError(f"axes={pinned['axes']}: name each of the {grid_ndim} array axes mu, theta, alpha, "
+                                "roughness or f0", where="--as")
+        if grid_ndim == 1:
+            wanted = [1]
+    for role in roles:
+        d, r, f = role
+        if "axes" in pinned and grid_ndim > 1:
+            actual = [0] * grid_ndim
+            actual[d] = 0
+            actual[r] = 1
+            if f is not None:
+                actual[f] = 2
+            if actual != wanted:
+                continue
+        directions = [None] if d is None else _pinned(pinned, "direction", DIRECTIONS)
+        if "axes" in pinned and d is not None and "direction" not in pinned:
+            first = pinned["axes"].split(",")[d].strip()
+            directions = [x for x in directions if x.startswith("theta") == (first == "theta")]
+        roughness = _pinned(pinned, "roughness", ROUGHNESS)
+        f0s = [None] if f is None else _pinned(pinned, "f0", F0_POSITIONS)
+        flip_sets = list(itertools.product((False, True), repeat=grid_ndim))
+        if "flip" in pinned:
+            flip_sets = [tuple(bool(int(x)) for x in pinned["flip"].split(","))]
+            if len(flip_sets[0]) != grid_ndim:
+                raise ArgumentError(f"flip=: one 0/1 per array axis ({grid_ndim})", where="--as")
+        given = explicit or {}
+        fixed_axes = []
+        if d is not None and ("mu" in given or "theta" in given):
+            directions, fixed_axes = ["explicit"], fixed_axes + [d]
+        if "alpha" in given:
+            roughness, fixed_axes = ["explicit"], fixed_axes + [r]
+        if f is not None and "f0" in given:
+            f0s, fixed_axes = ["explicit"], fixed_axes + [f]
+        roles = {d: ("theta" if "theta" in given else "mu"), r: "alpha", f: "f0"}
+        if shape is not None and any(len(given[roles[a]]) != shape[a] for a in fixed_axes):
+            continue  # the given values do not fit this axis
+        chosen = tuple(sorted((roles[a], tuple(float(v) for v in given[roles[a]])) for a in fixed_axes))
+        for direction, rough, f0, flips, shadowing in itertools.product(
+                directions, roughness, f0s, flip_sets, _pinned(pinned, "shadowing", SHADOWING)):
+            if any(flips[a] for a in fixed_axes):
+                continue
+            out.append(Convention(direction_axis=d, roughness_axis=r, f0_axis=f,
+                                  direction=direction or "mu-node", roughness=rough, f0=f0 or "f0-node",
+                                  flips=flips, shadowing=shadowing,
+                                  mu_floor=float(pinned.get("mu_floor", 1e-4)),
+                                  alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen))
+    if not out:
+        raise ArgumentError("the pinned parts leave no convention to test", where="--as")
+    return out
+
+
+def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[str]:
+    if key not in pinned:
+        return list(known)
+    if pinned[key] not in known:
+        raise ArgumentError(f"{key}={pinned[key]}: known values are {', '.join(known)}", where="--as")
+    return [pinned[key]]
+
+
+PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels")
+
+
+def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
+    """``--as KEY=VALUE`` items (or a mapping) -> the pinned parts."""
+    if items is None:
+        return {}
+    pairs = items.items() if isinstance(items, dict) else [i.partition("=")[::2] for i in items]
+    out = {}
+    for key, value in pairs:
+        key = str(key).strip()
+        if key not in PIN_KEYS or value in ("", None):
+            raise ArgumentError(f"expected KEY=VALUE with KEY one of {', '.join(PIN_KEYS)}; got {key!r}",
+                                where="--as")
+        out[key] = str(value).strip()
+    for key in ("mu_floor", "alpha_floor"):
+        if key in out:
+            try:
+                value = float(out[key])
+            except ValueError:
+                raise ArgumentError(f"{key} must be a number", where="--as") from None
+            if not 0 <= value < 1:
+                raise ArgumentError(f"{key} must lie in [0, 1)", where="--as")
+    if "channels" in out:
+        for meaning in out["channels"].split(","):
+            if meaning.strip() not in MEANINGS and meaning.strip() != "-":
+                raise ArgumentError(f"channels: unknown meaning {meaning!r} (known: {', '.join(MEANINGS)}, - to "
+                                    "skip a channel)", where="--as")
+    return out
+
+
+def with_floors(c: Convention, mu_floor: float, alpha_floor: float) -> Convention:
+    return replace(c, mu_floor=mu_floor, alpha_floor=alpha_floor)

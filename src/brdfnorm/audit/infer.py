@@ -1,0 +1,316 @@
+"""Convention inference: which declared convention (:mod:`.conventions`) a table was made in, with residuals.
+
+Two stages, both against exact values (:mod:`.reference`):
+
+1. Every geometry (axis roles, flips, sample positions, shadowing) is scored on a subset of interior cells —
+   the same indices on each axis, symmetric under a flip, so that flipped and transposed hypotheses reuse each
+   other's reference values; boundary rows are left out there because only they depend on the endpoint clamps.
+   Each channel takes the meaning with the smallest maximum residual; a geometry's score is that of its
+   best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
+   if no cheaper meaning fits the subset.
+2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
+   α = 0, and ranked by their maximum residual. Where the meanings need F90 and the table has more than
+   SUBGRID_CELLS cells, they are ranked on a strided subgrid (endpoints included) and only the best is then
+   measured on every cell; the runners-up's statistics say they were sampled.
+
+A hypothesis *fits* a channel when its maximum residual is within the tolerance
+
+    tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + k σ̂,
+
+σ̂ the noise of the residual estimated from its second differences along each axis (median absolute deviation
+/ 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not), and
+k = max(5, √(2 ln 2n) + 1) for n cells. A channel whose σ̂ exceeds MAX_NOISE_SHARE of the exact table's standard
+deviation never fits (data that are mostly noise would fit any hypothesis). The
+result is never a silent best guess: :class:`Inference` says whether the best fits, and whether the runner-up
+fits too (then the table does not decide between them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ArgumentError
+from .conventions import ALPHA_FLOORS, MU_FLOORS, Convention, coordinates, geometries
+from .reference import Reference
+
+#: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
+STAGE2 = 4
+STAGE2_F90 = 2
+#: Interior samples per axis in stage 1 (before symmetrizing), for cheap meanings and for F90 meanings.
+SUBSET = 6
+SUBSET_F90 = 3
+#: Above this many cells, candidates whose meanings need F90 are ranked on a strided subgrid of about this size.
+SUBGRID_CELLS = 1024
+NOISE_FACTOR = 5.0
+#: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
+MAX_NOISE_SHARE = 0.05
+
+
+@dataclass
+class ChannelFit:
+    """How one channel of the table matches a meaning under a convention."""
+
+    channel: str
+    meaning: str | None
+    max: float
+    rms: float
+    median: float
+    worst: tuple[int, ...]
+    tolerance: float
+    noise: float
+    residual: np.ndarray | None = None  # table − exact, over the grid
+    exact: np.ndarray | None = None
+    spread: float = 0.0  # standard deviation of the exact values over the table
+    worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
+    cells: int = 0  # cells measured
+    sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
+
+    @property
+    def too_noisy(self) -> bool:
+        """Noise above MAX_NOISE_SHARE of the table's own spread: random data would 'fit' anything."""
+        return bool(self.noise > MAX_NOISE_SHARE * self.spread)
+
+    @property
+    def fits(self) -> bool:
+        return self.meaning is not None and bool(self.max <= self.tolerance) and not self.too_noisy
+
+    def summary(self) -> dict:
+        return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "max": self.max,
+                "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
+                "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
+                "too_noisy": self.too_noisy, "cells": self.cells, "sampled": self.sampled}
+
+
+@dataclass
+class Hypothesis:
+    convention: Convention
+    channels: list[ChannelFit]
+
+    @property
+    def score(self) -> float:
+        fitted = [c.max for c in self.channels if c.meaning is not None]
+        return min(fitted) if fitted else float("inf")
+
+    @property
+    def fits(self) -> bool:
+        return any(c.fits for c in self.channels)
+
+
+@dataclass
+class Inference:
+    best: Hypothesis
+    runners_up: list[Hypothesis]
+    tested: int
+    reference_cells: dict = field(default_factory=dict)
+
+    @property
+    def fits(self) -> bool:
+        return self.best.fits
+
+    @property
+    def ambiguous(self) -> bool:
+        return bool(self.runners_up) and self.runners_up[0].fits and self.best.fits
+
+
+def _subset(n: int, k: int) -> np.ndarray:
+    if n <= 2:
+        return np.arange(n)
+    picks = np.unique(np.rint(np.linspace(1, n - 2, min(k, n - 2))).astype(int))
+    return np.unique(np.concatenate([picks, n - 1 - picks]))
+
+
+def noise_sigma(residual: np.ndarray) -> float:
+    """σ of white noise in ``residual`` from its second differences along each axis (robust: MAD)."""
+    parts = []
+    for axis in range(residual.ndim):
+        if residual.shape[axis] >= 3:
+            d2 = np.diff(residual, n=2, axis=axis).ravel()
+            parts.append(d2[np.isfinite(d2)])
+    if not parts or not sum(p.size for p in parts):
+        return 0.0
+    d2 = np.concatenate(parts)
+    return float(np.median(np.abs(d2 - np.median(d2))) / 0.6745 / np.sqrt(6.0))
+
+
+def allowed_meanings(grid_ndim: int, pins: dict, channels: int) -> list[list[str]]:
+    """Candidate meanings per channel."""
+    default = {1: ["E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90"], 3: ["E_f0"]}[grid_ndim]
+    if "channels" not in pins:
+        return [default] * channels
+    given = [m.strip() for m in pins["channels"].split(",")]
+    if len(given) != channels:
+        raise ArgumentError(f"channels={pins['channels']}: give one meaning per channel ({channels}), - to skip",
+                            where="--as")
+    return [[] if m == "-" else [m] for m in given]
+
+
+def _mesh(shape: tuple[int, ...], index: list[np.ndarray]) -> list[np.ndarray]:
+    return list(np.meshgrid(*index, indexing="ij")) if index else []
+
+
+def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> tuple[np.ndarray, np.ndarray]:
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"))
+
+
+def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
+          audit_channels: list[int] | None = None, keep_runners: int = 3,
+          explicit: dict[str, np.ndarray] | None = None) -> Inference:
+    """The best conventions for ``values`` (*grid, channels) — see the module docstring."""
+    grid = values.shape[:-1]
+    ndim = len(grid)
+    chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
+    meanings = allowed_meanings(ndim, pins, values.shape[-1])
+    candidates = geometries(ndim, pins, explicit, grid)
+    if not candidates:
+        sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
+        raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
+                            where="--axis")
+    cheap = [[m for m in meanings[k] if not Reference.needs_f90(m)] for k in range(values.shape[-1])]
+    scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
+    loose = 10.0 * (step + 1e-3)
+    if (not scored or scored[0][0] > loose) and any(Reference.needs_f90(m) for ms in meanings for m in ms):
+        scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
+    keep = STAGE2_F90 if any(Reference.needs_f90(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
+    search = ("mu_floor" not in pins, "alpha_floor" not in pins)
+    top = [c for _, c in scored[:max(keep, 2)]]
+    if keep == STAGE2_F90 and int(np.prod(grid)) > SUBGRID_CELLS:
+        # F90 costs ~3 ms a cell: the candidates are ranked on a strided subgrid (endpoints included), and only
+        # the best is measured on every cell; the runners-up say that they were sampled
+        per_axis = max(3, int(SUBGRID_CELLS ** (1.0 / len(grid))))
+        index = [np.unique(np.rint(np.linspace(0, n - 1, min(n, per_axis))).astype(int)) for n in grid]
+        ranked = sorted(((_stage2(values, names, c, reference, step, chosen, search, index), c) for c in top),
+                        key=lambda pair: pair[0].score)
+        finals = [_stage2(values, names, ranked[0][1], reference, step, chosen, search)] + [h for h, _ in ranked[1:]]
+    else:
+        finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]
+        finals.sort(key=lambda h: h.score)
+    finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
+    return Inference(finals[0], finals[1:1 + keep_runners], len(candidates),
+                     dict(reference.computed))
+
+
+def _stage1(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
+    grid = values.shape[:-1]
+    index = [_subset(n, k) for n in grid]
+    mesh = _mesh(grid, index)
+    sample = values[np.ix_(*index)] if grid else values
+    out = []
+    for c in candidates:
+        coords = coordinates(c, grid, mesh)
+        picks, best = [], float("inf")
+        for channel in range(values.shape[-1]):
+            if channel not in chosen or not meanings[channel]:
+                picks.append(None)
+                continue
+            data = sample[..., channel]
+            ok = np.isfinite(data)
+            residuals = {}
+            for meaning in meanings[channel]:
+                exact, _ = _exact(reference, c, meaning, coords)
+                residuals[meaning] = float(np.max(np.abs(data[ok] - exact[ok]))) if ok.any() else float("inf")
+            meaning = min(residuals, key=residuals.get)
+            picks.append(meaning)
+            best = min(best, residuals[meaning])
+        out.append((best, replace(c, meanings=tuple(picks))))
+    out.sort(key=lambda item: item[0])
+    return out
+
+
+def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, meaning: str,
+         step: float) -> ChannelFit:
+    residual = data - exact
+    ok = np.isfinite(residual)
+    if not ok.any():
+        return ChannelFit(name, meaning, float("inf"), float("inf"), float("inf"), (), 0.0, 0.0, residual, exact)
+    magnitude = np.where(ok, np.abs(residual), -1.0)
+    worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(magnitude)), residual.shape))
+    sigma = noise_sigma(np.where(ok, residual, 0.0))
+    factor = max(NOISE_FACTOR, float(np.sqrt(2.0 * np.log(2.0 * residual.size))) + 1.0)
+    tolerance = step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok])) + factor * sigma
+    if not ok.all():  # a table with non-finite cells does not fit, whatever its other cells do
+        tolerance = -1.0
+    r = residual[ok]
+    return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
+                      float(np.median(np.abs(r))), worst, tolerance, sigma, residual, exact,
+                      float(np.std(exact[ok])))
+
+
+def _full(values, c: Convention, reference, names, step, chosen, index=None) -> Hypothesis:
+    """Residuals of ``c`` on every cell, or on the cells ``index`` (one index vector per axis)."""
+    grid = values.shape[:-1]
+    sampled = index is not None
+    index = index if sampled else [np.arange(n) for n in grid]
+    mesh = _mesh(grid, index)
+    coords = coordinates(c, grid, mesh)
+    data = values[np.ix_(*index)] if sampled else values
+    fits = []
+    for channel, meaning in enumerate(c.meanings):
+        if channel not in chosen or meaning is None:
+            continue
+        exact, error = _exact(reference, c, meaning, coords)
+        fit = _fit(data[..., channel], exact, error, names[channel], meaning, step)
+        if fit.worst:
+            fit.worst_at = {k: float(np.broadcast_to(v, data.shape[:-1])[fit.worst]) for k, v in coords.items()}
+            fit.worst = tuple(int(index[a][w]) for a, w in enumerate(fit.worst))
+        fit.cells, fit.sampled = int(np.prod(data.shape[:-1])), sampled
+        fits.append(fit)
+    return Hypothesis(c, fits)
+
+
+def _stage2(values, names, c: Convention, reference, step, chosen, search=(True, True), index=None) -> Hypothesis:
+    """Residuals of ``c`` (every cell, or the cells ``index``) with its endpoint clamps searched where the grid
+    reaches below them."""
+    grid = values.shape[:-1]
+    mesh = _mesh(grid, index if index is not None else [np.arange(n) for n in grid])
+    raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, mesh)
+    best = _full(values, c, reference, names, step, chosen, index)
+    if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
+        trials = [_full(values, replace(c, mu_floor=f), reference, names, step, chosen, index) for f in MU_FLOORS
+                  if f != c.mu_floor]
+        best = _clamp_choice(best, trials)
+    if search[1] and float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
+        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, step, chosen, index)
+                  for f in ALPHA_FLOORS if f != best.convention.alpha_floor]
+        best = _clamp_choice(best, trials)
+    return best
+
+
+def _clamp_choice(default: Hypothesis, trials: list[Hypothesis]) -> Hypothesis:
+    """Another clamp replaces the default only if it at least halves the maximum residual: a clamp changes one
+    boundary row, and noise in that row must not pick one."""
+    challenger = min(trials, key=lambda h: h.score)
+    return challenger if challenger.score < 0.5 * default.score else default
+
+
+def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, meanings) -> Hypothesis:
+    """Channels the best geometry leaves unfitted with cheap meanings try the F90 ones (an LTC table's Fresnel
+    channel beside its albedo): first on the stage-1 subset, in full only where that beats the current meaning."""
+    c = best.convention
+    current = {fit.channel: fit for fit in best.channels}
+    grid = values.shape[:-1]
+    index = [_subset(n, SUBSET_F90) for n in grid]
+    coords = coordinates(c, grid, _mesh(grid, index))
+    sample = values[np.ix_(*index)]
+    picks = list(c.meanings)
+    changed = False
+    for channel in chosen:
+        fit = current.get(names[channel])
+        extra = [m for m in meanings[channel] if Reference.needs_f90(m) and m != c.meanings[channel]]
+        if fit is None or fit.fits or not extra or fit.meaning is None:
+            continue
+        data = sample[..., channel]
+        ok = np.isfinite(data)
+        for meaning in extra:
+            exact, _ = _exact(reference, c, meaning, coords)
+            if ok.any() and float(np.max(np.abs(data[ok] - exact[ok]))) < fit.max:
+                candidate = _full(values, replace(c, meanings=tuple(
+                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, step, [channel])
+                if candidate.channels[0].max < current[names[channel]].max:
+                    current[names[channel]] = candidate.channels[0]
+                    picks[channel] = meaning
+                    changed = True
+    if not changed:
+        return best
+    return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])

@@ -1,0 +1,106 @@
+"""Exact reference values for an audit, each computed once and shared by every hypothesis that needs it.
+
+Two base quantities per (μ, α, shadowing), both by brdfnorm's albedo engine
+(:func:`brdfnorm.lut.table.compute_cells`, the same cells ``brdfnorm lut`` computes):
+
+* E(μ, α) — the directional albedo of the lobe with its Fresnel off;
+* F90(μ, α) = ∫ f cos (1 − V·H)⁵ dL — the split-sum bias (``lut --channels dfg``'s DFG_f90, by
+  :func:`brdfnorm.lut.table.split_sum_models`).
+
+Every channel meaning is a linear combination of them: 1 − E; DFG_f0 = E − F90 (since (1 − (1 − c)⁵) + (1 − c)⁵ = 1);
+E_f0 = f0·E + (1 − f0)·F90 (Schlick's F = f0 + (1 − f0)(1 − c)⁵ with f90 = 1); and E_avg(α) = 2∫₀¹ E μ dμ by
+:func:`brdfnorm.lut.table.average_over_mu`. Many hypotheses share their μ and α values (a flip of a symmetric
+sample set, a transposed square table, the same grid with another clamp), so values are cached per
+(quantity, shadowing, μ, α) and only new pairs are computed. Each value keeps the engine's error estimate, which
+an audit adds to its tolerance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..lut.table import average_over_mu, compute_cells, split_sum_models
+from ..models.base import Model
+
+#: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
+#: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
+RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8}
+
+
+class Reference:
+    """A cache of exact E, F90 (and E_avg) values of one model."""
+
+    def __init__(self, model: Model) -> None:
+        names = {p.name for p in model.parameters}
+        if "alpha" not in names:
+            raise_unsupported(model)
+        if "fresnel" in names and str(model.params.get("fresnel")) != "none":
+            from ..errors import ArgumentError
+
+            raise ArgumentError("audits tabulate the lobe with its Fresnel off (Fresnel enters as the split-sum "
+                                "channels and E_f0's Schlick axis); drop -p fresnel=...", where="--model")
+        self.model = model.with_params(fresnel="none") if "fresnel" in names else model
+        self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
+        self.computed = {"E": 0, "F90": 0, "E_avg": 0}
+
+    def _model(self, quantity: str, shadowing: str) -> Model:
+        names = {p.name for p in self.model.parameters}
+        base = self.model.with_params(shadowing=shadowing) if "shadowing" in names else self.model
+        if quantity == "F90":
+            return split_sum_models(base)[0]["DFG_f90"]
+        return base
+
+    def values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray,
+                                                                                                  np.ndarray]:
+        """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) (broadcast together)."""
+        mu, alpha = np.broadcast_arrays(np.asarray(mu, dtype=float), np.asarray(alpha, dtype=float))
+        table = self.store.setdefault((quantity, shadowing), {})
+        keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), strict=True))
+        missing = sorted({k for k in keys if k not in table})
+        if missing:
+            m = np.array([k[0] for k in missing])
+            a = np.array([k[1] for k in missing])
+            if quantity == "E_avg":
+                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=RTOL[quantity])
+            else:
+                cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
+                                      {"alpha": a}, rtol=RTOL[quantity])
+                value, error = cells.value[:, 0], cells.error[:, 0]
+            self.computed[quantity] += len(missing)
+            for k, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
+                table[k] = (v, e)
+        pairs = [table[k] for k in keys]
+        value = np.array([p[0] for p in pairs]).reshape(mu.shape)
+        error = np.array([p[1] for p in pairs]).reshape(mu.shape)
+        return value, error
+
+    def meaning(self, meaning: str, shadowing: str, mu: np.ndarray | None, alpha: np.ndarray,
+                f0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates."""
+        if meaning == "E_avg":
+            return self.values("E_avg", shadowing, np.zeros_like(alpha), alpha)
+        E, e_err = self.values("E", shadowing, mu, alpha)
+        if meaning == "E":
+            return E, e_err
+        if meaning == "1-E":
+            return 1.0 - E, e_err
+        F, f_err = self.values("F90", shadowing, mu, alpha)
+        if meaning == "DFG_f90":
+            return F, f_err
+        if meaning == "DFG_f0":
+            return E - F, e_err + f_err
+        if meaning == "E_f0":
+            f0 = np.broadcast_to(f0, np.broadcast(E, f0).shape)
+            return f0 * E + (1.0 - f0) * F, f0 * e_err + (1.0 - f0) * f_err
+        raise ValueError(meaning)
+
+    @staticmethod
+    def needs_f90(meaning: str) -> bool:
+        return meaning in ("DFG_f0", "DFG_f90", "E_f0")
+
+
+def raise_unsupported(model: Model) -> None:
+    from ..errors import ArgumentError
+
+    raise ArgumentError(f"{model.name} has no 'alpha' parameter; audits cover microfacet lobes over (μ, α) "
+                        "(ggx, beckmann, ...)", where="--model")

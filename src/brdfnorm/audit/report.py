@@ -1,0 +1,150 @@
+"""An audit for people: the terminal text, and ``--report DIR``'s figures (signed error maps with a colour bar,
+error against resolution), drawn with matplotlib (Agg) from :class:`.api.AuditResult`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OutputError
+
+
+def _g(x: float) -> str:
+    return f"{x:.3g}" if np.isfinite(x) else str(x)
+
+
+def _channel_line(c: dict) -> str:
+    verdict = "fits" if c["fits"] else ("too noisy to decide" if c.get("too_noisy") else "does not fit")
+    at = ", ".join(f"{k}={_g(v)}" for k, v in c.get("worst_at", {}).items())
+    return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}"
+            f"{f' ({at})' if at else ''}, "
+            f"median {_g(c['median'])}, RMS {_g(c['rms'])}; tolerance {_g(c['tolerance'])} "
+            f"(noise σ {_g(c['noise_sigma'])}): {verdict}"
+            + (f" [on a subgrid of {c['cells']} cells]" if c.get("sampled") else ""))
+
+
+def text(result: dict) -> str:
+    """The terminal report of ``AuditResult.to_json()``."""
+    shape = "×".join(map(str, result["shape"]))
+    lines = [f"{result['file']}: {shape} {result['storage']} ({result['format']}"
+             + (f", array {result['array']}" if result["array"] else "") + f"), channels "
+             f"{', '.join(result['channels'])}; model {result['model']}; {result['hypotheses_tested']} conventions "
+             f"tested, storage step {_g(result['storage_step'])}"]
+    for note in result["notes"]:
+        lines.append(f"note: {note}")
+    best = result["best"]
+    if result["verdict"] == "fits":
+        lines.append(f"convention: {best['text']}")
+    else:
+        lines.append("NO HYPOTHESIS FITS within the tolerance; the closest is:")
+        lines.append(f"  {best['text']}")
+    lines += [_channel_line(c) for c in best["channels"]]
+    for k, other in enumerate(result["runners_up"][:2]):
+        label = "runner-up" if k == 0 else "next"
+        lines.append(f"{label}{' (also fits: the table does not decide)' if k == 0 and result['ambiguous'] else ''}"
+                     f": {other['text']}")
+        lines += [_channel_line(c) for c in other["channels"]]
+    for channel, e in result["interpolation"].items():
+        worst = ", ".join(f"{k}={_g(v)}" for k, v in e["worst"].items())
+        lines.append(f"GPU interpolation error, channel {channel} ({e['points']} points of the {e['density']}× grid "
+                     f"of {e['of_grid']} cells): max {_g(e['max'])} at {worst}; RMS {_g(e['rms'])}")
+    for channel, rows in result["resolution"].items():
+        cells = [f"{r['size']}: {_g(r['max'])}" if "max" in r else f"{r['size']}: skipped" for r in rows]
+        lines.append(f"exact tables, channel {channel}, max interpolation error by size: {'; '.join(cells)}")
+    for kind, info in result["bad_cells"].items():
+        if info["count"]:
+            shown = ", ".join(f"{tuple(c)}={_g(v)}" for c, v in zip(info["cells"], info["values"], strict=True))
+            lines.append(f"{info['count']} {kind.replace('_', ' ')} cells: {shown}"
+                         + (" …" if info["count"] > len(info["cells"]) else ""))
+    lines.append(f"({result['seconds']:.2f} s)")
+    return "\n".join(lines)
+
+
+def figures(result, directory: str) -> list[str]:
+    """Signed error maps (one per audited channel) and the error-against-resolution plot, as PNG files."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    target = Path(directory)
+    if not target.is_dir():
+        raise OutputError(f"directory {directory!r} does not exist", where="--report")
+    written = []
+    for fit in result.best.channels:
+        if fit.residual is None:
+            continue
+        residual = fit.residual
+        limit = float(np.nanmax(np.abs(residual))) or 1e-16
+        describe = result.best.convention.describe()["axes"]
+        figure, axes = plt.subplots(figsize=(6, 5))
+        title = f"channel {fit.channel}: max |error| {limit:.3g}"
+        if residual.ndim == 1:
+            axes.plot(np.arange(residual.size), residual, "o-")
+            axes.set_xlabel(f"array index ({describe[0]})")
+            axes.set_ylabel(f"table − exact {fit.meaning}")
+        else:
+            offset = 0
+            if residual.ndim == 3:  # the slice through the worst cell along the first axis
+                residual, offset = residual[fit.worst[0]], 1
+                title += f"\nslice {describe[0]} index {fit.worst[0]}"
+            image = axes.imshow(residual, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="upper",
+                                interpolation="nearest", aspect="auto")
+            figure.colorbar(image, ax=axes, label=f"table − exact {fit.meaning}")
+            axes.set_xlabel(f"array axis {offset + 1} ({describe[offset + 1]})")
+            axes.set_ylabel(f"array axis {offset} ({describe[offset]})")
+        axes.set_title(title)
+        path = target / f"error_map_{fit.channel}.png"
+        figure.savefig(path, dpi=100)
+        plt.close(figure)
+        written.append(str(path))
+    if result.resolution:
+        figure, axes = plt.subplots(figsize=(6, 4))
+        for channel, rows in result.resolution.items():
+            sizes = [r["size"] for r in rows if "max" in r]
+            axes.loglog(sizes, [r["max"] for r in rows if "max" in r], "o-", label=f"{channel} max")
+            axes.loglog(sizes, [r["rms"] for r in rows if "max" in r], "s--", label=f"{channel} RMS")
+        for level in (1e-3, 1e-4):
+            axes.axhline(level, color="grey", lw=0.5)
+        axes.set_xlabel("samples per axis (exact table)")
+        axes.set_ylabel("interpolation error")
+        axes.legend()
+        path = target / "error_vs_resolution.png"
+        figure.savefig(path, dpi=100)
+        plt.close(figure)
+        written.append(str(path))
+    return written
+
+
+def formula_figures(arrays: dict, directory: str) -> list[str]:
+    """The signed error of a formula over its domain: a map over (μ, α) or a curve over α, one PNG a quantity."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    target = Path(directory)
+    if not target.is_dir():
+        raise OutputError(f"directory {directory!r} does not exist", where="--report")
+    written = []
+    for quantity, (diff, mu, alpha) in arrays.items():
+        figure, axes = plt.subplots(figsize=(6, 5))
+        finite = diff[np.isfinite(diff)]
+        limit = float(np.max(np.abs(finite))) if finite.size else 1.0
+        if mu is None:
+            axes.plot(alpha, diff)
+            axes.set_xlabel("alpha")
+            axes.set_ylabel(f"formula − exact {quantity}")
+        else:
+            image = axes.pcolormesh(alpha[0], mu[:, 0], diff, cmap="RdBu_r", vmin=-limit, vmax=limit,
+                                    shading="nearest")
+            figure.colorbar(image, ax=axes, label=f"formula − exact {quantity}")
+            axes.set_xlabel("alpha")
+            axes.set_ylabel("mu = cos θ")
+        axes.set_title(f"{quantity}: max |error| {limit:.3g}")
+        path = target / f"formula_error_{quantity}.png"
+        figure.savefig(path, dpi=100)
+        plt.close(figure)
+        written.append(str(path))
+    return written
