@@ -263,7 +263,7 @@ def test_converged_says_whether_the_digits_were_reached(monkeypatch):
     m = bn.load("modified-phong", n=3.0)
     exact = bn.albedo(m, 0.7, method="certified", digits=30)
     assert exact.converged.all()
-    monkeypatch.setattr(certified, "EVAL_LIMIT", 40)  # Arb stops early and returns the wider ball it has
+    monkeypatch.setattr(certified.core, "EVAL_LIMIT", 40)  # Arb stops early and returns the wider ball it has
     with pytest.warns(UserWarning, match="did not reach"):
         wide = bn.albedo(m, 0.7, method="certified", digits=30)
     assert not wide.converged.all()  # still a valid enclosure, only wider than 30 digits
