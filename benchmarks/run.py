@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
 from bench_parallel import w_parallel  # noqa: E402
 
@@ -1034,7 +1035,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "fit": lambda c, r, _: w_fit(c, r), "eval": lambda c, r, _: w_eval(c, r),
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
-    "engine": lambda c, r, _: w_engine(c, r),
+    "engine": lambda c, r, _: w_engine(c, r), "certified": lambda c, r, _: w_certified(c, r),
 })
 
 

@@ -13,12 +13,16 @@ carry, besides ``E`` (the enclosure's midpoint rounded to float64) and ``E_error
 ``digits`` is met: every enclosure's relative radius is ≤ 10^−N (the working precision is raised until it is;
 a cell that still misses it is counted in ``meta["unconverged"]``).
 
-E_avg(α) = 2∫₀¹ E(μ) μ dμ is NOT certified: it is refused (pass ``average=False`` / ``--no-average``). The route
-tried — a 2-D rigorous integral, Arb over θ_V with the 1-D reduction as its integrand continued to complex θ_V —
-gives no usable bound: on a complex ball of θ_V the inner integrand's θ_L = θ_V + 2 atan d(θ_V) loses the exact
-cancellation at the horizon end (θ_L = π/2 for every θ_V) to ball arithmetic's dependency problem (a ball of radius
-0.01 in θ_V gave θ_L ± 0.9), so the outer integrator could only bisect. A formulation with θ_V-independent inner
-endpoints (e.g. θ_L itself as the inner variable) is the way on.
+E_avg(α) = 2∫₀¹ E(μ) μ dμ is NOT certified: it is refused (pass ``average=False`` / ``--no-average``), never
+replaced by an estimate. Two 2-D rigorous integrals were tried and give no usable bound in reasonable time:
+(1) Arb over θ_V with the 1-D reduction as its integrand, continued to complex θ_V: on a complex ball of θ_V the
+horizon end θ_L = θ_V + 2 atan d(θ_V) = π/2 loses its exactness to ball arithmetic's dependency problem (a ball of
+radius 0.01 in θ_V gave θ_L ± 0.9); (2) Arb over t (d = α sinh t, δ = θ_L − θ_V fixed) with θ_V on [0, π/2 − δ]
+inside (endpoints exact, no dependency at the horizon): there a complex ball of t of radius 0.1 already makes
+√(cos²θ_L + α² sin²θ_L)'s argument a ball containing 0 (δ = 2 atan(α sinh t) ± 0.35), so the inner bound fails
+and the outer integrator bisects without end. What would work: a Gauss–Legendre rule in t with a remainder from
+Taylor coefficients in t on real balls (python-flint's ``arb_series``), or a bound of the continuation computed
+with a first-order (mid + derivative) enclosure instead of a plain ball.
 """
 
 from __future__ import annotations
@@ -130,3 +134,4 @@ def compute(model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, f
                           "E_lower/E_upper": "float64 bounds rounded outward: E_lower <= E <= E_upper for the "
                                              "true E of every cell"}}
     return Lut(tables, axes, meta, {name: tuple(names) for name in tables})
+

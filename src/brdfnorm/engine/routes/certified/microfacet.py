@@ -193,36 +193,38 @@ def white_albedo(work: _Integrator, view: tuple, alpha, distribution: str, shado
     raise ArgumentError(f"{distribution}: no certified reduction", where="method")
 
 
-def _ggx(work: _Integrator, view: tuple, alpha, shadowing: str, times_mu: bool = False):
-    """E (or μE with ``times_mu``); ``view`` may be complex balls (E_avg's continuation in θ_V, lut.certified)."""
-    arb, acb = work.arb, work.acb
-    mu, sv, thv = view
+def ggx_kernel(alpha, correlated: bool, t, sl, cl, sv, mu, analytic: bool, acb):
+    """The GGX integrand in t of the module docstring's reduction without its 1/μ: G2 sin θ_L/(1 + d²)·bracket, at
+    d = α sinh t with θ_L and θ_V given by their sines and cosines (balls, complex ones included: every square
+    root is analytic-checked when ``analytic``)."""
     a2 = alpha * alpha
     g = 1 - a2
-    root_v = mu * mu + a2 * sv * sv
-    root_v = _sqrt(root_v, True, acb) if isinstance(root_v, acb) else root_v.sqrt()
-    g1v = 2 * mu / (mu + root_v)
+    d = alpha * t.sinh()
+    ch = t.cosh()
+    r = alpha * ch
+    m = cl + mu
+    q = (sl + sv) ** 2 + a2 * m * m
+    rq = _sqrt(q, analytic, acb)
+    c = (m * m * r * r + q) / 2
+    bracket = a2 * (r + 2 * g * m / rq) + g * g * m * c / (ch * ch * q * rq)
+    rl = _sqrt(cl * cl + a2 * sl * sl, analytic, acb)
+    rv = _sqrt(mu * mu + a2 * sv * sv, analytic, acb)
+    g2 = 2 * cl * mu / (cl * rv + mu * rl) if correlated else 2 * cl / (cl + rl) * 2 * mu / (mu + rv)
+    return g2 * sl / (1 + d * d) * bracket
+
+
+def _ggx(work: _Integrator, view: tuple, alpha, shadowing: str):
+    arb, acb = work.arb, work.acb
+    mu, sv, thv = view
     correlated = shadowing == "height-correlated"
 
     def f(t, analytic):
-        d = alpha * t.sinh()
-        thl = thv + 2 * _atan(d, analytic, acb)
-        sl, cl = thl.sin(), thl.cos()
-        ch = t.cosh()
-        r = alpha * ch
-        m = cl + mu
-        q = (sl + sv) ** 2 + a2 * m * m
-        rq = _sqrt(q, analytic, acb)
-        c = (m * m * r * r + q) / 2
-        bracket = a2 * (r + 2 * g * m / rq) + g * g * m * c / (ch * ch * q * rq)
-        rl = _sqrt(cl * cl + a2 * sl * sl, analytic, acb)
-        g2 = 2 * cl * mu / (cl * root_v + mu * rl) if correlated else 2 * cl / (cl + rl) * g1v
-        return g2 * sl / (1 + d * d) * bracket
+        thl = thv + 2 * _atan(alpha * t.sinh(), analytic, acb)
+        return ggx_kernel(alpha, correlated, t, thl.sin(), thl.cos(), sv, mu, analytic, acb)
 
     start = -((thv / 2).tan() / alpha).asinh()
     end = (((arb.pi() / 2 - thv) / 2).tan() / alpha).asinh()
-    integral = work.segment(f, start, end)
-    return integral if times_mu else integral / mu
+    return work.segment(f, start, end) / mu
 
 
 def _beckmann(work: _Integrator, view: tuple, alpha, shadowing: str):
