@@ -20,7 +20,11 @@ horizon end θ_L = θ_V + 2 atan d(θ_V) = π/2 loses its exactness to ball arit
 radius 0.01 in θ_V gave θ_L ± 0.9); (2) Arb over t (d = α sinh t, δ = θ_L − θ_V fixed) with θ_V on [0, π/2 − δ]
 inside (endpoints exact, no dependency at the horizon): there a complex ball of t of radius 0.1 already makes
 √(cos²θ_L + α² sin²θ_L)'s argument a ball containing 0 (δ = 2 atan(α sinh t) ± 0.35), so the inner bound fails
-and the outer integrator bisects without end. What would work: a Gauss–Legendre rule in t with a remainder from
+and the outer integrator bisects without end (a third variant, the outer variable d itself with
+√(cos²θ_L + α² sin²θ_L) written as √(1 − (1 − α²) sin²θ_L), bounds its inner integral on complex balls of d up to
+radius 0.02 but meets a corner: at d = 0 and θ_V = θ_L = π/2 the height-correlated G2 = 2μ cos θ_L/(cos θ_L R_V +
+μ R_L) is 0/0 — bounded but not analytic — so the outer integrand is not analytic at d = 0 and Arb bisects towards
+it level by level). What would work: a Gauss–Legendre rule in t with a remainder from
 Taylor coefficients in t on real balls (python-flint's ``arb_series``), or a bound of the continuation computed
 with a first-order (mid + derivative) enclosure instead of a plain ball.
 """
