@@ -248,3 +248,15 @@ def test_32_by_32_ggx_table_certified_to_12_digits_within_10_minutes():
     auto = bn.lut.compute(model, axes, clamp=clamp, rtol=1e-10, average=False)
     assert np.all(table["E_lower"] - auto["E_error"] <= auto["E"])
     assert np.all(auto["E"] <= table["E_upper"] + auto["E_error"])
+
+
+@pytest.mark.parametrize("distribution", ["ggx", "beckmann"])
+def test_rough_beyond_one_and_a_theta_axis(distribution):
+    """α = 2.5 (the reduction holds for every α > 0) on a θ axis: the float64 azimuthal values inside."""
+    model = bn.load(distribution, alpha=2.5, shadowing="separable")
+    theta = np.radians([0.0, 45.0, 80.0])
+    table = certified_tables.compute(model, {"theta": theta}, digits=10, average=False)
+    assert table.meta["unconverged"] == 0 and "radian" in table.meta["certified"]["view"]
+    r = bn.albedo(model, theta, rtol=1e-12, method="azimuthal")
+    assert np.all(table["E_lower"] - r.error[:, 0] <= r.value[:, 0])
+    assert np.all(r.value[:, 0] <= table["E_upper"] + r.error[:, 0])

@@ -264,7 +264,10 @@ def _beckmann(work: _Integrator, view: tuple, alpha, shadowing: str):
             if analytic or not s.imag == 0:
                 return _nan(acb)
             top = thl.real.upper()
-            c = shadow_loss(acb(top)).real if top > 0 else arb(0)
+            if not top < arb.pi() / 2:  # c increases up to the horizon, where G2 = 0: c ≤ G2⁰ on the whole path
+                c = g1v
+            else:
+                c = shadow_loss(acb(top)).real if top > 0 else arb(0)
             return value * acb(arb(0, c.upper())) if c.is_finite() else _nan(acb)
         return value * shadow_loss(thl)
 
