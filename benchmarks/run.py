@@ -40,6 +40,7 @@ sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
+from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
 from bench_parallel import w_parallel  # noqa: E402
 
@@ -821,6 +822,15 @@ def targets(results: dict, cfg: Config) -> list[dict]:
                         "measured": f"{fmt_time(line['time_s'])}; {line['note']}", "met": bool(line["time_s"] <= goal)})
     out += _engine_targets(results, cfg)
     out += audit_targets(results)
+    cert = results.get("certified", {})
+    if "time_s" in cert:
+        out.append({"target": f"{cert['title']}: every cell ≥ 12 digits, every auto value inside its enclosure "
+                              "widened by its estimate (issue 33)",
+                    "measured": f"{cert['time_s']:.3g} s ({cert['cpu_s']:.3g} s CPU, load {cert['load_average']:.1f}"
+                                f"), {cert['unconverged']} unconverged, largest relative radius "
+                                f"{cert['max_relative_radius']:.2g}, {cert['auto_inside_widened_enclosures']}/"
+                                f"{cert['cells']} auto values inside",
+                    "met": cert["met"]})
     mem = results.get("memory", {})
     if "peak_rss_mib" in mem:
         out.append({"target": f"peak RSS of the {cfg.sweep_n.size}×{cfg.table_angles.size} table < 1 GB",
@@ -1037,6 +1047,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
     "engine": lambda c, r, _: w_engine(c, r), "audit": lambda c, r, _: w_audit(c, r),
+    "certified": lambda c, r, _: w_certified(c, r),
 })
 
 

@@ -11,6 +11,7 @@ import numpy as np
 import typer
 
 from ..errors import ArgumentError, OutputError
+from ..lut import certified as certified_tables
 from ..lut import formats
 from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
 from ..output import write_file
@@ -70,6 +71,8 @@ def lut_command(
     no_average: bool = typer.Option(False, "--no-average", help="Skip E_avg = 2∫ E(μ) μ dμ."),
     rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of every cell (and of E_avg)."),
     method: str = typer.Option("auto", "--method", help="Albedo method (auto picks the model's best)."),
+    digits: int = typer.Option(None, "--digits", min=1, help="With --method certified: every cell's enclosure has a "
+                               "relative radius ≤ 10^-DIGITS (default 12)."),
     allow_unconverged: bool = typer.Option(False, "--allow-unconverged",
                                            help="Write the table even if some cells miss --rtol (exit 0)."),
     output: str = typer.Option(..., "--output", "-o", metavar="FILE",
@@ -115,14 +118,24 @@ def lut_command(
         if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
             raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
         table_names = table or None
+        if digits is not None and method != "certified":
+            raise ArgumentError("--digits applies to --method certified only", where="--digits")
         with progress_bar(f"{m.name}: table cells") as progress:
-            result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
-                             average=not no_average, grid=grid, source=model, progress=progress, workers=spread.workers,
-                             scheduler=spread.scheduler, checkpoint=spread.checkpoint)
+            if method == "certified":
+                if spread.given():
+                    raise ArgumentError("certified tables are computed in this process", where="--workers")
+                result = certified_tables.compute(m, axes, clamp=clamps, digits=12 if digits is None else digits,
+                                                  average=not no_average, grid=grid, source=model,
+                                                  progress=progress)
+            else:
+                result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
+                                 average=not no_average, grid=grid, source=model, progress=progress,
+                                 workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint)
         data = formats.dumps(result, name, tables=table_names, half=half)
         unconverged = result.meta["unconverged"]
         if unconverged and not allow_unconverged:
-            typer.echo(f"error: {unconverged} cells did not reach --rtol {rtol:g}; nothing written (see their "
+            goal = f"--digits {result.meta['certified']['digits']}" if method == "certified" else f"--rtol {rtol:g}"
+            typer.echo(f"error: {unconverged} cells did not reach {goal}; nothing written (see their "
                        "error estimates with --allow-unconverged)", err=True)
             raise typer.Exit(1)
         write_file(output, data)

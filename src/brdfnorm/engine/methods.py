@@ -21,6 +21,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from decimal import Decimal
 from functools import partial
 
 import numpy as np
@@ -75,10 +76,15 @@ class AlbedoResult:
              "reason": "" if self.reason is None else str(self.reason[i])}
             | ({} if self.reflected is None else {"reflected": channel_value(self.reflected[i]),
                                                   "transmitted": channel_value(self.transmitted[i])})
-            | ({} if self.lower is None else {"lower": _decimals(self.lower[i]), "upper": _decimals(self.upper[i])})
+            | ({} if self.lower is None else {"lower": _decimals(self.lower[i]), "upper": _decimals(self.upper[i]),
+                                              # the enclosure is for this float64 radian, exactly (theta_deg is
+                                              # for display, 12 digits): shortest round trip and exact decimal
+                                              "theta_rad": float(self.theta[i]),
+                                              "theta_rad_exact": str(Decimal(float(self.theta[i])))})
             for i in np.ndindex(self.converged.shape)
         ]
-        bounds = () if self.lower is None else (Column("lower", "lower", None), Column("upper", "upper", None))
+        bounds = () if self.lower is None else (Column("theta_rad", "θ (rad, certified)", None),
+                                                Column("lower", "lower", None), Column("upper", "upper", None))
         parts = () if self.reflected is None else (Column("reflected", "reflected"),
                                                    Column("transmitted", "transmitted"))
         params = ", ".join(f"{k}={format_value(v, 6)}" for k, v in self.bound.items())

@@ -554,6 +554,8 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     """
     from .. import __version__
 
+    if method == "certified":  # bounds and digits: brdfnorm.lut.certified (which builds on this module)
+        raise ArgumentError("certified tables come from brdfnorm.lut.certified.compute", where="method")
     spread = None if (workers == 1 and scheduler is None and checkpoint is None) else \
         {"workers": workers, "scheduler": scheduler, "checkpoint": checkpoint}
     result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
