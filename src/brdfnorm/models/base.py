@@ -126,6 +126,12 @@ class Model(ABC):
         """
         return None
 
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """How ``brdfnorm check`` should search float parameters at the bound values, where the declared ranges do
+        not say it: name -> (low, high), a narrower range that goes with the other parameters, or None to hold the
+        bound value (a setting such as a table size, not a property of the surface). Empty by default."""
+        return {}
+
     def closed_form_albedo(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> np.ndarray:
         """Exact albedo where a closed form applies, NaN elsewhere; (..., C)."""
         return np.full(np.shape(fixed)[:-1] + (self.channels,), np.nan)

@@ -89,6 +89,10 @@ class Charlie(Model):
             raise ParameterError(f"the sheen width α (alpha, or roughness²) must be ≥ {ALPHA_MIN:g}",
                                  where="parameter roughness")
 
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """``check`` searches the roughness (from √ALPHA_MIN) and holds ``alpha`` (0 means roughness²)."""
+        return {"alpha": None, "roughness": (float(np.sqrt(ALPHA_MIN)), 1.0)}
+
     def _white(self, L: np.ndarray, V: np.ndarray, params) -> np.ndarray:
         """D·G2/(4 N·V): f·(N·L) of the white lobe, (...); 0 below either horizon."""
         alpha = sheen_alpha(params)

@@ -25,7 +25,7 @@ Imageworks"): f_ms(L, V) = F_ms (1 − E(μ_L))(1 − E(μ_V)) / (π (1 − E_av
 own albedo, E_avg(α) = 2∫₀¹ E(μ) μ dμ, and — with a Fresnel — their colour term F_ms = F_avg² E_avg / (1 − F_avg (1 −
 E_avg)) per channel (the energy of the light that keeps bouncing, each bounce scaled by F_avg; F_ms = 1 for F = 1),
 F_avg = 2∫₀¹ F(μ) μ dμ exact: f0 + (f90 − f0)/21 for Schlick (Fdez-Agüera 2019), a Gauss–Legendre integral
-(split at the critical angle) for the exact dielectric and conductor. ``ms=turquin`` (Turquin 2019, "Practical
+(from the critical angle on) for the exact dielectric and conductor. ``ms=turquin`` (Turquin 2019, "Practical
 multiple scattering compensation for microfacet models", eq. 16): f = f_ss (1 + F0 (1/E(μ_V) − 1)), F0 = F(μ = 1)
 per channel — not reciprocal (it depends on the view only), so its albedo over the view goes to quadrature.
 E and E_avg come from :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way —
@@ -276,8 +276,8 @@ def _gauss_legendre(function: Callable[[np.ndarray], np.ndarray], lo: np.ndarray
 
 def fresnel_average(params: Mapping[str, object]) -> np.ndarray:
     """F_avg = 2∫₀¹ F(μ) μ dμ per channel, (..., C): f0 + (f90 − f0)/21 for Schlick (2∫(1 − μ)⁵μ dμ = 1/21);
-    for the exact Fresnels a Gauss–Legendre integral split at the critical angle μ_c = √(1 − η²) (η < 1: F = 1
-    below it, an exact 1 − μ_c² there)."""
+    for the exact Fresnels a Gauss–Legendre integral, for a dielectric from the critical angle μ_c = √(1 − η²) on
+    (η < 1: F = 1 below it, an exact μ_c² there) in t with μ = μ_c + (1 − μ_c) t²."""
     kind = params["fresnel"]
     if kind == "none":
         return np.ones(1)
@@ -290,8 +290,14 @@ def fresnel_average(params: Mapping[str, object]) -> np.ndarray:
         return _gauss_legendre(lambda mu: 2.0 * mu * fresnel_conductor(mu, eta[..., None, None], k[..., None, None]),
                                np.zeros(eta.shape), np.ones(eta.shape))
     critical = np.sqrt(np.clip(1.0 - eta * eta, 0.0, 1.0))
-    return critical**2 + _gauss_legendre(lambda mu: 2.0 * mu * fresnel_dielectric(mu, eta[..., None, None]),
-                                         critical, np.ones(eta.shape))
+    span = (1.0 - critical)[..., None, None]
+
+    def above(t: np.ndarray) -> np.ndarray:
+        # μ = μ_c + (1 − μ_c) t²: F has a square-root edge at μ_c (√(μ² − μ_c²)), analytic in t.
+        mu = critical[..., None, None] + span * t * t
+        return 2.0 * mu * fresnel_dielectric(mu, eta[..., None, None]) * 2.0 * span * t
+
+    return critical**2 + _gauss_legendre(above, np.zeros(eta.shape), np.ones(eta.shape))
 
 
 def fresnel_normal(params: Mapping[str, object]) -> np.ndarray:
@@ -321,6 +327,19 @@ class MicrofacetModel(Model):
             raise ParameterError("must be 0 (exact) or one whole number ≥ 2", where="parameter ms_table")
         if not self.isotropic or np.any(np.asarray(p["alpha"]) > 1.0):
             raise ParameterError(f"ms={p['ms']} tables cover isotropic alpha ≤ 1 only", where="parameter ms")
+
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """``check`` holds the table size, the Fresnel inputs the chosen Fresnel does not read, and — with a
+        compensation, whose tables cover isotropic α ≤ 1 — the anisotropic widths, searching α over [ALPHA_MIN, 1]."""
+        p = self._params
+        space: dict[str, tuple[float, float] | None] = {"ms_table": None}
+        if p["fresnel"] != "dielectric" and p["fresnel"] != "conductor":
+            space["eta"] = None
+        if p["fresnel"] != "conductor":
+            space["k"] = None
+        if p["ms"] != "none":
+            space.update(alpha=(ALPHA_MIN, 1.0), alpha_x=None, alpha_y=None)
+        return space
 
     @property
     def channels(self) -> int:  # type: ignore[override]

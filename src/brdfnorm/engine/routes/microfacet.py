@@ -202,7 +202,8 @@ def _bilinear(table, mu_nodes, alpha_nodes, mu, alpha):
 def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensation:
     distribution = {"ggx": GGXDistribution, "beckmann": BeckmannDistribution}[distribution_name]()
     if size == 0:
-        return Compensation(distribution, shadowing, 0)
+        # Exact values are integrals to rtol _EXACT_RTOL: their error, ten times that, is what callers propagate.
+        return Compensation(distribution, shadowing, 0, error=10 * _EXACT_RTOL)
     nodes = np.linspace(0.0, 1.0, size)
     mu_grid, alpha_grid = np.meshgrid(nodes, nodes, indexing="ij")
     grid = _albedo_grid(distribution, shadowing, np.maximum(mu_grid, MU_CLAMP), alpha_grid)
