@@ -62,6 +62,10 @@ class Model(ABC):
     name: str = "model"
     #: One-line formula shown by ``brdfnorm models``.
     formula: str = ""
+    #: Whether the lobe conserves energy, in words (``brdfnorm models``; "" where not stated); ``check`` measures it.
+    energy: str = ""
+    #: Where :meth:`closed_form_albedo` holds, in words (``brdfnorm models``).
+    closed_form_domain: str = "normal incidence"
     #: Declared parameters (name, kind, range, default).
     parameters: tuple[Parameter, ...] = ()
     #: Number of output channels (1 for a scalar lobe, 3 for RGB).

@@ -83,6 +83,7 @@ class Charlie(Model):
         Parameter("terminator", "bool", False, description="kulla only: soften Λ(L) to Λ^(1+2(1−N·L)^8)"),
     )
     channels = 3
+    energy = "not a closed lobe (a sheen layer); gains energy at grazing views for roughness ≲ 0.3"
 
     def _check(self) -> None:
         if np.any(sheen_alpha(self._params) < ALPHA_MIN):

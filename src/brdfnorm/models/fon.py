@@ -87,6 +87,8 @@ class FujiiOrenNayar(Model):
     formula = ("f = ρ/π A (1 + r s/t),  s = L·V − N·L N·V,  t = max(N·L, N·V) if s > 0 else 1,  "
                "A = 1/(1 + (1/2 − 2/(3π)) r)")
     parameters = FON_PARAMETERS
+    energy = "conserved (E ≤ ρ; loses the interreflected part)"
+    closed_form_domain = "every direction"
 
     def evaluate(self, L, V, params):
         return fon_single_scattering(L, V, scalar_param(params, "roughness"),

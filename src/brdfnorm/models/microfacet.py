@@ -316,6 +316,8 @@ class MicrofacetModel(Model):
     """Walter et al.'s microfacet BRDF over a slope distribution (subclasses name the distribution)."""
 
     distribution: Distribution = GGXDistribution()
+    energy = ("conserved: single scattering loses energy (E < 1 for α > 0); ms=kulla-conty or turquin restore "
+              "it to 1 for F = 1")
 
     def _check(self) -> None:
         p = self._params
