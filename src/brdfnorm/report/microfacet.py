@@ -5,8 +5,8 @@ scattering microfacet lobe loses with f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (�
 E(μ, α) and its average E_avg(α) = 2∫ E(μ) μ dμ; Karis (2013) splits the Schlick-Fresnel lobe's integral into
 the "DFG" pair. This section shows E and 1 − E over (μ, α), E_avg(α), the DFG pair, and the white-furnace
 residual max |1 − E_total| of GGX with ``ms=kulla-conty`` as the tables it interpolates grow (16, 32, 64, and
-exact — that one by the hemisphere cubature of the compensated lobe), and the rough-glass albedo E = R + T of ``ggx-dielectric`` for η = 1.5 and 1/1.5. It runs when the
-built-in ``ggx`` model is registered.
+exact — that one by the hemisphere cubature of the compensated lobe), and the rough-glass albedo E = R + T of
+``ggx-dielectric`` for η = 1.5 and 1/1.5. It runs when the built-in ``ggx`` model is registered.
 """
 
 from __future__ import annotations
