@@ -64,3 +64,15 @@ def test_dfg_gains_the_cloth_channel():
     assert "DFG_cloth" in table.meta["dfg"]
     other = lut.compute(bn.load("ggx"), {"mu": [1.0], "alpha_x": [0.5]}, channels=("dfg",), rtol=1e-8, average=False)
     assert "DFG_cloth" not in other  # the cloth lobe has no alpha_x: only alpha/roughness axes carry over
+
+
+def test_cli_three_channel_dfg_table_round_trips_through_npz(capsys, tmp_path):
+    out = tmp_path / "dfg.npz"
+    code, _, err = run_cli(capsys, "lut", "ggx", "--axis", "mu=0.25,1", "--axis", "alpha=0.5,1", "--channels", "dfg",
+                           "--no-average", "--rtol", "1e-9", "-o", str(out))
+    assert code == 0, err
+    table = lut.load(out)
+    assert {"DFG_f0", "DFG_f90", "DFG_cloth"} <= set(table) and "DFG_cloth" in table.meta["dfg"]
+    assert table["DFG_cloth"][1, 0] == pytest.approx(1 / 12, abs=1e-9)
+    # The split-sum pair still sums to E (the Schlick weights add to 1), the cloth channel is separate.
+    np.testing.assert_allclose(table["DFG_f0"] + table["DFG_f90"], table["E"], atol=1e-9)
