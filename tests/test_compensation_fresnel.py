@@ -95,3 +95,13 @@ def test_check_reports_turquins_energy_and_asymmetry_at_f0_half():
     described = report.coverage["parameters"]
     assert any(d.startswith("ms_table") and "held" in d for d in described)  # a table size is not searched
     assert any(d.startswith("alpha ∈ [1e-12, 1]") for d in described)  # the tables' range
+
+
+def test_turquin_over_the_view_goes_to_quadrature():
+    # Turquin's factor depends on V: the lobe is not reciprocal, so the microfacet methods (which integrate at the
+    # fixed direction as if it were) must not answer the albedo over the view.
+    model = bn.load("ggx", alpha=0.5, ms="turquin", ms_table=0, fresnel="schlick", f0=0.5)
+    over_view = bn.albedo(model, np.radians(60.0), over="view", rtol=1e-8)
+    over_light = bn.albedo(model, np.radians(60.0), rtol=1e-8)
+    assert over_view.method == "quadrature" and over_light.method == "microfacet"
+    assert abs(over_view.value[0] - over_light.value[0]) > 1e-4
