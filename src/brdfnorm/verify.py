@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from . import validate
-from .claims import DEFAULT_EXPONENTS, Claim, seed000, seed002, seed003
+from .claims import DEFAULT_EXPONENTS, Claim, published, seed000, seed002, seed003
 from .errors import ArgumentError
 from .registry import Registry
 
@@ -35,7 +35,11 @@ CHECKS: Registry[Callable[[np.ndarray], Claim]] = Registry("claim", "claim", {
     "gaussian-fit": seed003.gaussian_fit,
     "gaussian-fit-small-n-error": seed003.gaussian_small_n,
     "gaussian-hyperbola-beats-line": seed003.gaussian_hyperbola,
+    # The second group: the field's published numbers (brdfnorm.claims.published).
+    **published.CHECKS,
 })
+#: The group of each claim: the seed articles' claims, or the field's published numbers.
+GROUPS = {claim_id: published.GROUP if claim_id in published.CHECKS else "seed claims" for claim_id in CHECKS}
 
 
 def check_exponents(exponents: Sequence[float]) -> np.ndarray:
@@ -59,7 +63,7 @@ def verify(exponents: Sequence[float] = DEFAULT_EXPONENTS, only: Sequence[str] |
     if isinstance(only, str):
         only = [only]
     ids = list(CHECKS) if only is None else [CHECKS.validate(i) for i in only]
-    claims = [CHECKS[i](n) for i in ids]
+    claims = [replace(CHECKS[i](n), group=GROUPS[i]) for i in ids]
     return [certify(claim, digits) for claim in claims] if certified else claims
 
 

@@ -68,6 +68,7 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
         model.parameter(name)  # an unknown name fails before any work
     ranges, discrete, bool_names, held, described = [], [], [], {}, []
     bound = model.params
+    narrowed = model.search_space()  # ranges that depend on other parameters, or settings to hold
     for p in model.parameters:
         if p.name in sweep:
             if p.kind != "float":
@@ -78,13 +79,17 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             model.with_params(**{p.name: values})  # validates the values (hard ranges)
             discrete.append((p.name, values))
             described.append(f"{p.name}: {values.size} given values")
-        elif (p.name in fixed or p.kind in ("color", "choice")
+        elif (p.name in fixed or p.kind in ("color", "choice") or (p.name in narrowed and narrowed[p.name] is None)
               or np.ndim(bound[p.name]) > (1 if p.kind == "color" else 0)):
             held[p.name] = bound[p.name]
             described.append(f"{p.name} = {_text(bound[p.name])} (held)")
         elif p.kind == "bool":
             bool_names.append(p.name)
             described.append(f"{p.name} ∈ {{0, 1}}")
+        elif p.name in narrowed:
+            low, high = narrowed[p.name]
+            ranges.append(_Range(p.name, low, high, False))
+            described.append(ranges[-1].describe() + f" (declared {p.describe_range()}; narrowed by the model)")
         elif p.minimum is None or (p.maximum is not None and p.maximum == p.minimum):
             held[p.name] = bound[p.name]
             described.append(f"{p.name} = {_text(bound[p.name])} (no finite range declared; held)")

@@ -52,11 +52,14 @@ class Claim:
     cases: list[dict] = field(default_factory=list)
     #: With ``verify(certified=True)``: the albedo enclosures the claim was checked against (see :func:`certify`).
     certified: dict | None = None
+    #: "seed claims" or "published numbers" (set by :func:`brdfnorm.verify.verify`).
+    group: str = ""
 
     def as_dict(self) -> dict:
         return {
             **({} if self.certified is None else {"certified": self.certified}),
             "id": self.id,
+            "group": self.group,
             "source": self.source,
             "statement": self.statement,
             "formula_value": float(self.formula_value),

@@ -54,12 +54,12 @@ def models(debug: bool = DEBUG_OPTION) -> None:
     """List the built-in lobes with their formulas, parameters and known closed forms."""
     with guarded(debug):
         table = Table(title="built-in models")
-        for column in ("name", "formula", "parameters", "closed form"):
+        for column in ("name", "formula", "parameters", "closed form", "energy"):
             table.add_column(column)
         for name, cls in REGISTRY.items():
             params = ", ".join(f"{p.name}={p.describe_default()} {p.describe_range()}" for p in cls.parameters)
-            has_closed = "normal incidence" if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
-            table.add_row(name, cls.formula, params, has_closed)
+            has_closed = cls.closed_form_domain if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
+            table.add_row(name, cls.formula, params, has_closed, cls.energy or "—")
         console().print(table)
 
 

@@ -45,7 +45,8 @@ def verify(
         if json_output:
             write_file(STDOUT, to_json({"exponents": n, "claims": [c.as_dict() for c in claims]}) + "\n")
         else:
-            table = Table(title=f"seed claims ({sum(c.ok for c in claims)} of {len(claims)} ok)", show_lines=True)
+            groups = " and ".join(dict.fromkeys(c.group for c in claims))
+            table = Table(title=f"{groups} ({sum(c.ok for c in claims)} of {len(claims)} ok)", show_lines=True)
             for column, justify in (("claim", "left"), ("source", "left"), ("statement", "left"),
                                     ("formula", "right"), ("numerics", "right"), ("rel. error", "right"),
                                     *((("certified albedo", "right"),) if certified else ()),

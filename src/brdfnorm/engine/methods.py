@@ -509,7 +509,14 @@ from .routes import azimuthal as _azimuthal  # noqa: E402
 from .routes.microfacet import azimuthal_method as _azimuthal_method  # noqa: E402
 from .routes.microfacet import halfvector_method as _microfacet  # noqa: E402
 
-register_method(Method("azimuthal", _azimuthal.applies, _azimuthal_method,
+
+def _reciprocal_microfacet(applies):
+    """``applies`` except for ms=turquin over the view: that lobe is not reciprocal (its factor depends on V), and
+    the microfacet methods integrate at the fixed direction as if it were; the generic quadrature takes it."""
+    return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
+
+
+register_method(Method("azimuthal", _reciprocal_microfacet(_azimuthal.applies), _azimuthal_method,
                        "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
                 auto_priority=1)
 
@@ -518,7 +525,8 @@ register_method(Method("azimuthal", _azimuthal.applies, _azimuthal_method,
 # fail.
 from ..models.microfacet import MicrofacetModel  # noqa: E402
 
-register_method(Method("microfacet", lambda model, over: isinstance(model, MicrofacetModel), _microfacet,
+register_method(Method("microfacet", _reciprocal_microfacet(lambda model, over: isinstance(model, MicrofacetModel)),
+                       _microfacet,
                        "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=2)
 
 # Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise

@@ -18,7 +18,8 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
   weighted as given (:class:`SchlickWeighted`) — its own Fresnel, if it has one, must be switched off by its
-  parameters (e.g. ``f0=1`` for ``examples/ggx.brdf``), which is recorded in ``meta["dfg"]``.
+  parameters (e.g. ``f0=1`` for ``examples/ggx.brdf``), which is recorded in ``meta["dfg"]``. Where the other axes
+  are ``alpha`` or ``roughness``, a third channel DFG_cloth (:mod:`.cloth`, the sheen lobe's albedo).
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ from ..errors import ArgumentError
 from ..models.base import Model
 from ..parameters import resolve
 from .adaptive import adaptive_unit_interval
+from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
+from .cloth import cloth_model
 
 #: Axes that give the view direction: μ = cos θ_o, or θ_o itself (radians in the API).
 DIRECTION_AXES = ("mu", "theta")
@@ -454,7 +457,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     others = [n for n in names if n != direction]
     avg_shape = tuple(len(evaluated[n]) for n in others)
     cells = int(np.prod(shape))
-    total = cells * (1 + 2 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
+    total = cells * (1 + 3 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
     E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
                                                                 method, done, total, progress, spread, "E")
@@ -487,6 +490,15 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
             table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
             converged &= ok
             evaluations = evaluations + count
+        cloth = cloth_model(param_grids)  # the third channel engines store beside the pair (lut.cloth)
+        if cloth is not None:
+            value, error, ok, count, done, _ = _tabulate(cloth[0], shape, theta_grid, cloth[1], rtol, "auto", done,
+                                                         total, progress, spread, "DFG_cloth")
+            tables["DFG_cloth"], tables["DFG_cloth_error"] = value, error
+            table_axes["DFG_cloth"] = table_axes["DFG_cloth_error"] = tuple(names)
+            converged &= ok
+            evaluations = evaluations + count
+            dfg += "; " + CLOTH_DESCRIPTION
     return Computed(tables, table_axes, converged, avg_converged, int(evaluations.sum()), dfg)
 
 

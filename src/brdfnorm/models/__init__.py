@@ -8,15 +8,22 @@ from .beckmann import Beckmann
 from .beckmann_dielectric import BeckmannDielectric
 from .blinn_phong import BlinnPhong
 from .blinn_phong_gaussian import BlinnPhongGaussian
+from .burley import Burley
+from .charlie import Charlie
+from .eon import EnergyPreservingOrenNayar
+from .fon import FujiiOrenNayar
 from .ggx import GGX
 from .ggx_dielectric import GGXDielectric
 from .lambert import Lambert
+from .oren_nayar import OrenNayar
 from .phong import PhongModified, PhongOriginal
 
 REGISTRY: Registry[type[Model]] = Registry("model", "model", {
     cls.name: cls for cls in (Lambert, PhongOriginal, PhongModified, BlinnPhong, BlinnPhongGaussian, GGX, Beckmann,
-                              GGXDielectric, BeckmannDielectric)
+                              GGXDielectric, BeckmannDielectric, Charlie, OrenNayar,
+                              FujiiOrenNayar, EnergyPreservingOrenNayar, Burley)
 })
 
 __all__ = ["REGISTRY", "Lobe", "Model", "Over", "mirror", "Beckmann", "BeckmannDielectric", "BlinnPhong",
-           "BlinnPhongGaussian", "GGX", "GGXDielectric", "Lambert", "PhongModified", "PhongOriginal"]
+           "BlinnPhongGaussian", "Burley", "Charlie", "EnergyPreservingOrenNayar",
+           "FujiiOrenNayar", "GGX", "GGXDielectric", "Lambert", "OrenNayar", "PhongModified", "PhongOriginal"]

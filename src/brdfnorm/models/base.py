@@ -62,6 +62,10 @@ class Model(ABC):
     name: str = "model"
     #: One-line formula shown by ``brdfnorm models``.
     formula: str = ""
+    #: Whether the lobe conserves energy, in words (``brdfnorm models``; "" where not stated); ``check`` measures it.
+    energy: str = ""
+    #: Where :meth:`closed_form_albedo` holds, in words (``brdfnorm models``).
+    closed_form_domain: str = "normal incidence"
     #: Declared parameters (name, kind, range, default).
     parameters: tuple[Parameter, ...] = ()
     #: Number of output channels (1 for a scalar lobe, 3 for RGB).
@@ -125,6 +129,12 @@ class Model(ABC):
         (:func:`brdfnorm.engine.routes.hemisphere.estimate_lobe`).
         """
         return None
+
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """How ``brdfnorm check`` should search float parameters at the bound values, where the declared ranges do
+        not say it: name -> (low, high), a narrower range that goes with the other parameters, or None to hold the
+        bound value (a setting such as a table size, not a property of the surface). Empty by default."""
+        return {}
 
     def closed_form_albedo(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> np.ndarray:
         """Exact albedo where a closed form applies, NaN elsewhere; (..., C)."""

@@ -11,6 +11,8 @@ from .base import Model, normal_lobe, scalar_param
 class Lambert(Model):
     name = "lambert"
     formula = "f = reflectance / π"
+    energy = "conserved (E = reflectance)"
+    closed_form_domain = "every direction"
     parameters = (Parameter("reflectance", "float", 1.0, 0.0, 1.0, "diffuse reflectance (albedo)"),)
 
     def evaluate(self, L, V, params):

@@ -21,13 +21,17 @@ Channels: ``fresnel=none`` is one channel; every other Fresnel takes colours (f0
 grey) and makes the lobe three-channel.
 
 Multiple scattering (``ms=kulla-conty``, Kulla & Conty 2017, "Revisiting physically based shading at
-Imageworks"): f_ms(L, V) = (1 − E(μ_L))(1 − E(μ_V)) / (π (1 − E_avg)) with E(μ, α) the lobe's own albedo and
-E_avg(α) = 2∫₀¹ E(μ) μ dμ, computed by :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way
-—
+Imageworks"): f_ms(L, V) = F_ms (1 − E(μ_L))(1 − E(μ_V)) / (π (1 − E_avg)) with E(μ, α) the white (F = 1) lobe's
+own albedo, E_avg(α) = 2∫₀¹ E(μ) μ dμ, and — with a Fresnel — their colour term F_ms = F_avg² E_avg / (1 − F_avg (1 −
+E_avg)) per channel (the energy of the light that keeps bouncing, each bounce scaled by F_avg; F_ms = 1 for F = 1),
+F_avg = 2∫₀¹ F(μ) μ dμ exact: f0 + (f90 − f0)/21 for Schlick (Fdez-Agüera 2019), a Gauss–Legendre integral
+(from the critical angle on) for the exact dielectric and conductor. ``ms=turquin`` (Turquin 2019, "Practical
+multiple scattering compensation for microfacet models", eq. 16): f = f_ss (1 + F0 (1/E(μ_V) − 1)), F0 = F(μ = 1)
+per channel — not reciprocal (it depends on the view only), so its albedo over the view goes to quadrature.
+E and E_avg come from :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way —
 E on an N × N node grid over (μ, α) ∈ [0, 1]², interpolated bilinearly, E_avg on N nodes in α, linearly (the
 μ = 0 row is evaluated at μ = 1e-4); with ``ms_table=0`` exact values at every evaluation (slow: an albedo
-integral per direction — meant for checks). It is defined for F = 1 and isotropic α ≤ 1 only: with F ≠ 1 the
-compensation needs Kulla & Conty's Fresnel-average term, which is not implemented (refused, not approximated).
+integral per direction — meant for checks). Both need isotropic α ≤ 1 (the tables' range).
 """
 
 from __future__ import annotations
@@ -198,7 +202,7 @@ def register_compensation(provider: Callable) -> None:
 
 SHADOWING = ("height-correlated", "separable")
 FRESNEL = ("none", "schlick", "dielectric", "conductor")
-MULTIPLE_SCATTERING = ("none", "kulla-conty")
+MULTIPLE_SCATTERING = ("none", "kulla-conty", "turquin")
 
 
 def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
@@ -214,7 +218,7 @@ def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
         Parameter("eta", "color", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
         Parameter("k", "color", (0.0, 0.0, 0.0), 0.0, 1e3, "extinction coefficient (conductor)"),
         Parameter("ms", "choice", "none", choices=MULTIPLE_SCATTERING,
-                  description="multiple-scattering compensation (Kulla & Conty 2017)"),
+                  description="multiple-scattering compensation (Kulla & Conty 2017, Turquin 2019)"),
         Parameter("ms_table", "float", 32.0, 0.0, 1024.0, "kulla-conty table size N (0: exact, slow)"),
     )
 
@@ -256,10 +260,64 @@ def fresnel(params: Mapping[str, object], cos: np.ndarray) -> np.ndarray:
     return fresnel_conductor(c, eta, np.asarray(params["k"], dtype=float))
 
 
+#: Gauss–Legendre nodes for F_avg: 48 points on each of 8 panels per smooth piece (F is analytic in μ there).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(48)
+_PANELS = 8
+
+
+def _gauss_legendre(function: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """∫_lo^hi function(μ) dμ elementwise over (...) bounds, composite Gauss–Legendre (8 × 48 points)."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    edges = lo[..., None] + (hi - lo)[..., None] * np.linspace(0.0, 1.0, _PANELS + 1)
+    a, b = edges[..., :-1, None], edges[..., 1:, None]
+    mu = (a + b) / 2 + (b - a) / 2 * _GL_X
+    return np.sum(function(mu) * (b - a) / 2 * _GL_W, axis=(-2, -1))
+
+
+def fresnel_average(params: Mapping[str, object]) -> np.ndarray:
+    """F_avg = 2∫₀¹ F(μ) μ dμ per channel, (..., C): f0 + (f90 − f0)/21 for Schlick (2∫(1 − μ)⁵μ dμ = 1/21);
+    for the exact Fresnels a Gauss–Legendre integral, for a dielectric from the critical angle μ_c = √(1 − η²) on
+    (η < 1: F = 1 below it, an exact μ_c² there) in t with μ = μ_c + (1 − μ_c) t²."""
+    kind = params["fresnel"]
+    if kind == "none":
+        return np.ones(1)
+    if kind == "schlick":
+        f0, f90 = np.asarray(params["f0"], dtype=float), np.asarray(params["f90"], dtype=float)
+        return f0 + (f90 - f0) / 21.0
+    eta = np.asarray(params["eta"], dtype=float)
+    if kind == "conductor":
+        k = np.asarray(params["k"], dtype=float)
+        return _gauss_legendre(lambda mu: 2.0 * mu * fresnel_conductor(mu, eta[..., None, None], k[..., None, None]),
+                               np.zeros(eta.shape), np.ones(eta.shape))
+    critical = np.sqrt(np.clip(1.0 - eta * eta, 0.0, 1.0))
+    span = (1.0 - critical)[..., None, None]
+
+    def above(t: np.ndarray) -> np.ndarray:
+        # μ = μ_c + (1 − μ_c) t²: F has a square-root edge at μ_c (√(μ² − μ_c²)), analytic in t.
+        mu = critical[..., None, None] + span * t * t
+        return 2.0 * mu * fresnel_dielectric(mu, eta[..., None, None]) * 2.0 * span * t
+
+    return critical**2 + _gauss_legendre(above, np.zeros(eta.shape), np.ones(eta.shape))
+
+
+def fresnel_normal(params: Mapping[str, object]) -> np.ndarray:
+    """F0 = F(μ = 1) per channel, (C,) or (..., C): Turquin's scale of the missing energy."""
+    return fresnel(params, np.ones(np.shape(params["alpha"])))
+
+
+def fresnel_multiple_scattering(params: Mapping[str, object], e_avg: np.ndarray) -> np.ndarray:
+    """Kulla & Conty's F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), (..., C) against ``e_avg`` (...)."""
+    f_avg = fresnel_average(params)
+    e_avg = np.asarray(e_avg, dtype=float)[..., None]
+    return f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg))
+
+
 class MicrofacetModel(Model):
     """Walter et al.'s microfacet BRDF over a slope distribution (subclasses name the distribution)."""
 
     distribution: Distribution = GGXDistribution()
+    energy = ("conserved: single scattering loses energy (E < 1 for α > 0); ms=kulla-conty or turquin restore "
+              "it to 1 for F = 1")
 
     def _check(self) -> None:
         p = self._params
@@ -269,11 +327,21 @@ class MicrofacetModel(Model):
         table = float(np.asarray(p["ms_table"]).max())
         if np.ndim(p["ms_table"]) or (table != 0 and (table < 2 or table != int(table))):
             raise ParameterError("must be 0 (exact) or one whole number ≥ 2", where="parameter ms_table")
-        if p["fresnel"] != "none":
-            raise ParameterError("ms=kulla-conty needs fresnel=none: the Fresnel-average term is not implemented",
-                                 where="parameter ms")
         if not self.isotropic or np.any(np.asarray(p["alpha"]) > 1.0):
-            raise ParameterError("ms=kulla-conty tables cover isotropic alpha ≤ 1 only", where="parameter ms")
+            raise ParameterError(f"ms={p['ms']} tables cover isotropic alpha ≤ 1 only", where="parameter ms")
+
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """``check`` holds the table size, the Fresnel inputs the chosen Fresnel does not read, and — with a
+        compensation, whose tables cover isotropic α ≤ 1 — the anisotropic widths, searching α over [ALPHA_MIN, 1]."""
+        p = self._params
+        space: dict[str, tuple[float, float] | None] = {"ms_table": None}
+        if p["fresnel"] != "dielectric" and p["fresnel"] != "conductor":
+            space["eta"] = None
+        if p["fresnel"] != "conductor":
+            space["k"] = None
+        if p["ms"] != "none":
+            space.update(alpha=(ALPHA_MIN, 1.0), alpha_x=None, alpha_y=None)
+        return space
 
     @property
     def channels(self) -> int:  # type: ignore[override]
@@ -301,6 +369,8 @@ class MicrofacetModel(Model):
 
     def projected(self, L, V, params):
         value = self.single_scattering(L, V, params)
+        if params["ms"] == "turquin":
+            return value * self.turquin_factor(V, params)
         if params["ms"] == "kulla-conty":
             value = value + self.multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
         return value
@@ -309,25 +379,41 @@ class MicrofacetModel(Model):
         with np.errstate(divide="ignore", invalid="ignore"):
             value = self.single_scattering(L, V, params) / L[..., 2:3]
         value = np.where(L[..., 2:3] > 0, value, 0.0)
+        if params["ms"] == "turquin":
+            return value * self.turquin_factor(V, params)
         if params["ms"] == "kulla-conty":
             value = value + self.multiple_scattering(L, V, params)
         return value
 
-    def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
-        """Kulla & Conty's f_ms = (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., 1); 0 at α = 0 (a mirror
-        loses no energy: E = E_avg = 1)."""
+    def _table(self, params):
         if _COMPENSATION is None:
-            raise EvaluationError("ms=kulla-conty needs the half-vector integrator (import brdfnorm)", where=self.name)
+            raise EvaluationError(f"ms={params['ms']} needs the half-vector integrator (import brdfnorm)",
+                                  where=self.name)
+        return _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+
+    def turquin_factor(self, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """Turquin's 1 + F0 (1/E(μ_V) − 1), (..., C); 1 where μ_V ≤ 0."""
+        mu_v = V[..., 2]
+        alpha = np.asarray(params["alpha"], dtype=float)
+        shape = np.broadcast_shapes(mu_v.shape, alpha.shape)
+        e_v = self._table(params).albedo(np.broadcast_to(np.maximum(mu_v, 0.0), shape), np.broadcast_to(alpha, shape))
+        f0 = fresnel_normal(params)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = 1.0 + f0 * (1.0 / e_v[..., None] - 1.0)
+        return np.where((np.broadcast_to(mu_v, shape) > 0)[..., None] & (e_v[..., None] > 0), factor, 1.0)
+
+    def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """Kulla & Conty's f_ms = F_ms (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., C); 0 at α = 0 (a mirror
+        loses no energy: E = E_avg = 1)."""
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
         alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), shape)
         mu_l = np.broadcast_to(L[..., 2], shape)
         mu_v = np.broadcast_to(V[..., 2], shape)
-        table = _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
-        e_l, e_v, e_avg = table.energies(mu_l, mu_v, alpha)
+        e_l, e_v, e_avg = self._table(params).energies(mu_l, mu_v, alpha)
         lossy = (mu_l > 0) & (mu_v > 0) & (e_avg < 1.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             value = (1.0 - e_l) * (1.0 - e_v) / (np.pi * (1.0 - e_avg))
-        return np.where(lossy, value, 0.0)[..., None]
+        return np.where(lossy, value, 0.0)[..., None] * fresnel_multiple_scattering(params, e_avg)
 
     def lobe(self, fixed, params, over):
         ax, ay = roughness(params)

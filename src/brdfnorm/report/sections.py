@@ -242,10 +242,12 @@ def verify_section(verify: Callable) -> Callable[[Context], Section]:
                          Cell("✔ holds" if claim.ok else "✘ fails", css="good" if claim.ok else "bad")])
         failed = [str(c.id) for c in claims if not c.ok]
         ctx.findings.append(
-            f"{len(claims) - len(failed)} of {len(claims)} checked claims of the seed articles hold"
+            f"{len(claims) - len(failed)} of {len(claims)} checked claims (the seed articles' and the field's "
+            "published numbers) hold"
             + (f"; refuted: {', '.join(failed)}." if failed else "."))
         body = (
-            "<p>Claims of the seed articles (formulas, fits, folklore), each recomputed independently by "
+            "<p>Claims of the seed articles (formulas, fits, folklore) and the field's published numbers (EON, "
+            "Kulla-Conty's F_avg, GGX furnace values), each recomputed independently by "
             "<code>brdfnorm.verify</code>: the value the claim gives, the value computed here, their relative "
             "difference and the verdict.</p>\n"
             + table([["id", "source", "claim", "claimed value", "computed value", "relative difference",

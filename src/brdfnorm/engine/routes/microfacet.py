@@ -23,6 +23,8 @@ from ...models.microfacet import (
     Distribution,
     GGXDistribution,
     MicrofacetModel,
+    fresnel_multiple_scattering,
+    fresnel_normal,
     register_compensation,
 )
 from .azimuthal import white_albedo
@@ -65,19 +67,30 @@ azimuthal_method = _albedo_method(
 def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping[str, object], value: np.ndarray,
                       error: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(value, error) of the single-scattering albedo (K, C) plus, with ``ms=kulla-conty``, the compensation
-    lobe's albedo in closed form: ∫ f_ms (N·L) dL = (1 − E(μ_V)) · 2∫₀¹(1 − E(μ))μ dμ / (1 − E_avg), the inner
-    integral exact for the table as read (piecewise linear in μ)."""
-    if params["ms"] != "kulla-conty":
+    lobe's albedo in closed form: ∫ f_ms (N·L) dL = F_ms (1 − E(μ_V)) · 2∫₀¹(1 − E(μ))μ dμ / (1 − E_avg), the inner
+    integral exact for the table as read (piecewise linear in μ); with ``ms=turquin`` the single-scattering albedo
+    times 1 + F0 (1/E(μ_V) − 1) (the factor depends on the fixed view only; over the light this is exact)."""
+    if params["ms"] == "none":
         return value, error
     K = fixed.shape[0]
     table = compensation(model.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
     alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
-    e_v, lost = table.albedo(fixed[:, 2], alpha), 1.0 - table.average_albedo(alpha)
+    e_v = table.albedo(fixed[:, 2], alpha)
+    if params["ms"] == "turquin":
+        f0 = np.broadcast_to(fresnel_normal(params), value.shape)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = 1.0 + f0 * (1.0 / e_v[:, None] - 1.0)
+            # d(factor)/dE = −F0/E²: the table entries' errors (a bilinear read mixes four of them) through it.
+            propagated = np.abs(value) * f0 * 4.0 * table.error / (e_v[:, None] ** 2)
+        return value * factor, error * np.abs(factor) + propagated
+    e_avg = table.average_albedo(alpha)
+    lost = 1.0 - e_avg
+    colour = np.broadcast_to(fresnel_multiple_scattering(params, e_avg), value.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         compensated = np.where(lost > 0, (1.0 - e_v) * table.missing_energy(alpha) / lost, 0.0)
         # The table entries' own quadrature errors, through a ratio of sums of at most a few of them.
         propagated = np.where(lost > 0, 4.0 * table.error / lost, 0.0)
-    return value + compensated[:, None], error + propagated[:, None]
+    return value + compensated[:, None] * colour, error + propagated[:, None] * np.abs(colour)
 
 
 # -- Kulla & Conty's compensation tables -------------------------------------------------------------------
@@ -189,7 +202,8 @@ def _bilinear(table, mu_nodes, alpha_nodes, mu, alpha):
 def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensation:
     distribution = {"ggx": GGXDistribution, "beckmann": BeckmannDistribution}[distribution_name]()
     if size == 0:
-        return Compensation(distribution, shadowing, 0)
+        # Exact values are integrals to rtol _EXACT_RTOL: their error, ten times that, is what callers propagate.
+        return Compensation(distribution, shadowing, 0, error=10 * _EXACT_RTOL)
     nodes = np.linspace(0.0, 1.0, size)
     mu_grid, alpha_grid = np.meshgrid(nodes, nodes, indexing="ij")
     grid = _albedo_grid(distribution, shadowing, np.maximum(mu_grid, MU_CLAMP), alpha_grid)
