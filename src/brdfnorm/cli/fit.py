@@ -89,6 +89,11 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
         for axis in (top, bottom):
             axis.set_xscale("log")
         top.set_yscale("log")
+    from ..report.figures import plain_text, readable_log_ticks
+
+    plain_text(fig)  # the parameter name is the user's: never mathtext
+    for axis in (top, bottom):
+        readable_log_ticks(axis)
     fig.tight_layout()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
