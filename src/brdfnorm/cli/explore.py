@@ -31,6 +31,10 @@ def explore(
     Serves only the models named here, the built-ins and examples/; Ctrl-C stops it.
     """
     with guarded(debug):
+        from ..extras import require
+
+        for module in ("anyio", "starlette", "uvicorn", "watchfiles"):  # the server's stack: one install hint
+            require(module, "explore", where="explore")
         from ..explore import Catalog, bind, serve, url_of
         from ..explore.server import is_loopback
 
