@@ -4,7 +4,8 @@ A fenced ```sh block contributes its lines that start with ``brdfnorm`` (continu
 with ``brdfnorm`` bound to ``python -m brdfnorm`` (the checkout's sources first on PYTHONPATH) in a fresh
 directory that holds a link to ``examples/``; each must exit 0. ``brdfnorm explore`` starts a server that runs
 until stopped: it passes when it prints the address it listens on, and is then stopped. A ```python block runs
-as a script in such a directory. The marker line ``<!-- slow -->`` right before a block puts it in the slow tier;
+as a script in such a directory. The README's examples are in the quick tier, the guides' (docs/) in the slow
+one; the marker line ``<!-- slow -->`` right before a block puts a README example in the slow tier too;
 ``<!-- skip -->`` is for examples that need what a test machine does not have (a Dask cluster on other hosts),
 and such skips are counted below so that they cannot grow unnoticed.
 """
@@ -13,8 +14,10 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -69,7 +72,7 @@ def examples() -> list[Example]:
 
 def commands(code: str) -> list[str]:
     """The ``brdfnorm`` command lines of a shell block, continuation lines joined."""
-    joined = re.sub(r"\\\n\s*", " ", code)
+    joined = re.sub(r"\s*\\\n\s*", " ", code)
     return [line.strip() for line in joined.splitlines() if line.strip().startswith("brdfnorm ")]
 
 
@@ -87,16 +90,15 @@ def _workdir(tmp_path: Path) -> Path:
 
 def _explore(command: str, cwd: Path) -> None:
     """Start the explorer, wait for the address it prints, stop it."""
-    process = subprocess.Popen(["bash", "-c", _SHELL + "exec " + command], cwd=cwd, env=_environment(),
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    seen = []
+    argv = [sys.executable, "-m", "brdfnorm", *shlex.split(command.split("#")[0])[1:]]
+    process = subprocess.Popen(argv, cwd=cwd, env=_environment(), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    seen: list[str] = []
+    reader = threading.Thread(target=lambda: seen.extend(iter(process.stdout.readline, "")), daemon=True)
+    reader.start()
     try:
         deadline = time.monotonic() + 90
-        os.set_blocking(process.stdout.fileno(), False)
         while time.monotonic() < deadline:
-            chunk = process.stdout.read()
-            if chunk:
-                seen.append(chunk)
             if "http://127.0.0.1:" in "".join(seen):
                 return
             if process.poll() is not None:
@@ -134,7 +136,9 @@ EXAMPLES = examples()
 
 
 def _param(example: Example):
-    marks = [pytest.mark.slow] if example.marker == "slow" else []
+    # The README's examples run in the quick tier (the first thing a user tries); the guides' in the slow one.
+    slow = example.marker == "slow" or example.page != "README.md"
+    marks = [pytest.mark.slow] if slow else []
     return pytest.param(example, id=example.id, marks=marks)
 
 
@@ -147,7 +151,7 @@ def test_example_runs(example: Example, tmp_path):
 
 def test_examples_are_found_and_skips_are_counted():
     """The collector sees the README's and the docs' examples, and skips only the ones listed."""
-    assert sum(e.page == "README.md" for e in EXAMPLES) >= 5
+    assert sum(e.page == "README.md" for e in EXAMPLES) >= 4
     assert {e.page for e in EXAMPLES} >= {"README.md", "docs/tables.md", "docs/python.md", "docs/cli.md"}
     assert {e.id for e in EXAMPLES if e.marker == "skip"} == SKIPPED
 

@@ -71,8 +71,8 @@ def check_command(
                                     help="Values of a float parameter instead of its declared range (repeatable): "
                                          "V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
     only: str = typer.Option(None, "--only", metavar="CHECK,...",
-                             help=f"Run only these checks ({','.join(CHECKS)}); default: "
-                                  f"{','.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
+                             help=f"Run only these checks, comma-separated ({', '.join(CHECKS)}); default: "
+                                  f"{', '.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
     normalized: bool = typer.Option(False, "--normalized", help="The lobe is meant to be normalized: also check "
                                     "that its albedo at the --at direction is 1 across the parameters."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention for --normalized: normal (fixed "

@@ -10,6 +10,7 @@ import contextlib
 import functools
 import inspect
 import math
+import shutil
 import sys
 import warnings
 from collections.abc import Callable, Iterator
@@ -100,7 +101,9 @@ class ResultOutput:
 
     def write(self, records) -> None:
         """Render ``records`` as the chosen format (table, JSON or CSV) to the output file or stdout."""
-        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output)))
+        to_terminal = self.output in (None, STDOUT) and sys.stdout.isatty()
+        width = shutil.get_terminal_size().columns if to_terminal else None  # a file or a pipe: nothing cut
+        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output), width))
 
 
 def result_options(command: Callable) -> Callable:
