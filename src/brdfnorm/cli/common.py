@@ -279,7 +279,8 @@ def load_model(name_or_path: str, params: list[str]) -> Model:
     model = load(name_or_path)
     parsed = {}
     for name, text in parse_params(params).items():
-        parsed[name] = model.parameter(name).parse(text)
+        target = model.aliases[name][0] if name in model.aliases else name  # roughness parses as alpha does
+        parsed[name] = model.parameter(target).parse(text)
     return model.with_params(**parsed) if parsed else model
 
 

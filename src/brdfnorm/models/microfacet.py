@@ -259,6 +259,9 @@ def fresnel(params: Mapping[str, object], cos: np.ndarray) -> np.ndarray:
 class MicrofacetModel(Model):
     """Walter et al.'s microfacet BRDF over a slope distribution (subclasses name the distribution)."""
 
+    #: Engines and .brdf files speak of perceptual roughness: α = roughness² (Burley 2012; Karis 2013).
+    aliases = {"roughness": ("alpha", np.square, "alpha = roughness²")}
+
     distribution: Distribution = GGXDistribution()
 
     def _check(self) -> None:
