@@ -137,3 +137,13 @@ def test_fit_lut_refuses_a_fit_off_by_more_than_100_percent(tmp_path):
     assert not (tmp_path / "bp.glsl").exists()
     allowed = cli(*args, "--allow-poor-fit")
     assert allowed.returncode == 0 and (tmp_path / "bp.glsl").is_file()
+
+
+def test_shell_completion_completes_commands_and_options():
+    env = {**os.environ, "_BRDFNORM_COMPLETE": "complete_bash", "COMP_WORDS": "brdfnorm albedo --ov",
+           "COMP_CWORD": "2"}
+    result = subprocess.run([sys.executable, "-m", "brdfnorm"], capture_output=True, text=True, timeout=120,
+                            env=env)
+    assert result.returncode == 0 and result.stdout.split() == ["--over"]
+    script = cli("--show-completion", "bash")
+    assert script.returncode == 0 and "_BRDFNORM_COMPLETE" in script.stdout
