@@ -45,6 +45,9 @@ def test_unknown_names_get_did_you_mean():
         bn.load("ggx", roughness=0.5, alpha=0.2)
     with pytest.raises(ParameterError, match="did you mean 'alpha'"):
         bn.load("ggx").parameter("alfa")
+    # sweeps and searches run over the parameter itself: said in one line, not "unknown parameter"
+    with pytest.raises(ParameterError, match=r"roughness is not a parameter of its own here \(alpha = roughness²\)"):
+        bn.load("ggx").parameter("roughness")
 
 
 @pytest.mark.slow
