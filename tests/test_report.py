@@ -206,6 +206,10 @@ def test_fit_table_reproduces_seed_003(default_report):
 
 @pytest.mark.slow
 def test_verify_table(default_report):
+    """Columns mean the same on every row: A (the seed's side), B (independent), |A − B| / |B| recomputed from
+    them, the claimed relation (a claimed failure says by how much it fails), the criterion, the verdict, and each
+    claim's explaining line under its statement."""
+    from brdfnorm.claims import RELATIONS
     from brdfnorm.verify import verify
 
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
@@ -213,7 +217,54 @@ def test_verify_table(default_report):
     claims = verify()
     assert [row[0][0] for row in rows] == [claim.id for claim in claims]
     for row, claim in zip(rows, claims, strict=True):
-        assert row[6][0] == ("✔ holds" if claim.ok else "✘ fails")
+        _, _, statement, relation, a, b, difference, criterion, verdict = row
+        assert statement[0] == claim.statement + claim.detail  # the explaining line is in the cell
+        assert relation[0] == RELATIONS[claim.relation] and criterion[0] == claim.criterion != ""
+        assert a[1] == claim.formula_value and b[1] == claim.numeric_value
+        assert difference[1] == pytest.approx(abs(a[1] - b[1]) / abs(b[1]), rel=1e-12, abs=1e-300)
+        assert verdict[0] == ("✔ confirmed" if claim.ok else "✘ refuted")
+    by_id = {row[0][0]: row for row in rows}
+    # The negative claims read as failures, with the size of the failure in the difference column.
+    stokes = by_id["stokes-z-cubed-fails"]
+    assert stokes[3][0].startswith("A ≠ B") and stokes[6][1] == pytest.approx(1.0)
+    small_n = by_id["gaussian-fit-small-n-error"]
+    assert small_n[3][0].startswith("A ≠ B") and small_n[6][1] == pytest.approx(0.42, abs=0.01)
+    assert by_id["gaussian-hyperbola-beats-line"][3][0] == "A < B"
+    # A difference is never shown as 0 beside values that differ (issue 31: 0.00 beside a 1.4e-7 difference).
+    for row in rows:
+        if row[4][1] != row[5][1]:
+            assert row[6][1] > 0 and float(row[6][0]) > 0
+
+
+@pytest.mark.slow
+def test_furnace_residual_is_integrated(monkeypatch):
+    """The Kulla–Conty furnace residual comes from integrating the compensated lobe: with exact tables it is
+    not 0 by construction but the integration error (small, nonzero), and for 16×16 tables it agrees with the
+    engine's adaptive hemisphere cubature of the whole lobe (method="quadrature", a second route)."""
+    from brdfnorm import albedo, load
+    from brdfnorm.report import microfacet
+
+    monkeypatch.setattr(microfacet, "FURNACE_ALPHAS", (0.5,))
+    residuals = microfacet.furnace_residuals(quick=True)
+    value, error = residuals[0]
+    assert 0.0 < value < 1e-6 and 0.0 < error
+    mu = microfacet.grid_values(0.05, 1.0, 4)
+    total = albedo(load("ggx", ms="kulla-conty", ms_table=16.0, alpha=0.5), np.arccos(mu), method="quadrature",
+                   rtol=1e-7).value[..., 0]
+    assert residuals[16][0] == pytest.approx(float(np.max(np.abs(1.0 - total))), rel=1e-4)
+    assert residuals[16][0] > 1e-4
+
+
+def test_microfacet_loss_sentence_names_its_numbers():
+    """"loses up to X %" is the max over (μ, α) of 1 − E; 1 − E_avg is named as the average (issue 31: 68.2 %
+    beside E_avg = 0.416)."""
+    from brdfnorm.report.microfacet import loss_sentence
+
+    mu, alpha = np.array([0.0, 0.5, 1.0]), np.array([0.5, 1.0])
+    lut = {"1-E": np.array([[0.3, 0.682], [0.1, 0.2], [0.01, 0.05]]), "E_avg": np.array([0.8, 0.416])}
+    sentence = loss_sentence(mu, alpha, lut)
+    assert "up to 68.2 % of the energy at one view (max over μ of 1 − E(μ, α), at μ = 0, α = 1)" in sentence
+    assert "58.4 % averaged over views (1 − E_avg, E_avg = 0.4160 at α = 1)" in sentence
 
 
 @pytest.mark.slow

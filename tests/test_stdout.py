@@ -144,7 +144,7 @@ def test_issue_done_when_command_redirected_to_a_file_compiles(tmp_path, languag
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     suffix = {"glsl": "glsl", "hlsl": "hlsl", "c": "c", "python": "py"}[language]
     command = (f"{sys.executable} -m brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form auto "
-               f"--emit {language} > f.{suffix}")
+               f"--emit {language} -v > f.{suffix}")  # -v: the forms tried, on stderr
     done = subprocess.run(command, shell=True, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     path = tmp_path / f"f.{suffix}"

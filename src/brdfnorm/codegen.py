@@ -22,6 +22,7 @@ import keyword
 import re
 from dataclasses import dataclass
 
+from .exact_forms import ExactForm
 from .fit import FitResult
 from .forms import HyperbolaForm, RationalForm, SmithForm
 from .registry import Registry
@@ -135,6 +136,9 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
         return lines
     if isinstance(form, SmithForm):
         return _smith_body(form, result, language, x, t)
+    if isinstance(form, ExactForm):
+        power = (lambda b, e: f"{b} ** ({e})") if language == "python" else (lambda b, e: f"pow({b}, {e})")
+        return [f"return {form.code(x, lambda v: literal(v, language), power)}{syn.end}"]
     assert isinstance(form, RationalForm)
     u = x
     if form.sqrt:
@@ -205,9 +209,10 @@ def emit(result: FitResult, language: str, model_name: str, *, variable: str | N
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     ranges = "; ".join(f"{comment_text(k)} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
     where = ", ".join(f"{comment_text(k)} = {v:.6g}" for k, v in result.argmax.items())
+    how = (f"the exact closed form (seed 000), checked against quadrature at {result.samples} samples,"
+           if result.form == "closed-form" else f"{result.form} fit ({result.metric}) over {result.samples} samples,")
     comment = [
-        f"{comment_text(quantity)} of {comment_text(model_name)}: {result.form} fit ({result.metric}) over "
-        f"{result.samples} samples,",
+        f"{comment_text(quantity)} of {comment_text(model_name)}: {how}",
         f"{ranges}.",
         f"Max relative error {result.max_rel_error:.3g} (at {where}); max absolute error "
         f"{result.max_abs_error:.3g}.",

@@ -67,6 +67,15 @@ class BrdfFileError(BrdfnormError):
         self.column = column
 
 
+class MissingExtraError(BrdfnormError, ImportError):
+    """An optional dependency is not installed; the message says which extra installs it
+    (:func:`brdfnorm.extras.require`)."""
+
+    def __init__(self, message: str, where: str | None = None, module: str | None = None) -> None:
+        super().__init__(message, where)
+        self.module = module
+
+
 class EvaluationError(BrdfnormError, ArithmeticError):
     """A BRDF could not be evaluated (non-finite values, loop budget exhausted, ...)."""
 

@@ -6,6 +6,7 @@ declare *slider* ranges (BRDF Explorer's UI limits), so values outside them are 
 
 from __future__ import annotations
 
+import difflib
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -111,13 +112,17 @@ class Parameter:
         return ",".join(f"{v:g}" for v in np.atleast_1d(np.asarray(self.default, dtype=float)))
 
 
-def resolve(parameters: tuple[Parameter, ...], values: Mapping[str, object], *, where: str = "") -> dict:
-    """Defaults overridden by ``values``; unknown names are refused with the list of known ones."""
+def resolve(parameters: tuple[Parameter, ...], values: Mapping[str, object], *, where: str = "",
+            aliases: tuple[str, ...] = ()) -> dict:
+    """Defaults overridden by ``values``; unknown names are refused with the closest known name ("did you
+    mean") and the list of known ones (``aliases``: other names the model accepts)."""
     known = {p.name: p for p in parameters}
     for name in values:
         if name not in known:
-            names = ", ".join(known) or "none"
-            raise ParameterError(f"unknown parameter {name!r} (known: {names})", where=where or None)
+            names = ", ".join([*known, *aliases]) or "none"
+            close = difflib.get_close_matches(str(name), [*known, *aliases], n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise ParameterError(f"unknown parameter {name!r}{hint} (known: {names})", where=where or None)
     resolved = {}
     for p in parameters:
         resolved[p.name] = p.validate(values[p.name]) if p.name in values else p.default

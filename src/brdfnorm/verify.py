@@ -88,9 +88,10 @@ def certify(claim: Claim, digits: int = 30) -> Claim:
     (formulas that are float64 procedures). Claims that are not albedo values are returned unchanged."""
     if claim.id not in CERTIFIABLE:
         return claim
-    import flint
-
     from .engine.routes import certified
+    from .extras import require
+
+    flint = require("flint", "certified", where="--certified")
     from .models import REGISTRY
 
     model_name, degrees, closed_form = CERTIFIABLE[claim.id]

@@ -37,9 +37,21 @@ GAUSSIAN_RANGE = (1.0, 512.0)
 TWO_PI = 2.0 * np.pi
 
 
+#: What a claim states about its two values A (``formula_value``: the seed's formula or side) and B
+#: (``numeric_value``: the independent computation), in words a reader of a table needs.
+RELATIONS = {
+    "equal": "A = B",
+    "differ": "A ≠ B (a claimed failure or error)",
+    "less": "A < B",
+    "peak": "A ≥ B (A at L = N; B the largest elsewhere)",
+}
+
+
 @dataclass(frozen=True)
 class Claim:
-    """One checked statement. ``rel_error`` = |formula − numeric| / |numeric|; ``ok`` is the verdict."""
+    """One checked statement. ``rel_error`` = |formula − numeric| / |numeric| (or what ``detail`` says);
+    ``ok`` is the verdict. ``relation`` (a key of :data:`RELATIONS`) says what the claim states about the two
+    values, ``criterion`` the test the verdict applies, in words."""
 
     id: str
     source: str
@@ -54,6 +66,8 @@ class Claim:
     certified: dict | None = None
     #: "seed claims" or "published numbers" (set by :func:`brdfnorm.verify.verify`).
     group: str = ""
+    relation: str = "equal"
+    criterion: str = ""
 
     def as_dict(self) -> dict:
         return {
@@ -67,6 +81,8 @@ class Claim:
             "rel_error": float(self.rel_error),
             "ok": bool(self.ok),
             "detail": self.detail,
+            "relation": self.relation,
+            "criterion": self.criterion,
             "cases": self.cases,
         }
 
@@ -96,6 +112,7 @@ def parametric(claim_id: str, source: str, statement: str, n, formula, numeric, 
         bool(np.all(errors <= tol)),
         f"{detail}; {where}" if detail else where,
         cases,
+        criterion=f"|A − B| / |B| ≤ {tol:g} at every n",
     )
 
 

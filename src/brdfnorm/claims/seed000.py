@@ -53,6 +53,7 @@ def blinn_phong_folklore(n: np.ndarray) -> Claim:
         "(n+8)/8π is not the Blinn-Phong factor (an approximation; error quantified)",
         float(folk[worst]), float(exact[worst]), float(errors[worst]),
         bool(errors[worst] > 1e-6 and consistent <= 1e-12), detail,
+        relation="differ", criterion="|A − B| / |B| > 1e-6 (and the exact factor confirmed to 1e-12)",
     )  # fmt: skip
 
 
@@ -115,6 +116,7 @@ def _peak_premise(claim_id: str, statement: str, energy: Callable, normal: Calla
     return Claim(
         claim_id, SOURCES["000"], statement, float(closed[worst_n]), float(values[worst_n, worst_t]),
         float(max(0.0, excess[worst_n, worst_t - 1])), holds and consistent <= 1e-10, detail,
+        relation="peak", criterion="E(θ) / E(0) − 1 ≤ 1e-9 at every n and θ; E(0) = A to 1e-10",
     )  # fmt: skip
 
 

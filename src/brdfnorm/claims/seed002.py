@@ -27,6 +27,7 @@ def half_vector_length(_: np.ndarray) -> Claim:
         "bp-half-vector-length", SOURCES["002"], "‖ω_i + ω_o‖ = √2·√(ω_i·ω_o + 1)",
         float(formula[worst]), float(numeric[worst]), float(errors[worst]), bool(errors.max() <= 1e-13),
         f"{wi.shape[0]} random pairs of upper-hemisphere directions; numeric: the norm of the vector sum",
+        criterion="|A − B| / |B| ≤ 1e-13 for every pair",
     )  # fmt: skip
 
 
@@ -115,6 +116,7 @@ def delta_theta_2f1(n: np.ndarray) -> Claim:
         "tolerance 1e-20",
         [{"n": r[0], "A": r[1], "formula_value": float(r[2]), "numeric_value": float(r[3]), "rel_error": r[4]}
          for r in rows],
+        criterion="|A − B| / |B| ≤ 1e-20 at every (n, A)",
     )  # fmt: skip
 
 
@@ -207,6 +209,7 @@ def weierstrass(n: np.ndarray) -> Claim:
         f"θ_o = 60°, Δθ ∈ {{π, 2, 0.5}} × n = {', '.join(f'{k:g}' for k in n)} (both divided by the integrand's "
         "maximum); both forms by "
         f"adaptive Gauss–Legendre; worst at n = {nn[worst]:g}, Δθ = {dd[worst]:.3g}; tolerance 1e-11",
+        criterion="|A − B| / |B| ≤ 1e-11 at every (n, Δθ)",
     )  # fmt: skip
 
 
@@ -279,6 +282,7 @@ def stokes_cosine(_: np.ndarray) -> Claim:
         circle, surface, error, error <= 1e-12 and mismatch <= 1e-8 and abs(surface - np.pi) <= 1e-12,
         f"F̄ by the Poincaré-lemma integral = (−y/2, x/2, 0); max |∇×F̄ − G| = {mismatch:.1g} (finite differences); "
         "formula: the line integral; numeric: the hemisphere integral of the cosine",
+        criterion="|A − B| / |B| ≤ 1e-12",
     )  # fmt: skip
 
 
@@ -297,6 +301,7 @@ def stokes_z_cubed(_: np.ndarray) -> Claim:
         f"∮ F̄·dl = {circle:.3g} = ∫(∇×F̄)·ω dω = {curl_flux:.2g} (Stokes holds for F̄), but ∫ G·ω dω = 2π/5 = "
         f"{surface:.6f}: ∇×F̄ = (−3xz²/5, −3yz²/5, 2z³/5) ≠ G, max |∇×F̄ − G| = {mismatch:.3g}, as ∇·G = 3z² ≠ 0; "
         "ok means the failure is reproduced",
+        relation="differ", criterion="|A − B| / |B| > 0.5, with Stokes confirmed for F̄",
     )  # fmt: skip
 
 
@@ -326,4 +331,5 @@ def divergence_cosine(_: np.ndarray) -> Claim:
         "divergence-cosine", SOURCES["002"], "divergence theorem with F = N: ∭∇·N dV + ∬_disk N_z dA = π",
         formula, surface, error, error <= 1e-12 and abs(surface - np.pi) <= 1e-12,
         f"volume term {volume:.1g}, disk term {disk:.15g}; numeric: the hemisphere integral of N·ω",
+        criterion="|A − B| / |B| ≤ 1e-12",
     )  # fmt: skip

@@ -60,6 +60,7 @@ def gaussian_fit(_: np.ndarray) -> Claim:
         f"least-squares re-fit of the exact factor at n = 1, 2, …, 512 gives {refit[0]:.10f} + {refit[1]:.10f}·n: "
         f"the seed's 8 printed decimals (ok when within half a unit of the 8th); relative differences "
         f"{errors[0]:.2g} (intercept), {errors[1]:.2g} (slope)",
+        criterion="|A − B| ≤ 5e-9 (half a unit of the 8th decimal), both coefficients",
     )  # fmt: skip
 
 
@@ -72,6 +73,7 @@ def gaussian_small_n(_: np.ndarray) -> Claim:
         "gaussian-fit-small-n-error", SOURCES["003"], "the fitted factor is inaccurate at small n: ≈42 % at n = 1",
         seed, exact, error, abs(error - 0.42) <= 0.01,
         "numeric: exact factor 1/E at L = N by adaptive Gauss–Legendre; ok when the error is 42 % ± 1 %",
+        relation="differ", criterion="|A − B| / |B| = 0.42 ± 0.01",
     )  # fmt: skip
 
 
@@ -85,6 +87,7 @@ def gaussian_hyperbola(_: np.ndarray) -> Claim:
         float(hyperbola.max_rel_error / line.max_rel_error), bool(hyperbola.max_rel_error < line.max_rel_error),
         "formula: max relative error of the fitted hyperbola over n ∈ [1, 512]; numeric: of the fitted line "
         "(both least squares on absolute residuals); rel_error column: their ratio",
+        relation="less", criterion="A < B",
     )  # fmt: skip
 
 

@@ -8,6 +8,7 @@ import sys
 import typer
 
 from .application import app
+from .help import tidy
 
 # isort: split
 # Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
@@ -16,7 +17,7 @@ from . import audit, check, core, explore, fit, info, lut, report, verify  # noq
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point: usage errors become one line (``error: ...``) with exit code 2, as project errors do."""
-    command = typer.main.get_command(app)
+    command = tidy(typer.main.get_command(app))
     try:
         code = command.main(args=argv if argv is not None else sys.argv[1:], prog_name="brdfnorm",
                             standalone_mode=False)

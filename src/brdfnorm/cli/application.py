@@ -5,10 +5,33 @@ from __future__ import annotations
 
 import typer
 
+from .help import OrderedGroup
+
 app = typer.Typer(
     name="brdfnorm",
+    cls=OrderedGroup,
     help="Exact energy normalization of analytic BRDFs: albedo, normalization factors, fits, shader code.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
-    add_completion=False,
+    add_completion=True,
 )
+
+
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("brdfnorm")
+        except PackageNotFoundError:  # run from a source tree that was never installed
+            number = "unknown (not installed)"
+        typer.echo(f"brdfnorm {number}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _root(
+    show_version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                      help="Print the version and exit."),
+) -> None:
+    """Exact energy normalization of analytic BRDFs: albedo, normalization factors, fits, shader code."""

@@ -8,6 +8,7 @@ verdict is reported but does not fail), 2 for bad input.
 from __future__ import annotations
 
 import re
+import time
 
 import numpy as np
 import typer
@@ -71,8 +72,8 @@ def check_command(
                                     help="Values of a float parameter instead of its declared range (repeatable): "
                                          "V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
     only: str = typer.Option(None, "--only", metavar="CHECK,...",
-                             help=f"Run only these checks ({','.join(CHECKS)}); default: "
-                                  f"{','.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
+                             help=f"Run only these checks, comma-separated ({', '.join(CHECKS)}); default: "
+                                  f"{', '.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
     normalized: bool = typer.Option(False, "--normalized", help="The lobe is meant to be normalized: also check "
                                     "that its albedo at the --at direction is 1 across the parameters."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention for --normalized: normal (fixed "
@@ -83,7 +84,9 @@ def check_command(
                                            "float32 models such as mitsuba: 256 units of float32, 1.5e-5).",
                                            show_default=False),
     budget: str = typer.Option("20", "--budget", metavar="SECONDS|COUNTevals",
-                               help="Work per model: seconds (default 20) or evaluations, e.g. 5e7evals."),
+                               help="Work for the whole command, shared by the models (each gets what is left "
+                                    "divided by the models still to check): seconds (default 20) or "
+                                    "evaluations, e.g. 5e7evals."),
     points: int = typer.Option(48, "--points", help="Parameter points of the coarse grid (per bool combination "
                                "and swept value)."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
@@ -93,7 +96,9 @@ def check_command(
     """Audit BRDFs: energy conservation (largest albedo), reciprocity, positivity, finiteness, normalization.
 
     Every float parameter with a declared range is searched over it (open ranges up to min + 1e4), bools take
-    both values; -p NAME=VALUE holds a parameter, --sweep gives its values. Exit code 1 when a check fails.
+    both values; -p NAME=VALUE holds a parameter, --sweep gives its values. With several models, one row is
+    printed per model as it finishes. Exit code 1 when a check fails; 3 when none fails but the budget cut a
+    search short (the verdict reads "pass (partial: k of N points)").
     The albedo integrals go through local processes or a Dask cluster like a table's cells (the same report);
     --checkpoint resumes one model's check under a budget of evaluations.
     """
@@ -115,32 +120,74 @@ def check_command(
             for name in sweeps:
                 m.parameter(name)
         reports = []
-        for name, m in zip(models, loaded, strict=True):
+        stream = not json_output and len(loaded) > 1
+        started, spent = time.monotonic(), 0
+        for index, (name, m) in enumerate(zip(models, loaded, strict=True)):
+            share = _share(limit, len(loaded) - index, time.monotonic() - started, spent)
             try:
                 report = run_check(m, checks=checks, sweep=sweeps, fixed=held, tolerance=tolerance, at=at.value,
-                                   over=over.value, budget=limit, points=points, workers=spread.workers,
+                                   over=over.value, budget=share, points=points, workers=spread.workers,
                                    scheduler=spread.scheduler, checkpoint=spread.checkpoint,
                                    chunk_cells=spread.chunk_cells)
             except ArgumentError as error:
                 flags = {"sweep": "--sweep", "checks": "--only", "budget": "--budget", "points": "--points"}
                 error.where = flags.get(error.where, error.where)
                 raise
+            spent += int(report.coverage.get("evaluations", 0))
             reports.append(report)
-            typer.echo(f"{name}: {report.status}{_failed(report)} — {coverage_text(report)}", err=True)
+            typer.echo(f"{name}: {verdict_text(report)}{_failed(report)} — {coverage_text(report)}", err=True)
+            if stream:  # one row per model as it finishes, not a table at the end
+                console().print(row_text(report), markup=False, highlight=False, soft_wrap=True)
         if json_output:
             shown = tolerance if tolerance is not None or not reports else reports[0].tolerance
             write_file(STDOUT, to_json({"tolerance": shown, "over": over.value, "checks": list(checks),
                                         "status": _overall(reports),
-                                        "reports": [report_json(r) for r in reports]}) + "\n")
+                                        "reports": [{**report_json(r), "partial": _partial(r)} for r in reports]})
+                       + "\n")
         elif len(reports) == 1:
             console().print(detail_table(reports[0]))
-        else:
-            out = console()
-            out.print(summary_table(reports))
-            if any(r.failed for r in reports):
-                out.print(failures_table(reports))
+        elif any(r.failed for r in reports):
+            console().print(failures_table(reports))
         if any(r.failed for r in reports):
             raise typer.Exit(1)
+        if any(_partial(r) for r in reports):
+            raise typer.Exit(PARTIAL_EXIT)
+
+
+#: Exit status when no check failed but a budget cut a search short.
+PARTIAL_EXIT = 3
+
+
+def _share(total: Budget, left: int, elapsed: float, evaluations: int) -> Budget:
+    """The budget of the next model: what is left of ``total`` divided by the ``left`` models still to check."""
+    if total.seconds is not None:
+        return Budget(seconds=max(total.seconds - elapsed, 0.0) / left or 1e-3)
+    if total.evaluations is not None:
+        return Budget(seconds=None, evaluations=max((total.evaluations - evaluations) // left, 1))
+    return total
+
+
+def _partial(report: CheckReport) -> dict | None:
+    """``{"points": k, "of": N}`` when the search covered only k of its N planned parameter points."""
+    c = report.coverage
+    planned = c.get("parameter_points_planned")
+    done = [c[key]["parameter_points"] for key in ("energy", "pairs") if key in c]
+    if not planned or not done or min(done) >= planned:
+        return None
+    return {"points": int(min(done)), "of": int(planned)}
+
+
+def verdict_text(report: CheckReport) -> str:
+    """The verdict, with "(partial: k of N points)" when the budget cut the search short."""
+    partial = _partial(report)
+    return report.status + (f" (partial: {partial['points']} of {partial['of']} points)" if partial else "")
+
+
+def row_text(report: CheckReport) -> str:
+    """One model's row of a multi-model check: verdict, each check's headline, time."""
+    cells = "; ".join(f"{name}: {r.status}, {cell(r)}" for name, r in report.results.items())
+    return (f"{report.source or report.model}  {verdict_text(report)}  {cells}  "
+            f"({report.coverage['elapsed_s']:.1f} s)")
 
 
 def _failed(report: CheckReport) -> str:
@@ -149,7 +196,8 @@ def _failed(report: CheckReport) -> str:
 
 def _overall(reports: list[CheckReport]) -> str:
     statuses = [r.status for r in reports]
-    return "fail" if "fail" in statuses else "inconclusive" if "inconclusive" in statuses else "pass"
+    overall = "fail" if "fail" in statuses else "inconclusive" if "inconclusive" in statuses else "pass"
+    return overall + (" (partial)" if overall == "pass" and any(_partial(r) for r in reports) else "")
 
 
 def coverage_text(report: CheckReport) -> str:
@@ -188,7 +236,9 @@ def report_json(report: CheckReport) -> dict:
 
 def detail_table(report: CheckReport) -> Table:
     # Names and messages come from outside (file names, parameter names): text, never rich markup.
-    table = Table(title=escape(f"{report.source or report.model}: {VERDICT[report.status]} "
+    partial = _partial(report)
+    cut = f" (partial: {partial['points']} of {partial['of']} points)" if partial else ""
+    table = Table(title=escape(f"{report.source or report.model}: {VERDICT[report.status]}{cut} "
                                f"(tolerance {report.tolerance:g})"))
     for column in ("check", "verdict", "value", "details"):
         table.add_column(column, overflow="fold")

@@ -10,6 +10,7 @@ import contextlib
 import functools
 import inspect
 import math
+import shutil
 import sys
 import warnings
 from collections.abc import Callable, Iterator
@@ -100,7 +101,9 @@ class ResultOutput:
 
     def write(self, records) -> None:
         """Render ``records`` as the chosen format (table, JSON or CSV) to the output file or stdout."""
-        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output)))
+        to_terminal = self.output in (None, STDOUT) and sys.stdout.isatty()
+        width = shutil.get_terminal_size().columns if to_terminal else None  # a file or a pipe: nothing cut
+        write_file(self.output or STDOUT, render(records, result_format(self.json_output, self.csv_output), width))
 
 
 def result_options(command: Callable) -> Callable:
@@ -177,17 +180,31 @@ def guarded(debug: bool = False) -> Iterator[None]:
         if error.where in CLI_NAMES:
             error.where = CLI_NAMES[error.where]
         raise fail(str(error).replace("\n", " ")) from None
+    except ModuleNotFoundError as error:  # an optional package imported deeper down: the install hint, exit 2
+        from ..extras import missing_extra
+
+        hint = missing_extra(error)
+        if debug:
+            raise
+        if hint is None:
+            raise _internal(error) from None
+        raise fail(str(hint)) from None
     except KeyboardInterrupt as interrupt:  # Ctrl-C, or SIGTERM while a table's cells run (brdfnorm.parallel)
         signal_name = f" by {interrupt.args[0]}" if interrupt.args else ""
         raise fail(f"interrupted{signal_name}", 143 if signal_name else 130) from None
     except Exception as error:  # noqa: BLE001 — the contract: no traceback without --debug
         if debug:
             raise
-        detail = str(error).splitlines()[0] if str(error) else ""
-        raise fail(f"internal error: {type(error).__name__}: {detail} (please report this, with the output of "
-                   "the same command run with --debug)", 1) from None
+        raise _internal(error) from None
     finally:
         warnings.showwarning = previous
+
+
+def _internal(error: Exception) -> typer.Exit:
+    """An unexpected exception: one line and exit 1."""
+    detail = str(error).splitlines()[0] if str(error) else ""
+    return fail(f"internal error: {type(error).__name__}: {detail} (please report this, with the output of "
+                "the same command run with --debug)", 1)
 
 
 def _number(text: str, option: str) -> float:
@@ -262,7 +279,8 @@ def load_model(name_or_path: str, params: list[str]) -> Model:
     model = load(name_or_path)
     parsed = {}
     for name, text in parse_params(params).items():
-        parsed[name] = model.parameter(name).parse(text)
+        target = model.aliases[name][0] if name in model.aliases else name  # roughness parses as alpha does
+        parsed[name] = model.parameter(target).parse(text)
     return model.with_params(**parsed) if parsed else model
 
 

@@ -11,7 +11,8 @@ from .application import app
 from .common import DEBUG_OPTION, guarded
 
 
-@app.command()
+@app.command(short_help="Explore lobes in the browser: sliders, the lobe in 2-D and 3-D, E(θ_o), exact factors, "
+                        "the energy verdict, and the factor fitted as shader code.")
 def explore(
     models: list[str] = typer.Argument(None, metavar="MODEL_OR_FILE",
                                        help="Built-in names or .brdf files to open first; files are watched and "
@@ -31,6 +32,10 @@ def explore(
     Serves only the models named here, the built-ins and examples/; Ctrl-C stops it.
     """
     with guarded(debug):
+        from ..extras import require
+
+        for module in ("anyio", "starlette", "uvicorn", "watchfiles"):  # the server's stack: one install hint
+            require(module, "explore", where="explore")
         from ..explore import Catalog, bind, serve, url_of
         from ..explore.server import is_loopback
 

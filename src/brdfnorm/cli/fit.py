@@ -19,6 +19,7 @@ from rich.table import Table
 
 from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
+from ..exact_forms import EXACT, exact_form
 from ..fit import METRICS, FitResult, fit, parse_form
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
@@ -89,6 +90,11 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
         for axis in (top, bottom):
             axis.set_xscale("log")
         top.set_yscale("log")
+    from ..report.figures import plain_text, readable_log_ticks
+
+    plain_text(fig)  # the parameter name is the user's: never mathtext
+    for axis in (top, bottom):
+        readable_log_ticks(axis)
     fig.tight_layout()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
@@ -102,7 +108,8 @@ def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="The fitted parameter: NAME=START:STOP:COUNT[:log] or NAME=V,V,..."),
+                              help="The fitted parameter: NAME=START:STOP:COUNT, NAME=START:STOP:COUNT:log "
+                                   "or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
                             "(coefficients vs max absolute error; an entry beats every smaller fit by ≥ 1 %; "
@@ -110,8 +117,10 @@ def fit_command(
                             "--target is then absolute "
                             "(default 5e-3) and --max-coefficients defaults to 16."),
     lut_table: str = typer.Option("E", "--table", metavar="NAME", help="The table fitted with --lut."),
-    form: str = typer.Option("auto", "--form", help="linear | hyperbola | poly:D | rational:P/Q | "
-                             "rational-sqrt:P/Q | auto; with --at view add @D (degree in cos θ_o) and "
+    form: str = typer.Option("auto", "--form", help="closed-form | linear | hyperbola | poly:D | rational:P/Q | "
+                             "rational-sqrt:P/Q | auto (which prefers closed-form where the model has one: "
+                             "phong, modified-phong and blinn-phong over n at normal); with --at view add @D "
+                             "(degree in cos θ_o) and "
                              "optionally ~tau, e.g. rational-sqrt:4/2@3~tau. With --lut of a (mu, alpha) "
                              "table also smith:P/Q@D or smith:P/Q@D/DQ, E = 1 − s·(N + ln s·L)/Q in "
                              "s = μ/√(μ² + α²(1 − μ²)) with Q of degree DQ in α², e.g. smith:1/1@1/2 (GGX to "
@@ -131,6 +140,11 @@ def fit_command(
     output: str = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the emitted code here."),
     plot: str = typer.Option(None, "--plot", metavar="FILE.png", help="Plot α, the fit and its error."),
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help="Also print the forms --form auto tried."),
+    allow_poor_fit: bool = typer.Option(False, "--allow-poor-fit",
+                                        help="With --lut: write the code even when the fit's relative error "
+                                             "exceeds 100 % (refused otherwise: the table is then rarely the "
+                                             "one meant)."),
     spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
@@ -146,7 +160,7 @@ def fit_command(
             if model is not None or sweep is not None or at is not At.normal or theta is not None:
                 raise ArgumentError("--lut fits a table file: give no MODEL, --sweep, --at or --theta", where="--lut")
             _fit_lut(lut, lut_table, form, (metric or Metric.minimax_abs).value, 5e-3 if target is None else target,
-                     max_coefficients or 16, emit_language, output, json_output)
+                     max_coefficients or 16, emit_language, output, json_output, allow_poor_fit)
             return
         if model is None or sweep is None:
             raise ArgumentError("give MODEL and --sweep NAME=SPEC (or --lut FILE)", where="--sweep")
@@ -160,7 +174,7 @@ def fit_command(
             raise ArgumentError(f"need at least 2, got {max_coefficients}", where="--max-coefficients")
         if plot is not None and not plot.lower().endswith(".png"):
             raise ArgumentError(f"the plot is a PNG file: {plot!r}", where="--plot")
-        if form.strip() != "auto":
+        if form.strip() not in ("auto", "closed-form"):
             parse_form(form, two_d=at is At.view)  # a bad --form is reported before any integration
         if output is not None and not Path(output).parent.is_dir():
             raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
@@ -168,6 +182,12 @@ def fit_command(
         degrees = parse_angles(theta) if theta is not None else None
         m = load_model(model, param)
         m.parameter(name)  # an unknown swept parameter is a one-line error before any integration
+        exact = exact_form(m.name, name, at.value)
+        if form.strip() == "closed-form" and exact is None:
+            raise ArgumentError(f"{m.name} has no closed-form factor over {name} at {at.value}; closed forms: "
+                                f"{', '.join(EXACT)} over n at normal", where="--form")
+        if exact is not None and form.strip() in ("auto", "closed-form"):
+            form = exact  # the exact formula: cheaper and more accurate than any fit
         job = sweep_job(m, at.value, name, values, None if degrees is None else np.radians(degrees), rtol=rtol,
                         chunk_cells=spread.chunk_cells)
         samples = compute_cells(job, f"{m.name}: sampling the factor over {name}", spread)
@@ -202,11 +222,17 @@ def fit_command(
             return
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
-        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT))
+        _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT),
+                 verbose=verbose)
+
+
+#: ``fit --lut`` refuses a fit whose relative error exceeds this (unless --allow-poor-fit): a fit that far off
+#: means the table is not the one meant (issue 31: the README's E.npz held another lobe's table).
+POOR_FIT = 1.0
 
 
 def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_coefficients: int,
-             emit_language: str | None, output: str | None, json_output: bool) -> None:
+             emit_language: str | None, output: str | None, json_output: bool, allow_poor_fit: bool = False) -> None:
     """``fit --lut``: a two-axis table fitted by :func:`brdfnorm.lut.fitting.fit_table`; the Pareto front on
     stderr, the code (or the expression) alone on stdout."""
     from ..lut import load
@@ -221,6 +247,10 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
                        max_coefficients=max_coefficients)
     best, (x, t) = result.best, result.variables
     source = str(data.meta.get("model", "table"))
+    if best.max_rel_error > POOR_FIT and not allow_poor_fit:
+        raise ArgumentError(f"the best fit ({best.form}) of table {table} of {source} is off by up to "
+                            f"{100 * best.max_rel_error:.0f} % relative error; is this the table you meant? "
+                            "(--allow-poor-fit writes it anyway)", where=path)
     code = (emit(best, emit_language, source, variable=x, second=t, quantity=f"Table {table}",
                  suffix=table) if emit_language else None)
     if output is not None:
@@ -249,10 +279,12 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
         write_file(STDOUT, best.expression + "\n")
 
 
-def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool) -> None:
+def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_stderr: bool,
+             verbose: bool = False) -> None:
     out = console(stderr=to_stderr)
+    how = "exact, seed 000" if result.form == "closed-form" else result.metric
     out.print(f"[bold]{escape(model)}[/bold] normalization factor at {at}: [bold]{result.form}[/bold] "
-              f"({result.metric}, {result.samples} samples)")
+              f"({how}, {result.samples} samples)")
     out.print(f"  α ≈ {result.expression}", highlight=False, markup=False)
     where = ", ".join(f"{k} = {v:.6g}" for k, v in result.argmax.items())
     out.print(f"  max relative error {result.max_rel_error:.4g} at {where}; max absolute error "
@@ -262,7 +294,7 @@ def _summary(result: FitResult, model: str, at: str, output: str | None, *, to_s
               + f"; operations: {ops or 'none'}", markup=False)
     for warning in result.warnings:
         out.print(f"  [yellow]warning:[/yellow] {escape(warning)}")
-    if result.tried:
+    if result.tried and verbose:
         table = Table(title="forms tried (auto)")
         for column in ("form", "coefficients", "max rel. error", "pole/degenerate"):
             table.add_column(column)

@@ -27,7 +27,8 @@ def info(
     json_output: bool = typer.Option(False, "--json", help="Print one JSON object."),
     debug: bool = DEBUG_OPTION,
 ) -> None:
-    """Parameters (kind, range, default), channels, reciprocity on a sample of pairs, isFunc section."""
+    """Parameters (kind, range, default), channels, reciprocity on a sample of pairs, and whether a .brdf file
+    has an isFunc (importance-sampling) section."""
     with guarded(debug):
         if samples < 1:
             raise ArgumentError(f"need at least 1 pair, got {samples}", where="--samples")

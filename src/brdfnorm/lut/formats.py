@@ -331,12 +331,9 @@ def _read_code(data: bytes, path: str) -> Lut:
 
 def _openexr():
     """The OpenEXR package (an optional extra), or a one-line error saying how to install it."""
-    try:
-        import OpenEXR
-    except ImportError:
-        raise ArgumentError("the .exr format needs the OpenEXR package: pip install 'brdfnorm[exr]' (or write .npz)",
-                            where="format") from None
-    return OpenEXR
+    from ..extras import require
+
+    return require("OpenEXR", "exr", where=".exr format")
 
 
 def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:

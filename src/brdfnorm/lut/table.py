@@ -186,6 +186,9 @@ def axis_parameter(model: Model, name: str, values: np.ndarray) -> tuple[str, np
             raise ArgumentError("f0 must lie in (0, 1) (η = (1 + √F0)/(1 − √F0))", where="axes")
         root = np.sqrt(values)
         return "eta", (1.0 + root) / (1.0 - root)
+    if name in model.aliases and name not in {p.name for p in model.parameters}:
+        target, mapping, _ = model.aliases[name]  # e.g. a roughness axis sets alpha = roughness²
+        return target, mapping(np.asarray(values, dtype=float))
     return name, values
 
 
@@ -575,12 +578,15 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     unconverged = int(np.count_nonzero(~result.converged))
     if result.avg_converged is not None:
         unconverged += int(np.count_nonzero(~result.avg_converged))
-    fixed = {k: v for k, v in model.params.items() if k not in axes}
+    aliased = {name: model.aliases[name] for name in axes if name in model.aliases}  # e.g. roughness → alpha
+    fixed = {k: v for k, v in model.params.items() if k not in axes and k not in {t for t, _, _ in aliased.values()}}
     meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": dict(clamp or {}),
             "rtol": rtol, "method": method, "units": {"mu": "cos theta_o", "theta": "radians"},
             "brdfnorm": __version__, "unconverged": unconverged, "evaluations": result.evaluations}
     if result.dfg is not None:
         meta["dfg"] = result.dfg
+    if aliased:
+        meta["aliases"] = {name: text for name, (_, _, text) in aliased.items()}
     return Lut(result.tables, axes, meta, result.table_axes)
 
 

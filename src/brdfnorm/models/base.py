@@ -9,6 +9,7 @@ how a sweep over a parameter is integrated in one vectorized pass.
 
 from __future__ import annotations
 
+import difflib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -74,9 +75,12 @@ class Model(ABC):
     isotropic: bool = True
     #: The file the model was read from, as the user gave it (None for built-in lobes); errors name it.
     source_path: str | None = None
+    #: Other names a parameter answers to: alias -> (parameter, the parameter's value from the alias's, the
+    #: mapping in words). ``roughness`` on the microfacet lobes sets α = roughness².
+    aliases: dict = {}
 
     def __init__(self, **values: object) -> None:
-        self._params = resolve(self.parameters, values, where=self.name)
+        self._params = resolve(self.parameters, self.translate(values), where=self.name, aliases=tuple(self.aliases))
         self._check()
 
     @property
@@ -88,10 +92,21 @@ class Model(ABC):
         """A copy bound to other parameter values."""
         clone = object.__new__(type(self))
         clone.__dict__.update(self.__dict__)
-        merged = {**self._params, **values}
+        merged = {**self._params, **self.translate(values)}
         clone._params = resolve(self.parameters, merged, where=self.name)
         clone._check()
         return clone
+
+    def translate(self, values: Mapping[str, object]) -> dict:
+        """``values`` with each alias (:attr:`aliases`) replaced by the parameter it sets."""
+        out = dict(values)
+        for alias, (target, mapping, text) in self.aliases.items():
+            if alias in out:
+                if target in values:
+                    raise ParameterError(f"give {target} or {alias}, not both ({text})", where=self.name)
+                value = self.parameter(target).validate(out.pop(alias))
+                out[target] = mapping(np.asarray(value, dtype=float))
+        return out
 
     def _check(self) -> None:  # noqa: B027 - a hook: most lobes have nothing to check across their parameters
         """Checks across parameters, after each binding (a ParameterError for values that do not go together)."""
@@ -101,7 +116,13 @@ class Model(ABC):
         for p in self.parameters:
             if p.name == name:
                 return p
-        raise ParameterError(f"unknown parameter {short_repr(name)}", where=self.name)
+        names = [p.name for p in self.parameters] + list(self.aliases)
+        close = difflib.get_close_matches(str(name), names, n=1, cutoff=0.6)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        if name in self.aliases:  # -p and table axes take it; a sweep or a search runs over the parameter itself
+            target, _, text = self.aliases[name]
+            raise ParameterError(f"{name} is not a parameter of its own here ({text}): use {target}", where=self.name)
+        raise ParameterError(f"unknown parameter {short_repr(name)}{hint}", where=self.name)
 
     # -- evaluation -------------------------------------------------------------------------------
     @abstractmethod

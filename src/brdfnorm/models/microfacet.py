@@ -315,6 +315,9 @@ def fresnel_multiple_scattering(params: Mapping[str, object], e_avg: np.ndarray)
 class MicrofacetModel(Model):
     """Walter et al.'s microfacet BRDF over a slope distribution (subclasses name the distribution)."""
 
+    #: Engines and .brdf files speak of perceptual roughness: α = roughness² (Burley 2012; Karis 2013).
+    aliases = {"roughness": ("alpha", np.square, "alpha = roughness²")}
+
     distribution: Distribution = GGXDistribution()
     energy = ("conserved: single scattering loses energy (E < 1 for α > 0); ms=kulla-conty or turquin restore "
               "it to 1 for F = 1")

@@ -152,7 +152,24 @@ def _csv(records: Records) -> str:
     return buffer.getvalue()
 
 
-def _table(records: Records) -> str:
+def _same_channels(records: Records, column: Column) -> bool:
+    """Whether every row's value in ``column`` is several channels that are all equal (a grey colour model)."""
+    if not records.rows:
+        return False
+    for row in records.rows:
+        value = records.cell(row, column)
+        if not isinstance(value, (list, tuple, np.ndarray)) or len(value) < 2:
+            return False
+        first = value[0]
+        if any(not (v == first or (v != v and first != first)) for v in value[1:]):
+            return False
+    return True
+
+
+def _table(records: Records, width: int | None = None) -> str:
+    """A table for people. ``width``: the terminal's columns (the table fits them, numbers wrap rather than
+    lose digits); None (not a terminal): the table's natural width, nothing cut. Columns whose channels agree
+    on every row show one value, the header saying so."""
     from rich.console import Console  # rich loads only when a table is drawn, not with the library
     from rich.markup import escape
     from rich.table import Table
@@ -160,12 +177,21 @@ def _table(records: Records) -> str:
     # Names from outside (a file called "[bold]x.brdf") are text, never rich markup.
     table = Table(title=escape(records.title))
     shown = [c for c in records.columns if c.in_table]
+    collapsed = {c.key for c in shown if _same_channels(records, c)}
     for column in shown:
-        table.add_column(escape(column.header), justify="right")
+        header = column.header + (" (all channels)" if column.key in collapsed else "")
+        table.add_column(escape(header), justify="right", overflow="fold")
     for row in records.rows:
-        table.add_row(*(escape(format_value(records.cell(row, c), c.digits, bound=c.bound)) for c in shown))
+        cells = []
+        for c in shown:
+            value = records.cell(row, c)
+            cells.append(escape(format_value(value[0] if c.key in collapsed else value, c.digits, bound=c.bound)))
+        table.add_row(*cells)
     buffer = io.StringIO()
-    Console(file=buffer, width=160).print(table)
+    if width is None:
+        natural = Console(file=buffer, width=100_000).measure(table).maximum
+        width = max(natural, 40)
+    Console(file=buffer, width=width).print(table)
     return buffer.getvalue()
 
 
@@ -191,6 +217,8 @@ def validate_format(name: object) -> Format:
     return FORMATS[FORMATS.validate(name)]
 
 
-def render(records: Records, format_name: str = "table") -> str:
-    """``records`` as text in the named format."""
-    return validate_format(format_name).render(records)
+def render(records: Records, format_name: str = "table", width: int | None = None) -> str:
+    """``records`` as text in the named format; ``width`` (tables only): the terminal's columns, or None for
+    the table's natural width (when the text goes to a file or a pipe)."""
+    chosen = validate_format(format_name)
+    return chosen.render(records, width) if chosen.name == "table" else chosen.render(records)

@@ -230,11 +230,9 @@ def _in_pool(pool: ProcessPoolExecutor, tasks: list[tuple]) -> Iterator[ChunkRes
 
 def dask_client(scheduler: str):
     """A ``distributed.Client`` connected to ``scheduler``, or a one-line error naming the address."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise ArgumentError("a Dask scheduler needs the 'distributed' package (pip install 'brdfnorm[dask]')",
-                            where="scheduler") from None
+    from ..extras import require
+
+    Client = require("distributed", "dask", where="scheduler").Client  # noqa: N806 - the class, by its own name
     try:
         return Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as error:

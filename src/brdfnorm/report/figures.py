@@ -15,7 +15,8 @@ import matplotlib.style
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
+from matplotlib.text import Text
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 
@@ -23,10 +24,14 @@ from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 #: pixel, sharp on HiDPI screens).
 DPI = 144
 CSS_PER_INCH = 96
-#: ``text.parse_math`` off: model names and file names are drawn as text — a name such as ``a$\foo{$b`` is not
-#: mathtext (the figures spell their symbols in Unicode).
+#: ``text.parse_math`` stays on: Matplotlib's own log-axis tick labels are mathtext (``$\mathdefault{10^{-1}}$``)
+#: and print as raw TeX without it. Titles, axis labels, legend entries and annotations — where model names,
+#: parameter names and file names go — are drawn as plain text instead (:func:`plain_text`), so a name such
+#: as ``a$\foo{$b`` is never read as mathtext (the figures spell their own symbols in Unicode).
 STYLE = {"font.size": 9.0, "axes.titlesize": 10.0, "legend.fontsize": 8.0, "axes.grid": True,
-         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white", "text.parse_math": False}
+         "grid.alpha": 0.35, "lines.linewidth": 1.4, "figure.facecolor": "white"}
+#: At most this many labelled decades on a log axis (more would overlap on the narrow panels).
+LOG_TICKS = 6
 CHANNEL_NAMES = ("R", "G", "B")
 
 
@@ -58,10 +63,64 @@ def render(name: str, alt: str, draw) -> Image:
     """Draw with ``draw() -> Figure`` under the fixed style and encode it as PNG."""
     with matplotlib.style.context(["default", STYLE]):
         figure = draw()
+        plain_text(figure)
+        for axis in figure.axes:
+            readable_log_ticks(axis)
         buffer = io.BytesIO()
         figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": None})
     width, height = figure.get_size_inches()
     return Image(name, buffer.getvalue(), round(width * CSS_PER_INCH), round(height * CSS_PER_INCH), alt)
+
+
+def plain_text(figure: Figure) -> None:
+    """Draw every title, axis label, legend entry and annotation as plain text (no mathtext): these hold names
+    a user chose. Tick labels and offset texts keep mathtext, which Matplotlib's formatters write."""
+    texts: list[Text] = list(figure.texts)
+    for suptitle in ("_suptitle", "_supxlabel", "_supylabel"):
+        if getattr(figure, suptitle, None) is not None:
+            texts.append(getattr(figure, suptitle))
+    for legend in figure.legends:
+        texts.extend(legend.get_texts())
+    for axes in figure.axes:
+        texts.extend([axes.title, axes._left_title, axes._right_title, axes.xaxis.label, axes.yaxis.label])
+        texts.extend(axes.texts)
+        legend = axes.get_legend()
+        if legend is not None:
+            texts.extend(legend.get_texts())
+            texts.append(legend.get_title())
+    for item in texts:
+        item.set_parse_math(False)
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def log_label(value: float, _position=None) -> str:
+    """A log-axis tick label in plain Unicode: 1, 10, 10², 10⁻³ for decades, 0.2 or 5 between them (no
+    mathtext, so the label reads the same whatever ``text.parse_math`` says)."""
+    if not np.isfinite(value) or value <= 0:
+        return ""
+    k = int(round(np.log10(value)))
+    if abs(value / 10.0**k - 1.0) > 1e-9:
+        return f"{value:.3g}".replace("-", "−")
+    return {0: "1", 1: "10"}.get(k, "10" + str(k).translate(_SUPERSCRIPT))
+
+
+def readable_log_ticks(axes) -> None:
+    """On each log-scaled axis: decades labelled in Unicode (:func:`log_label`), at most :data:`LOG_TICKS` of
+    them, minor ticks unlabelled — Matplotlib labels minor ticks (2×10⁰, 3×10⁰, …) on short ranges, and they
+    overlap. An axis spanning less than one decade keeps a few minor labels (it has no decade to label)."""
+    for axis in (axes.xaxis, axes.yaxis):
+        if axis.get_scale() != "log":
+            continue
+        low, high = sorted(axis.get_view_interval())
+        axis.set_major_locator(LogLocator(base=10.0, numticks=LOG_TICKS))
+        axis.set_major_formatter(FuncFormatter(log_label))
+        if low > 0 and np.floor(np.log10(high)) >= np.ceil(np.log10(low)):
+            axis.set_minor_formatter(NullFormatter())
+        else:
+            axis.set_minor_locator(LogLocator(base=10.0, subs=(2.0, 5.0), numticks=LOG_TICKS))
+            axis.set_minor_formatter(FuncFormatter(log_label))
 
 
 def channels(values: np.ndarray) -> list[tuple[str, np.ndarray]]:

@@ -31,18 +31,21 @@ td.good { color: #1b7a2f; }
 .scroll { overflow-x: auto; }
 .findings li { margin: 0.25em 0; }
 .note { color: #555; font-size: 0.92em; }
+small.detail { color: #555; }
 """
 
 
 @dataclass(frozen=True)
 class Cell:
-    """A table cell: shown text, optional full-precision value, optional CSS class, optional span."""
+    """A table cell: shown text, optional full-precision value, optional CSS class, optional span, and an optional
+    explaining line drawn small under the text."""
 
     text: str
     value: float | None = None
     css: str = ""
     colspan: int = 1
     rowspan: int = 1
+    detail: str = ""
 
 
 def number(value: float, digits: int = 12, css: str = "num") -> Cell:
@@ -100,7 +103,8 @@ def _cell(cell: Cell | str, tag: str) -> str:
         attributes += f' rowspan="{cell.rowspan}"'
     if cell.value is not None:
         attributes += f' data-value="{cell.value!r}"'
-    return f"<{tag}{attributes}>{escape(cell.text)}</{tag}>"
+    detail = f'<br><small class="detail">{escape(cell.detail)}</small>' if cell.detail else ""
+    return f"<{tag}{attributes}>{escape(cell.text)}{detail}</{tag}>"
 
 
 def _quote(value: str) -> str:

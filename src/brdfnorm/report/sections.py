@@ -233,25 +233,37 @@ def polar_section(ctx: Context) -> Section:
 
 def verify_section(verify: Callable) -> Callable[[Context], Section]:
     def build(ctx: Context) -> Section:
+        from ..claims import RELATIONS
+
         claims = list(verify())
         rows = []
         for claim in claims:
-            rows.append([text(str(claim.id)), text(str(claim.source)), text(str(claim.statement)),
-                         _value_cell(claim.formula_value), _value_cell(claim.numeric_value),
-                         relative(claim.rel_error) if claim.rel_error is not None else text("—"),
-                         Cell("✔ holds" if claim.ok else "✘ fails", css="good" if claim.ok else "bad")])
+            # The difference column is recomputed here from the two values shown, so that it means
+            # |A − B| / |B| on every row (a claim's own rel_error may be another measure, e.g. a ratio).
+            a, b = float(claim.formula_value), float(claim.numeric_value)
+            difference = abs(a - b) / abs(b) if b != 0 else (0.0 if a == b else float("inf"))
+            rows.append([text(str(claim.id)), text(str(claim.source).split(" (")[0]),
+                         Cell(str(claim.statement), detail=str(claim.detail)),
+                         text(RELATIONS.get(claim.relation, claim.relation)), _value_cell(claim.formula_value),
+                         _value_cell(claim.numeric_value), Cell(f"{difference:.2e}", difference, "num"),
+                         text(claim.criterion or "—"),
+                         Cell("✔ confirmed" if claim.ok else "✘ refuted", css="good" if claim.ok else "bad")])
         failed = [str(c.id) for c in claims if not c.ok]
         ctx.findings.append(
             f"{len(claims) - len(failed)} of {len(claims)} checked claims (the seed articles' and the field's "
-            "published numbers) hold"
+            "published numbers) are confirmed"
             + (f"; refuted: {', '.join(failed)}." if failed else "."))
         body = (
-            "<p>Claims of the seed articles (formulas, fits, folklore) and the field's published numbers (EON, "
-            "Kulla-Conty's F_avg, GGX furnace values), each recomputed independently by "
-            "<code>brdfnorm.verify</code>: the value the claim gives, the value computed here, their relative "
-            "difference and the verdict.</p>\n"
-            + table([["id", "source", "claim", "claimed value", "computed value", "relative difference",
-                      "verdict"]], rows, table_id="verify-table")
+            "<p>Claims of the seed articles (formulas, fits, folklore, and steps a seed shows failing) and the "
+            "field's published numbers (EON, Kulla-Conty's F_avg, GGX furnace values), each "
+            "recomputed independently by <code>brdfnorm verify</code>. On every row A is the seed's side (its "
+            "formula, fit or stated value) and B the independent computation; the line under each claim says "
+            "what A and B are. <em>Claimed relation</em> is what the seed states about them: most claims state "
+            "A = B, a claimed failure or error states A ≠ B, and then |A − B| / |B| is by how much it fails. "
+            "The verdict applies the criterion to the difference: ✔ confirmed means the seed's statement, "
+            "equality or failure, is reproduced.</p>\n"
+            + table([["id", "source", "claim, and how it was checked", "claimed relation", "A (seed)",
+                      "B (independent)", "|A − B| / |B|", "criterion", "verdict"]], rows, table_id="verify-table")
         )
         return Section("verify", "The seeds' claims, verified", body)
 

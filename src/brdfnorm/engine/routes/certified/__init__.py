@@ -61,7 +61,6 @@ from .core import (
     DEFAULT_DIGITS,
     EVAL_LIMIT,
     GUARD_DIGITS,
-    INSTALL_HINT,
     MAX_DIGITS,
     PRECISION_ATTEMPTS,
     Enclosure,
@@ -73,7 +72,7 @@ from .core import (
 from .microfacet import _microfacet, _microfacet_route, white_albedo
 from .seeds import _blinn_phong, _blinn_phong_gaussian, _phong
 
-__all__ = ["DEFAULT_DIGITS", "EVAL_LIMIT", "GUARD_DIGITS", "INSTALL_HINT", "MAX_DIGITS", "Enclosure", "REDUCTIONS",
+__all__ = ["DEFAULT_DIGITS", "EVAL_LIMIT", "GUARD_DIGITS", "MAX_DIGITS", "Enclosure", "REDUCTIONS",
            "Reduction", "albedo_method", "applies", "closed_form_inside", "enclose", "require_flint", "route",
            "starting_bits", "validate_digits", "white_albedo", "_Integrator", "_microfacet"]
 

@@ -18,16 +18,13 @@ DEFAULT_DIGITS = 30
 MAX_DIGITS = 1000
 #: Integrand evaluations Arb may spend on one integral before it returns the (wider) enclosure it has.
 EVAL_LIMIT = 200_000
-INSTALL_HINT = "python-flint is not installed; install it with: pip install 'brdfnorm[certified]'"
 
 
 def require_flint():
-    """The python-flint module, or an ArgumentError saying how to install it (it is an optional extra)."""
-    try:
-        import flint
-    except ImportError:
-        raise ArgumentError(INSTALL_HINT, where="method") from None
-    return flint
+    """The python-flint module, or a MissingExtraError saying how to install it (it is an optional extra)."""
+    from ....extras import require
+
+    return require("flint", "certified", where="method certified")
 
 
 #: Decimal digits printed beyond those asked for: the outward rounding of the bounds then widens the interval by

@@ -1,0 +1,105 @@
+"""Help text that reads well at 80 columns: applied once to the click command tree typer builds.
+
+Typer shows each parameter's Python type beside it (``<bool>``, ``<float>``, ``<light|view>``) and wraps a
+required argument in braces on the usage line (``{MODEL}``); neither means anything to a user. This pass gives
+every option a metavar a person reads (a flag none, a choice its values, a number ``N`` or ``NUMBER``), drops
+the type column of arguments, writes arguments plainly on the usage line, and reflows each command's help so that
+the lines of a docstring paragraph are one paragraph (typer keeps the docstring's line breaks). Commands are
+listed in the order a new user meets them (:data:`ORDER`).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from rich.markup import escape
+from typer.core import TyperArgument, TyperGroup, TyperOption
+
+#: The commands in the order a user meets them: discover, compute, tabulate and fit, audit, explore, study.
+ORDER = ("models", "info", "albedo", "normalize", "lut", "fit", "check", "audit", "explore", "verify", "report")
+
+
+class OrderedGroup(TyperGroup):
+    """The root group: commands listed in :data:`ORDER` (any other after them, in registration order)."""
+
+    def list_commands(self, ctx) -> list[str]:
+        names = super().list_commands(ctx)
+        return sorted(names, key=lambda name: ORDER.index(name) if name in ORDER else len(ORDER))
+
+
+def _metavar(option: TyperOption) -> str:
+    if option.is_flag or option.count:
+        return ""
+    kind = option.type_descriptor
+    if kind.is_choice:
+        choices = "|".join(str(getattr(choice, "value", choice)) for choice in kind.choices or ())
+        # A long list of choices would take the help text's width: the option's name, then (the help lists them).
+        return choices if len(choices) <= 16 else option.name.upper().replace("_", "-")
+    annotation = kind.annotation
+    if annotation is int:
+        return "N"
+    if annotation is float:
+        return "NUMBER"
+    if isinstance(annotation, type) and issubclass(annotation, Path):
+        return "PATH"
+    return "TEXT"
+
+
+def _reflow(text: str | None) -> str | None:
+    """Join the lines of each paragraph (a blank line separates paragraphs; an indented or bulleted line starts
+    a new line, as in a list)."""
+    if not text:
+        return text
+    paragraphs = re.split(r"\n\s*\n", text.strip())
+    out = []
+    for paragraph in paragraphs:
+        lines = [line.strip() for line in paragraph.splitlines()]
+        joined = lines[0]
+        for line in lines[1:]:
+            joined += ("\n" if line.startswith(("-", "*", "•")) else " ") + line
+        out.append(joined)
+    return "\n\n".join(out)
+
+
+def _plain_usage(argument: TyperArgument):
+    def usage() -> str:
+        name = argument.metavar or argument.name.upper()
+        name = name if argument.required else f"[{name}]"
+        return name + ("..." if argument.nargs != 1 else "")
+    return usage
+
+
+def tidy(command):
+    """Apply the readable-help pass to ``command`` and every subcommand (idempotent)."""
+    if getattr(command, "_brdfnorm_tidy", False):
+        return command
+    command._brdfnorm_tidy = True
+    # Help texts are plain text: "pip install 'brdfnorm[certified]'" must not lose "[certified]" as rich markup.
+    command.help = escape(_reflow(command.help)) if command.help else command.help
+    if command.short_help is None and command.help:
+        command.short_help = command.help.split("\n\n")[0]  # the whole first paragraph: never cut
+    help_option = command.get_help_option
+
+    def get_help_option(ctx, _original=help_option):
+        option = _original(ctx)
+        if option is not None:
+            option.metavar = ""  # a flag: no "<bool>"
+        return option
+
+    command.get_help_option = get_help_option
+    for param in command.params:
+        if isinstance(param, TyperOption) and param.metavar is None:
+            param.metavar = _metavar(param)
+            kind = param.type_descriptor
+            if kind.is_choice and param.metavar and "|" not in param.metavar:
+                choices = [str(getattr(choice, "value", choice)) for choice in kind.choices or ()]
+                param.help = f"{param.help or ''} One of: {', '.join(choices)}.".strip()
+        elif isinstance(param, TyperArgument):
+            param.display_type_rich = lambda ctx: None  # the argument's help says what it is
+            param._usage_display_name = _plain_usage(param)
+        if param.help:
+            param.help = escape(param.help)
+    for sub in getattr(command, "commands", {}).values():
+        tidy(sub)
+    return command
