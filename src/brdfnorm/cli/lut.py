@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
+from .. import validate
 from ..errors import ArgumentError, OutputError
 from ..lut import formats
 from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
@@ -97,6 +98,7 @@ def lut_command(
             if axis_name in axes:
                 raise ArgumentError(f"axis {axis_name} given twice", where="--axis")
             axes[axis_name] = values
+        validate.batch_size(tuple(len(v) for v in axes.values()), where="--axis")  # before any grid is built
         if "theta" in axes:
             if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
                 raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")

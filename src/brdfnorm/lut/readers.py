@@ -319,13 +319,12 @@ def _declarations(code: str, path: str) -> dict[str, np.ndarray]:
         if constructor is not None:
             body = body[constructor.end():]
         tokens = body.translate(_SEPARATORS).split()
-        if len(tokens) != count:
-            raise TableFileError(f"{name}: {len(tokens)} values for {count} elements", path, line)
-        values = np.empty(count)
-        for index, token in enumerate(tokens):
+        for index, token in enumerate(tokens):  # every token a number: 'nan' or 'junk' is never skipped
             if len(token) > 40 or _TOKEN.fullmatch(token) is None:
                 raise TableFileError(f"{name}, element {index}: {token[:30]!r} is not a number", path, line)
-            values[index] = float(token.rstrip("fF"))
+        if len(tokens) != count:
+            raise TableFileError(f"{name}: {len(tokens)} values for {count} elements", path, line)
+        values = np.array([float(token.rstrip("fF")) for token in tokens])
         # the file declares float32: its decimals name float32 values (9 digits name each one exactly)
         with np.errstate(over="ignore"):
             found[name] = values.astype(np.float32).astype(float)
