@@ -51,6 +51,7 @@ class Case:
     api: bool = False
     stderr: str = ""  # text stderr must contain (an exit-0 case's note)
     stdout_ok: bool = False
+    cpu_seconds: float | None = None  # the child's CPU time (user + system), where the issue sets a bound
     extra: dict = field(default_factory=dict)
 
 
@@ -226,12 +227,14 @@ def exr_truncated(directory: Path) -> list[str]:
     return _fit(path)
 
 
-def brdf_junk(directory: Path) -> list[str]:
-    head = "analytic\n::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
-    body = "{ ; ( ] }\n" * ((1024**2 - 200) // 10)
-    path = directory / "junk.brdf"
-    path.write_text(head + body + "}\n::end shader\n")
-    return ["albedo", str(path)]
+def brdf_junk(unit: str) -> Callable[[Path], list[str]]:
+    """A .brdf of 1 MiB: the BRDF's header, then ``unit`` repeated."""
+    def make(directory: Path) -> list[str]:
+        head = "analytic\n::begin shader\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {\n"
+        path = directory / "junk.brdf"
+        path.write_text(head + unit * ((1024**2 - 200) // len(unit)) + "}\n::end shader\n")
+        return ["albedo", str(path)]
+    return make
 
 
 def lut_two_axes_1e6(directory: Path) -> list[str]:
@@ -266,7 +269,10 @@ CASES = [
     Case("png-ihdr-12-bytes", png_ihdr_short),
     Case("png-width-0-height-2^30", png_width_zero, slow=True),
     Case("exr-truncated", exr_truncated),
-    Case("brdf-1-mib-junk", brdf_junk, seconds=30, slow=True),
+    Case("brdf-1-mib-mismatched-brackets", brdf_junk("{ ; ( ] }\n"), cpu_seconds=5, slow=True),
+    Case("brdf-1-mib-balanced-junk", brdf_junk("{ ; ( ) }\n"), cpu_seconds=5, slow=True),  # was SIGSEGV
+    Case("brdf-1-mib-identifiers", brdf_junk("a b c "), cpu_seconds=5, slow=True),  # was 11 s
+    Case("brdf-1-mib-operators", brdf_junk("+ - * / "), cpu_seconds=5, slow=True),
     Case("lut-two-axes-1e6-each", lut_two_axes_1e6, names="--axis"),
     Case("check-budget-half-eval", budget_half_eval, names="--budget", extra={"contains": "0.5evals"}),
     Case("api-albedo-1e6-angles", api_albedo_1e6, names="theta", api=True),

@@ -25,9 +25,9 @@ def _limit_address_space() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
 
 
-def run_limited(argv: list[str], cwd: Path, seconds: float) -> tuple[int, str, str, float, int]:
-    """(exit code, stdout, stderr, wall seconds, peak resident KiB) of ``argv`` under the address-space limit;
-    killed (and failed) past ``seconds``."""
+def run_limited(argv: list[str], cwd: Path, seconds: float) -> tuple[int, str, str, float, int, float]:
+    """(exit code, stdout, stderr, wall seconds, peak resident KiB, CPU seconds) of ``argv`` under the
+    address-space limit; killed (and failed) past ``seconds``."""
     out, err = cwd / ".stdout", cwd / ".stderr"
     start = time.monotonic()
     with open(out, "wb") as stdout, open(err, "wb") as stderr:
@@ -48,7 +48,7 @@ def run_limited(argv: list[str], cwd: Path, seconds: float) -> tuple[int, str, s
     text_out, text_err = out.read_text(errors="replace"), err.read_text(errors="replace")
     out.unlink()
     err.unlink()
-    return process.returncode, text_out, text_err, elapsed, usage.ru_maxrss
+    return process.returncode, text_out, text_err, elapsed, usage.ru_maxrss, usage.ru_utime + usage.ru_stime
 
 
 def _params():
@@ -65,12 +65,15 @@ def test_hostile_case(case: Case, tmp_path: Path) -> None:
         argv = [sys.executable, "-c", PYTHON_API.format(body=args[0])]
     else:
         argv = [sys.executable, "-m", "brdfnorm", *args]
-    code, out, err, elapsed, peak = run_limited(argv, tmp_path, case.seconds)
-    report = f"exit {code} in {elapsed:.1f} s, peak {peak / 1024:.0f} MiB\nstderr: {err[-2000:]}"
+    code, out, err, elapsed, peak, cpu = run_limited(argv, tmp_path, case.seconds)
+    report = f"exit {code} in {elapsed:.1f} s ({cpu:.1f} s CPU), peak {peak / 1024:.0f} MiB\nstderr: {err[-2000:]}"
+    print(f"{case.name}: {report.splitlines()[0]}")
     assert code == case.exit, report
     if not case.stdout_ok:
         assert out == "", report
     assert peak <= PEAK_RSS_KIB, report
+    if case.cpu_seconds is not None:  # CPU time: the machine's load does not count against the case
+        assert cpu <= case.cpu_seconds, report
     assert sorted(p.name for p in inputs.iterdir()) == before, "something was written beside the inputs"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["inputs"], "something was written"
     assert "Traceback" not in err and "internal error" not in err, report
