@@ -30,7 +30,6 @@ import os
 import re
 import struct
 import sys
-import zipfile
 import zlib
 from array import array as float_buffer
 from contextlib import contextmanager
@@ -38,7 +37,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
-from ..inputs import element_count, parsing, read_bounded
+from ..inputs import element_count, npz_arrays, parsing, read_bounded
 from .table import Lut
 
 #: Refuse tables larger than this many cells on reading (a 1024³ float64 table is 8 GB).
@@ -52,9 +51,6 @@ MAX_FILE_BYTES = {"npz": 512 * _MIB, "exr": 512 * _MIB, "png": 256 * _MIB, "json
                   "h": 32 * _MIB, "glsl": 32 * _MIB, "hlsl": 32 * _MIB}
 #: Bytes of all the arrays an ``.npz`` declares, decompressed (a 1.5 MB archive can declare gigabytes).
 MAX_ARRAY_BYTES = 512 * _MIB
-#: Bytes of an ``.npz``'s central directory (brdfnorm writes a few hundred bytes; each entry costs a Python object).
-MAX_ZIP_DIRECTORY = _MIB
-_NPY_HEADER_BYTES = 10_000
 
 
 # -- shared pieces ------------------------------------------------------------------------------------------
@@ -146,54 +142,8 @@ def openexr():
 
 # -- npz ---------------------------------------------------------------------------------------------------
 
-def _zip_directory_bounded(data: bytes, path: str) -> None:
-    """Refuse an archive whose central directory (read from its end record, before :mod:`zipfile` parses it into
-    one object per entry) is larger than :data:`MAX_ZIP_DIRECTORY`, or that needs ZIP64 (never written here)."""
-    end = data.rfind(b"PK\x05\x06", max(0, len(data) - 65_557))
-    if end < 0 or end + 22 > len(data):
-        raise TableFileError("not a brdfnorm npz table (no zip end record)", path)
-    entries, size, offset = struct.unpack("<HII", data[end + 10:end + 20])
-    if entries == 0xFFFF or size == 0xFFFFFFFF or offset == 0xFFFFFFFF:
-        raise TableFileError("a ZIP64 archive, which brdfnorm never writes", path)
-    if size > MAX_ZIP_DIRECTORY:
-        raise TableFileError(f"the zip directory takes {size} bytes (more than {MAX_ZIP_DIRECTORY})", path)
-
-
-def _npy_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, path: str) -> np.ndarray:
-    """One ``.npy`` member: header first (shape and dtype checked), then exactly the declared bytes."""
-    name = info.filename.removesuffix(".npy")
-    with archive.open(info) as member:
-        version = np.lib.format.read_magic(member)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(member, max_header_size=_NPY_HEADER_BYTES)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(member, max_header_size=_NPY_HEADER_BYTES)
-        else:
-            raise TableFileError(f"array {name!r}: .npy format version {version} (brdfnorm writes 1.0)", path)
-        if dtype.hasobject or dtype.kind not in "fiucU":
-            raise TableFileError(f"array {name!r}: dtype {dtype} is not numbers", path)
-        count = element_count(shape, MAX_CELLS, where=path, what=f"array {name!r}'s shape")
-        size = count * dtype.itemsize
-        if size > MAX_ARRAY_BYTES:
-            raise TableFileError(f"array {name!r} declares {size} bytes (more than {MAX_ARRAY_BYTES})", path)
-        raw = member.read(size + 1)
-    if len(raw) != size:
-        raise TableFileError(f"array {name!r} holds {len(raw)} bytes of data, its header declares {size}", path)
-    return np.frombuffer(raw, dtype=dtype).reshape(shape, order="F" if fortran else "C")
-
-
 def read_npz(data: bytes, path: str) -> Lut:
-    _zip_directory_bounded(data, path)
-    with zipfile.ZipFile(io.BytesIO(data)) as archive:
-        infos = archive.infolist()
-        declared = sum(info.file_size for info in infos)
-        if declared > MAX_ARRAY_BYTES + len(infos) * _NPY_HEADER_BYTES:
-            raise TableFileError(f"the archive's members declare {declared} bytes (more than {MAX_ARRAY_BYTES})",
-                                 path)
-        names = [info.filename for info in infos]
-        if len(set(names)) != len(names) or not all(n.endswith(".npy") for n in names):
-            raise TableFileError("not a brdfnorm npz table (members other than one .npy per array)", path)
-        arrays = {info.filename.removesuffix(".npy"): _npy_member(archive, info, path) for info in infos}
+    arrays = npz_arrays(data, path, max_elements=MAX_CELLS, max_bytes=MAX_ARRAY_BYTES)
     text = arrays.get("meta")
     if text is None or text.dtype.kind != "U" or text.shape != ():
         raise TableFileError("not a brdfnorm npz table (no 'meta' text)", path)
