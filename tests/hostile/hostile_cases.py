@@ -12,7 +12,11 @@ from __future__ import annotations
 import io
 import json
 import os
+import socket
 import struct
+import subprocess
+import sys
+import threading
 import zipfile
 import zlib
 from collections.abc import Callable
@@ -237,6 +241,63 @@ def brdf_junk(unit: str) -> Callable[[Path], list[str]]:
     return make
 
 
+def _silent_server(reply: bytes | None) -> int:
+    """A server on 127.0.0.1 (a daemon thread of the test process) that accepts connections and then stays silent
+    or sends ``reply``; its port."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(16)
+    held = []
+
+    def serve() -> None:
+        while True:
+            connection, _ = server.accept()
+            held.append(connection)
+            if reply is not None:
+                connection.sendall(reply)
+
+    threading.Thread(target=serve, daemon=True).start()
+    return server.getsockname()[1]
+
+
+def scheduler_silent(directory: Path) -> list[str]:
+    return ["albedo", "ggx", "--theta", "0:60:7", "--scheduler", f"tcp://127.0.0.1:{_silent_server(None)}",
+            "--connect-timeout", "3"]
+
+
+def scheduler_http(directory: Path) -> list[str]:
+    port = _silent_server(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n")
+    return ["albedo", "ggx", "--theta", "0:60:7", "--scheduler", f"tcp://127.0.0.1:{port}"]
+
+
+def scheduler_empty(directory: Path) -> list[str]:
+    return ["albedo", "ggx", "--theta", "0:60:7", "--scheduler", ""]
+
+
+CHECKPOINTED = ["albedo", "ggx", "-p", "alpha=0.5", "--theta", "0:80:8", "--chunk-cells", "4", "--workers", "1"]
+
+
+def checkpoint_tampered(directory: Path) -> list[str]:
+    """A complete checkpoint whose first chunk says a NaN value converged (its digest still the job's)."""
+    args = [*CHECKPOINTED, "--checkpoint", str(directory / "c")]
+    subprocess.run([sys.executable, "-m", "brdfnorm", *args], check=True, capture_output=True)
+    chunk = directory / "c" / "chunk-000000.npz"
+    with np.load(chunk, allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    arrays["value"] = arrays["value"].copy()
+    arrays["value"][1, 0] = np.nan
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    chunk.write_bytes(buffer.getvalue())
+    return args
+
+
+def checkpoint_foreign(directory: Path) -> list[str]:
+    (directory / "c").mkdir()
+    (directory / "c" / "notes.txt").write_text("mine")
+    return [*CHECKPOINTED, "--checkpoint", str(directory / "c")]
+
+
 def lut_two_axes_1e6(directory: Path) -> list[str]:
     return ["lut", "ggx", "--axis", "mu=0.01:1:1000000", "--axis", "alpha=0.01:1:1000000", "-o",
             str(directory / "out.npz")]
@@ -273,6 +334,13 @@ CASES = [
     Case("brdf-1-mib-balanced-junk", brdf_junk("{ ; ( ) }\n"), cpu_seconds=5, slow=True),  # was SIGSEGV
     Case("brdf-1-mib-identifiers", brdf_junk("a b c "), cpu_seconds=5, slow=True),  # was 11 s
     Case("brdf-1-mib-operators", brdf_junk("+ - * / "), cpu_seconds=5, slow=True),
+    Case("checkpoint-nan-marked-converged", checkpoint_tampered, exit=0, stdout_ok=True,
+         stderr="chunk-000000.npz: a converged cell with a non-finite value (cell 1 of the chunk); computing that "
+                "chunk again"),
+    Case("checkpoint-holding-foreign-files", checkpoint_foreign, names="--checkpoint"),
+    Case("scheduler-accepts-never-answers", scheduler_silent, names="--scheduler", seconds=15),
+    Case("scheduler-answers-http", scheduler_http, names="--scheduler", seconds=15),
+    Case("scheduler-empty-address", scheduler_empty, names="--scheduler", seconds=15),
     Case("lut-two-axes-1e6-each", lut_two_axes_1e6, names="--axis"),
     Case("check-budget-half-eval", budget_half_eval, names="--budget", extra={"contains": "0.5evals"}),
     Case("api-albedo-1e6-angles", api_albedo_1e6, names="theta", api=True),

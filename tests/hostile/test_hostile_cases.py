@@ -79,7 +79,7 @@ def test_hostile_case(case: Case, tmp_path: Path) -> None:
     assert "Traceback" not in err and "internal error" not in err, report
     if case.exit == 2:
         errors = [line for line in err.splitlines() if line.startswith("error:")]
-        assert len(errors) == 1, report
+        assert len(errors) == 1 and err.count("\n") == 1, report  # the error line, and nothing else
         named = str(inputs) + os.sep if case.names == "INPUT" else case.names
         assert named in errors[0], report
         if "contains" in case.extra:

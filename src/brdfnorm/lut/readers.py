@@ -15,7 +15,7 @@ file:
   refused;
 * C/GLSL/HLSL: declarations are found by an anchored head pattern and ``str.find`` of their ``;`` (no
   backtracking over the file), their sizes have at most 9 digits, every token of an initializer is a number;
-* EXR: the header is read first (data window checked), the library's diagnostics kept off stdout.
+* EXR: the header is read first (data window checked), the library's diagnostics kept off stdout and stderr.
 
 Cells must be finite real numbers: NaN, ±inf, complex values and text are refused with the table's name and the
 cell's index (or the file's line and column).
@@ -30,6 +30,7 @@ import os
 import re
 import struct
 import sys
+import tempfile
 import zlib
 from array import array as float_buffer
 from contextlib import contextmanager
@@ -314,17 +315,25 @@ def read_code(data: bytes, path: str) -> Lut:
 # -- OpenEXR -----------------------------------------------------------------------------------------------
 
 @contextmanager
-def _stdout_to_stderr():
-    """File descriptor 1 pointed at 2 while a C library runs: OpenEXR prints its warnings on stdout, which is for
-    machine output only."""
+def _quiet_library():
+    """File descriptors 1 and 2 pointed at a scratch file while a C library runs: OpenEXR prints its diagnostics
+    on stdout (machine output only) and stderr, which would add lines to the one error line; what it says is in
+    the exception it raises."""
     sys.stdout.flush()
-    saved = os.dup(1)
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
     try:
-        os.dup2(2, 1)
-        yield
+        with tempfile.TemporaryFile() as scratch:
+            os.dup2(scratch.fileno(), 1)
+            os.dup2(scratch.fileno(), 2)
+            try:
+                yield
+            finally:
+                os.dup2(saved[0], 1)
+                os.dup2(saved[1], 2)
     finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+        os.close(saved[0])
+        os.close(saved[1])
 
 
 def read_exr(data: bytes, path: str) -> Lut:
@@ -333,7 +342,7 @@ def read_exr(data: bytes, path: str) -> Lut:
     if data[:4] != b"\x76\x2f\x31\x01":
         raise TableFileError("not an OpenEXR file", path)
     try:
-        with _stdout_to_stderr():
+        with _quiet_library():
             with OpenEXR.File(io.BytesIO(data), header_only=True) as image:
                 # read inside the block: the header's dict is emptied when the file closes
                 (x0, y0), (x1, y1) = (tuple(int(v) for v in corner) for corner in image.header()["dataWindow"])
