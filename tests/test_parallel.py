@@ -402,7 +402,8 @@ def test_every_parallel_command_has_the_same_options_in_the_same_place(capsys, m
         assert code == 0
         options = [line.split()[1] for line in out.splitlines() if line.startswith("│ --") or
                    line.startswith("│    --")]
-        expected = ["--workers", "--scheduler", "--connect-timeout", "--checkpoint"] + ([] if command == "lut" else ["--chunk-cells"])
+        expected = ["--workers", "--scheduler", "--connect-timeout", "--checkpoint"] + \
+            ([] if command == "lut" else ["--chunk-cells"])
         at = options.index("--workers")
         assert options[at:at + len(expected) + 1] == [*expected, "--debug"], (command, options)
         assert "DASK_SCHEDULER_ADDRESS" in out

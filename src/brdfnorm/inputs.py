@@ -5,7 +5,8 @@ as ``/dev/zero`` never ends — with the size checked against the format's cap f
 read), checks any shape a header declares with :func:`element_count` (the product computed without overflow,
 before an array exists), and wraps its whole parse in :func:`parsing`, so that whatever goes wrong inside —
 a ``struct.error``, a ``RecursionError`` from deep nesting, a ``MemoryError``, numpy's own complaints — ends as
-one :class:`~brdfnorm.errors.BrdfnormError` naming the file, never as an internal error.
+one :class:`~brdfnorm.errors.BrdfnormError` naming the file, never as an internal error. :func:`npz_arrays`
+reads a numpy archive (table files, checkpoint chunks) with every ``.npy`` header checked before its array exists.
 """
 
 from __future__ import annotations
