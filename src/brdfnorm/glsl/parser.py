@@ -223,8 +223,13 @@ def _parse_bounded(text: bytes) -> tree_sitter.Tree | None:
         try:
             worker = threading.Thread(target=work, name="glsl-parse", daemon=True)
             worker.start()
+        except RuntimeError:  # no room for the stack (a tight address-space limit): parse here, bounded the same
+            worker = None
         finally:
             threading.stack_size(previous)
+    if worker is None:
+        work()
+        worker = threading.Thread(target=lambda: None)  # already finished: the loop below does not wait
     try:
         while worker.is_alive():
             worker.join(0.05)  # a join with a timeout keeps Ctrl-C working while the parse runs

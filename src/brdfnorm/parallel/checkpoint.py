@@ -79,6 +79,8 @@ class Checkpoint:
         renamed onto it — ``rename(2)`` replaces a missing or empty directory in one step, and fails if another
         process got there first, which is then joined (its ``job.json`` is read like any checkpoint's)."""
         directory = Path(directory)
+        if directory.is_symlink():  # renamed onto, a link would be replaced: its target is the checkpoint
+            directory = directory.resolve()
         where = "checkpoint"
         if directory.exists() and not directory.is_dir():
             raise ArgumentError(f"{directory} is not a directory", where=where)
