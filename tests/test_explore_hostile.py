@@ -61,6 +61,7 @@ def test_two_hundred_half_open_connections_are_dropped_within_seconds():
         assert httpx.get(url, timeout=30).status_code == 200
 
 
+@pytest.mark.slow
 def test_a_silent_connection_is_closed_after_the_read_deadline():
     with background(Catalog.build(["phong"])) as url:
         host, port = url.split("//")[1].rstrip("/").split(":")
