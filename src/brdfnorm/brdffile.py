@@ -31,6 +31,7 @@ nothing from the file is ever executed as Python.
 from __future__ import annotations
 
 import bisect
+import os
 import re
 import warnings
 from array import array
@@ -42,6 +43,7 @@ import numpy as np
 
 from .errors import BrdfFileError, ModelNotFoundError
 from .glsl.names import ENTRY_POINT, reserved_kind
+from .inputs import parsing, read_bounded
 from .models.base import Model
 from .parameters import Parameter
 
@@ -172,18 +174,17 @@ def _decode(data: bytes, path: str) -> str:
 
 
 def _read_bytes(path: str) -> bytes:
+    """The file's bytes through :func:`brdfnorm.inputs.read_bounded`: regular files only (a FIFO would block, a
+    device never ends), at most :data:`MAX_BYTES`, refused from ``stat`` before a byte is read."""
+    if not os.path.lexists(path):
+        raise ModelNotFoundError("no such file (and not a built-in model name)", where=path)
     try:
-        with open(path, "rb") as handle:
-            data = handle.read(MAX_BYTES + 1)
-    except FileNotFoundError:
-        raise ModelNotFoundError("no such file (and not a built-in model name)", where=path) from None
-    except IsADirectoryError:
-        raise BrdfFileError("is a directory, not a .brdf file", path) from None
-    except OSError as exc:
-        raise BrdfFileError(f"cannot read file: {exc.strerror or exc}", path) from None
-    if len(data) > MAX_BYTES:
-        raise BrdfFileError(f"file larger than {MAX_BYTES // (1024 * 1024)} MiB; not a .brdf file", path)
-    return data
+        return read_bounded(path, MAX_BYTES, error=BrdfFileError)
+    except BrdfFileError as error:
+        if error.message == "a directory, not a file":
+            raise BrdfFileError("is a directory, not a .brdf file", path) from None
+        raise BrdfFileError(f"{error.message}; not a .brdf file" if "allows" in error.message else error.message,
+                            path) from None
 
 
 def _number(scanner: _Scanner, token: _Token, what: str) -> float:
@@ -358,7 +359,9 @@ def read_brdf(path: str | Path) -> BrdfFile:
     :class:`~brdfnorm.errors.BrdfFileError` (with line and column) for anything wrong inside it.
     """
     path = str(path)
-    return parse_brdf(_decode(_read_bytes(path), path), path)
+    data = _read_bytes(path)
+    with parsing(path, error=BrdfFileError):  # whatever fails inside the parse is one error naming the file
+        return parse_brdf(_decode(data, path), path)
 
 
 class BrdfModel(Model):
@@ -448,13 +451,14 @@ def compile_brdf(brdf: BrdfFile, **params: object) -> BrdfModel:
     """The model of a parsed file (:func:`parse_brdf` on a text sent elsewhere, or :func:`read_brdf`)."""
     from .glsl import compile_shader  # the GLSL toolchain (tree-sitter) loads only for a readable file
 
-    program = compile_shader(
-        brdf.shader.text,
-        path=brdf.path,
-        first_line=brdf.shader.line,
-        first_column=brdf.shader.column,
-        uniforms=brdf.uniforms,
-    )
+    with parsing(brdf.path, error=BrdfFileError):  # a RecursionError or MemoryError in the compiler names the file
+        program = compile_shader(
+            brdf.shader.text,
+            path=brdf.path,
+            first_line=brdf.shader.line,
+            first_column=brdf.shader.column,
+            uniforms=brdf.uniforms,
+        )
     return BrdfModel(brdf, program, **params)
 
 

@@ -10,6 +10,7 @@ both a TypeError and a ValueError), as are numbers float64 cannot hold (``10**40
 from __future__ import annotations
 
 import numbers
+import os
 
 import numpy as np
 
@@ -130,12 +131,43 @@ def count(value: object, where: str, *, minimum: int = 1, maximum: int = MAX_COU
     return number
 
 
-def batch_size(shape: tuple[int, ...], where: str = "theta") -> int:
-    """The number of integrals a broadcast batch holds, refused beyond :data:`MAX_INTEGRALS`."""
+def memory_limit() -> int:
+    """Bytes this process may hold: the machine's physical memory, or less where an address-space limit
+    (``ulimit -v``, ``RLIMIT_AS``) is set."""
+    try:
+        physical = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        physical = 1 << 62
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError, ValueError):
+        soft = -1
+    return min(physical, soft) if soft > 0 else physical
+
+
+def _bytes_text(count: float) -> str:
+    for unit, scale in (("TiB", 1024**4), ("GiB", 1024**3), ("MiB", 1024**2)):
+        if count >= scale:
+            return f"{count / scale:.3g} {unit}"
+    return f"{count / 1024:.3g} KiB"
+
+
+def batch_size(shape: tuple[int, ...], where: str = "theta", *, bytes_per_integral: int | None = None) -> int:
+    """The number of integrals a broadcast batch holds, refused beyond :data:`MAX_INTEGRALS` — and, where the
+    caller says what one integral costs while the batch is integrated at once, refused up front when the batch
+    cannot fit in :func:`memory_limit` (rather than a MemoryError, or the kernel's OOM killer, minutes later)."""
     size = int(np.prod(shape, dtype=object))
     if size > MAX_INTEGRALS:
         raise ArgumentError(f"{size:,} albedo integrals in one call is more than the limit of "
                             f"{MAX_INTEGRALS:,}; split the work", where=where)
+    if bytes_per_integral is not None and size * bytes_per_integral > memory_limit():
+        raise ArgumentError(f"{size:,} albedo integrals in one call would need about "
+                            f"{_bytes_text(size * bytes_per_integral)} (about {_bytes_text(bytes_per_integral)} "
+                            f"each while they are integrated together), more than the "
+                            f"{_bytes_text(memory_limit())} this process may use; split the work into smaller "
+                            "calls (or use `brdfnorm lut`, which computes in chunks)", where=where)
     return size
 
 

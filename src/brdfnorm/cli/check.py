@@ -50,6 +50,8 @@ def parse_budget(spec: str) -> Budget:
         raise ArgumentError(f"expected SECONDS (e.g. 20 or 20s) or COUNTevals (e.g. 5e7evals), got {spec!r}",
                             where="--budget")
     if match.group(2) in ("evals", "evaluations"):
+        if amount < 1 or amount != int(amount):
+            raise ArgumentError(f"an evaluation count is a whole number ≥ 1, got {spec.strip()!r}", where="--budget")
         return Budget(seconds=None, evaluations=int(amount))
     return Budget(seconds=amount)
 

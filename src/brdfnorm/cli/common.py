@@ -59,8 +59,15 @@ class Spread:
 
     workers: int | None = None
     scheduler: str | None = None
+    connect_timeout: float | None = None
     checkpoint: str | None = None
     chunk_cells: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.connect_timeout is not None:  # one command per process: its deadline for every Dask connection
+            from ..parallel import executors
+
+            executors.DASK_CONNECT_TIMEOUT = self.connect_timeout
 
     def given(self) -> bool:
         return any(value is not None for value in astuple(self))
@@ -73,6 +80,9 @@ PARALLEL_OPTIONS = {
     "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
                                     help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
                                     "instead of local processes.")),
+    "connect_timeout": (float, typer.Option(None, "--connect-timeout", min=0.1, max=3600, metavar="SECONDS",
+                                            help="One deadline for reaching the --scheduler: connection and "
+                                            "handshake (default 10).")),
     "checkpoint": (str, typer.Option(None, "--checkpoint", metavar="DIR",
                                      help="Save each finished chunk of cells in DIR; rerunning the same command "
                                      "resumes, computing only what is missing.")),
@@ -136,7 +146,8 @@ CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--
              "over": "--over", "at": "--at", "nonfinite": "--nonfinite", "model": "MODEL", "language": "--emit",
              "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
              "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits", "workers": "--workers",
-             "scheduler": "--scheduler", "checkpoint": "--checkpoint", "chunk_cells": "--chunk-cells",
+             "scheduler": "--scheduler", "connect_timeout": "--connect-timeout", "checkpoint": "--checkpoint",
+             "chunk_cells": "--chunk-cells",
              "axes": "--axis", "clamp": "--clamp", "channels": "--channels", "tables": "--table", "half": "--half",
              "grid": "--grid", "format": "--format"}
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
+from .. import validate
 from ..errors import ArgumentError, OutputError
 from ..lut import certified as certified_tables
 from ..lut import formats
@@ -101,6 +102,11 @@ def lut_command(
             if axis_name in axes:
                 raise ArgumentError(f"axis {axis_name} given twice", where="--axis")
             axes[axis_name] = values
+        validate.batch_size(tuple(len(v) for v in axes.values()), where="--axis")  # before any grid is built
+        if spread.checkpoint is not None:  # DIR holds one checkpoint per table, and nothing else
+            from ..parallel.checkpoint import check_root
+
+            check_root(spread.checkpoint)
         if "theta" in axes:
             if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
                 raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")

@@ -106,6 +106,12 @@ def _decimals(values: np.ndarray) -> str | list[str]:
     return str(values.ravel()[0]) if values.size == 1 else [str(v) for v in values.ravel()]
 
 
+#: Working memory of one albedo integral while a batch is integrated at once (the adaptive cubature's nodes and
+#: values for every case): measured 25 KiB (lambert), 41 KiB (phong) and 92 KiB (ggx-dielectric, both hemispheres)
+#: per integral at 4 000 angles; a BSDF counts twice. A batch that cannot fit is refused up front.
+BYTES_PER_INTEGRAL = 48 * 1024
+
+
 @dataclass(frozen=True)
 class Problem:
     """A batch of albedo integrals, flattened: K cases with their fixed direction and parameter values."""
@@ -161,7 +167,8 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     except ValueError:
         raise ArgumentError(f"shapes do not broadcast: theta {theta.shape}, phi {phi.shape}, parameters "
                             f"{', '.join(str(b) for b in batch_shapes)}", where="theta") from None
-    validate.batch_size(shape)
+    sides = 2 if getattr(model, "transmits", False) else 1
+    validate.batch_size(shape, bytes_per_integral=BYTES_PER_INTEGRAL * sides)
     theta_b, phi_b = np.broadcast_to(theta, shape), np.broadcast_to(phi, shape)
     params, broadcast = {}, {}
     for p, batch in zip(model.parameters, batch_shapes, strict=True):

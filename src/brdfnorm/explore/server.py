@@ -64,6 +64,7 @@ from .compute import (
     fit_factor,
     view_angle,
 )
+from .guard import MAX_CONNECTIONS, GuardedH11Protocol
 
 STATIC = Path(__file__).with_name("static")
 #: Largest request body accepted (a page request is well under 1 KiB).
@@ -447,8 +448,9 @@ def url_of(sock: socket.socket) -> str:
 
 def make_server(catalog: Catalog, host: str) -> _Server:
     explorer = Explorer(catalog, loopback_only=is_loopback(host), host=host.strip("[]"))
+    # the h11 protocol with a request-read deadline and connection limits (.guard); beyond the limit, 503
     config = uvicorn.Config(explorer.app, log_level="warning", access_log=False, lifespan="on",
-                            timeout_graceful_shutdown=2)
+                            timeout_graceful_shutdown=2, http=GuardedH11Protocol, limit_concurrency=MAX_CONNECTIONS)
     return _Server(config, explorer)
 
 

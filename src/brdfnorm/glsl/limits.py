@@ -16,7 +16,16 @@ MAX_SHADER_BYTES = 1024 * 1024
 #: reports plus one per :data:`PARSE_BYTES_PER_REPORT` bytes of text (valid GLSL needs about one report per
 #: 100 bytes; error recovery on junk can take far more work, and memory, per byte).
 PARSE_REPORTS = 2_000
-PARSE_BYTES_PER_REPORT = 16
+PARSE_BYTES_PER_REPORT = 32
+#: CPU time one parse may take before it is cancelled, whatever its count (valid GLSL of 1 MiB parses in well
+#: under a second; error recovery on junk costs up to 0.2 ms per report).
+PARSE_SECONDS = 2.0
+#: Stack of the thread tree-sitter parses in (address space reserved, touched only as deep as the recursion goes).
+PARSE_STACK_BYTES = 256 * 1024**2
+#: Deepest nesting of brackets ``( [ {`` a shader may have (checked by a linear pre-scan before tree-sitter,
+#: whose error recovery on deep or mismatched brackets grows without bound and can overflow its C stack: 100 000
+#: lines of ``{ ; ( ] }`` crash it). The examples nest at most 6 deep.
+MAX_BRACKET_DEPTH = 256
 #: Syntax nodes compiled, each macro expansion counted anew (``#define A2 (A1+A1)`` doubles the count). The
 #: examples compile 8–191 nodes; compiling takes 10–30 µs a node.
 MAX_COMPILED_NODES = 100_000

@@ -23,31 +23,29 @@ PNG holds one table of one or two axes (a 1-axis table is one row); tables of th
 digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in the meta comment. Text from the
 meta (model names, parameters) only ever appears inside JSON with every non-ASCII character, ``*``, ``/``,
 ``?`` and ``\\`` escaped, so no comment can be closed or continued by it. Written with zlib + struct (no imaging
-library is a dependency). Readers check what they read and report ``FILE:LINE`` (or the file) on a bad file.
+library is a dependency). Readers (:mod:`.readers`) are bounded before they allocate and report ``FILE:LINE``
+(or the file) on a bad file.
 """
 
 from __future__ import annotations
 
 import io
 import json
-import math
 import re
 import struct
 import tempfile
-import zipfile
 import zlib
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError, TableFileError
+from ..errors import ArgumentError
 from ..output import write_file
+from .readers import MAGIC, PNG_SIGNATURE, READERS, read
+from .readers import openexr as _openexr
 from .table import Lut
 
-#: Refuse tables larger than this many cells on reading (a 1024³ float64 table is 8 GB).
-MAX_CELLS = 50_000_000
-MAGIC = "brdfnorm-lut"
 TEXT_FORMATS = ("json", "csv", "h", "glsl", "hlsl")
 
 
@@ -87,26 +85,6 @@ def _check_finite(lut: Lut, tables: Sequence[str], fmt: str) -> None:
             raise ArgumentError(f"table {name} has non-finite values, which {fmt} cannot hold", where="tables")
 
 
-def _meta_from(payload: dict, where: str) -> tuple[dict, dict]:
-    meta = payload.get("meta")
-    if not isinstance(meta, dict) or not isinstance(meta.get("axes"), list) or not isinstance(meta.get("tables"),
-                                                                                              dict):
-        raise TableFileError("no brdfnorm lut metadata (axes, tables)", where)
-    return meta, meta["tables"]
-
-
-def _build(tables: dict, axes: dict, meta: dict, path: str) -> Lut:
-    for name, array in [*tables.items(), *axes.items()]:
-        if array.size > MAX_CELLS:
-            raise TableFileError(f"{name} has {array.size} values, more than {MAX_CELLS}", path)
-    try:
-        return Lut(tables, axes, meta, {name: meta["tables"][name] for name in tables})
-    except (KeyError, TypeError) as error:
-        raise TableFileError(f"tables and axes do not match the metadata ({error})", path) from None
-    except ArgumentError as error:
-        raise TableFileError(error.message, path) from None
-
-
 # -- npz ---------------------------------------------------------------------------------------------------
 
 def _write_npz(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
@@ -118,20 +96,6 @@ def _write_npz(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
     arrays = {name: lut[name] for name in tables} | dict(lut.axes)
     np.savez_compressed(buffer, meta=np.array(json.dumps(_subset_meta(lut, tables))), **arrays)
     return buffer.getvalue()
-
-
-def _read_npz(data: bytes, path: str) -> Lut:
-    try:
-        with np.load(io.BytesIO(data), allow_pickle=False) as archive:
-            meta = json.loads(str(archive["meta"]))
-            _, table_axes = _meta_from({"meta": meta}, path)
-            axes = {name: np.asarray(archive[name], dtype=float) for name in meta["axes"]}
-            tables = {name: np.asarray(archive[name], dtype=float) for name in table_axes}
-    except TableFileError:
-        raise
-    except (OSError, ValueError, KeyError, TypeError, EOFError, zlib.error, zipfile.BadZipFile) as error:
-        raise TableFileError(f"not a brdfnorm npz table ({type(error).__name__}: {error})", path) from None
-    return _build(tables, axes, meta, path)
 
 
 def _subset_meta(lut: Lut, tables: Sequence[str]) -> dict:
@@ -149,23 +113,6 @@ def _write_json(lut: Lut, tables: Sequence[str], half: bool) -> str:
     return json.dumps(document, indent=1, allow_nan=False) + "\n"
 
 
-def _read_json(data: bytes, path: str) -> Lut:
-    try:
-        document = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        line = getattr(error, "lineno", None)
-        raise TableFileError(f"not JSON: {error}", path, line) from None
-    if not isinstance(document, dict) or document.get("format") != MAGIC:
-        raise TableFileError(f"not a brdfnorm lut (no \"format\": \"{MAGIC}\")", path)
-    meta, _ = _meta_from(document, path)
-    try:
-        axes = {n: np.asarray(document["axes"][n], dtype=float) for n in meta["axes"]}
-        tables = {n: np.asarray(v, dtype=float) for n, v in document["tables"].items()}
-    except (KeyError, TypeError, ValueError) as error:
-        raise TableFileError(f"malformed axes or tables ({error})", path) from None
-    return _build(tables, axes, meta, path)
-
-
 # -- csv ---------------------------------------------------------------------------------------------------
 
 def _write_csv(lut: Lut, tables: Sequence[str], half: bool) -> str:
@@ -181,54 +128,6 @@ def _write_csv(lut: Lut, tables: Sequence[str], half: bool) -> str:
     stacked = np.stack(columns, axis=1)
     lines.extend(",".join(repr(float(v)) for v in row) for row in stacked)
     return "\n".join(lines) + "\n"
-
-
-def _read_csv(data: bytes, path: str) -> Lut:
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise TableFileError("not UTF-8 text", path, 1) from None
-    lines = text.splitlines()
-    if not lines or not lines[0].startswith(f"# {MAGIC} "):
-        raise TableFileError(f"the first line must be '# {MAGIC} {{metadata}}'", path, 1)
-    try:
-        meta = json.loads(lines[0][len(MAGIC) + 3:])
-    except json.JSONDecodeError as error:
-        raise TableFileError(f"metadata is not JSON: {error.msg}", path, 1) from None
-    meta, table_axes = _meta_from({"meta": meta}, path)
-    header = lines[1].split(",") if len(lines) > 1 else []
-    if header != [*meta["axes"], *table_axes]:
-        raise TableFileError(f"header must be {','.join([*meta['axes'], *table_axes])}", path, 2)
-    rows = []
-    for number, line in enumerate(lines[2:], start=3):
-        fields = line.split(",")
-        if len(fields) != len(header):
-            raise TableFileError(f"expected {len(header)} fields, got {len(fields)}", path, number)
-        try:
-            rows.append([float(f) for f in fields])
-        except ValueError:
-            raise TableFileError("a field is not a number", path, number) from None
-        if len(rows) > MAX_CELLS:
-            raise TableFileError(f"more than {MAX_CELLS} rows", path, number)
-    values = np.array(rows, dtype=float).reshape(-1, len(header))
-    k = len(meta["axes"])
-    axes = {name: _unique_in_order(values[:, i]) for i, name in enumerate(meta["axes"])}
-    shape = tuple(len(a) for a in axes.values())
-    grids = np.meshgrid(*axes.values(), indexing="ij") if axes else []
-    if values.shape[0] != int(np.prod(shape)) or any(
-            not np.array_equal(g.ravel(), values[:, i]) for i, g in enumerate(grids)):
-        raise TableFileError("rows are not one per cell of the axes' grid in row-major order", path)
-    tables = {}
-    for j, name in enumerate(table_axes):
-        full = values[:, k + j].reshape(shape)
-        index = tuple(slice(None) if a in table_axes[name] else 0 for a in meta["axes"])
-        tables[name] = full[index]
-    return _build(tables, axes, meta, path)
-
-
-def _unique_in_order(column: np.ndarray) -> np.ndarray:
-    _, first = np.unique(column, return_index=True)
-    return column[np.sort(first)]
 
 
 # -- C, GLSL, HLSL -----------------------------------------------------------------------------------------
@@ -286,55 +185,7 @@ class _SubsetLut:
         self.meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
 
 
-_DECLARATION = re.compile(r"(?:static\s+)?const\s+float\s+([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])+)\s*=\s*"
-                          r"(?:float\[\d+\]\s*\()?([^;]*?)\)?\s*;", re.S)
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
-
-
-def _read_code(data: bytes, path: str) -> Lut:
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError:
-        raise TableFileError("not ASCII text (not a brdfnorm lut header)", path, 1) from None
-    marker = f"// {MAGIC} "
-    meta_line = next((i for i, line in enumerate(text.splitlines()) if line.startswith(marker)), None)
-    if meta_line is None:
-        raise TableFileError(f"no '{marker}{{metadata}}' comment line", path)
-    try:
-        payload = json.loads(text.splitlines()[meta_line][len(marker):])
-    except json.JSONDecodeError as error:
-        raise TableFileError(f"metadata is not JSON: {error.msg}", path, meta_line + 1) from None
-    meta, table_axes = _meta_from(payload, path)
-    ids = payload.get("identifiers", {})
-    found = {}
-    for match in _DECLARATION.finditer(text):
-        line = text.count("\n", 0, match.start()) + 1
-        numbers = _NUMBER.findall(match.group(3))
-        count = math.prod(int(n) for n in re.findall(r"\d+", match.group(2)))
-        if len(numbers) != count:
-            raise TableFileError(f"{match.group(1)}: {len(numbers)} values for {count} elements", path, line)
-        # the file declares float32: its decimals name float32 values (9 digits name each one exactly)
-        found[match.group(1)] = np.array([float(n) for n in numbers], dtype=float).astype(np.float32).astype(float)
-    try:
-        axis_values = meta.pop("axis_values")
-        axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
-        tables = {}
-        for name in table_axes:
-            shape = tuple(len(axes[a]) for a in table_axes[name])
-            tables[name] = found[ids[name]].reshape(shape) if shape else found[ids[name]].reshape(())
-    except (KeyError, ValueError, TypeError) as error:
-        raise TableFileError(f"arrays do not match the metadata (missing or misshapen: {error})", path) from None
-    return _build(tables, axes, meta, path)
-
-
 # -- OpenEXR -----------------------------------------------------------------------------------------------
-
-def _openexr():
-    """The OpenEXR package (an optional extra), or a one-line error saying how to install it."""
-    from ..extras import require
-
-    return require("OpenEXR", "exr", where=".exr format")
-
 
 def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:
     if len(shape) == 0:
@@ -364,42 +215,7 @@ def _write_exr(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
         return target.read_bytes()
 
 
-def _read_exr(data: bytes, path: str) -> Lut:
-    OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
-
-    if data[:4] != b"\x76\x2f\x31\x01":
-        raise TableFileError("not an OpenEXR file", path)
-    with tempfile.TemporaryDirectory() as scratch:
-        source = Path(scratch) / "lut.exr"
-        source.write_bytes(data)
-        try:
-            with OpenEXR.File(str(source)) as image:
-                text = image.header().get("brdfnorm")
-                channels = {n: np.array(c.pixels, dtype=float) for n, c in image.channels().items()}
-        except Exception as error:  # noqa: BLE001 — the bindings raise bare RuntimeErrors on bad files
-            raise TableFileError(f"unreadable OpenEXR ({error})", path) from None
-    try:
-        meta = json.loads(str(text))
-    except json.JSONDecodeError:
-        raise TableFileError("no brdfnorm metadata in the EXR header", path) from None
-    meta, table_axes = _meta_from({"meta": meta}, path)
-    try:
-        axis_values = meta.pop("axis_values")
-        axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
-        shape = tuple(len(v) for v in axes.values())
-        tables = {}
-        for name in table_axes:
-            full = channels[name].reshape(shape)
-            tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in meta["axes"])]
-    except (KeyError, ValueError, TypeError) as error:
-        raise TableFileError(f"channels do not match the metadata ({error})", path) from None
-    return _build(tables, axes, meta, path)
-
-
 # -- PNG ---------------------------------------------------------------------------------------------------
-
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
 
 def _chunk(kind: bytes, body: bytes) -> bytes:
     return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
@@ -428,70 +244,18 @@ def _write_png(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
             + _chunk(b"tEXt", text) + _chunk(b"IDAT", zlib.compress(raw, 9)) + _chunk(b"IEND", b""))
 
 
-def _read_png(data: bytes, path: str) -> Lut:
-    if not data.startswith(PNG_SIGNATURE):
-        raise TableFileError("not a PNG file", path)
-    position, header, text, idat = len(PNG_SIGNATURE), None, None, []
-    while position + 12 <= len(data):
-        (length,) = struct.unpack(">I", data[position:position + 4])
-        kind, body = data[position + 4:position + 8], data[position + 8:position + 8 + length]
-        (crc,) = struct.unpack(">I", data[position + 8 + length:position + 12 + length] or b"\0\0\0\0")
-        if len(body) != length or zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
-            raise TableFileError(f"corrupt PNG chunk {kind!r} at byte {position}", path)
-        if kind == b"IHDR":
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"tEXt" and body.startswith(MAGIC.encode() + b"\x00"):
-            text = body[len(MAGIC) + 1:]
-        elif kind == b"IDAT":
-            idat.append(body)
-        position += 12 + length
-    if header is None or text is None:
-        raise TableFileError("no brdfnorm metadata (tEXt) in this PNG", path)
-    width, height, depth, colour, _, _, interlace = header
-    if (depth, colour, interlace) != (16, 0, 0):
-        raise TableFileError("expected a 16-bit greyscale, non-interlaced PNG", path)
-    if width * height > MAX_CELLS:
-        raise TableFileError(f"image of {width}×{height} pixels is too large", path)
-    expected = height * (1 + 2 * width)
-    inflate = zlib.decompressobj()
-    try:
-        raw = inflate.decompress(b"".join(idat), expected + 1)
-    except zlib.error as error:
-        raise TableFileError(f"corrupt image data ({error})", path) from None
-    if len(raw) != expected:
-        raise TableFileError(f"image data holds {len(raw)} bytes, expected {expected}", path)
-    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * width)
-    if np.any(rows[:, 0] != 0):
-        raise TableFileError("only PNG filter type 0 is read (as brdfnorm writes it)", path)
-    codes = rows[:, 1:].copy().view(">u2").astype(float)
-    try:
-        meta = json.loads(text.decode("latin-1"))
-        _, table_axes = _meta_from({"meta": meta}, path)
-        info = meta.pop("png")
-        axis_values = meta.pop("axis_values")
-        axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
-        lo, hi = float(info["lo"]), float(info["hi"])
-        scale = (hi - lo) if hi > lo else 1.0
-        (name,) = table_axes
-        shape = tuple(len(axes[a]) for a in table_axes[name])
-        table = (lo + codes / 65535.0 * scale).reshape(shape)
-    except (KeyError, TypeError, ValueError, json.JSONDecodeError) as error:
-        raise TableFileError(f"metadata does not describe the image ({error})", path) from None
-    return _build({name: table}, axes, meta, path)
-
-
 # -- registry ----------------------------------------------------------------------------------------------
 
 #: extension -> (writer(lut, tables, half) -> str | bytes, reader(bytes, path) -> Lut, float precision kept)
 FORMATS: dict[str, tuple[Callable, Callable[[bytes, str], Lut], str]] = {
-    "npz": (_write_npz, _read_npz, "float64"),
-    "json": (_write_json, _read_json, "float64"),
-    "csv": (_write_csv, _read_csv, "float64"),
-    "exr": (_write_exr, _read_exr, "float32 (float16 with half)"),
-    "h": (_write_code("c"), _read_code, "float32"),
-    "glsl": (_write_code("glsl"), _read_code, "float32"),
-    "hlsl": (_write_code("hlsl"), _read_code, "float32"),
-    "png": (_write_png, _read_png, "16-bit fixed point over [min, max]"),
+    "npz": (_write_npz, READERS["npz"], "float64"),
+    "json": (_write_json, READERS["json"], "float64"),
+    "csv": (_write_csv, READERS["csv"], "float64"),
+    "exr": (_write_exr, READERS["exr"], "float32 (float16 with half)"),
+    "h": (_write_code("c"), READERS["h"], "float32"),
+    "glsl": (_write_code("glsl"), READERS["h"], "float32"),
+    "hlsl": (_write_code("hlsl"), READERS["h"], "float32"),
+    "png": (_write_png, READERS["png"], "16-bit fixed point over [min, max]"),
 }
 
 
@@ -535,12 +299,8 @@ def save_bytes(path: str | Path, data: str | bytes) -> None:
 
 
 def load(path: str | Path, *, fmt: str | None = None) -> Lut:
-    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> float64 array."""
-    name = format_of(path, fmt)
-    try:
-        with open(path, "rb") as handle:
-            data = handle.read(4 * MAX_CELLS * 8 + 1)
-    except OSError as error:
-        raise TableFileError(f"cannot read: {error.strerror}", str(path)) from None
-    _, reader, _ = FORMATS[name]
-    return reader(data, str(path))
+    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> float64 array.
+
+    Bounded and guarded by :mod:`brdfnorm.lut.readers`: any problem with the file is one
+    :class:`~brdfnorm.errors.TableFileError` naming it."""
+    return read(path, format_of(path, fmt))

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import validate
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
@@ -449,6 +450,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     _, evaluated, direction = _checked_axes(model, axes, clamp)
     names = list(evaluated)
     shape = tuple(len(evaluated[n]) for n in names)
+    validate.batch_size(shape, where="axes")  # before any array of the table's size exists
 
     def along(name: str, values: np.ndarray, order: list[str]) -> np.ndarray:
         index = [1] * len(order)

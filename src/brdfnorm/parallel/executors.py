@@ -22,8 +22,13 @@ and stops local workers at once: at most the chunks in flight are lost.
 from __future__ import annotations
 
 import functools
+import ipaddress
 import json
 import multiprocessing
+import re
+import socket
+import struct
+import sys
 import time
 import uuid
 import warnings
@@ -39,8 +44,14 @@ from .job import CellsJob, ChunkPlan, ModelSource, canonical_json
 
 #: Dask re-runs a chunk task that raised this many more times (an unexpected failure on one worker).
 DASK_RETRIES = 2
-#: Seconds to wait for a Dask scheduler to answer.
-DASK_CONNECT_TIMEOUT = 10
+#: Seconds to reach a Dask scheduler, all in all: the TCP connection, its handshake and the client's start (the
+#: command line's ``--connect-timeout`` sets it).
+DASK_CONNECT_TIMEOUT = 10.0
+#: Largest first message a Dask scheduler's handshake may announce (it is a few hundred bytes; an HTTP server's
+#: "HTTP/1.1" read as a length is 3.5·10¹⁸).
+HANDSHAKE_BYTES = 1024**2
+_SCHEMES = ("tcp", "tls")
+_HOST = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9.-]{0,252}[A-Za-z0-9])?\Z")
 
 
 @dataclass(frozen=True)
@@ -138,7 +149,7 @@ class Workers:
                                 "line also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
         if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
             raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
-        self.scheduler = scheduler or None
+        self.scheduler = None if scheduler is None else scheduler_address(scheduler)
         self.count = int(workers) if workers is not None else local_cores()
         self._pool: ProcessPoolExecutor | None = None
         self._client = None
@@ -228,16 +239,96 @@ def _in_pool(pool: ProcessPoolExecutor, tasks: list[tuple]) -> Iterator[ChunkRes
             yield future.result()
 
 
+def scheduler_address(address: object) -> str:
+    """A Dask scheduler address, checked before anything connects: ``tcp://`` or ``tls://``, a host name or IP
+    address (IPv6 in brackets), a port in 1–65535, nothing else (no path, user or query)."""
+    if not isinstance(address, str):
+        raise ArgumentError(f"expected an address tcp://HOST:PORT, got {type(address).__name__}", where="scheduler")
+    text = address.strip()
+    if not text:
+        raise ArgumentError("empty address (expected tcp://HOST:PORT or tls://HOST:PORT)", where="scheduler")
+    shown = repr(text if len(text) <= 60 else text[:57] + "...")
+    scheme, separator, rest = text.partition("://")
+    if not separator or scheme.lower() not in _SCHEMES:
+        raise ArgumentError(f"{shown}: expected tcp://HOST:PORT or tls://HOST:PORT", where="scheduler")
+    host, colon, port = rest.rpartition(":")
+    if not colon or not port.isdigit() or len(port) > 5 or not 1 <= int(port) <= 65535:
+        raise ArgumentError(f"{shown}: the port must be a number in 1–65535 (tcp://HOST:PORT)", where="scheduler")
+    if host.startswith("[") and host.endswith("]"):
+        try:
+            ipaddress.IPv6Address(host[1:-1])
+        except ValueError:
+            raise ArgumentError(f"{shown}: {host} is not an IPv6 address", where="scheduler") from None
+    elif not _HOST.match(host):
+        raise ArgumentError(f"{shown}: {host!r} is not a host name or IP address", where="scheduler")
+    return f"{scheme.lower()}://{host}:{int(port)}"
+
+
+def _preflight(address: str, deadline: float) -> None:
+    """Connect to the scheduler and, for ``tcp://``, wait for the first bytes of its handshake (a Dask scheduler
+    speaks first: a frame length), all before ``deadline``: a server that accepts and never answers, or answers in
+    another protocol, is refused here, not left to the client (which would wait forever, or allocate what an
+    HTTP reply's first bytes read as a length)."""
+    scheme, _, rest = address.partition("://")
+    host, _, port = rest.rpartition(":")
+    host = host.strip("[]")
+
+    def left() -> float:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            raise TimeoutError
+        return remaining
+
+    try:
+        with socket.create_connection((host, int(port)), timeout=left()) as connection:
+            if scheme != "tcp":
+                return  # TLS is negotiated by the client, under the same deadline
+            first = b""
+            while len(first) < 8:
+                connection.settimeout(left())
+                data = connection.recv(8 - len(first))
+                if not data:
+                    raise ArgumentError(f"the server at {address} closed the connection without a handshake",
+                                        where="scheduler")
+                first += data
+    except TimeoutError:
+        raise ArgumentError(f"no Dask scheduler answered at {address} within {DASK_CONNECT_TIMEOUT:g} s "
+                            "(--connect-timeout)", where="scheduler") from None
+    except OSError as error:
+        raise ArgumentError(f"cannot reach the Dask scheduler at {address}: {error.strerror or error}",
+                            where="scheduler") from None
+    (length,) = struct.unpack("<Q", first)
+    if not 0 < length <= HANDSHAKE_BYTES:
+        raise ArgumentError(f"the server at {address} is not a Dask scheduler (its first bytes are "
+                            f"{first[:8]!r})", where="scheduler")
+
+
 def dask_client(scheduler: str):
-    """A ``distributed.Client`` connected to ``scheduler``, or a one-line error naming the address."""
+    """A ``distributed.Client`` connected to ``scheduler`` within :data:`DASK_CONNECT_TIMEOUT` seconds in all, or a
+    one-line error naming the address; a client that failed to start is closed here, never by its destructor."""
     from ..extras import require
 
     Client = require("distributed", "dask", where="scheduler").Client  # noqa: N806 - the class, by its own name
+    scheduler = scheduler_address(scheduler)
+    deadline = time.monotonic() + DASK_CONNECT_TIMEOUT
+    _preflight(scheduler, deadline)
+    remaining = max(deadline - time.monotonic(), 0.5)
+    hook = sys.unraisablehook
     try:
-        return Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as error:
-        detail = str(error).splitlines()[0] if str(error) else type(error).__name__
+        return Client(scheduler, timeout=remaining, set_as_default=False)
+    except Exception as error:  # noqa: BLE001 — whatever the client raised, one line naming the address
+        detail = str(error).splitlines()[0][:200] if str(error) else type(error).__name__
         raise ArgumentError(f"cannot reach the Dask scheduler at {scheduler}: {detail}", where="scheduler") from None
+    finally:
+        # a Client whose start failed is collected now, its destructor's complaints silenced (the error above says
+        # what went wrong), instead of printing a traceback at exit
+        sys.unraisablehook = lambda _unraisable: None
+        try:
+            import gc
+
+            gc.collect()
+        finally:
+            sys.unraisablehook = hook
 
 
 def _on_dask(tasks: list[tuple], client, digest: str) -> Iterator[ChunkResult]:

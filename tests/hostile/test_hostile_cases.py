@@ -1,0 +1,88 @@
+"""The runner of :mod:`hostile_cases` (issue 35): each case is one command in a subprocess, under a 4 GB
+address-space limit (``RLIMIT_AS``), and must end within its time with exit 0 or 2, exactly one ``error:`` line
+naming its input (for exit 2), a clean stdout, nothing written beside its inputs, and at most 1 GB resident (the
+child's own ``ru_maxrss`` from ``os.wait4``).
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hostile_cases import CASES, PYTHON_API, Case
+
+ADDRESS_SPACE = 4 * 1024**3
+PEAK_RSS_KIB = 1024**2  # 1 GiB (ru_maxrss is in KiB on Linux)
+
+
+def _limit_address_space() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
+
+
+def run_limited(argv: list[str], cwd: Path, seconds: float) -> tuple[int, str, str, float, int, float]:
+    """(exit code, stdout, stderr, wall seconds, peak resident KiB, CPU seconds) of ``argv`` under the
+    address-space limit; killed (and failed) past ``seconds``."""
+    out, err = cwd / ".stdout", cwd / ".stderr"
+    start = time.monotonic()
+    with open(out, "wb") as stdout, open(err, "wb") as stderr:
+        process = subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
+                                   preexec_fn=_limit_address_space, env={**os.environ, "COLUMNS": "200"})
+    while True:
+        pid, status, usage = os.wait4(process.pid, os.WNOHANG)
+        if pid:
+            break
+        if time.monotonic() - start > seconds:
+            process.send_signal(signal.SIGKILL)
+            os.wait4(process.pid, 0)
+            process.returncode = -9
+            pytest.fail(f"still running after {seconds} s: {' '.join(argv)[:300]}")
+        time.sleep(0.02)
+    elapsed = time.monotonic() - start
+    process.returncode = os.waitstatus_to_exitcode(status)  # reaped here: keep Popen from waiting again
+    text_out, text_err = out.read_text(errors="replace"), err.read_text(errors="replace")
+    out.unlink()
+    err.unlink()
+    return process.returncode, text_out, text_err, elapsed, usage.ru_maxrss, usage.ru_utime + usage.ru_stime
+
+
+def _params():
+    return [pytest.param(case, id=case.name, marks=[pytest.mark.slow] if case.slow else []) for case in CASES]
+
+
+@pytest.mark.parametrize("case", _params())
+def test_hostile_case(case: Case, tmp_path: Path) -> None:
+    inputs = tmp_path / "inputs"
+    inputs.mkdir()
+    args = case.make(inputs)
+    before = sorted(p.name for p in inputs.iterdir())
+    if case.api:
+        argv = [sys.executable, "-c", PYTHON_API.format(body=args[0])]
+    else:
+        argv = [sys.executable, "-m", "brdfnorm", *args]
+    code, out, err, elapsed, peak, cpu = run_limited(argv, tmp_path, case.seconds)
+    report = f"exit {code} in {elapsed:.1f} s ({cpu:.1f} s CPU), peak {peak / 1024:.0f} MiB\nstderr: {err[-2000:]}"
+    print(f"{case.name}: {report.splitlines()[0]}")
+    assert code == case.exit, report
+    if not case.stdout_ok:
+        assert out == "", report
+    assert peak <= PEAK_RSS_KIB, report
+    if case.cpu_seconds is not None:  # CPU time: the machine's load does not count against the case
+        assert cpu <= case.cpu_seconds, report
+    assert sorted(p.name for p in inputs.iterdir()) == before, "something was written beside the inputs"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["inputs"], "something was written"
+    assert "Traceback" not in err and "internal error" not in err, report
+    if case.exit == 2:
+        errors = [line for line in err.splitlines() if line.startswith("error:")]
+        assert len(errors) == 1 and err.count("\n") == 1, report  # the error line, and nothing else
+        named = str(inputs) + os.sep if case.names == "INPUT" else case.names
+        assert named in errors[0], report
+        if "contains" in case.extra:
+            assert case.extra["contains"] in errors[0], report
+    if case.stderr:
+        assert case.stderr in err, report
