@@ -7,8 +7,10 @@ import mpmath
 import numpy as np
 import pytest
 
+from brdfnorm.engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
+from brdfnorm.engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
+from brdfnorm.engine.machinery.kronrod import NODES as KRONROD_NODES
 from brdfnorm.lut.adaptive import adaptive_unit_interval
-from brdfnorm.lut.table import GAUSS_WEIGHTS, KRONROD_NODES, KRONROD_WEIGHTS
 
 #: A jump of the second derivative (c·x₊²) smoothed over WIDTH, as a rough dielectric's E(μ) has near μ = 1.
 WIDTH, JUMP = 1e-3, 25.0

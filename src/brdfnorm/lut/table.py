@@ -32,6 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import validate
+from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
+from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
+from ..engine.machinery.kronrod import NODES as KRONROD_NODES
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
@@ -60,24 +63,6 @@ MU_FLOOR = 1e-7
 #: looser than NODE_RTOL_MAX (see average_over_mu).
 NODE_RTOL_STEP = 10.0
 NODE_RTOL_MAX = 1e-4
-
-# Kronrod's 15-point extension of the 7-point Gauss rule on [-1, 1] (nodes ≥ 0; the rule is symmetric).
-_XK = np.array([0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
-                0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
-                0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
-                0.207784955007898467600689403773245, 0.0])
-_WK = np.array([0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
-                0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
-                0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
-                0.204432940075298892414161999234649, 0.209482141084727828012999174891714])
-_WG = np.array([0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
-                0.381830050505118944950369775488975, 0.417959183673469387755102040816327])
-KRONROD_NODES = np.concatenate([-_XK[:-1], _XK[::-1]])
-KRONROD_WEIGHTS = np.concatenate([_WK[:-1], _WK[::-1]])
-#: The G7 weights on the K15 nodes (zero on the Kronrod-only nodes, which are the even positions).
-GAUSS_WEIGHTS = np.zeros(15)
-GAUSS_WEIGHTS[1::2] = np.concatenate([_WG, _WG[-2::-1]])
-
 
 def grid_values(start: float, stop: float, count: int, grid: str = "node") -> np.ndarray:
     """``count`` values over [start, stop]: at i/(N−1) (``node``, the default) or at (i + ½)/N (``texel``,

@@ -59,8 +59,8 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
+from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 from . import halfvector_global as global_rule
-from .hemisphere import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 
 _EPS = np.finfo(float).eps
 #: Roughness floor inside the integral (α = 0 is a mirror; 1e-150 differs from it by ~1e-300).
