@@ -14,7 +14,7 @@ from conftest import phong_like_reference, run_cli
 
 import brdfnorm as bn
 from brdfnorm.engine.routes.series import blinn_phong_albedo_series
-from brdfnorm.errors import ArgumentError
+from brdfnorm.errors import ArgumentError, MissingExtraError
 
 flint = pytest.importorskip("flint", reason="python-flint (brdfnorm[certified]) is not installed")
 arb = flint.arb
@@ -164,7 +164,7 @@ def test_no_certified_route_names_the_model_and_the_reason(tmp_path):
 
 def test_without_python_flint_the_method_says_how_to_install_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "flint", None)  # import flint now raises ImportError
-    with pytest.raises(ArgumentError, match=r"pip install 'brdfnorm\[certified\]'"):
+    with pytest.raises(MissingExtraError, match=r"pip install 'brdfnorm\[certified\]'"):
         bn.albedo(bn.load("phong", n=2.0), 0.0, method="certified")
 
 

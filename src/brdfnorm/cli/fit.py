@@ -108,7 +108,7 @@ def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="The fitted parameter: NAME=START:STOP:COUNT, NAME=START:STOP:COUNT:log "
+                              help="The fitted parameter: NAME=START:STOP:COUNT (add :log for log spacing) "
                                    "or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "

@@ -181,7 +181,7 @@ def _check_brackets(src: Source) -> None:
         else:
             opened.append(match.start())
             if len(opened) > MAX_BRACKET_DEPTH:
-                raise src.error_at(f"brackets nested more than {MAX_BRACKET_DEPTH} deep", match.start())
+                raise src.error_at(f"brackets nested too deeply (more than {MAX_BRACKET_DEPTH} levels)", match.start())
     if opened:
         raise src.error_at(f"syntax error: '{chr(text[opened[-1]])}' is never closed", opened[-1])
 
