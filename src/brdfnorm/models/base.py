@@ -119,7 +119,8 @@ class Model(ABC):
         names = [p.name for p in self.parameters] + list(self.aliases)
         close = difflib.get_close_matches(str(name), names, n=1, cutoff=0.6)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        if isinstance(name, str) and name in self.aliases:  # -p and table axes take it; a sweep or a search runs over the parameter itself
+        # -p and table axes take an alias; a sweep or a search runs over the parameter itself
+        if isinstance(name, str) and name in self.aliases:
             target, _, text = self.aliases[name]
             raise ParameterError(f"{name} is not a parameter of its own here ({text}): use {target}", where=self.name)
         raise ParameterError(f"unknown parameter {short_repr(name)}{hint}", where=self.name)
