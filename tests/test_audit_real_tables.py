@@ -4,7 +4,8 @@ licences in its README.md), audited end to end through the command line in a sub
 What each audit must find is what the table's own generator says (its fitting or baking code, cited in the
 README): the convention is named, and the error it reports at the worst cell is checked against an independent
 route — the exact value there by composite Gauss-Legendre over the half vector (tests.conftest), which shares no
-code with brdfnorm's integrators — minus the table's value read back independently (numpy, not brdfnorm's reader).
+code with brdfnorm's integrators — minus the table's value (the text tables read back by numpy, not brdfnorm's
+reader; the PNG by brdfnorm's reader).
 """
 
 from __future__ import annotations
@@ -109,3 +110,50 @@ def test_three_dfg_lut_16_half_js():
         assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(alpha)
         exact, error = _exact(models[meaning].with_params(alpha=alpha), mu)
         assert abs(table[i, j, k] - exact) == pytest.approx(fit["max"], abs=error + 2e-6)
+
+
+def _ue4_estimate(mu: float, r: float, n: int = 400_000) -> tuple[float, float]:
+    """(scale, bias) by brdfgen.jl's estimator (UE4's IBL: GGX importance sampling with α = r², Schlick-GGX
+    G1 = c/(c(1 − k) + k), k = α/2, separable), with many more samples than the table's 1 000."""
+    a, k = r * r, r * r / 2
+    u1, u2 = (np.arange(n) + 0.5) / n, np.random.default_rng(1).random(n)
+    phi, ct = 2 * np.pi * u1, np.sqrt((1 - u2) / (1 + (a * a - 1) * u2))
+    st = np.sqrt(1 - ct * ct)
+    H = np.stack([st * np.cos(phi), st * np.sin(phi), ct], -1)
+    V = np.array([np.sqrt(1 - mu * mu), 0.0, mu])
+    vh = H @ V
+    nl = (2 * vh[:, None] * H - V)[:, 2]
+    g1 = lambda c: c / (c * (1 - k) + k)  # noqa: E731
+    weight = np.where(nl > 0, g1(mu) * g1(np.maximum(nl, 1e-12)) * vh / (ct * mu), 0.0)
+    fc = (1 - vh) ** 5
+    return float(np.mean((1 - fc) * weight)), float(np.mean(fc * weight))
+
+
+def test_brdfgen_png_lut_excerpt():
+    """4DA/brdfgen's brdfLUT.png (512×512 RGB, 16-bit; R scale, G bias, B 0; rows roughness r, columns μ, both at
+    texel centres of 512): every 32nd texel from the 16th, so its axes are given with --axis. The table is UE4's
+    split sum with Schlick-GGX shadowing k = α/2, which is none of brdfnorm's Smith forms: the audit says no
+    hypothesis fits, names the axes (rows roughness) and the closest shadowing, separable (what k = α/2
+    approximates), and the error it measures is the table's; the table itself is the generator's estimator (checked
+    here with 400× its samples), so the misfit is the shadowing's, not the reading's."""
+    path = ENGINES / "brdfgen_lut_excerpt.png"
+    grid = "0.0302734375:0.9677734375:16"  # (32 i + 15.5)/512, i = 0..15
+    code, r, _ = _audit(str(path), "--model", "ggx", "--axis", f"r={grid}", "--axis", f"mu={grid}", "--as",
+                        "channels=DFG_f0,DFG_f90,-", "--no-sweep")
+    best = r["best"]
+    c = best["convention"]
+    assert code == 1 and r["verdict"] == "no hypothesis fits"
+    assert c["axes"][0] == "alpha" and c["shadowing"] == "separable" and c["channels"][:2] == ["DFG_f0", "DFG_f90"]
+    scale, bias = best["channels"]
+    assert 0.1 < scale["max"] < 0.2 and 0.1 < bias["max"] < 0.25
+    from brdfnorm.audit.readers import read_table
+
+    values = read_table(path).values
+    for fit, k in ((scale, 0), (bias, 1)):
+        i, j = fit["worst_cell"]
+        rough, mu = (32 * i + 15.5) / 512, (32 * j + 15.5) / 512
+        assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(rough**2)
+        separable = split_sum_models(GGX.with_params(shadowing="separable"))[0]
+        exact, error = _exact(separable["DFG_f0" if k == 0 else "DFG_f90"].with_params(alpha=rough**2), mu)
+        assert abs(values[i, j, k] - exact) == pytest.approx(fit["max"], abs=error + 1e-5)
+        assert values[i, j, k] == pytest.approx(_ue4_estimate(mu, rough)[k], abs=1e-2)
