@@ -157,3 +157,27 @@ def test_brdfgen_png_lut_excerpt():
         exact, error = _exact(separable["DFG_f0" if k == 0 else "DFG_f90"].with_params(alpha=rough**2), mu)
         assert abs(values[i, j, k] - exact) == pytest.approx(fit["max"], abs=error + 1e-5)
         assert values[i, j, k] == pytest.approx(_ue4_estimate(mu, rough)[k], abs=1e-2)
+
+
+def test_cycles_ggx_albedo_c_header_32():
+    """Blender Cycles' table_ggx_E (shader.tables, a C header of 32×32 floats printed to 6 decimals): the audit
+    names μ at nodes i/31 and roughness at nodes with α = r², height-correlated Smith, and it fits to the printing:
+    max 9.9e-7 (half the last printed digit is 5e-7, plus the reference's error). A C header of a real engine,
+    though 2-D and float: no 32³ uint16 header was found (docs/audit.md)."""
+    path = ENGINES / "cycles_ggx_E.h"
+    code, r, _ = _audit(str(path), "--model", "ggx", "--shape", "32,32", "--no-sweep")
+    c = r["best"]["convention"]
+    assert code == 0 and r["verdict"] == "fits" and not r["ambiguous"]
+    assert (c["axes"][0], c["direction"], c["roughness"], c["flipped"], c["shadowing"], c["channels"]) == (
+        "mu", "mu-node", "r2-node", [False, False], "height-correlated", ["E"])
+    (fit,) = r["best"]["channels"]
+    assert fit["max"] < 1.5e-6 and not r["runners_up"][0]["fits"]
+    text = path.read_text()
+    body = text[text.index("{") + 1:text.rindex("}")]
+    table = np.array([float(t.rstrip("f")) for t in re.split(r"[\s,]+", body) if t]).reshape(32, 32)
+    i, j = fit["worst_cell"]
+    mu, alpha = max(i / 31, 1e-4), max((j / 31) ** 2, 1e-8)
+    assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(alpha)
+    exact, error = _exact(GGX.with_params(alpha=alpha), mu)
+    assert abs(table[i, j] - exact) == pytest.approx(fit["max"], abs=error + 1e-8)
+    assert abs(table[i, j] - exact) <= 5e-7 + 5e-7  # the printing's half digit and the reference's share
