@@ -165,7 +165,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     ndim = len(grid)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1])
-    candidates = geometries(ndim, pins, explicit, grid)
+    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
