@@ -181,3 +181,41 @@ def test_cycles_ggx_albedo_c_header_32():
     exact, error = _exact(GGX.with_params(alpha=alpha), mu)
     assert abs(table[i, j] - exact) == pytest.approx(fit["max"], abs=error + 1e-8)
     assert abs(table[i, j] - exact) <= 5e-7 + 5e-7  # the printing's half digit and the reference's share
+
+
+#: Cycles' glass slice z = 8 of 16: ior = ior_from_F0((8/15)⁴) (cycles_precompute.cpp).
+CYCLES_ETA = (1 + (8 / 15) ** 2) / (1 - (8 / 15) ** 2)
+
+
+def test_cycles_glass_slice_names_the_reflection_form_of_refraction_shadowing():
+    """One η slice of Blender Cycles' table_ggx_glass_E (E = R + T of its GGX glass, 2²³ samples a cell): with
+    η given and the sample positions pinned to its generator's (μ and roughness at nodes i/15, α = r²), the audit
+    finds the refraction's shadowing to be the reflection's 1/(1 + Λ_V + Λ_L) — the form the issue says Cycles'
+    glass uses — and the table fits to its sampling noise; Heitz's Beta form (brdfnorm's default) misses by 0.71."""
+    path = ENGINES / "cycles_ggx_glass_E_slice.h"
+    common = (str(path), "--model", "ggx-dielectric", "-p", f"eta={CYCLES_ETA!r}", "--shape", "16,16", "--as",
+              "direction=mu-node", "--as", "roughness=r2-node", "--no-sweep", "--no-interpolation")
+    code, r, _ = _audit(*common)
+    c = r["best"]["convention"]
+    assert code == 0 and (c["axes"][0], c["flipped"], c["shadowing"]) == (
+        "mu", [False, False], "height-correlated/refraction=reflection-form")
+    (fit,) = r["best"]["channels"]
+    assert fit["max"] < 2e-5 and fit["median"] < 2e-6
+    code, beta, _ = _audit(*common, "--as", "shadowing=height-correlated")
+    assert code == 1 and 0.6 < beta["best"]["channels"][0]["max"] < 0.8
+    # independent route at the worst cell of the Beta form: the facet reference's R + T (nested scipy quad)
+    from tests.dielectric_reference import albedo_part
+
+    text = path.read_text()
+    body = text[text.index("{") + 1:text.rindex("}")]
+    table = np.array([float(t.rstrip("f")) for t in re.split(r"[\s,]+", body) if t]).reshape(16, 16)
+    worst = beta["best"]["channels"][0]
+    y, x = worst["worst_cell"]  # array indices; worst_at: where the Beta form's best geometry puts that cell
+    exact = sum(albedo_part("ggx", worst["worst_at"]["mu"], worst["worst_at"]["alpha"], CYCLES_ETA, part)
+                for part in "RT")
+    assert abs(table[y, x] - exact) == pytest.approx(worst["max"], abs=1e-6)
+    # and at the reflection form's worst cell (rows μ = y/15, columns α = (x/15)², floors 1e-4 and 1e-8)
+    y, x = fit["worst_cell"]
+    mu, alpha = max(y / 15, 1e-4), max((x / 15) ** 2, 1e-8)
+    exact = sum(albedo_part("ggx", mu, alpha, CYCLES_ETA, part, refraction="reflection-form") for part in "RT")
+    assert abs(table[y, x] - exact) == pytest.approx(fit["max"], abs=1e-7)
