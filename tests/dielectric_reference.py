@@ -53,8 +53,11 @@ def _fresnel(c: float, eta: float) -> float:
     return 0.5 * (rs * rs + rp * rp)
 
 
-def albedo_part(distribution: str, mu: float, alpha: float, eta: float, part: str) -> float:
-    """R (``part="R"``) or T (``"T"``) of the rough dielectric at cos θ_V = ``mu``, to ~1e-13."""
+def albedo_part(distribution: str, mu: float, alpha: float, eta: float, part: str,
+                refraction: str = "correlated-beta") -> float:
+    """R (``part="R"``) or T (``"T"``) of the rough dielectric at cos θ_V = ``mu``, to ~1e-13; ``refraction`` the
+    refraction's G2: Heitz's B(1 + Λ_V, 1 + Λ_L) (``correlated-beta``), 1/(1 + Λ_V + Λ_L) (``reflection-form``) or
+    1/((1 + Λ_V)(1 + Λ_L)) (``separable``)."""
     D, lam = _distribution(distribution, alpha)
     vz, sin_v = mu, math.sqrt(1.0 - mu * mu)
     lambda_v = lam(sin_v * sin_v / (vz * vz))
@@ -103,8 +106,12 @@ def albedo_part(distribution: str, mu: float, alpha: float, eta: float, part: st
             lambda_l = lam((1.0 - lz * lz) / (lz * lz))
             if part == "R":
                 g2 = 1.0 / (1.0 + lambda_v + lambda_l)
-            else:
+            elif refraction == "correlated-beta":
                 g2 = math.exp(betaln(1.0 + lambda_v, 1.0 + lambda_l))
+            elif refraction == "reflection-form":
+                g2 = 1.0 / (1.0 + lambda_v + lambda_l)
+            else:
+                g2 = 1.0 / ((1.0 + lambda_v) * (1.0 + lambda_l))
             return weight * g2 * D(mz) * c / vz
 
         return 2.0 * s * quad(g, math.acos(hi), math.acos(lo), epsabs=1e-15, epsrel=1e-14, limit=200)[0]

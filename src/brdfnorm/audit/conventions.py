@@ -11,7 +11,8 @@ the roughness (and, for three axes, Schlick's f0):
   (``r2-node``, ``r2-texel``: the axis is the perceptual roughness r, α = r²);
 * endpoint clamps: μ ≥ ``mu_floor`` and α ≥ ``alpha_floor`` (searched among :data:`MU_FLOORS`, :data:`ALPHA_FLOORS`
   where the grid reaches below them);
-* Smith shadowing: ``height-correlated`` or ``separable``;
+* Smith shadowing: ``height-correlated`` or ``separable`` (for rough dielectrics also the refraction's form,
+  :data:`DIELECTRIC_SHADOWING`);
 * per channel, its meaning (:data:`MEANINGS`).
 """
 
@@ -28,6 +29,12 @@ DIRECTIONS = ("mu-node", "mu-texel", "theta-node", "theta-texel", "ltc")
 ROUGHNESS = ("alpha-node", "alpha-texel", "r2-node", "r2-texel")
 F0_POSITIONS = ("f0-node", "f0-texel")
 SHADOWING = ("height-correlated", "separable")
+#: For rough dielectrics (a model with ``refraction_shadowing``) the refraction's G2 is searched too: Heitz's Beta
+#: form (``height-correlated``, brdfnorm's default), G1·G1 for both (``separable``: OpenPBR, Mitsuba), and
+#: height-correlated reflection with the refraction's G2 as the reflection's 1/(1 + Λ_V + Λ_L) (Blender Cycles'
+#: glass) or as G1·G1.
+DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-form",
+                                    "height-correlated/refraction=separable")
 #: Channel meanings. DFG_f0 = ∫ f cos (1 − (1 − V·H)⁵) (Karis's split-sum scale), DFG_f90 = ∫ f cos (1 − V·H)⁵
 #: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ.
 MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg")
@@ -173,7 +180,7 @@ def coordinates(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) 
 
 
 def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.ndarray] | None = None,
-               shape: tuple[int, ...] | None = None) -> list[Convention]:
+               shape: tuple[int, ...] | None = None, shadowings: tuple[str, ...] = SHADOWING) -> list[Convention]:
     """Every geometry (axis roles, flips, positions, shadowing) of a grid of ``grid_ndim`` axes, with pinned
     parts fixed (``pinned``: direction=..., roughness=..., shadowing=..., axes=mu,alpha, flip=0/1 per axis)."""
     out = []
@@ -227,7 +234,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
             continue  # the given values do not fit this axis
         chosen = tuple(sorted((roles[a], tuple(float(v) for v in given[roles[a]])) for a in fixed_axes))
         for direction, rough, f0, flips, shadowing in itertools.product(
-                directions, roughness, f0s, flip_sets, _pinned(pinned, "shadowing", SHADOWING)):
+                directions, roughness, f0s, flip_sets, _pinned(pinned, "shadowing", shadowings)):
             if any(flips[a] for a in fixed_axes):
                 continue
             out.append(Convention(direction_axis=d, roughness_axis=r, f0_axis=f,

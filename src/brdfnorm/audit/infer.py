@@ -10,8 +10,9 @@ Two stages, both against exact values (:mod:`.reference`):
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
    α = 0, and ranked by their maximum residual. Where the meanings need F90 and the table has more than
-   SUBGRID_CELLS cells, they are ranked on a strided subgrid (endpoints included) and only the best is then
-   measured on every cell; the runners-up's statistics say they were sampled.
+   SUBGRID_CELLS cells, they are ranked on a strided subgrid of about RANK_CELLS interior cells (no endpoint
+   clamp reaches them) and only the best is then measured on every cell, its clamps searched; the runners-up's
+   statistics say they were sampled.
 
 A hypothesis *fits* a channel when its maximum residual is within the tolerance
 
@@ -43,6 +44,8 @@ SUBSET = 6
 SUBSET_F90 = 3
 #: Above this many cells, candidates whose meanings need F90 are ranked on a strided subgrid of about this size.
 SUBGRID_CELLS = 1024
+#: Cells of the interior subgrid those candidates are ranked on (the runners-up's statistics are on it).
+RANK_CELLS = 256
 NOISE_FACTOR = 5.0
 #: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
 MAX_NOISE_SHARE = 0.05
@@ -162,7 +165,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     ndim = len(grid)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1])
-    candidates = geometries(ndim, pins, explicit, grid)
+    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
@@ -178,10 +181,13 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     if keep == STAGE2_F90 and int(np.prod(grid)) > SUBGRID_CELLS:
         # F90 costs ~3 ms a cell: the candidates are ranked on a strided subgrid (endpoints included), and only
         # the best is measured on every cell; the runners-up say that they were sampled
-        per_axis = max(3, int(SUBGRID_CELLS ** (1.0 / len(grid))))
-        index = [np.unique(np.rint(np.linspace(0, n - 1, min(n, per_axis))).astype(int)) for n in grid]
-        ranked = sorted(((_stage2(values, names, c, reference, step, chosen, search, index), c) for c in top),
-                        key=lambda pair: pair[0].score)
+        # ranked on interior cells only (no endpoint clamp reaches them, so no clamp search is needed: it cost
+        # ~10 boundary rows of F90 per candidate); the best then gets its clamps searched on every cell
+        per_axis = max(3, int(RANK_CELLS ** (1.0 / len(grid))))
+        index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
+                 else np.arange(n) for n in grid]
+        ranked = sorted(((_stage2(values, names, c, reference, step, chosen, (False, False), index), c)
+                         for c in top), key=lambda pair: pair[0].score)
         finals = [_stage2(values, names, ranked[0][1], reference, step, chosen, search)] + [h for h, _ in ranked[1:]]
     else:
         finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]

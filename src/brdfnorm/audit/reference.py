@@ -21,6 +21,7 @@ import numpy as np
 
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
+from .conventions import DIELECTRIC_SHADOWING, SHADOWING
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
@@ -40,12 +41,19 @@ class Reference:
             raise ArgumentError("audits tabulate the lobe with its Fresnel off (Fresnel enters as the split-sum "
                                 "channels and E_f0's Schlick axis); drop -p fresnel=...", where="--model")
         self.model = model.with_params(fresnel="none") if "fresnel" in names else model
+        # a rough dielectric whose refraction's shadowing is not given: that form is searched too
+        self.refraction = ("refraction_shadowing" in names
+                           and str(model.params.get("refraction_shadowing")) == "auto")
+        self.shadowings = DIELECTRIC_SHADOWING if self.refraction else SHADOWING
         self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
         self.computed = {"E": 0, "F90": 0, "E_avg": 0}
 
     def _model(self, quantity: str, shadowing: str) -> Model:
         names = {p.name for p in self.model.parameters}
+        shadowing, _, refraction = shadowing.partition("/refraction=")
         base = self.model.with_params(shadowing=shadowing) if "shadowing" in names else self.model
+        if refraction and self.refraction:
+            base = base.with_params(refraction_shadowing=refraction)
         if quantity == "F90":
             return split_sum_models(base)[0]["DFG_f90"]
         return base

@@ -40,7 +40,8 @@ def audit_command(
     fmt: str = typer.Option(None, "--format", help="Format when the extension does not say it (e.g. text, raw)."),
     pin: list[str] = typer.Option([], "--as", metavar="KEY=VALUE", help="Pin part of the convention: axes=mu,alpha "
                                   "direction=mu-node|mu-texel|theta-node|theta-texel|ltc roughness=alpha-node|"
-                                  "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable "
+                                  "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable (rough "
+                                  "dielectrics also height-correlated/refraction=reflection-form|separable) "
                                   "mu_floor=1e-4 alpha_floor=1e-8 channels=DFG_f0,DFG_f90"),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
                                    "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "

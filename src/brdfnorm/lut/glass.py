@@ -43,7 +43,8 @@ def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, meth
     with Workers(spread.get("workers", 1), spread.get("scheduler")) as pool:
         pool.start()
         chunks = np.array_split(np.arange(M), max(1, min(M, CHUNKS_PER_WORKER * pool.count)))
-        tasks = [(model.distribution, alpha[c], eta[c], model.params["shadowing"]) for c in chunks if c.size]
+        tasks = [(model.distribution, alpha[c], eta[c], model.params["shadowing"],
+                  str(model.params.get("refraction_shadowing", "auto"))) for c in chunks if c.size]
         parts = pool.map(functools.partial(average_albedo, rtol=rtol), tasks)
     value, error = np.concatenate([p.value for p in parts]), np.concatenate([p.error for p in parts])
     converged = np.concatenate([p.converged for p in parts])

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...models.dielectric import MicrofacetDielectric, refraction_shadowing
+from ...models.dielectric import MicrofacetDielectric, refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ..machinery.grazing_panels import ladder
 from .azimuthal import white_albedo
@@ -426,12 +426,14 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
     alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
     eta = np.broadcast_to(np.asarray(params["eta"], dtype=float), (K,))
     budget = max_evaluations // 2
+    # the refraction part takes the refraction's G2 kind (its integrand uses ``shadowing`` for nothing else)
+    refraction = refraction_kind(str(params["shadowing"]), str(params.get("refraction_shadowing", "auto")))
 
     def parts(rows: np.ndarray, relative: float, absolute: np.ndarray) -> tuple[CubatureResult, CubatureResult]:
         fixed, a, e = problem.fixed[rows], alpha[rows], eta[rows]
         return (reflection_albedo(model.distribution, fixed, a, e, params["shadowing"], rtol=relative,
                                   atol=absolute, max_evaluations=budget),
-                part_albedo(model.distribution, fixed, a, e, params["shadowing"], "refraction", rtol=relative,
+                part_albedo(model.distribution, fixed, a, e, refraction, "refraction", rtol=relative,
                             atol=absolute[:, None], max_evaluations=budget))
 
     reflected, transmitted = parts(np.arange(K), rtol, np.full(K, atol / 2))

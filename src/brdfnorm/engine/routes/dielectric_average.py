@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...models.dielectric import refraction_shadowing
+from ...models.dielectric import refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
@@ -100,7 +100,7 @@ def _slope_nodes(distribution: Distribution, alpha: float, n: int, cuts: list[fl
 
 
 def _inner(part: str, distribution: Distribution, alpha: float, eta: float, shadowing: str, s: np.ndarray,
-           n: int) -> np.ndarray:
+           n: int, refraction: str = "auto") -> np.ndarray:
     """∫ w (V·m) dV over the views about each facet of slope radius s (the inner two integrals of (A1))."""
     mz = 1.0 / np.sqrt(1.0 + (alpha * s) ** 2)
     sin_b = alpha * s * mz
@@ -147,28 +147,33 @@ def _inner(part: str, distribution: Distribution, alpha: float, eta: float, shad
             side = lz < 0.0
         lam = distribution.smith_lambda
         lambda_v, lambda_l = lam(alpha**2 * (1.0 - vz * vz) / (vz * vz)), lam(alpha**2 * (1.0 - lz * lz) / (lz * lz))
-        G2 = (shadowing_masking if part == "R" else refraction_shadowing)(shadowing, lambda_l, lambda_v)
+        if part == "R":
+            G2 = shadowing_masking(shadowing, lambda_l, lambda_v)
+        else:
+            G2 = refraction_shadowing(refraction_kind(shadowing, refraction), lambda_l, lambda_v)
         g = np.where(side & (vz > 0.0) & np.isfinite(G2), G2, 0.0)
     # φ' over [0, π] counted twice (the views mirror about the plane of m and N).
     return 2.0 * np.einsum("skij,skij,ski,ski->s", g, w_phi, weight * st * ct, w_theta)
 
 
-def _quadrature(distribution: Distribution, alpha: float, eta: float, shadowing: str, n: int) -> tuple[float, float]:
+def _quadrature(distribution: Distribution, alpha: float, eta: float, shadowing: str, n: int,
+                refraction: str = "auto") -> tuple[float, float]:
     """(R̄, T̄) of (A1) by the order-n rules."""
     kink = [np.sqrt(1.0 - eta * eta) / (eta * alpha)] if eta < 1.0 else []
     s, du = _slope_nodes(distribution, alpha, n, kink)
     mz = 1.0 / np.sqrt(1.0 + (alpha * s) ** 2)
     parts = []
     for part in ("R", "T"):
-        inner = np.concatenate([_inner(part, distribution, alpha, eta, shadowing, s[i:i + _CHUNK], n)
+        inner = np.concatenate([_inner(part, distribution, alpha, eta, shadowing, s[i:i + _CHUNK], n, refraction)
                                 for i in range(0, s.size, _CHUNK)])
         parts.append(float(np.sum(du / mz * inner)) / np.pi)
     return parts[0], parts[1]
 
 
-def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "height-correlated", *,
-                   rtol: float = 1e-10, atol: float = 0.0) -> AverageResult:
-    """E_avg = R̄ + T̄ of the rough dielectric for each (α, η) (arrays broadcast to (M,))."""
+def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "height-correlated",
+                   refraction: str = "auto", *, rtol: float = 1e-10, atol: float = 0.0) -> AverageResult:
+    """E_avg = R̄ + T̄ of the rough dielectric for each (α, η) (arrays broadcast to (M,)); ``refraction`` the
+    refraction's G2 (the model's ``refraction_shadowing``)."""
     alpha, eta = (np.atleast_1d(np.asarray(q, dtype=float)) for q in (alpha, eta))
     alpha, eta = np.broadcast_arrays(alpha, eta)
     M = alpha.size
@@ -181,7 +186,7 @@ def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "hei
     for k in range(M):
         history = []
         for n in ORDERS:
-            r, t = _quadrature(distribution, float(alpha.flat[k]), float(eta.flat[k]), shadowing, n)
+            r, t = _quadrature(distribution, float(alpha.flat[k]), float(eta.flat[k]), shadowing, n, refraction)
             history.append(r + t)
             if len(history) >= 3:
                 estimate = abs(history[-1] - history[-2]) + abs(history[-2] - history[-3])
