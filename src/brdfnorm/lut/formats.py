@@ -36,18 +36,20 @@ import struct
 import tempfile
 import zipfile
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
 from ..output import write_file
+from . import layout as layouts
+from .images import PNG_SIGNATURE, RGBA, WriteOptions, _openexr, _write_exr, _write_png
+from .layout import MAGIC, _check_finite, _subset_meta
 from .table import Lut
 
 #: Refuse tables larger than this many cells on reading (a 1024³ float64 table is 8 GB).
 MAX_CELLS = 50_000_000
-MAGIC = "brdfnorm-lut"
 TEXT_FORMATS = ("json", "csv", "h", "glsl", "hlsl")
 
 
@@ -62,13 +64,13 @@ def _meta_json(lut: Lut, extra: dict | None = None) -> str:
     return text
 
 
-def _identifier(name: str) -> str:
+def _identifier(name: str, prefix: str = "lut_") -> str:
     body = "one_minus_E" if name == "1-E" else re.sub(r"[^A-Za-z0-9_]", "_", name)
-    return "lut_" + re.sub(r"_+", "_", body).strip("_")  # GLSL reserves names with "__"
+    return prefix + re.sub(r"_+", "_", body).strip("_")  # GLSL reserves names with "__"
 
 
-def _identifiers(lut: Lut, tables: Sequence[str]) -> dict[str, str]:
-    names = {name: _identifier(name) for name in tables}
+def _identifiers(lut: Lut, tables: Sequence[str], prefix: str = "lut_") -> dict[str, str]:
+    names = {name: _identifier(name, prefix) for name in tables}
     if len(set(names.values())) != len(names):
         raise ArgumentError(f"table names {', '.join(tables)} do not give distinct identifiers", where="tables")
     return names
@@ -79,12 +81,6 @@ def _float32_text(value: float, suffix: str = "") -> str:
     if not re.search(r"[.eE]", text):
         text += ".0"
     return text + suffix
-
-
-def _check_finite(lut: Lut, tables: Sequence[str], fmt: str) -> None:
-    for name in tables:
-        if not np.all(np.isfinite(lut[name])):
-            raise ArgumentError(f"table {name} has non-finite values, which {fmt} cannot hold", where="tables")
 
 
 def _meta_from(payload: dict, where: str) -> tuple[dict, dict]:
@@ -109,7 +105,7 @@ def _build(tables: dict, axes: dict, meta: dict, path: str) -> Lut:
 
 # -- npz ---------------------------------------------------------------------------------------------------
 
-def _write_npz(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
+def _write_npz(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     clash = set(tables) & set(lut.axes)
     if clash or "meta" in set(tables) | set(lut.axes):
         raise ArgumentError(f"names used twice in one archive: {', '.join(sorted(clash) or ['meta'])}",
@@ -134,15 +130,9 @@ def _read_npz(data: bytes, path: str) -> Lut:
     return _build(tables, axes, meta, path)
 
 
-def _subset_meta(lut: Lut, tables: Sequence[str]) -> dict:
-    meta = dict(lut.meta)
-    meta["tables"] = {name: list(lut.table_axes[name]) for name in tables}
-    return meta
-
-
 # -- json --------------------------------------------------------------------------------------------------
 
-def _write_json(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_json(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
     _check_finite(lut, tables, "JSON")
     document = {"format": MAGIC, "axes": {n: v.tolist() for n, v in lut.axes.items()},
                 "tables": {n: lut[n].tolist() for n in tables}, "meta": _subset_meta(lut, tables)}
@@ -168,7 +158,7 @@ def _read_json(data: bytes, path: str) -> Lut:
 
 # -- csv ---------------------------------------------------------------------------------------------------
 
-def _write_csv(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_csv(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
     _check_finite(lut, tables, "CSV")
     names = list(lut.axes)
     grids = np.meshgrid(*lut.axes.values(), indexing="ij")
@@ -235,6 +225,9 @@ def _unique_in_order(column: np.ndarray) -> np.ndarray:
 
 def _axes_comment(lut: Lut, prefix: str) -> list[str]:
     lines = [f"{prefix} brdfnorm lookup table: {len(lut.axes)} axes, indexed in this order"]
+    if lut.meta.get("layout"):
+        text = re.sub(r"[^A-Za-z0-9_.,;:()\[\] -]", "_", lut.meta["layout"]["text"])  # nothing that ends a comment
+        lines.append(f"{prefix} layout: {text}")
     for name, values in lut.axes.items():
         safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
         lines.append(f"{prefix}   {safe}: {len(values)} values from {values[0]:.9g} to {values[-1]:.9g}")
@@ -249,10 +242,10 @@ def _c_nested(array: np.ndarray) -> str:
     return "{\n" + ",\n".join(_c_nested(sub) for sub in array) + "}"
 
 
-def _write_code(language: str) -> Callable[[Lut, Sequence[str], bool], str]:
-    def write(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_code(language: str) -> Callable[[Lut, Sequence[str], WriteOptions], str]:
+    def write(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
         _check_finite(lut, tables, language)
-        ids = _identifiers(lut, tables)
+        ids = _identifiers(lut, tables, opts.prefix)
         lines = _axes_comment(lut, "//")
         lines.append(f"// {MAGIC} " + _meta_json(_SubsetLut(lut, tables), {"identifiers": ids}))
         if language == "c":
@@ -314,7 +307,7 @@ def _read_code(data: bytes, path: str) -> Lut:
         if len(numbers) != count:
             raise TableFileError(f"{match.group(1)}: {len(numbers)} values for {count} elements", path, line)
         # the file declares float32: its decimals name float32 values (9 digits name each one exactly)
-        found[match.group(1)] = np.array([float(n) for n in numbers], dtype=float).astype(np.float32).astype(float)
+        found[match.group(1)] = np.array([float(n) for n in numbers], dtype=float).astype(np.float32)
     try:
         axis_values = meta.pop("axis_values")
         axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
@@ -329,41 +322,6 @@ def _read_code(data: bytes, path: str) -> Lut:
 
 # -- OpenEXR -----------------------------------------------------------------------------------------------
 
-def _openexr():
-    """The OpenEXR package (an optional extra), or a one-line error saying how to install it."""
-    from ..extras import require
-
-    return require("OpenEXR", "exr", where=".exr format")
-
-
-def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:
-    if len(shape) == 0:
-        return 1, 1
-    return int(np.prod(shape[:-1])), int(shape[-1])
-
-
-def _write_exr(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
-    OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
-
-    shape = tuple(len(v) for v in lut.axes.values())
-    dtype = np.float16 if half else np.float32
-    if half:
-        big = [n for n in tables if np.any(np.abs(lut[n]) > np.finfo(np.float16).max)]
-        if big:
-            raise ArgumentError(f"table {big[0]} exceeds the float16 range", where="half")
-    channels = {name: np.ascontiguousarray(np.asarray(lut.full(name)).reshape(_image_shape(shape)), dtype=dtype)
-                for name in tables}
-    meta = _subset_meta(lut, tables)
-    meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
-              "brdfnorm": json.dumps(meta, ensure_ascii=True)}
-    with tempfile.TemporaryDirectory() as scratch:  # the bindings write to a path; the caller renames atomically
-        target = Path(scratch) / "lut.exr"
-        with OpenEXR.File(header, channels) as image:
-            image.write(str(target))
-        return target.read_bytes()
-
-
 def _read_exr(data: bytes, path: str) -> Lut:
     OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
 
@@ -373,9 +331,10 @@ def _read_exr(data: bytes, path: str) -> Lut:
         source = Path(scratch) / "lut.exr"
         source.write_bytes(data)
         try:
-            with OpenEXR.File(str(source)) as image:
+            with OpenEXR.File(str(source), separate_channels=True) as image:
                 text = image.header().get("brdfnorm")
-                channels = {n: np.array(c.pixels, dtype=float) for n, c in image.channels().items()}
+                # the channels' own precision (float32, or float16 with half) is what the file holds
+                images = [{n: np.array(c.pixels) for n, c in part.channels.items()} for part in image.parts]
         except Exception as error:  # noqa: BLE001 — the bindings raise bare RuntimeErrors on bad files
             raise TableFileError(f"unreadable OpenEXR ({error})", path) from None
     try:
@@ -386,47 +345,20 @@ def _read_exr(data: bytes, path: str) -> Lut:
     try:
         axis_values = meta.pop("axis_values")
         axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
-        shape = tuple(len(v) for v in axes.values())
+        exr = meta.pop("exr", None) or {"parts": [{"axes": meta["axes"], "channels": {n: n for n in table_axes}}]}
         tables = {}
-        for name in table_axes:
-            full = channels[name].reshape(shape)
-            tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in meta["axes"])]
+        for part, channels in zip(exr["parts"], images, strict=True):
+            shape = tuple(len(axes[a]) for a in part["axes"])
+            for channel, name in part["channels"].items():
+                full = channels[channel].reshape(shape)
+                tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in part["axes"])]
+        tables = {name: tables[name] for name in table_axes}  # in the metadata's order, not the parts'
     except (KeyError, ValueError, TypeError) as error:
         raise TableFileError(f"channels do not match the metadata ({error})", path) from None
     return _build(tables, axes, meta, path)
 
 
 # -- PNG ---------------------------------------------------------------------------------------------------
-
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
-
-
-def _write_png(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
-    if len(tables) != 1:
-        raise ArgumentError(f"a PNG holds one table; choose one of {', '.join(tables)}", where="tables")
-    (name,) = tables
-    values = lut[name]
-    if values.ndim > 2:
-        raise ArgumentError(f"a PNG image holds a table of one or two axes; {name} has {values.ndim} (use .exr or "
-                            ".npz)", where="tables")
-    _check_finite(lut, tables, "PNG")
-    image = values.reshape(_image_shape(values.shape))
-    lo, hi = float(image.min()), float(image.max())
-    scale = (hi - lo) if hi > lo else 1.0
-    codes = np.rint((image - lo) / scale * 65535.0).astype(">u2")
-    meta = _subset_meta(lut, tables)
-    meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
-    meta["png"] = {"table": name, "lo": lo, "hi": hi, "value": "lo + code / 65535 * (hi - lo)"}
-    height, width = image.shape
-    raw = b"".join(b"\x00" + row.tobytes() for row in codes)  # filter type 0 on every row
-    text = MAGIC.encode("latin-1") + b"\x00" + json.dumps(meta, ensure_ascii=True).encode("latin-1")
-    return (PNG_SIGNATURE + _chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0))
-            + _chunk(b"tEXt", text) + _chunk(b"IDAT", zlib.compress(raw, 9)) + _chunk(b"IEND", b""))
-
 
 def _read_png(data: bytes, path: str) -> Lut:
     if not data.startswith(PNG_SIGNATURE):
@@ -448,11 +380,12 @@ def _read_png(data: bytes, path: str) -> Lut:
     if header is None or text is None:
         raise TableFileError("no brdfnorm metadata (tEXt) in this PNG", path)
     width, height, depth, colour, _, _, interlace = header
-    if (depth, colour, interlace) != (16, 0, 0):
-        raise TableFileError("expected a 16-bit greyscale, non-interlaced PNG", path)
+    samples = {0: 1, 2: 3, 6: 4}.get(colour)
+    if depth != 16 or samples is None or interlace != 0:
+        raise TableFileError("expected a 16-bit greyscale, RGB or RGBA non-interlaced PNG", path)
     if width * height > MAX_CELLS:
         raise TableFileError(f"image of {width}×{height} pixels is too large", path)
-    expected = height * (1 + 2 * width)
+    expected = height * (1 + 2 * samples * width)
     inflate = zlib.decompressobj()
     try:
         raw = inflate.decompress(b"".join(idat), expected + 1)
@@ -460,29 +393,34 @@ def _read_png(data: bytes, path: str) -> Lut:
         raise TableFileError(f"corrupt image data ({error})", path) from None
     if len(raw) != expected:
         raise TableFileError(f"image data holds {len(raw)} bytes, expected {expected}", path)
-    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * width)
+    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * samples * width)
     if np.any(rows[:, 0] != 0):
         raise TableFileError("only PNG filter type 0 is read (as brdfnorm writes it)", path)
-    codes = rows[:, 1:].copy().view(">u2").astype(float)
+    codes = rows[:, 1:].copy().view(">u2").astype(float).reshape(height, width, samples)
     try:
         meta = json.loads(text.decode("latin-1"))
         _, table_axes = _meta_from({"meta": meta}, path)
         info = meta.pop("png")
         axis_values = meta.pop("axis_values")
         axes = {n: np.asarray(axis_values[n], dtype=float) for n in meta["axes"]}
-        lo, hi = float(info["lo"]), float(info["hi"])
-        scale = (hi - lo) if hi > lo else 1.0
-        (name,) = table_axes
-        shape = tuple(len(axes[a]) for a in table_axes[name])
-        table = (lo + codes / 65535.0 * scale).reshape(shape)
-    except (KeyError, TypeError, ValueError, json.JSONDecodeError) as error:
+        if "channels" not in info:  # one greyscale table (files before the R, G, B, A mapping)
+            info = {"axes": table_axes[info["table"]], "channels": {"R": info}}
+        shape = tuple(len(axes[a]) for a in info["axes"])
+        tables = {}
+        for position, (channel, entry) in enumerate(info["channels"].items()):
+            if channel != RGBA[position]:
+                raise ValueError(f"channel {channel} in place {position}")
+            lo, hi, name = float(entry["lo"]), float(entry["hi"]), entry["table"]
+            full = (lo + codes[..., position] / 65535.0 * ((hi - lo) if hi > lo else 1.0)).reshape(shape)
+            tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in info["axes"])]
+    except (KeyError, TypeError, ValueError, IndexError, json.JSONDecodeError) as error:
         raise TableFileError(f"metadata does not describe the image ({error})", path) from None
-    return _build({name: table}, axes, meta, path)
+    return _build(tables, axes, meta, path)
 
 
 # -- registry ----------------------------------------------------------------------------------------------
 
-#: extension -> (writer(lut, tables, half) -> str | bytes, reader(bytes, path) -> Lut, float precision kept)
+#: extension -> (writer(lut, tables, WriteOptions) -> str | bytes, reader(bytes, path) -> Lut, float precision kept)
 FORMATS: dict[str, tuple[Callable, Callable[[bytes, str], Lut], str]] = {
     "npz": (_write_npz, _read_npz, "float64"),
     "json": (_write_json, _read_json, "float64"),
@@ -506,26 +444,43 @@ def format_of(path: str | Path, fmt: str | None = None, *, where: str = "path") 
 
 def _tables(lut: Lut, tables: Sequence[str] | None, fmt: str) -> list[str]:
     if tables is None:
-        return ["E"] if fmt == "png" and "E" in lut else list(lut)
+        return layouts.default_tables(lut, fmt)
     unknown = [t for t in tables if t not in lut]
     if unknown:
         raise ArgumentError(f"no table {unknown[0]!r} (tables: {', '.join(lut)})", where="tables")
     return list(dict.fromkeys(tables))
 
 
-def dumps(lut: Lut, fmt: str, *, tables: Sequence[str] | None = None, half: bool = False) -> str | bytes:
-    """The file's content in format ``fmt`` (text for json/csv/h/glsl/hlsl, bytes otherwise)."""
+def dumps(lut: Lut, fmt: str, *, tables: Sequence[str] | None = None, half: bool = False,
+          layout: str | Mapping[str, str] | None = None, prefix: str = "lut_", channel_names: str = "rgba",
+          broadcast_average: bool = False) -> str | bytes:
+    """The file's content in format ``fmt`` (text for json/csv/h/glsl/hlsl, bytes otherwise).
+
+    ``tables``: which tables (default: all in npz/json/csv; in the engine formats the values without error
+    estimates and 1 − E, :func:`.layout.default_tables`). ``layout``: ``x=AXIS,y=AXIS,v=down|up`` or ``axes``
+    (default: x = the view axis, y = the next axis in the engine formats; the ``--axis`` order in the others),
+    :mod:`.layout`. ``prefix``: of the identifiers in code. ``channel_names``: ``rgba`` or ``brdfnorm`` (EXR).
+    ``broadcast_average``: E_avg repeated over μ inside the grid's image (EXR, PNG) instead of its own image.
+    """
     fmt = format_of("", fmt, where="format")
     if half and fmt != "exr":
         raise ArgumentError("half precision applies to .exr only", where="half")
+    if prefix and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix) or "__" in prefix:
+        raise ArgumentError(f"prefix {prefix!r} is not the start of an identifier (letters, digits, _; no __)",
+                            where="prefix")
     writer, _, _ = FORMATS[fmt]
-    return writer(lut, _tables(lut, tables, fmt), half)
+    chosen = _tables(lut, tables, fmt)
+    spec = layouts.parse(layout) if isinstance(layout, str) else layout
+    laid = layouts.apply(lut, layouts.resolve(lut, spec, fmt))
+    options = WriteOptions(half=half, prefix=prefix, channel_names=channel_names, broadcast_average=broadcast_average)
+    return writer(laid, chosen, options)
 
 
 def save(lut: Lut, path: str | Path, *, fmt: str | None = None, tables: Sequence[str] | None = None,
-         half: bool = False) -> Path:
-    """Write ``lut`` to ``path`` (format from the extension unless ``fmt``), atomically."""
-    save_bytes(path, dumps(lut, format_of(path, fmt), tables=tables, half=half))
+         half: bool = False, **options) -> Path:
+    """Write ``lut`` to ``path`` (format from the extension unless ``fmt``), atomically; ``options`` as
+    :func:`dumps` takes them (layout, prefix, channel_names, broadcast_average)."""
+    save_bytes(path, dumps(lut, format_of(path, fmt), tables=tables, half=half, **options))
     return Path(path)
 
 
@@ -535,7 +490,9 @@ def save_bytes(path: str | Path, data: str | bytes) -> None:
 
 
 def load(path: str | Path, *, fmt: str | None = None) -> Lut:
-    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> float64 array."""
+    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> array, indexed in
+    the order of its ``--axis`` flags whatever the file's layout; float64 from npz/json/csv/png, float32 from
+    .h/.glsl/.hlsl/.exr (float16 from a ``half`` EXR), the precision the file holds."""
     name = format_of(path, fmt)
     try:
         with open(path, "rb") as handle:
@@ -543,4 +500,4 @@ def load(path: str | Path, *, fmt: str | None = None) -> Lut:
     except OSError as error:
         raise TableFileError(f"cannot read: {error.strerror}", str(path)) from None
     _, reader, _ = FORMATS[name]
-    return reader(data, str(path))
+    return layouts.restore(reader(data, str(path)), str(path))  # indexed in the --axis order again

@@ -523,7 +523,9 @@ class Lut(Mapping):
                 raise ArgumentError(f"table {name!r}: its axes {self.table_axes[name]} must be some of "
                                     f"{tuple(self.axes)} in that order", where="tables")
             expected = tuple(len(self.axes[a]) for a in self.table_axes[name])
-            array = np.asarray(array, dtype=float)
+            array = np.asarray(array)
+            if array.dtype not in (np.float16, np.float32):  # a float32 file's tables stay float32
+                array = array.astype(float)
             if array.shape != expected:
                 raise ArgumentError(f"table {name!r} has shape {array.shape}, its axes "
                                     f"{self.table_axes[name]} need {expected}", where="tables")
