@@ -130,7 +130,7 @@ def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     if len(samples) == 2:  # no two-channel colour PNG: RGB with B = 0
         samples.append(np.zeros(shape, dtype=">u2"))
     colour = {1: 0, 3: 2, 4: 6}[len(samples)]  # greyscale, RGB, RGBA
-    codes = np.stack(samples, axis=-1)
+    codes = np.stack(samples, axis=-1).astype(">u2")  # np.stack gives native byte order; PNG is big-endian
     meta = _subset_meta(lut, tables)
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["png"] = {"axes": part["axes"], "channels": mapping, "value": "lo + code / 65535 * (hi - lo)",

@@ -25,6 +25,8 @@ MAGIC = "brdfnorm-lut"
 #: What "keep the --axis order" is called on the command line.
 AXES_ORDER = "axes"
 V_DIRECTIONS = ("down", "up")
+#: The default y axis where present (else the first other axis in the --axis order).
+ROUGHNESS_AXES = ("roughness", "alpha")
 
 
 def parse(text: str | None) -> dict | None:
@@ -60,7 +62,8 @@ def resolve(lut: Lut, spec: Mapping[str, str] | None, fmt: str) -> dict | None:
     direction = next((n for n in names if n in DIRECTION_AXES), names[0] if names else None)
     x = spec.get("x", direction)
     others = [n for n in names if n != x]
-    y = spec.get("y", others[0] if others else None)
+    preferred = [n for n in ROUGHNESS_AXES if n in others] + others  # engines index rows by roughness
+    y = spec.get("y", preferred[0] if preferred else None)
     for key, name in (("x", x), ("y", y)):
         if name is not None and name not in names:
             raise ArgumentError(f"{key}={name}: no axis of that name (axes: {', '.join(names)})", where="--layout")
@@ -93,7 +96,7 @@ def apply(lut: Lut, layout: Mapping | None) -> Lut:
         array = np.transpose(lut[name], [own.index(a) for a in target])
         if flip and layout["y"] in target:
             array = np.flip(array, axis=target.index(layout["y"]))
-        tables[name], table_axes[name] = np.ascontiguousarray(array), target
+        tables[name], table_axes[name] = np.array(array, order="C"), target
     meta = {**lut.meta, "layout": dict(layout)}
     return Lut(tables, axes, meta, table_axes)
 
@@ -116,7 +119,7 @@ def restore(lut: Lut, path: str = "") -> Lut:
         own = lut.table_axes[name]
         array = np.flip(lut[name], axis=own.index(y)) if flip and y in own else lut[name]
         target = [a for a in order if a in own]
-        tables[name], table_axes[name] = np.ascontiguousarray(np.transpose(array, [own.index(a) for a in target])), \
+        tables[name], table_axes[name] = np.array(np.transpose(array, [own.index(a) for a in target]), order="C"), \
             target
     return Lut(tables, axes, lut.meta, table_axes)
 
