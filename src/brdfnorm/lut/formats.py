@@ -7,19 +7,23 @@ format    layout                                                                
 ``.json`` ``{"axes": {...}, "tables": {...}, "meta": {...}}``, nested lists             float64, bit-exact
 ``.csv``  long form: ``# brdfnorm-lut {meta}`` line, header, one row per cell: axis     float64, bit-exact
           columns then tables (tables without an axis repeated along it)
-``.exr``  OpenEXR, one channel per table over the grid (rows: the first axes, columns:  float32 (``half``:
-          the last), ZIP; axes and meta in the ``brdfnorm`` header attribute           float16), nearest
+``.exr``  OpenEXR (:mod:`.images`): the grid's tables as channels R, G, B, A, E_avg as a   float32 (``half``:
+          second part of one row; ZIP; axes, layout, channel mapping and meta in the   float16), nearest
+          ``brdfnorm`` header attribute
 ``.h``    C/C++ header: ``static const float lut_E[32][32] = {...};`` per table,       float32, nearest
-          axes in a comment, meta as a JSON comment
+          ``[y][x]``; axes and layout in a comment, meta as a JSON comment
 ``.glsl`` ``const float lut_E[1024] = float[1024](...);`` (row-major, flattened),       float32, nearest
           ``const int`` sizes; passes glslangValidator
 ``.hlsl`` ``static const float lut_E[1024] = {...};`` (row-major, flattened)            float32, nearest
-``.png``  16-bit greyscale of ONE table (``E`` unless another is chosen), code =        within (hi − lo)/131070
-          round((v − lo)/(hi − lo)·65535); lo, hi, axes and meta in a ``tEXt`` chunk
+``.png``  16-bit greyscale, RGB or RGBA of one to four tables over the same axes       within (hi − lo)/131070
+          (:mod:`.images`), code = round((v − lo)/(hi − lo)·65535) per channel; lo,
+          hi, mapping, axes and meta in a ``tEXt`` chunk
 ========  ===========================================================================  =====================
 
-PNG holds one table of one or two axes (a 1-axis table is one row); tables of three or more axes are refused
-(use EXR or npz). Identifiers in code are ``lut_`` + the table name with every other character than letters,
+The engine formats (exr, png, h, glsl, hlsl) are written in the engine layout, x = N·V, y = roughness
+(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others; :func:`load`
+undoes the layout. PNG holds tables of one or two axes (a 1-axis table is one row); three or more axes are refused
+(use EXR or npz). Identifiers in code are ``prefix`` (``lut_``) + the table name with every other character than letters,
 digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in the meta comment. Text from the
 meta (model names, parameters) only ever appears inside JSON with every non-ASCII character, ``*``, ``/``,
 ``?`` and ``\\`` escaped, so no comment can be closed or continued by it. Written with zlib + struct (no imaging
