@@ -21,13 +21,14 @@ format    layout                                                                
 ========  ===========================================================================  =====================
 
 The engine formats (exr, png, h, glsl, hlsl) are written in the engine layout, x = N·V, y = roughness
-(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others; :func:`load`
-undoes the layout. PNG holds tables of one or two axes (a 1-axis table is one row); three or more axes are refused
-(use EXR or npz). Identifiers in code are ``prefix`` (``lut_``) + the table name with every other character than letters,
-digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in the meta comment. Text from the
-meta (model names, parameters) only ever appears inside JSON with every non-ASCII character, ``*``, ``/``,
-``?`` and ``\\`` escaped, so no comment can be closed or continued by it. Written with zlib + struct (no imaging
-library is a dependency). Readers check what they read and report ``FILE:LINE`` (or the file) on a bad file.
+(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others;
+:func:`load` undoes the layout. PNG holds tables of one or two axes (a 1-axis table is one row); three or more
+axes are refused (use EXR or npz). Identifiers in code are ``prefix`` (``lut_``) + the table name with every
+other character than letters, digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in
+the meta comment. Text from the meta (model names, parameters) only ever appears inside JSON with every
+non-ASCII character, ``*``, ``/``, ``?`` and ``\\`` escaped, so no comment can be closed or continued by it.
+Written with zlib + struct (no imaging library is a dependency). Readers check what they read and report
+``FILE:LINE`` (or the file) on a bad file.
 """
 
 from __future__ import annotations
