@@ -79,14 +79,15 @@ def lut_command(
     table: list[str] = typer.Option([], "--tables", "--table", metavar="NAMES", help="Write only these tables "
                                     "(comma list, repeatable). Default: all in .npz/.json/.csv; in .exr/.png/.h/"
                                     ".glsl/.hlsl the values (E, E_avg, DFG_…), no errors or 1-E."),
-    layout: str = typer.Option(None, "--layout", metavar="x=AXIS,y=AXIS,v=down|up", help="Which axis runs along "
-                               "the image's columns (x, u) and rows (y, v), and whether row 0 (the top) holds the "
-                               "first y value (v=down) or the last (v=up). Default in .exr/.png/.h/.glsl/.hlsl: x = "
-                               "mu or theta, y = the next axis, v=down; 'axes' keeps the --axis order (the default "
-                               "in .npz/.json/.csv). Written in the metadata; brdfnorm.lut.load undoes it."),
-    channel_names: str = typer.Option("rgba", "--channel-names", metavar="rgba|brdfnorm", help="Image channels: R, "
-                                      "G, B, A in the order of the tables (mapping in the metadata), or brdfnorm's "
-                                      "table names (.exr)."),
+    layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS,y=AXIS,v=down|up: the axis "
+                               "along the image's columns (x, u) and rows (y, v), and whether row 0 (the top) "
+                               "holds the first y value (v=down) or the last (v=up). Default in .exr/.png/.h/.glsl/"
+                               ".hlsl: x = mu or theta, y = roughness or alpha (else the next axis), v=down; 'axes' "
+                               "keeps the --axis order (the default in .npz/.json/.csv). Written in the metadata; "
+                               "brdfnorm.lut.load undoes it."),
+    channel_names: str = typer.Option("rgba", "--channel-names", metavar="NAMING", help="rgba: image channels R, "
+                                      "G, B, A in the order of the tables (mapping in the metadata); brdfnorm: "
+                                      "the table names (.exr)."),
     broadcast_average: bool = typer.Option(False, "--broadcast-average", help="Repeat E_avg along μ inside the "
                                            "grid's image (.exr, .png) instead of writing it as its own one-row "
                                            "image (an EXR part; in PNG its own file, --tables E_avg)."),
