@@ -325,7 +325,7 @@ def test_random_and_zero_channels_never_fit_and_are_kept_by_the_fix(capsys, tmp_
 
 
 @pytest.mark.parametrize("ext, options", [("npz", ["--array", "E"]), ("json", ["--array", "tables.E"]),
-                                          ("h", ["--array", "lut_E"]), ("exr", ["--array", "E"]),
+                                          ("h", ["--array", "lut_E"]), ("exr", ["--array", "R"]),
                                           ("csv", ["--array", "E", "--shape", f"{N},{N}"]), ("png", [])])
 def test_brdfnorm_lut_files_are_audited(capsys, tmp_path, ext, options):
     path = tmp_path / f"own.{ext}"

@@ -108,7 +108,8 @@ FLOAT32 = ("exr", "h", "glsl", "hlsl")
 
 @pytest.mark.parametrize("fmt", [*EXACT, *FLOAT32])
 def test_round_trip(table, tmp_path, fmt):
-    path = lut.save(table, tmp_path / f"t.{fmt}")
+    options = {"channel_names": "brdfnorm"} if fmt == "exr" else {}  # nine tables: more than R, G, B, A
+    path = lut.save(table, tmp_path / f"t.{fmt}", tables=list(table), **options)
     back = lut.load(path)
     assert list(back) == list(table) and list(back.axes) == list(table.axes)
     assert back.table_axes == table.table_axes
@@ -117,26 +118,34 @@ def test_round_trip(table, tmp_path, fmt):
     for name in table:
         expected = table[name] if fmt in EXACT else table[name].astype(np.float32).astype(float)
         assert np.array_equal(back[name], expected), (fmt, name)  # float64 bit-exact; float32 to nearest
+        assert back[name].dtype == (np.float64 if fmt in EXACT else np.float32)  # the precision the file holds
     assert back.meta["model"] == "blinn-phong" and back.meta["rtol"] == 1e-10
 
 
 def test_exr_half(table, tmp_path):
     back = lut.load(lut.save(table, tmp_path / "t.exr", half=True))
     assert np.array_equal(back["E"], table["E"].astype(np.float16).astype(float))
+    assert back["E"].dtype == np.float16
 
 
 def test_png_quantization(table, tmp_path):
     back = lut.load(lut.save(table, tmp_path / "t.png"))
-    assert list(back) == ["E"]
-    span = table["E"].max() - table["E"].min()
-    error = np.max(np.abs(back["E"] - table["E"]))
-    assert 0 < error <= span / 131070 * (1 + 1e-9)
+    assert list(back) == ["E", "DFG_f0", "DFG_f90"]  # the grid's values as R, G, B (E_avg is its own image)
+    for name in back:
+        span = table[name].max() - table[name].min()
+        error = np.max(np.abs(back[name] - table[name]))
+        assert 0 < error <= span / 131070 * (1 + 1e-9), name
     one_axis = lut.load(lut.save(table, tmp_path / "avg.png", tables=["E_avg"]))
     assert one_axis["E_avg"].shape == (3,)
     three = lut.compute(bn.load("lambert"), {"mu": [0.5, 1.0], "reflectance": [0.2, 0.4]}, rtol=1e-8)
     assert three["E"].shape == (2, 2)
-    with pytest.raises(ArgumentError, match="one table"):
-        formats.dumps(table, "png", tables=["E", "1-E"])
+    with pytest.raises(ArgumentError, match="at most 4"):
+        formats.dumps(table, "png", tables=["E", "1-E", "E_error", "DFG_f0", "DFG_f90"])
+    with pytest.raises(ArgumentError, match="own"):  # E_avg has other axes than E: its own file
+        formats.dumps(table, "png", tables=["E", "E_avg"])
+    broadcast = lut.load(lut.save(table, tmp_path / "b.png", tables=["E", "E_avg"], broadcast_average=True))
+    assert broadcast["E_avg"].shape == (3,)
+    assert np.max(np.abs(broadcast["E_avg"] - table["E_avg"])) <= np.ptp(table["E_avg"]) / 131070 * (1 + 1e-9)
 
 
 def test_png_refuses_three_axes(tmp_path):
@@ -151,9 +160,9 @@ def test_png_refuses_three_axes(tmp_path):
 def test_c_header_compiles_with_hostile_names(table, tmp_path):
     hostile = lut.Lut(dict(table), table.axes, {**table.meta, "model": "evil*/ \\\n??/ #include <x> \u00e9"},
                       table.table_axes)
-    (tmp_path / "t.h").write_text(formats.dumps(hostile, "h"))
+    (tmp_path / "t.h").write_text(formats.dumps(hostile, "h", tables=list(table)))
     (tmp_path / "main.c").write_text('#include "t.h"\n#include "t.h"\nint main(void) {\n'
-                                     "  return (int)(lut_E[3][2] + lut_one_minus_E[0][0] + lut_E_avg[1]"
+                                     "  return (int)(lut_E[2][3] + lut_one_minus_E[0][0] + lut_E_avg[1]"
                                      " + lut_DFG_f0[0][0]) * 0;\n}\n")
     done = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-trigraphs", "-o", str(tmp_path / "a.out"),
                            str(tmp_path / "main.c")], capture_output=True, text=True)
@@ -163,9 +172,9 @@ def test_c_header_compiles_with_hostile_names(table, tmp_path):
 
 @pytest.mark.skipif(shutil.which("glslangValidator") is None, reason="glslangValidator not installed")
 def test_glsl_passes_glslang(table, tmp_path):
-    code = formats.dumps(table, "glsl")
+    code = formats.dumps(table, "glsl", tables=list(table))
     shader = ("#version 330\n" + code + "out vec4 colour;\nvoid main() {\n"
-              "  colour = vec4(lut_E[lut_E_size1 * 3 + 2], lut_E_avg[1], lut_one_minus_E[0], 1.0);\n}\n")
+              "  colour = vec4(lut_E[lut_E_size1 * 2 + 3], lut_E_avg[1], lut_one_minus_E[0], 1.0);\n}\n")
     (tmp_path / "t.frag").write_text(shader)
     done = subprocess.run(["glslangValidator", str(tmp_path / "t.frag")], capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
@@ -173,13 +182,16 @@ def test_glsl_passes_glslang(table, tmp_path):
 
 def test_hlsl_layout(table):
     code = formats.dumps(table, "hlsl")
-    assert "static const float lut_E[12] = {" in code and "static const int lut_E_size0 = 4;" in code
+    # x = mu (4 values) runs fastest, y = n (3 values) is size0: lut_E[n][mu], flattened row-major
+    assert "static const float lut_E[12] = {" in code and "static const int lut_E_size0 = 3;" in code
+    assert "static const int lut_E_size1 = 4;" in code and "E_error" not in code and "one_minus" not in code
 
 
 @pytest.mark.parametrize("fmt", list(formats.FORMATS))
 def test_damaged_files_are_one_error_naming_the_file(table, tmp_path, fmt):
     path = tmp_path / f"bad.{fmt}"
-    data = formats.dumps(table, fmt, tables=["E"] if fmt == "png" else None)
+    data = formats.dumps(table, fmt, tables=["E"] if fmt == "png" else list(table),
+                         channel_names="brdfnorm" if fmt == "exr" else "rgba")
     raw = data.encode() if isinstance(data, str) else data
     path.write_bytes(raw[: len(raw) // 2])
     with pytest.raises(TableFileError, match="bad"):
@@ -216,7 +228,8 @@ def test_cli_theta_in_degrees_and_stdout(capsys):
     code, stdout, stderr = run_cli(capsys, "lut", "lambert", "--axis", "theta=0,60", "-o", "-", "--format", "json")
     assert code == 0 and "wrote" not in stderr
     document = json.loads(stdout)
-    assert np.allclose(document["axes"]["theta"], np.radians([0, 60]))
+    assert document["axes"]["theta"] == [0.0, 60.0]  # the units the command line took, and the metadata says so
+    assert document["meta"]["units"]["theta"] == "degrees"
     assert np.allclose(document["tables"]["E"], 1.0)
 
 

@@ -1,5 +1,11 @@
 """Declared model parameters: name, kind, range and default, and validation of user values.
 
+Kinds (:data:`KINDS`): ``float`` (one number), ``int`` (a whole number: table sizes), ``spectrum`` (per-channel
+numbers: one value for every channel or R,G,B, each within the declared range — an index of refraction η,
+an extinction k, a reflectance f0; never a colour clamped to [0, 1] or quantized), ``color`` (an R,G,B colour in
+a .brdf file or a Mitsuba reflectance), ``bool`` and ``choice``. :meth:`Parameter.declaration` is the one
+description that ``brdfnorm models``, ``info``, ``check`` and the explorer read.
+
 Built-in lobes declare *hard* ranges (a negative Phong exponent is meaningless and refused); `.brdf` files
 declare *slider* ranges (BRDF Explorer's UI limits), so values outside them are accepted with a warning.
 """
@@ -17,7 +23,14 @@ import numpy as np
 from .errors import ParameterError, ParameterTypeError
 from .validate import real_array, short_repr
 
-Kind = Literal["float", "bool", "color", "choice"]
+Kind = Literal["float", "int", "spectrum", "bool", "color", "choice"]
+KINDS: tuple[str, ...] = ("float", "int", "spectrum", "bool", "color", "choice")
+#: Kinds that hold one number per colour channel (an array's last axis of length CHANNELS).
+PER_CHANNEL = ("spectrum", "color")
+#: Kinds that a lookup-table axis, a sweep or a search may vary (one number per cell; a spectrum gets it in every
+#: channel).
+NUMERIC = ("float", "int", "spectrum")
+CHANNELS = 3
 
 
 @dataclass(frozen=True)
@@ -33,6 +46,28 @@ class Parameter:
     strict: bool = True  # True: range is a hard limit; False: slider range, warn only
     choices: tuple[str, ...] = ()  # the allowed values of a ``kind="choice"`` parameter
 
+    @property
+    def per_channel(self) -> bool:
+        """Whether a value holds one number per colour channel (``spectrum``, ``color``)."""
+        return self.kind in PER_CHANNEL
+
+    def declaration(self) -> dict:
+        """The declaration as plain data: name, kind, channels (3 per-channel numbers, else 1), integer, default,
+        minimum, maximum (per channel for a spectrum), strict (hard range) or slider, choices, description, and
+        the range and default as the command line spells them."""
+        default = self.default
+        if isinstance(default, tuple):
+            default = [float(v) for v in default]
+        elif self.kind == "int":
+            default = int(default)  # type: ignore[arg-type]
+        elif self.kind == "float":
+            default = float(default)  # type: ignore[arg-type]
+        return {"name": self.name, "kind": self.kind, "channels": CHANNELS if self.per_channel else 1,
+                "integer": self.kind == "int", "default": default, "minimum": self.minimum,
+                "maximum": self.maximum, "strict": self.strict, "choices": list(self.choices),
+                "description": self.description, "range": self.describe_range(),
+                "default_text": self.describe_default()}
+
     def describe_range(self) -> str:
         if self.kind == "bool":
             return "0 or 1"
@@ -40,7 +75,9 @@ class Parameter:
             return "|".join(self.choices)
         lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
         hi = "inf" if self.maximum is None else f"{self.maximum:g}"
-        return f"[{lo}, {hi}]"
+        whole = " whole" if self.kind == "int" else ""
+        each = " per channel (1 or 3 numbers)" if self.kind == "spectrum" else ""
+        return f"[{lo}, {hi}]{whole}{each}"
 
     def parse(self, text: str) -> float | bool | tuple[float, float, float]:
         """Parse a command-line value (``n=512``, ``normalized=0``, ``baseColor=0.5,0.5,0.5``)."""
@@ -55,7 +92,12 @@ class Parameter:
                 if lowered in ("0", "false", "no", "off"):
                     return False
                 raise ValueError
-            if self.kind == "color":
+            if self.kind == "int":
+                number = float(text)
+                if not number.is_integer():
+                    raise ValueError
+                return int(number)  # type: ignore[return-value]
+            if self.per_channel:
                 parts = [float(p) for p in text.split(",")]
                 if len(parts) == 1:
                     parts = parts * 3
@@ -64,7 +106,8 @@ class Parameter:
                 return tuple(parts)  # type: ignore[return-value]
             return float(text)
         except ValueError:
-            expected = {"bool": "0 or 1", "color": "R,G,B (three numbers)", "float": "a number"}[self.kind]
+            expected = {"bool": "0 or 1", "color": "R,G,B (three numbers)", "float": "a number",
+                        "int": "a whole number", "spectrum": "a number or R,G,B (one per channel)"}[self.kind]
             raise ParameterError(f"expected {expected}, got {text!r}", where=f"parameter {self.name}") from None
 
     def validate(self, value: object) -> float | bool | tuple[float, float, float] | np.ndarray:
@@ -79,10 +122,12 @@ class Parameter:
                 return bool(value)
             raise ParameterError(f"expected 0 or 1, got {value!r}", where=where)
         array = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
-        if self.kind == "color" and array.ndim == 0:
-            array = np.full(3, float(array))
-        if self.kind == "color" and array.shape[-1:] != (3,):
+        if self.per_channel and array.ndim == 0:
+            array = np.full(CHANNELS, float(array))
+        if self.per_channel and array.shape[-1:] != (CHANNELS,):
             raise ParameterError(f"expected 3 components (R,G,B), got {value!r}", where=where)
+        if self.kind == "int" and not np.all(array == np.rint(array)):
+            raise ParameterError(f"expected a whole number, got {short_repr(value)}", where=where)
         low = self.minimum is not None and np.any(array < self.minimum)
         high = self.maximum is not None and np.any(array > self.maximum)
         if low or high:
@@ -91,8 +136,8 @@ class Parameter:
                 raise ParameterError(message, where=where)
             warnings.warn(f"{where}: {message} (the file's slider range; evaluating anyway)", stacklevel=3)
         if array.ndim == 0:
-            return float(array)
-        if self.kind == "color" and array.ndim == 1:
+            return int(array) if self.kind == "int" else float(array)
+        if self.per_channel and array.ndim == 1:
             return tuple(float(c) for c in array)  # type: ignore[return-value]
         return array
 
@@ -109,6 +154,8 @@ class Parameter:
             return str(self.default)
         if self.kind == "bool":
             return str(int(bool(self.default)))
+        if self.kind == "int":
+            return str(int(self.default))  # type: ignore[arg-type]
         return ",".join(f"{v:g}" for v in np.atleast_1d(np.asarray(self.default, dtype=float)))
 
 

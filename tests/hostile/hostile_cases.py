@@ -12,6 +12,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import socket
 import struct
 import subprocess
@@ -169,7 +170,9 @@ def csv_100mb(directory: Path) -> list[str]:
 
 
 def header_5000_digit_size(directory: Path) -> list[str]:
-    text = dumps(small_lut(), "h").replace("lut_E[3][4]", "lut_E[" + "9" * 5000 + "]")
+    # whatever the layout's [y][x] sizes are (engine layout: [4][3]), the declaration's sizes become one 5000-digit size
+    text, found = re.subn(r"lut_E(?:\[[0-9]+\])+", "lut_E[" + "9" * 5000 + "]", dumps(small_lut(), "h"), count=1)
+    assert found == 1, "no lut_E declaration to damage"
     path = directory / "t.h"
     path.write_text(text)
     return _fit(path)

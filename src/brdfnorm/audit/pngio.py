@@ -128,13 +128,19 @@ def encode(codes: np.ndarray, depth: int, text: dict[str, str] | None = None) ->
     return SIGNATURE + b"".join(chunks)
 
 
-def brdfnorm_scaling(text: dict[str, str]) -> tuple[float, float] | None:
-    """(lo, hi) of a PNG that ``brdfnorm lut`` wrote (value = lo + code/65535·(hi − lo)), else None."""
+def brdfnorm_scaling(text: dict[str, str]) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi) per channel of a PNG that ``brdfnorm lut`` wrote (value = lo + code/65535·(hi − lo)), else None.
+    A channel without a table (B of a two-table RGB image) is lo = 0, hi = 1."""
     payload = text.get("brdfnorm-lut")
     if payload is None:
         return None
     try:
         info = json.loads(payload)["png"]
-        return float(info["lo"]), float(info["hi"])
-    except (KeyError, TypeError, ValueError):
+        if "channels" not in info:  # one greyscale table (before the R, G, B, A mapping)
+            return np.array([float(info["lo"])]), np.array([float(info["hi"])])
+        entries = list(info["channels"].values())
+        count = 1 if len(entries) == 1 else 3 if len(entries) <= 3 else 4
+        entries += [{"lo": 0.0, "hi": 1.0}] * (count - len(entries))
+        return (np.array([float(e["lo"]) for e in entries]), np.array([float(e["hi"]) for e in entries]))
+    except (KeyError, TypeError, ValueError, AttributeError):
         return None

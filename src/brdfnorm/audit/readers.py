@@ -227,12 +227,15 @@ def _read_png(data, where, *, array, shape, dtype, order, scale) -> Source:
     names = pngio.NAMES[codes.shape[-1]]
     stored = f"uint{depth}"
     own = pngio.brdfnorm_scaling(text)
-    if own is not None and scale is None:  # brdfnorm's own PNG: lo + code/65535·(hi − lo)
+    if own is not None and scale is None and own[0].size == codes.shape[-1]:  # brdfnorm's own: lo + code/65535·span
         lo, hi = own
-        values = lo + codes / 65535.0 * ((hi - lo) if hi > lo else 1.0)
-        source = Source(where, "png", "", values, names, stored, 65535.0 / ((hi - lo) if hi > lo else 1.0),
-                        notes=[f"brdfnorm PNG: values lo + code/65535·(hi − lo), lo={lo:g}, hi={hi:g}"],
-                        layout={"depth": depth, "text": text, "offset": lo})
+        span = np.where(hi > lo, hi - lo, 1.0)
+        values = lo + codes / 65535.0 * span  # per channel (R, G, B, A each its own lo, hi)
+        one = lo.size == 1
+        source = Source(where, "png", "", values, names, stored, 65535.0 / float(span.max()),  # the coarsest step
+                        notes=["brdfnorm PNG: values lo + code/65535·(hi − lo), "
+                               + ", ".join(f"lo={a:g}, hi={b:g}" for a, b in zip(lo, hi, strict=True))],
+                        layout={"depth": depth, "text": text, "offset": float(lo[0]) if one else lo})
         return source
     values, factor = _normalize(codes, stored, scale, where)
     return Source(where, "png", "", values, names, stored, factor, layout={"depth": depth, "text": text})

@@ -2,8 +2,8 @@
 
 Floats with a finite declared range are searched through x ∈ [0, 1] (a log1p scale where the range spans more
 than two decades), sampled at the centre, the corners and a scrambled Halton sequence; ranges open above are
-capped at min + :data:`UNBOUNDED_SPAN`; bools take both values; colours, choices and held names keep the
-bound value.
+capped at min + :data:`UNBOUNDED_SPAN`; ``int`` parameters (table sizes) at whole numbers only; bools take both
+values; per-channel numbers (colours, spectra), choices and held names keep the bound value.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ class _Range:
     low: float
     high: float
     capped: bool
+    integer: bool = False  # an int parameter (a table size): searched at whole numbers only
 
     @property
     def log(self) -> bool:
@@ -42,12 +43,15 @@ class _Range:
             value = self.low + np.expm1(x * np.log1p(self.high - self.low))
         else:
             value = self.low + x * (self.high - self.low)
+        if self.integer:
+            value = np.clip(np.rint(value), np.ceil(self.low), np.floor(self.high))
         return np.clip(value, self.low, self.high)  # rounding must not step outside a hard range
 
     def describe(self) -> str:
         scale = ", log1p scale" if self.log else ""
         cap = f" (declared [{self.low:g}, ∞), capped)" if self.capped else ""
-        return f"{self.name} ∈ [{self.low:g}, {self.high:g}]{scale}{cap}"
+        whole = ", whole numbers" if self.integer else ""
+        return f"{self.name} ∈ [{self.low:g}, {self.high:g}]{scale}{whole}{cap}"
 
 
 @dataclass(frozen=True)
@@ -79,8 +83,9 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             model.with_params(**{p.name: values})  # validates the values (hard ranges)
             discrete.append((p.name, values))
             described.append(f"{p.name}: {values.size} given values")
-        elif (p.name in fixed or p.kind in ("color", "choice") or (p.name in narrowed and narrowed[p.name] is None)
-              or np.ndim(bound[p.name]) > (1 if p.kind == "color" else 0)):
+        elif (p.name in fixed or p.per_channel or p.kind == "choice"
+              or (p.name in narrowed and narrowed[p.name] is None)
+              or np.ndim(bound[p.name]) > (1 if p.per_channel else 0)):
             held[p.name] = bound[p.name]
             described.append(f"{p.name} = {_text(bound[p.name])} (held)")
         elif p.kind == "bool":
@@ -88,14 +93,15 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             described.append(f"{p.name} ∈ {{0, 1}}")
         elif p.name in narrowed:
             low, high = narrowed[p.name]
-            ranges.append(_Range(p.name, low, high, False))
+            ranges.append(_Range(p.name, low, high, False, p.kind == "int"))
             described.append(ranges[-1].describe() + f" (declared {p.describe_range()}; narrowed by the model)")
         elif p.minimum is None or (p.maximum is not None and p.maximum == p.minimum):
             held[p.name] = bound[p.name]
             described.append(f"{p.name} = {_text(bound[p.name])} (no finite range declared; held)")
         else:
             capped = p.maximum is None
-            ranges.append(_Range(p.name, p.minimum, p.minimum + UNBOUNDED_SPAN if capped else p.maximum, capped))
+            ranges.append(_Range(p.name, p.minimum, p.minimum + UNBOUNDED_SPAN if capped else p.maximum, capped,
+                                 p.kind == "int"))
             described.append(ranges[-1].describe())
     bools = tuple(dict(zip(bool_names, combo, strict=True))
                   for combo in itertools.product((False, True), repeat=len(bool_names)))

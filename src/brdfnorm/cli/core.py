@@ -57,7 +57,8 @@ def models(debug: bool = DEBUG_OPTION) -> None:
         for column in ("name", "formula", "parameters", "closed form", "energy"):
             table.add_column(column)
         for name, cls in REGISTRY.items():
-            params = ", ".join(f"{p.name}={p.describe_default()} {p.describe_range()}" for p in cls.parameters)
+            declared = [p.declaration() for p in cls.parameters]  # the one declaration info and explore read
+            params = ", ".join(f"{d['name']}={d['default_text']} {d['kind']} {d['range']}" for d in declared)
             has_closed = cls.closed_form_domain if cls.closed_form_albedo is not Model.closed_form_albedo else "—"
             table.add_row(name, cls.formula, params, has_closed, cls.energy or "—")
         console().print(table)

@@ -38,11 +38,9 @@ def info(
         bound = m.params
         parameters = [
             {
-                "name": p.name,
-                "kind": p.kind,
+                **p.declaration(),  # the declaration models and explore read: kind, channels, integer, range…
                 "min": p.minimum,
                 "max": p.maximum,
-                "default": p.default,
                 "value": bound[p.name],
                 "range_is_slider": not p.strict,
             }
@@ -74,8 +72,8 @@ def info(
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
         for p in m.parameters:
-            kind_range = "R,G,B" if p.kind == "color" else p.describe_range()  # choices are listed as a|b|c
-            if not p.strict and p.kind == "float":
+            kind_range = "R,G,B " + p.describe_range() if p.kind == "color" else p.describe_range()  # a|b|c choices
+            if not p.strict and p.kind in ("float", "int", "spectrum"):
                 kind_range += " (slider)"
             table.add_row(escape(p.name), p.kind, kind_range, format_value(p.default, 6),
                           format_value(bound[p.name], 6))

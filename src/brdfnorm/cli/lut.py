@@ -14,7 +14,7 @@ from .. import validate
 from ..errors import ArgumentError, OutputError
 from ..lut import certified as certified_tables
 from ..lut import formats
-from ..lut.table import DIRECTION_AXES, GRIDS, axis_parameter, compute, grid_values
+from ..lut.table import DIRECTION_AXES, GRIDS, Lut, axis_parameter, compute, grid_values
 from ..output import write_file
 from ..output.formats import format_error
 from .application import app
@@ -53,6 +53,16 @@ def parse_clamp(spec: str) -> tuple[str, float]:
     return name.strip(), float(minimum)
 
 
+def in_degrees(result: Lut, degrees: np.ndarray, clamp: float | None) -> Lut:
+    """The lut with its θ axis (and θ clamp) in degrees as the command line gave them; ``meta["units"]`` says so."""
+    meta = dict(result.meta)
+    meta["units"] = {**meta.get("units", {}), "theta": "degrees"}
+    if clamp is not None:
+        meta["clamp"] = {**meta["clamp"], "theta": clamp}
+    axes = {name: degrees if name == "theta" else values for name, values in result.axes.items()}
+    return Lut(dict(result), axes, meta, result.table_axes)
+
+
 @app.command("lut")
 @parallel_options(chunk_cells=False)
 def lut_command(
@@ -67,8 +77,22 @@ def lut_command(
                                     "grid's values and records the clamps."),
     channels: list[str] = typer.Option([], "--channels", help="dfg: add the split-sum pair DFG_f0 = ∫ f cos "
                                        "(1 − (1 − V·H)⁵), DFG_f90 = ∫ f cos (1 − V·H)⁵, Fresnel off."),
-    table: list[str] = typer.Option([], "--table", metavar="NAME", help="Write only these tables (repeatable; "
-                                    "default all: E, E_error, E_avg, E_avg_error, 1-E, …; a PNG holds E)."),
+    table: list[str] = typer.Option([], "--tables", "--table", metavar="NAMES", help="Write only these tables "
+                                    "(comma list, repeatable). Default: all in .npz, .json, .csv; in .exr, .png, "
+                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_…), no errors or 1-E."),
+    layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS, y=AXIS, v=down|up: the axis "
+                               "along the image's columns (x, u) and rows (y, v), and whether row 0 (the top) "
+                               "holds the first y value (v=down) or the last (v=up). Default in .exr, .png, .h, .glsl, "
+                               ".hlsl: x = mu or theta, y = roughness or alpha (else the next axis), v=down; 'axes' "
+                               "keeps the --axis order (the default in .npz, .json, .csv). Written in the metadata; "
+                               "brdfnorm.lut.load undoes it."),
+    channel_names: str = typer.Option("rgba", "--channel-names", metavar="NAMING", help="rgba: image channels R, "
+                                      "G, B, A in the order of the tables (mapping in the metadata); brdfnorm: "
+                                      "the table names (.exr)."),
+    broadcast_average: bool = typer.Option(False, "--broadcast-average", help="Repeat E_avg along μ inside the "
+                                           "grid's image (.exr, .png) instead of writing it as its own one-row "
+                                           "image (an EXR part; in PNG its own file, --tables E_avg)."),
+    prefix: str = typer.Option("lut_", "--prefix", help="Start of every identifier in .h, .glsl, .hlsl."),
     no_average: bool = typer.Option(False, "--no-average", help="Skip E_avg = 2∫ E(μ) μ dμ."),
     rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of every cell (and of E_avg)."),
     method: str = typer.Option("auto", "--method", help="Albedo method (auto picks the model's best)."),
@@ -110,8 +134,10 @@ def lut_command(
         if "theta" in axes:
             if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
                 raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")
-            axes["theta"] = np.radians(axes["theta"])
+            degrees = axes["theta"]
+            axes["theta"] = np.radians(degrees)
         clamps = dict(parse_clamp(c) for c in clamp)
+        clamp_degrees = clamps.get("theta")
         if "theta" in clamps:
             clamps["theta"] = float(np.radians(clamps["theta"]))
         for c in channels:
@@ -123,7 +149,8 @@ def lut_command(
                 m.parameter(axis_parameter(m, axis_name, np.array([0.5]))[0])  # unknown: one line, before any work
         if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
             raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
-        table_names = table or None
+        table_names = formats.layouts.split_tables(table)
+        spec = formats.layouts.parse(layout)
         if digits is not None and method != "certified":
             raise ArgumentError("--digits applies to --method certified only", where="--digits")
         with progress_bar(f"{m.name}: table cells") as progress:
@@ -137,7 +164,10 @@ def lut_command(
                 result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
                                  average=not no_average, grid=grid, source=model, progress=progress,
                                  workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint)
-        data = formats.dumps(result, name, tables=table_names, half=half)
+        if "theta" in axes:  # the file's θ axis in the degrees it was given in (the API's is in radians)
+            result = in_degrees(result, degrees, clamp_degrees)
+        data = formats.dumps(result, name, tables=table_names, half=half, layout=spec, prefix=prefix,
+                             channel_names=channel_names, broadcast_average=broadcast_average)
         unconverged = result.meta["unconverged"]
         if unconverged and not allow_unconverged:
             goal = f"--digits {result.meta['certified']['digits']}" if method == "certified" else f"--rtol {rtol:g}"

@@ -161,7 +161,7 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     batch_shapes = []
     for p in model.parameters:
         value = np.asarray(bound[p.name])
-        batch_shapes.append(() if p.kind == "choice" else value.shape[:-1] if p.kind == "color" else value.shape)
+        batch_shapes.append(() if p.kind == "choice" else value.shape[:-1] if p.per_channel else value.shape)
     try:
         shape = np.broadcast_shapes(theta.shape, phi.shape, *batch_shapes)
     except ValueError:
@@ -176,7 +176,7 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
         if p.kind == "choice":  # a choice is one value for the whole batch (never swept)
             params[p.name] = broadcast[p.name] = value
             continue
-        tail = (3,) if p.kind == "color" else ()
+        tail = (3,) if p.per_channel else ()
         broadcast[p.name] = np.broadcast_to(np.asarray(value, dtype=float), shape + tail)
         params[p.name] = broadcast[p.name].reshape((-1,) + tail) if batch else value
     fixed = _directions(theta_b, phi_b).reshape(-1, 3)

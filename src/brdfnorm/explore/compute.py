@@ -86,27 +86,19 @@ def describe_parameters(model: Model) -> list[dict]:
     """Declared parameters with the slider each gets (log scale where the range spans decades)."""
     described = []
     for p in model.parameters:
-        entry = {"name": p.name, "kind": p.kind, "default": _plain(p.default), "minimum": p.minimum,
-                 "maximum": p.maximum, "strict": p.strict, "description": p.description}
-        if getattr(p, "choices", None):
-            entry["choices"] = [str(c) for c in p.choices]
-        if p.kind == "float":
+        entry = p.declaration()  # kind, channels (3 for a spectrum or colour), integer, range, default …
+        if not entry["choices"]:
+            del entry["choices"]
+        if p.kind in ("float", "int", "spectrum"):  # a spectrum's slider is each channel's
             low = p.minimum if p.minimum is not None else min(0.0, float(p.default))
             high = p.maximum if p.maximum is not None else max(UNBOUNDED_SLIDER_MAX, float(p.default))
+            low, high = float(low), float(high)
             log = high > 0 and (p.maximum is None or (low > 0 and high / low >= 1e3))
             if log:  # a slider spans at most six decades (α ≥ 1e-12 is a limit, not a useful place to drag to)
                 low = max(low, high * 1e-6) if low > 0 else max(1.0, high * 1e-6)
-            entry["slider"] = {"low": low, "high": high, "log": log}
+            entry["slider"] = {"low": low, "high": high, "log": log, "step": 1 if p.kind == "int" else None}
         described.append(entry)
     return described
-
-
-def _plain(value: object) -> object:
-    if isinstance(value, tuple):
-        return [float(v) for v in value]
-    if isinstance(value, (bool, str)):
-        return value
-    return float(value)  # type: ignore[arg-type]
 
 
 def bind_parameters(model: Model, raw: object) -> Model:
@@ -121,18 +113,18 @@ def bind_parameters(model: Model, raw: object) -> Model:
     for name, value in raw.items():
         p = model.parameter(str(name)[:80])
         where = f"parameter {p.name}"
-        if p.kind == "float":
+        if p.kind in ("float", "int") or (p.kind == "spectrum" and not isinstance(value, list)):
             number = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
             if number.ndim:
                 raise ParameterTypeError(f"expected one number, got {short_repr(value)}", where=where)
-            value = float(number)
-        elif p.kind == "color":
+            value = float(number)  # an int's wholeness and a spectrum's range: checked by the parameter
+        elif p.per_channel:
             if not (isinstance(value, list) and len(value) == 3):
                 raise ParameterTypeError(f"expected [R, G, B], got {short_repr(value)}", where=where)
             value = tuple(real_array(value, where, error=ParameterError, type_error=ParameterTypeError).tolist())
         elif p.kind == "bool" and not isinstance(value, bool):
             raise ParameterTypeError(f"expected true or false, got {short_repr(value)}", where=where)
-        elif p.kind not in ("float", "color", "bool") and not isinstance(value, str):  # a choice: its name
+        elif p.kind == "choice" and not isinstance(value, str):  # a choice: its name
             raise ParameterTypeError(f"expected one of the choices, got {short_repr(value)}", where=where)
         values[p.name] = value
     return model.with_params(**values)
@@ -220,9 +212,11 @@ def check_command(source: str, model: Model) -> str:
         value = model.params[p.name]
         if p.kind == "float":
             text = repr(float(value))
+        elif p.kind == "int":
+            text = str(int(value))
         elif p.kind == "bool":
             text = "1" if value else "0"
-        elif p.kind == "color":
+        elif p.per_channel:
             text = ",".join(repr(float(c)) for c in np.atleast_1d(value))
         else:
             text = str(value)

@@ -54,13 +54,14 @@ def table_samples(lut: Lut, table: str = "E") -> tuple[np.ndarray, np.ndarray, n
     if len(axes) != 2:
         raise ArgumentError(f"table {table} has {len(axes)} axes ({', '.join(axes) or 'none'}); a fit takes two",
                             where="--lut")
-    values = lut[table]
+    values = np.asarray(lut[table], dtype=float)  # a .h/.exr table is float32; the fit runs in float64
     first, second = axes
     if second in ("mu", "theta") and first not in ("mu", "theta"):
         first, second, values = second, first, values.T
     x = lut.axes[first]
-    if first == "theta":
-        x, first = np.cos(x), "mu"
+    if first == "theta":  # radians from the API, degrees in a file the command line wrote (meta["units"])
+        degrees = lut.meta.get("units", {}).get("theta") == "degrees"
+        x, first = np.cos(np.radians(x) if degrees else x), "mu"
     X, T = np.meshgrid(x, lut.axes[second], indexing="ij")
     return X.ravel(), T.ravel(), values.ravel(), (first, second)
 

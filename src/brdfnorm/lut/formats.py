@@ -7,43 +7,47 @@ format    layout                                                                
 ``.json`` ``{"axes": {...}, "tables": {...}, "meta": {...}}``, nested lists             float64, bit-exact
 ``.csv``  long form: ``# brdfnorm-lut {meta}`` line, header, one row per cell: axis     float64, bit-exact
           columns then tables (tables without an axis repeated along it)
-``.exr``  OpenEXR, one channel per table over the grid (rows: the first axes, columns:  float32 (``half``:
-          the last), ZIP; axes and meta in the ``brdfnorm`` header attribute           float16), nearest
+``.exr``  OpenEXR (:mod:`.images`): the grid's tables as channels R, G, B, A, E_avg as a   float32 (``half``:
+          second part of one row; ZIP; axes, layout, channel mapping and meta in the   float16), nearest
+          ``brdfnorm`` header attribute
 ``.h``    C/C++ header: ``static const float lut_E[32][32] = {...};`` per table,       float32, nearest
-          axes in a comment, meta as a JSON comment
+          ``[y][x]``; axes and layout in a comment, meta as a JSON comment
 ``.glsl`` ``const float lut_E[1024] = float[1024](...);`` (row-major, flattened),       float32, nearest
           ``const int`` sizes; passes glslangValidator
 ``.hlsl`` ``static const float lut_E[1024] = {...};`` (row-major, flattened)            float32, nearest
-``.png``  16-bit greyscale of ONE table (``E`` unless another is chosen), code =        within (hi − lo)/131070
-          round((v − lo)/(hi − lo)·65535); lo, hi, axes and meta in a ``tEXt`` chunk
+``.png``  16-bit greyscale, RGB or RGBA of one to four tables over the same axes       within (hi − lo)/131070
+          (:mod:`.images`), code = round((v − lo)/(hi − lo)·65535) per channel; lo,
+          hi, mapping, axes and meta in a ``tEXt`` chunk
 ========  ===========================================================================  =====================
 
-PNG holds one table of one or two axes (a 1-axis table is one row); tables of three or more axes are refused
-(use EXR or npz). Identifiers in code are ``lut_`` + the table name with every other character than letters,
-digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in the meta comment. Text from the
-meta (model names, parameters) only ever appears inside JSON with every non-ASCII character, ``*``, ``/``,
-``?`` and ``\\`` escaped, so no comment can be closed or continued by it. Written with zlib + struct (no imaging
-library is a dependency). Readers (:mod:`.readers`) are bounded before they allocate and report ``FILE:LINE``
-(or the file) on a bad file.
+The engine formats (exr, png, h, glsl, hlsl) are written in the engine layout, x = N·V, y = roughness
+(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others;
+:func:`load` undoes the layout. PNG holds tables of one or two axes (a 1-axis table is one row); three or more
+axes are refused (use EXR or npz). Identifiers in code are ``prefix`` (``lut_``) + the table name with every
+other character than letters, digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in
+the meta comment. Text from the meta (model names, parameters) only ever appears inside JSON with every
+non-ASCII character, ``*``, ``/``, ``?`` and ``\\`` escaped, so no comment can be closed or continued by it.
+Written with zlib + struct (no imaging library is a dependency). Readers (:mod:`.readers`) are bounded before
+they allocate and report ``FILE:LINE`` (or the file) on a bad file.
 """
+
 
 from __future__ import annotations
 
 import io
 import json
 import re
-import struct
-import tempfile
-import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError
 from ..output import write_file
-from .readers import MAGIC, PNG_SIGNATURE, READERS, read
-from .readers import openexr as _openexr
+from . import layout as layouts
+from .images import WriteOptions, _write_exr, _write_png
+from .layout import MAGIC, _check_finite, _subset_meta
+from .readers import READERS, read
 from .table import Lut
 
 TEXT_FORMATS = ("json", "csv", "h", "glsl", "hlsl")
@@ -60,13 +64,13 @@ def _meta_json(lut: Lut, extra: dict | None = None) -> str:
     return text
 
 
-def _identifier(name: str) -> str:
+def _identifier(name: str, prefix: str = "lut_") -> str:
     body = "one_minus_E" if name == "1-E" else re.sub(r"[^A-Za-z0-9_]", "_", name)
-    return "lut_" + re.sub(r"_+", "_", body).strip("_")  # GLSL reserves names with "__"
+    return prefix + re.sub(r"_+", "_", body).strip("_")  # GLSL reserves names with "__"
 
 
-def _identifiers(lut: Lut, tables: Sequence[str]) -> dict[str, str]:
-    names = {name: _identifier(name) for name in tables}
+def _identifiers(lut: Lut, tables: Sequence[str], prefix: str = "lut_") -> dict[str, str]:
+    names = {name: _identifier(name, prefix) for name in tables}
     if len(set(names.values())) != len(names):
         raise ArgumentError(f"table names {', '.join(tables)} do not give distinct identifiers", where="tables")
     return names
@@ -79,15 +83,9 @@ def _float32_text(value: float, suffix: str = "") -> str:
     return text + suffix
 
 
-def _check_finite(lut: Lut, tables: Sequence[str], fmt: str) -> None:
-    for name in tables:
-        if not np.all(np.isfinite(lut[name])):
-            raise ArgumentError(f"table {name} has non-finite values, which {fmt} cannot hold", where="tables")
-
-
 # -- npz ---------------------------------------------------------------------------------------------------
 
-def _write_npz(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
+def _write_npz(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     clash = set(tables) & set(lut.axes)
     if clash or "meta" in set(tables) | set(lut.axes):
         raise ArgumentError(f"names used twice in one archive: {', '.join(sorted(clash) or ['meta'])}",
@@ -98,15 +96,9 @@ def _write_npz(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
     return buffer.getvalue()
 
 
-def _subset_meta(lut: Lut, tables: Sequence[str]) -> dict:
-    meta = dict(lut.meta)
-    meta["tables"] = {name: list(lut.table_axes[name]) for name in tables}
-    return meta
-
-
 # -- json --------------------------------------------------------------------------------------------------
 
-def _write_json(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_json(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
     _check_finite(lut, tables, "JSON")
     document = {"format": MAGIC, "axes": {n: v.tolist() for n, v in lut.axes.items()},
                 "tables": {n: lut[n].tolist() for n in tables}, "meta": _subset_meta(lut, tables)}
@@ -115,7 +107,7 @@ def _write_json(lut: Lut, tables: Sequence[str], half: bool) -> str:
 
 # -- csv ---------------------------------------------------------------------------------------------------
 
-def _write_csv(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_csv(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
     _check_finite(lut, tables, "CSV")
     names = list(lut.axes)
     grids = np.meshgrid(*lut.axes.values(), indexing="ij")
@@ -134,6 +126,9 @@ def _write_csv(lut: Lut, tables: Sequence[str], half: bool) -> str:
 
 def _axes_comment(lut: Lut, prefix: str) -> list[str]:
     lines = [f"{prefix} brdfnorm lookup table: {len(lut.axes)} axes, indexed in this order"]
+    if lut.meta.get("layout"):
+        text = re.sub(r"[^A-Za-z0-9_.,;:()\[\] -]", "_", lut.meta["layout"]["text"])  # nothing that ends a comment
+        lines.append(f"{prefix} layout: {text}")
     for name, values in lut.axes.items():
         safe = re.sub(r"[^A-Za-z0-9_.-]", "_", name)
         lines.append(f"{prefix}   {safe}: {len(values)} values from {values[0]:.9g} to {values[-1]:.9g}")
@@ -148,10 +143,10 @@ def _c_nested(array: np.ndarray) -> str:
     return "{\n" + ",\n".join(_c_nested(sub) for sub in array) + "}"
 
 
-def _write_code(language: str) -> Callable[[Lut, Sequence[str], bool], str]:
-    def write(lut: Lut, tables: Sequence[str], half: bool) -> str:
+def _write_code(language: str) -> Callable[[Lut, Sequence[str], WriteOptions], str]:
+    def write(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
         _check_finite(lut, tables, language)
-        ids = _identifiers(lut, tables)
+        ids = _identifiers(lut, tables, opts.prefix)
         lines = _axes_comment(lut, "//")
         lines.append(f"// {MAGIC} " + _meta_json(_SubsetLut(lut, tables), {"identifiers": ids}))
         if language == "c":
@@ -185,68 +180,9 @@ class _SubsetLut:
         self.meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
 
 
-# -- OpenEXR -----------------------------------------------------------------------------------------------
-
-def _image_shape(shape: tuple[int, ...]) -> tuple[int, int]:
-    if len(shape) == 0:
-        return 1, 1
-    return int(np.prod(shape[:-1])), int(shape[-1])
-
-
-def _write_exr(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
-    OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
-
-    shape = tuple(len(v) for v in lut.axes.values())
-    dtype = np.float16 if half else np.float32
-    if half:
-        big = [n for n in tables if np.any(np.abs(lut[n]) > np.finfo(np.float16).max)]
-        if big:
-            raise ArgumentError(f"table {big[0]} exceeds the float16 range", where="half")
-    channels = {name: np.ascontiguousarray(np.asarray(lut.full(name)).reshape(_image_shape(shape)), dtype=dtype)
-                for name in tables}
-    meta = _subset_meta(lut, tables)
-    meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
-              "brdfnorm": json.dumps(meta, ensure_ascii=True)}
-    with tempfile.TemporaryDirectory() as scratch:  # the bindings write to a path; the caller renames atomically
-        target = Path(scratch) / "lut.exr"
-        with OpenEXR.File(header, channels) as image:
-            image.write(str(target))
-        return target.read_bytes()
-
-
-# -- PNG ---------------------------------------------------------------------------------------------------
-
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
-
-
-def _write_png(lut: Lut, tables: Sequence[str], half: bool) -> bytes:
-    if len(tables) != 1:
-        raise ArgumentError(f"a PNG holds one table; choose one of {', '.join(tables)}", where="tables")
-    (name,) = tables
-    values = lut[name]
-    if values.ndim > 2:
-        raise ArgumentError(f"a PNG image holds a table of one or two axes; {name} has {values.ndim} (use .exr or "
-                            ".npz)", where="tables")
-    _check_finite(lut, tables, "PNG")
-    image = values.reshape(_image_shape(values.shape))
-    lo, hi = float(image.min()), float(image.max())
-    scale = (hi - lo) if hi > lo else 1.0
-    codes = np.rint((image - lo) / scale * 65535.0).astype(">u2")
-    meta = _subset_meta(lut, tables)
-    meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
-    meta["png"] = {"table": name, "lo": lo, "hi": hi, "value": "lo + code / 65535 * (hi - lo)"}
-    height, width = image.shape
-    raw = b"".join(b"\x00" + row.tobytes() for row in codes)  # filter type 0 on every row
-    text = MAGIC.encode("latin-1") + b"\x00" + json.dumps(meta, ensure_ascii=True).encode("latin-1")
-    return (PNG_SIGNATURE + _chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0))
-            + _chunk(b"tEXt", text) + _chunk(b"IDAT", zlib.compress(raw, 9)) + _chunk(b"IEND", b""))
-
-
 # -- registry ----------------------------------------------------------------------------------------------
 
-#: extension -> (writer(lut, tables, half) -> str | bytes, reader(bytes, path) -> Lut, float precision kept)
+#: extension -> (writer(lut, tables, WriteOptions) -> str | bytes, reader(bytes, path) -> Lut, float precision kept)
 FORMATS: dict[str, tuple[Callable, Callable[[bytes, str], Lut], str]] = {
     "npz": (_write_npz, READERS["npz"], "float64"),
     "json": (_write_json, READERS["json"], "float64"),
@@ -270,26 +206,43 @@ def format_of(path: str | Path, fmt: str | None = None, *, where: str = "path") 
 
 def _tables(lut: Lut, tables: Sequence[str] | None, fmt: str) -> list[str]:
     if tables is None:
-        return ["E"] if fmt == "png" and "E" in lut else list(lut)
+        return layouts.default_tables(lut, fmt)
     unknown = [t for t in tables if t not in lut]
     if unknown:
         raise ArgumentError(f"no table {unknown[0]!r} (tables: {', '.join(lut)})", where="tables")
     return list(dict.fromkeys(tables))
 
 
-def dumps(lut: Lut, fmt: str, *, tables: Sequence[str] | None = None, half: bool = False) -> str | bytes:
-    """The file's content in format ``fmt`` (text for json/csv/h/glsl/hlsl, bytes otherwise)."""
+def dumps(lut: Lut, fmt: str, *, tables: Sequence[str] | None = None, half: bool = False,
+          layout: str | Mapping[str, str] | None = None, prefix: str = "lut_", channel_names: str = "rgba",
+          broadcast_average: bool = False) -> str | bytes:
+    """The file's content in format ``fmt`` (text for json/csv/h/glsl/hlsl, bytes otherwise).
+
+    ``tables``: which tables (default: all in npz/json/csv; in the engine formats the values without error
+    estimates and 1 − E, :func:`.layout.default_tables`). ``layout``: ``x=AXIS,y=AXIS,v=down|up`` or ``axes``
+    (default: x = the view axis, y = the next axis in the engine formats; the ``--axis`` order in the others),
+    :mod:`.layout`. ``prefix``: of the identifiers in code. ``channel_names``: ``rgba`` or ``brdfnorm`` (EXR).
+    ``broadcast_average``: E_avg repeated over μ inside the grid's image (EXR, PNG) instead of its own image.
+    """
     fmt = format_of("", fmt, where="format")
     if half and fmt != "exr":
         raise ArgumentError("half precision applies to .exr only", where="half")
+    if prefix and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix) or "__" in prefix:
+        raise ArgumentError(f"prefix {prefix!r} is not the start of an identifier (letters, digits, _; no __)",
+                            where="prefix")
     writer, _, _ = FORMATS[fmt]
-    return writer(lut, _tables(lut, tables, fmt), half)
+    chosen = _tables(lut, tables, fmt)
+    spec = layouts.parse(layout) if isinstance(layout, str) else layout
+    laid = layouts.apply(lut, layouts.resolve(lut, spec, fmt))
+    options = WriteOptions(half=half, prefix=prefix, channel_names=channel_names, broadcast_average=broadcast_average)
+    return writer(laid, chosen, options)
 
 
 def save(lut: Lut, path: str | Path, *, fmt: str | None = None, tables: Sequence[str] | None = None,
-         half: bool = False) -> Path:
-    """Write ``lut`` to ``path`` (format from the extension unless ``fmt``), atomically."""
-    save_bytes(path, dumps(lut, format_of(path, fmt), tables=tables, half=half))
+         half: bool = False, **options) -> Path:
+    """Write ``lut`` to ``path`` (format from the extension unless ``fmt``), atomically; ``options`` as
+    :func:`dumps` takes them (layout, prefix, channel_names, broadcast_average)."""
+    save_bytes(path, dumps(lut, format_of(path, fmt), tables=tables, half=half, **options))
     return Path(path)
 
 
@@ -299,8 +252,10 @@ def save_bytes(path: str | Path, data: str | bytes) -> None:
 
 
 def load(path: str | Path, *, fmt: str | None = None) -> Lut:
-    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> float64 array.
+    """Read a table written by :func:`save` (any format): a :class:`Lut` mapping table name -> array, indexed in
+    the order of its ``--axis`` flags whatever the file's layout; float64 from npz/json/csv/png, float32 from
+    .h/.glsl/.hlsl/.exr (float16 from a ``half`` EXR), the precision the file holds.
 
     Bounded and guarded by :mod:`brdfnorm.lut.readers`: any problem with the file is one
     :class:`~brdfnorm.errors.TableFileError` naming it."""
-    return read(path, format_of(path, fmt))
+    return layouts.restore(read(path, format_of(path, fmt)), str(path))  # indexed in the --axis order again

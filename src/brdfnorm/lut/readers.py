@@ -9,16 +9,21 @@ file:
 * ``.npz``: the zip's central directory is bounded from its end record, then each member's ``.npy`` header is read
   with :func:`numpy.lib.format.read_array_header_1_0` (or ``2_0``) from the member itself, its shape and dtype
   checked, and exactly the declared bytes read (the members' declared sizes bound what is inflated);
-* PNG: the IHDR chunk is 13 bytes, width and height each ≥ 1 and their product capped before anything is
-  inflated (and inflating is capped at the expected size);
+* PNG (16-bit greyscale, RGB or RGBA, channels mapped to tables by ``meta["png"]``): the IHDR chunk is 13 bytes,
+  width and height each ≥ 1 and width × height × samples capped before anything is inflated (and inflating is
+  capped at the expected size);
 * CSV: rows are read one at a time into a flat float64 buffer, counted as they come, and a header without rows is
   refused;
 * C/GLSL/HLSL: declarations are found by an anchored head pattern and ``str.find`` of their ``;`` (no
   backtracking over the file), their sizes have at most 9 digits, every token of an initializer is a number;
-* EXR: the header is read first (data window checked), the library's diagnostics kept off stdout and stderr.
+* EXR (one or more parts, channels R, G, B, A mapped to tables by ``meta["exr"]["parts"]``): the headers are
+  read first (every part's data window and its channels' values checked), the library's diagnostics kept off
+  stdout and stderr.
 
 Cells must be finite real numbers: NaN, ±inf, complex values and text are refused with the table's name and the
-cell's index (or the file's line and column).
+cell's index (or the file's line and column). Tables keep the precision the file holds: float32 from EXR and code
+(float16 from a ``half`` EXR), float64 otherwise. The layout a file was written in (:mod:`.layout`) is undone by
+:func:`brdfnorm.lut.load`, not here.
 """
 
 from __future__ import annotations
@@ -39,12 +44,13 @@ import numpy as np
 
 from ..errors import ArgumentError, TableFileError
 from ..inputs import element_count, npz_arrays, parsing, read_bounded
+from .images import PNG_SIGNATURE, RGBA
+from .images import _openexr as openexr
+from .layout import MAGIC
 from .table import Lut
 
 #: Refuse tables larger than this many cells on reading (a 1024³ float64 table is 8 GB).
 MAX_CELLS = 50_000_000
-MAGIC = "brdfnorm-lut"
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _MIB = 1024**2
 #: Bytes of one table file, by format. Text formats cost several times their size once parsed (JSON builds a
 #: Python float per number), so their caps are lower: 64 MiB of JSON as brdfnorm writes it is about 3 million cells.
@@ -87,8 +93,8 @@ def _index_text(index: tuple[int, ...]) -> str:
 
 
 def cells(value: object, name: str, path: str) -> np.ndarray:
-    """``value`` as float64 if every cell is a finite real number, else an error naming ``name`` and the first bad
-    cell's index (row-major)."""
+    """``value`` as float64 (float32 and float16 arrays as they are: the precision the file holds) if every cell
+    is a finite real number, else an error naming ``name`` and the first bad cell's index (row-major)."""
     try:
         data = value if isinstance(value, np.ndarray) else np.asarray(value)
     except (ValueError, TypeError):
@@ -107,7 +113,7 @@ def cells(value: object, name: str, path: str) -> np.ndarray:
                 raise TableFileError(f"{name}, cell {_index_text(index)}: {str(cell)[:30]!r} is not a number",
                                      path)
         data = np.array([float(c) for c in flat], dtype=float).reshape(data.shape)
-    data = np.asarray(data, dtype=float)
+    data = data if data.dtype in (np.float16, np.float32) else np.asarray(data, dtype=float)
     bad = ~np.isfinite(data)
     if bad.any():
         index = np.unravel_index(int(np.argmax(bad)), data.shape)
@@ -129,13 +135,6 @@ def build(tables: dict, axes: dict, meta: dict, path: str) -> Lut:
         raise TableFileError(f"tables and axes do not match the metadata ({error})", path) from None
     except ArgumentError as error:
         raise TableFileError(error.message, path) from None
-
-
-def openexr():
-    """The OpenEXR package (an optional extra), or a one-line error saying how to install it."""
-    from ..extras import require
-
-    return require("OpenEXR", "exr", where=".exr format")
 
 
 # -- npz ---------------------------------------------------------------------------------------------------
@@ -273,9 +272,10 @@ def _declarations(code: str, path: str) -> dict[str, np.ndarray]:
         if len(tokens) != count:
             raise TableFileError(f"{name}: {len(tokens)} values for {count} elements", path, line)
         values = np.array([float(token.rstrip("fF")) for token in tokens])
-        # the file declares float32: its decimals name float32 values (9 digits name each one exactly)
+        # the file declares float32: its decimals name float32 values (9 digits name each one exactly); a value
+        # past float32's range becomes inf here and is refused by cells() naming it
         with np.errstate(over="ignore"):
-            found[name] = values.astype(np.float32).astype(float)
+            found[name] = values.astype(np.float32)
         position = end + 1
     return found
 
@@ -333,6 +333,21 @@ def _quiet_library():
         os.close(saved[1])
 
 
+def _exr_bounded(image, path: str) -> None:
+    """Every part's data window (width, height ≥ 1, at most :data:`MAX_CELLS` pixels) and the values of all its
+    channels together (at most :data:`MAX_ARRAY_BYTES` as float32), from the headers, before any pixel is read."""
+    parts = list(image.parts)
+    values = 0
+    for number, part in enumerate(parts):
+        (x0, y0), (x1, y1) = (tuple(int(v) for v in corner) for corner in part.header["dataWindow"])
+        what = "the image's data window" if len(parts) == 1 else f"the data window of part {number}"
+        pixels = element_count([y1 - y0 + 1, x1 - x0 + 1], MAX_CELLS, where=path, what=what)
+        values += pixels * len(part.header["channels"])
+    if values * 4 > MAX_ARRAY_BYTES:
+        raise TableFileError(f"the image's {len(parts)} part(s) declare {values} values, more than "
+                             f"{MAX_ARRAY_BYTES // 4}", path)
+
+
 def read_exr(data: bytes, path: str) -> Lut:
     OpenEXR = openexr()  # noqa: N806 - the module, by its own name
 
@@ -341,12 +356,12 @@ def read_exr(data: bytes, path: str) -> Lut:
     try:
         with _quiet_library():
             with OpenEXR.File(io.BytesIO(data), header_only=True) as image:
-                # read inside the block: the header's dict is emptied when the file closes
-                (x0, y0), (x1, y1) = (tuple(int(v) for v in corner) for corner in image.header()["dataWindow"])
-            element_count([y1 - y0 + 1, x1 - x0 + 1], MAX_CELLS, where=path, what="the image's data window")
+                _exr_bounded(image, path)  # inside the block: the headers' dicts are emptied when the file closes
+            # separate_channels: otherwise the bindings merge R, G, B (and A) into one RGB(A) array
             with OpenEXR.File(io.BytesIO(data), separate_channels=True) as image:
                 text = image.header().get("brdfnorm")
-                channels = {n: np.array(c.pixels) for n, c in image.channels().items()}
+                # the channels' own precision (float32, or float16 with half) is what the file holds
+                images = [{n: np.array(c.pixels) for n, c in part.channels.items()} for part in image.parts]
     except TableFileError:
         raise
     except Exception as error:  # noqa: BLE001 — the bindings raise bare RuntimeErrors on bad files
@@ -355,12 +370,16 @@ def read_exr(data: bytes, path: str) -> Lut:
     try:
         axis_values = meta.pop("axis_values")
         axes = {n: cells(axis_values[n], f"axis {n}", path) for n in meta["axes"]}
-        shape = tuple(len(v) for v in axes.values())
+        # files before the R, G, B, A mapping: one part, a channel per table named by it
+        exr = meta.pop("exr", None) or {"parts": [{"axes": meta["axes"], "channels": {n: n for n in table_axes}}]}
         tables = {}
-        for name in table_axes:
-            full = cells(channels[name], f"table {name}", path).reshape(shape)
-            tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in meta["axes"])]
-    except (KeyError, ValueError, TypeError) as error:
+        for part, channels in zip(exr["parts"], images, strict=True):
+            shape = tuple(len(axes[a]) for a in part["axes"])
+            for channel, name in part["channels"].items():
+                full = cells(channels[channel], f"table {name}", path).reshape(shape)
+                tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in part["axes"])]
+        tables = {name: tables[name] for name in table_axes}  # in the metadata's order, not the parts'
+    except (KeyError, ValueError, TypeError, AttributeError) as error:
         raise TableFileError(f"channels do not match the metadata ({error})", path) from None
     return build(tables, axes, meta, path)
 
@@ -390,31 +409,41 @@ def read_png(data: bytes, path: str) -> Lut:
     if header is None or text is None:
         raise TableFileError("no brdfnorm metadata (tEXt) in this PNG", path)
     width, height, depth, colour, _, _, interlace = header
-    if (depth, colour, interlace) != (16, 0, 0):
-        raise TableFileError("expected a 16-bit greyscale, non-interlaced PNG", path)
-    element_count([height, width], MAX_CELLS, where=path, what="the image (height × width)")
-    expected = height * (1 + 2 * width)
+    samples = {0: 1, 2: 3, 6: 4}.get(colour)  # greyscale, RGB, RGBA
+    if depth != 16 or samples is None or interlace != 0:
+        raise TableFileError("expected a 16-bit greyscale, RGB or RGBA non-interlaced PNG", path)
+    element_count([height, width, samples], MAX_CELLS, where=path, what="the image (height × width × samples)")
+    expected = height * (1 + 2 * samples * width)
     raw = zlib.decompressobj().decompress(b"".join(idat), expected + 1)  # never inflates past the image's size
     if len(raw) != expected:
         raise TableFileError(f"image data holds {len(raw)} bytes, expected {expected}", path)
-    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * width)
+    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * samples * width)
     if np.any(rows[:, 0] != 0):
         raise TableFileError("only PNG filter type 0 is read (as brdfnorm writes it)", path)
-    codes = rows[:, 1:].copy().view(">u2").astype(float)
+    codes = rows[:, 1:].copy().view(">u2").astype(float).reshape(height, width, samples)
     meta = load_json(text.decode("latin-1"), path)
     _, table_axes = meta_from({"meta": meta}, path)
     try:
         info = meta.pop("png")
         axis_values = meta.pop("axis_values")
         axes = {n: cells(axis_values[n], f"axis {n}", path) for n in meta["axes"]}
-        lo, hi = float(info["lo"]), float(info["hi"])
-        scale = (hi - lo) if hi > lo else 1.0
-        (name,) = table_axes
-        shape = tuple(len(axes[a]) for a in table_axes[name])
-        table = (lo + codes / 65535.0 * scale).reshape(shape)
-    except (KeyError, TypeError, ValueError) as error:
+        if "channels" not in info:  # one greyscale table (files before the R, G, B, A mapping)
+            info = {"axes": table_axes[info["table"]], "channels": {"R": info}}
+        shape = tuple(len(axes[a]) for a in info["axes"])
+        if len(info["channels"]) > samples:
+            raise ValueError(f"{len(info['channels'])} channels named, the image has {samples}")
+        tables = {}
+        for position, (channel, entry) in enumerate(info["channels"].items()):
+            if channel != RGBA[position]:
+                raise ValueError(f"channel {channel} in place {position}")
+            lo, hi, name = float(entry["lo"]), float(entry["hi"]), entry["table"]
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                raise ValueError(f"channel {channel}: lo and hi must be finite numbers")
+            full = (lo + codes[..., position] / 65535.0 * ((hi - lo) if hi > lo else 1.0)).reshape(shape)
+            tables[name] = full[tuple(slice(None) if a in table_axes[name] else 0 for a in info["axes"])]
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
         raise TableFileError(f"metadata does not describe the image ({error})", path) from None
-    return build({name: table}, axes, meta, path)
+    return build(tables, axes, meta, path)
 
 
 READERS = {"npz": read_npz, "json": read_json, "csv": read_csv, "exr": read_exr, "h": read_code,

@@ -38,10 +38,12 @@ from ..engine.machinery.kronrod import NODES as KRONROD_NODES
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..parameters import resolve
+from ..parameters import CHANNELS as COLOUR_CHANNELS
+from ..parameters import NUMERIC, resolve
 from .adaptive import adaptive_unit_interval
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
 from .cloth import cloth_model
+from .splitsum import SchlickWeighted, split_sum_models  # noqa: F401 — re-exported (audit.reference)
 
 #: Axes that give the view direction: μ = cos θ_o, or θ_o itself (radians in the API).
 DIRECTION_AXES = ("mu", "theta")
@@ -99,7 +101,7 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
     parts = []
     for start in range(0, theta.size, CHUNK_CELLS):
         cells = slice(start, start + CHUNK_CELLS)
-        bound = model.with_params(**{name: v[cells] for name, v in flat.items()})
+        bound = model.with_params(**per_cell(model, {name: v[cells] for name, v in flat.items()}))
         with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
             warnings.simplefilter("ignore", UserWarning)
             parts.append(albedo(bound, theta[cells], over=over, rtol=rtol, method=method))
@@ -109,47 +111,11 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
                         for key in ("reflected", "transmitted")))
 
 
-class SchlickWeighted(Model):
-    """A model's lobe times a split-sum weight of V·H: 1 − (1 − V·H)⁵ (``f0``) or (1 − V·H)⁵ (``f90``).
-
-    V·H = √((1 + L·V)/2) for H = normalize(L + V). Keeps the base model's parameters and lobe hint.
-    """
-
-    def __init__(self, base: Model, term: str) -> None:  # noqa: D107 — binds to the base's values
-        if term not in ("f0", "f90"):
-            raise ArgumentError(f"unknown split-sum term {term!r}", where="channels")
-        self.base = base
-        self.term = term
-        self.name = f"{base.name}·schlick-{term}"
-        self.parameters = base.parameters
-        self.channels = base.channels
-        self.isotropic = base.isotropic
-        self._params = dict(base.params)
-
-    def _weight(self, L: np.ndarray, V: np.ndarray) -> np.ndarray:
-        cos_vh = np.sqrt(np.clip(0.5 * (1.0 + np.einsum("...i,...i->...", L, V)), 0.0, 1.0))
-        tail = (1.0 - cos_vh) ** 5
-        return (1.0 - tail if self.term == "f0" else tail)[..., None]
-
-    def evaluate(self, L, V, params):
-        return self.base.evaluate(L, V, params) * self._weight(L, V)
-
-    def projected(self, L, V, params):
-        return self.base.projected(L, V, params) * self._weight(L, V)
-
-    def lobe(self, fixed, params, over):
-        return self.base.lobe(fixed, params, over)
-
-
-def split_sum_models(model: Model) -> tuple[dict[str, Model], str]:
-    """The two DFG models (coefficient of f0, of f90) and how they were made (recorded in the table's meta)."""
-    names = {p.name for p in model.parameters}
-    if {"fresnel", "f0", "f90"} <= names:
-        return ({"DFG_f0": model.with_params(fresnel="schlick", f0=1.0, f90=0.0),
-                 "DFG_f90": model.with_params(fresnel="schlick", f0=0.0, f90=1.0)},
-                "the model's own fresnel=schlick with (f0, f90) = (1, 0) and (0, 1)")
-    return ({"DFG_f0": SchlickWeighted(model, "f0"), "DFG_f90": SchlickWeighted(model, "f90")},
-            "the model as given times 1 - (1 - V.H)^5 and (1 - V.H)^5; its own Fresnel must be off")
+def per_cell(model: Model, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-cell values as the parameters take them: a spectrum (η, k, f0) gets each cell's number in every channel."""
+    kinds = {p.name: p for p in model.parameters}
+    return {n: np.repeat(np.asarray(v)[..., None], COLOUR_CHANNELS, -1) if n in kinds and kinds[n].per_channel else v
+            for n, v in values.items()}
 
 
 def _single_channel(value: np.ndarray, error: np.ndarray, model: Model) -> tuple[np.ndarray, np.ndarray]:
@@ -193,8 +159,9 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
             raise ArgumentError(f"axis {name!r} needs a non-empty list of finite numbers", where="axes")
         if name not in DIRECTION_AXES:
             parameter = model.parameter(axis_parameter(model, name, np.array([0.5]))[0])
-            if parameter.kind != "float":
-                raise ArgumentError(f"only float parameters can be axes; {name} is {parameter.kind}", where="axes")
+            if parameter.kind not in NUMERIC:
+                raise ArgumentError(f"only numeric parameters ({', '.join(NUMERIC)}) can be axes; {name} is "
+                                    f"{parameter.kind}", where="axes")
         values[name] = array
     for name, minimum in clamp.items():
         if name not in values:
@@ -214,7 +181,7 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
             raise ArgumentError("theta must lie in [0, π/2) radians ([0°, 90°) on the command line)", where="axes")
     for name, array in evaluated.items():
         if name not in DIRECTION_AXES:
-            resolve(model.parameters, dict([axis_parameter(model, name, array)]), where=f"axis {name}")  # before work
+            resolve(model.parameters, per_cell(model, dict([axis_parameter(model, name, array)])), where=f"axis {name}")
     return values, evaluated, dname
 
 
@@ -510,7 +477,8 @@ class Lut(Mapping):
                 raise ArgumentError(f"table {name!r}: its axes {self.table_axes[name]} must be some of "
                                     f"{tuple(self.axes)} in that order", where="tables")
             expected = tuple(len(self.axes[a]) for a in self.table_axes[name])
-            array = np.asarray(array, dtype=float)
+            array = np.asarray(array)  # a float32 file's tables stay float32
+            array = array if array.dtype in (np.float16, np.float32) else array.astype(float)
             if array.shape != expected:
                 raise ArgumentError(f"table {name!r} has shape {array.shape}, its axes "
                                     f"{self.table_axes[name]} need {expected}", where="tables")

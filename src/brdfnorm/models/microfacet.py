@@ -213,13 +213,13 @@ def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
         Parameter("shadowing", "choice", "height-correlated", choices=SHADOWING,
                   description="Smith G2: 1/(1+Λ(L)+Λ(V)) or G1(L)G1(V)"),
         Parameter("fresnel", "choice", "none", choices=FRESNEL, description="F(V·H); none is F = 1"),
-        Parameter("f0", "color", (0.04, 0.04, 0.04), 0.0, 1.0, "Schlick reflectance at normal incidence"),
-        Parameter("f90", "color", (1.0, 1.0, 1.0), 0.0, 1.0, "Schlick reflectance at grazing incidence"),
-        Parameter("eta", "color", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
-        Parameter("k", "color", (0.0, 0.0, 0.0), 0.0, 1e3, "extinction coefficient (conductor)"),
+        Parameter("f0", "spectrum", (0.04, 0.04, 0.04), 0.0, 1.0, "Schlick reflectance at normal incidence"),
+        Parameter("f90", "spectrum", (1.0, 1.0, 1.0), 0.0, 1.0, "Schlick reflectance at grazing incidence"),
+        Parameter("eta", "spectrum", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
+        Parameter("k", "spectrum", (0.0, 0.0, 0.0), 0.0, 1e3, "extinction coefficient (conductor)"),
         Parameter("ms", "choice", "none", choices=MULTIPLE_SCATTERING,
                   description="multiple-scattering compensation (Kulla & Conty 2017, Turquin 2019)"),
-        Parameter("ms_table", "float", 32.0, 0.0, 1024.0, "kulla-conty table size N (0: exact, slow)"),
+        Parameter("ms_table", "int", 32, 0.0, 1024.0, "kulla-conty table size N (0: exact, slow)"),
     )
 
 

@@ -80,11 +80,12 @@ class ModelSource:
                 params[p.name] = str(value)
                 continue
             array = np.asarray(value, dtype=float)
-            if array.ndim > (1 if p.kind == "color" else 0):
+            if array.ndim > (1 if p.per_channel else 0):
                 raise ArgumentError(f"parameter {p.name} is bound to an array; give per-cell values as the job's "
                                     "cell values instead", where="model")
             params[p.name] = (bool(value) if p.kind == "bool" else
-                              tuple(float(c) for c in array) if p.kind == "color" else float(array))
+                              tuple(float(c) for c in array) if p.per_channel else
+                              int(array) if p.kind == "int" else float(array))
         if isinstance(model, BrdfModel):
             if not model.brdf_file.text:
                 raise ArgumentError(f"{model.name}: the model's .brdf text is unknown (parse it with "
