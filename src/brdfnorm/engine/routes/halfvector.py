@@ -59,8 +59,9 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
+from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor
 from . import halfvector_global as global_rule
-from .hemisphere import GAUSS, KRONROD, LOBATTO_NODES, LOBATTO_WEIGHTS, NODES, SLOW
+from .hemisphere import GAUSS, KRONROD, NODES
 
 _EPS = np.finfo(float).eps
 #: Roughness floor inside the integral (α = 0 is a mirror; 1e-150 differs from it by ~1e-300).
@@ -95,7 +96,7 @@ class _Panels:
     err_a: np.ndarray | None = None
     err_b: np.ndarray | None = None
     checked: np.ndarray | None = None  # (R, C) |K15⊗K15 − quarters by Lobatto7⊗Lobatto7| once confirmed, else NaN
-    floor: np.ndarray | None = None  # (R, C) half the parent's |K − G| where the split that made it was slow
+    floor: np.ndarray | None = None  # (R, C) where its ancestors converged algebraically (hemisphere.algebraic_floor)
 
     FIELDS = ("case", "a0", "a1", "b0", "b1", "value", "err_a", "err_b", "checked", "floor")
 
@@ -118,6 +119,10 @@ def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, 
     hb = (panels.b1[sl] - panels.b0[sl]) / 2
     a = ((panels.a0[sl] + panels.a1[sl]) / 2)[:, None] + ha[:, None] * nodes
     b = ((panels.b0[sl] + panels.b1[sl]) / 2)[:, None] + hb[:, None] * nodes
+    # A node on a panel's upper edge (Lobatto's) takes the limit from inside: the integrands pick their piece
+    # by floor(coordinate), and the last edge has no piece beyond it.
+    a = np.minimum(a, np.nextafter(panels.a1[sl], -np.inf)[:, None])
+    b = np.minimum(b, np.nextafter(panels.b1[sl], -np.inf)[:, None])
     piece = np.floor(panels.b0[sl]).astype(int)
     values = integrand(panels.case[sl], a[:, :, None], b[:, None, :], piece)
     return values * (ha * hb)[:, None, None, None]
@@ -188,12 +193,8 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
         _evaluate(integrand, fresh, chunk)
         np.add.at(evaluations, fresh.case, per_panel)
         if parent_error is not None:
-            # A split that reduced |K − G| by less than SLOW marks a kink or jump, where |K − G| can fall below
-            # the error by accident: the parent's estimate stays as a floor (hemisphere.integrate_hemisphere).
-            half = parent_error.shape[0]
-            own = fresh.err_a + fresh.err_b
-            floor = np.where(own[:half] + own[half:] > parent_error / SLOW, parent_error / 2, 0.0)
-            fresh.floor = np.concatenate([floor, floor])
+            # Where a split converged algebraically (a kink or a jump), the parent's estimate stays as a floor.
+            fresh.floor = algebraic_floor(parent_error, fresh.err_a + fresh.err_b)
         pool = _Panels.join(pool, fresh)
         if value is None:
             value = np.zeros((K, pool.value.shape[1]))

@@ -69,6 +69,7 @@ from typing import Literal
 import numpy as np
 
 from ..machinery.grazing_panels import starting_panels
+from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
 from ..machinery.tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
 
@@ -101,17 +102,7 @@ GAUSS_NODES = np.concatenate([-GAUSS_NODES[:-1], GAUSS_NODES[::-1]])  # the 7 Ga
 GAUSS_WEIGHTS = np.concatenate([_WG[:-1], _WG[::-1]])
 GAUSS = np.zeros(15)
 GAUSS[1:15:2] = np.concatenate([_WG[:-1], _WG[::-1]])
-# The 7-point Gauss-Lobatto rule (degree 11; Abramowitz & Stegun 25.4.32): nodes on both ends of the interval,
-# where no Gauss or Kronrod node lies (see _check_by_halves).
-_LOBATTO_INNER = np.sqrt(5.0 / 11.0 - 2.0 / 11.0 * np.sqrt(5.0 / 3.0))
-_LOBATTO_OUTER = np.sqrt(5.0 / 11.0 + 2.0 / 11.0 * np.sqrt(5.0 / 3.0))
-LOBATTO_NODES = np.array([-1.0, -_LOBATTO_OUTER, -_LOBATTO_INNER, 0.0, _LOBATTO_INNER, _LOBATTO_OUTER, 1.0])
-_WL = np.array([1.0 / 21.0, (124.0 - 7.0 * np.sqrt(15.0)) / 350.0, (124.0 + 7.0 * np.sqrt(15.0)) / 350.0])
-LOBATTO_WEIGHTS = np.concatenate([_WL, [256.0 / 525.0], _WL[::-1]])
 _EPS = np.finfo(float).eps
-
-#: A bisection that reduces a panel's summed |K − G| by less than this factor marks it non-smooth (see the loop).
-SLOW = 64.0
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -163,8 +154,10 @@ class _Panels:
     magnitude: np.ndarray | None = None  # (R, C) K15⊗K15 integral of |g| (the scale of rounding noise)
     inherited: np.ndarray | None = None  # (R, C) share of |parent − children| from the split that made it
     checked: np.ndarray | None = None  # (R,) bool: confirmed by _check_by_halves (its change is in ``inherited``)
+    floor: np.ndarray | None = None  # (R, C) where its ancestors converged algebraically: see algebraic_floor
 
-    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "magnitude", "inherited", "checked")
+    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "magnitude", "inherited", "checked",
+              "floor")
 
     def take(self, index) -> _Panels:
         return _Panels(*(None if (a := getattr(self, f)) is None else a[index] for f in self.FIELDS))
@@ -174,7 +167,7 @@ class _Panels:
         return _Panels(*(np.concatenate([getattr(a, f), getattr(b, f)]) for f in _Panels.FIELDS))
 
     def error(self) -> np.ndarray:
-        return self.err_b + self.err_u + self.inherited
+        return self.err_b + self.err_u + self.inherited + self.floor
 
     def halves(self, along_beta: np.ndarray) -> _Panels:
         """The two halves of every panel (first halves, then second halves), split along β or u."""
@@ -316,29 +309,22 @@ def integrate_hemisphere(
         _STALL_EVALUATIONS, _STALL_EVALUATIONS * np.bincount(panels.case, minlength=K)[remaining] // (nb * nu))
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
-    parent_value = parent_error = None  # values and K − G estimates of the panels whose halves ``fresh`` holds
+    parent_value = parent_error = None  # values and |K − G| of the panels whose halves ``fresh`` holds
 
     while fresh.case.size:
         _evaluate(fresh, integrand, frame, widths, supports, nonfinite, max_nodes_per_call)
         np.add.at(evaluations, fresh.case, nodes_per_panel)
         fresh.checked = np.zeros(fresh.case.size, dtype=bool)
+        fresh.floor = np.zeros_like(fresh.value)
         if parent_value is None:
             fresh.inherited = np.zeros_like(fresh.value)
         else:
             # What one more level of refinement changed: a check that both embedded rules can pass together
             # when a feature falls between all their nodes.
             half = parent_value.shape[0]
-            change = _refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
-            # Algebraic convergence: where the halves' embedded estimates together are more than 1/SLOW of
-            # their parent's, the panel holds a kink or a jump (a smooth one drops by orders of magnitude per
-            # bisection), and there |K − G| can be below the error by an accident of where the feature falls
-            # between the nodes (FON at θ_V = 45.7°, rtol 1e-8: a panel 0.002 wide across the kink θ_L = θ_V,
-            # |K − G| 3.1e-10, error 1.7e-9). There the parent's estimate stays as a floor, one level behind:
-            # an error that shrinks like h² (a kink along a curve) is then overestimated ~4 times.
-            own = fresh.err_b + fresh.err_u
-            slow = (own[:half] + own[half:]) > parent_error / SLOW
-            change = np.where(slow, np.maximum(change, parent_error / 2), change)
+            change = refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
             fresh.inherited = np.concatenate([change, change])
+            fresh.floor = algebraic_floor(parent_error, fresh.err_b + fresh.err_u)
         pool = fresh if pool is None else _Panels.join(pool, fresh)
         if value.shape[1] != pool.value.shape[1]:
             value = np.zeros((K, pool.value.shape[1]))
@@ -458,13 +444,6 @@ def _stalled(history: list[tuple[np.ndarray, np.ndarray]], evaluations: np.ndarr
     return stalled & (evaluations > after)
 
 
-def _refinement_change(whole: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    """|whole − (first + second)| for a panel and its two halves, less rounding-level noise (which each
-    panel's own floor already covers)."""
-    noise = 8.0 * _EPS * (np.abs(whole) + np.abs(first) + np.abs(second))
-    return np.maximum(np.abs(whole - first - second) - noise, 0.0)
-
-
 def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int):
     """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, n, C))."""
     chunk = max(1, max_nodes_per_call // nodes.size**2)
@@ -496,7 +475,7 @@ def _check_by_halves(panels: _Panels, integrand, frame, widths, supports, max_no
             sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, LOBATTO_WEIGHTS, LOBATTO_WEIGHTS))
     total = np.concatenate(sums)
     half = panels.case.size
-    return _refinement_change(panels.value, total[:half], total[half:])
+    return refinement_change(panels.value, total[:half], total[half:])
 
 
 def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
