@@ -9,8 +9,8 @@ coefficients set by where the kink falls between their nodes; they can agree by 
 next to an edge, beyond the outermost node, is seen by neither (nor by a G7 check of the halves, nor by the
 children, which keep the edge). Two remedies, both general:
 
-- the confirmation of a panel uses the 7-point Gauss-Lobatto rule (Abramowitz & Stegun 25.4.32, degree 11) on
-  its halves or quarters, whose nodes include the edges (:data:`LOBATTO_NODES`);
+- the confirmation of a panel uses Gauss-Lobatto rules (Abramowitz & Stegun 25.4.32) on its halves or quarters,
+  whose nodes include the edges (:data:`LOBATTO_NODES`, :data:`QUARTER_NODES`);
 - a panel whose bisection reduced |K − G| by less than :data:`SLOW` keeps half its parent's estimate as a floor
   (:func:`algebraic_floor`).
 """
@@ -21,13 +21,29 @@ import numpy as np
 
 _EPS = np.finfo(float).eps
 
-# The 7-point Gauss-Lobatto rule (degree 11; Abramowitz & Stegun 25.4.32): nodes on both ends of the interval,
-# where no Gauss or Kronrod node lies (brdfnorm.engine.routes.hemisphere._check_by_halves).
-_LOBATTO_INNER = np.sqrt(5.0 / 11.0 - 2.0 / 11.0 * np.sqrt(5.0 / 3.0))
-_LOBATTO_OUTER = np.sqrt(5.0 / 11.0 + 2.0 / 11.0 * np.sqrt(5.0 / 3.0))
-LOBATTO_NODES = np.array([-1.0, -_LOBATTO_OUTER, -_LOBATTO_INNER, 0.0, _LOBATTO_INNER, _LOBATTO_OUTER, 1.0])
-_WL = np.array([1.0 / 21.0, (124.0 - 7.0 * np.sqrt(15.0)) / 350.0, (124.0 + 7.0 * np.sqrt(15.0)) / 350.0])
-LOBATTO_WEIGHTS = np.concatenate([_WL, [256.0 / 525.0], _WL[::-1]])
+#: Points of the Gauss-Lobatto rule in the split direction of the hemisphere route's check of halves (9: degree 15,
+#: above the G7 it replaces there), and in both directions of the half-vector route's check of quarters (7: degree
+#: 11 on panels half as wide, which left the smooth lobes' evaluation counts as they were with G7).
+LOBATTO_POINTS = 9
+QUARTER_POINTS = 7
+
+
+def lobatto(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The n-point Gauss-Lobatto rule on [−1, 1] (Abramowitz & Stegun 25.4.32): the ends and the zeros of
+    P'_{n−1}, weights 2/(n(n − 1) P_{n−1}(x)²)."""
+    legendre = np.polynomial.legendre
+    degree = np.zeros(n)
+    degree[-1] = 1.0  # P_{n-1}
+    inner = np.sort(legendre.legroots(legendre.legder(degree)).real)
+    nodes = np.concatenate([[-1.0], (inner - inner[::-1]) / 2, [1.0]])  # symmetric to the last bit
+    weights = 2.0 / (n * (n - 1) * legendre.legval(nodes, degree) ** 2)
+    return nodes, (weights + weights[::-1]) / 2
+
+
+#: Nodes on both ends of the interval, where no Gauss or Kronrod node lies
+#: (brdfnorm.engine.routes.hemisphere._check_by_halves).
+LOBATTO_NODES, LOBATTO_WEIGHTS = lobatto(LOBATTO_POINTS)
+QUARTER_NODES, QUARTER_WEIGHTS = lobatto(QUARTER_POINTS)
 
 #: A bisection that reduces a panel's summed |K − G| by less than this factor marks it non-smooth
 #: (:func:`algebraic_floor`).

@@ -59,7 +59,7 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
-from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor
+from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
 from . import halfvector_global as global_rule
 from .hemisphere import GAUSS, KRONROD, NODES
 
@@ -164,9 +164,9 @@ def _quarters(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> np.
             for start in range(0, quarter.case.size, chunk):
                 sl = slice(start, start + chunk)
                 with np.errstate(all="ignore"):
-                    f = _rule_on(integrand, quarter, LOBATTO_NODES, sl)
+                    f = _rule_on(integrand, quarter, QUARTER_NODES, sl)
                 f = np.where(np.isfinite(f), f, 0.0)
-                total[sl] += np.einsum("rabc,a,b->rc", f, LOBATTO_WEIGHTS, LOBATTO_WEIGHTS)
+                total[sl] += np.einsum("rabc,a,b->rc", f, QUARTER_WEIGHTS, QUARTER_WEIGHTS)
     return total
 
 
@@ -187,7 +187,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
     active = np.ones(K, dtype=bool)
     pool: _Panels | None = None
     fresh = initial
-    per_panel, per_check = NODES.size**2, 4 * LOBATTO_NODES.size**2
+    per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
     parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
     while True:
         _evaluate(integrand, fresh, chunk)

@@ -198,12 +198,12 @@ def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return P, T, B
 
 
-def _map_nodes(panels: _Panels, frame, widths, supports, nodes: np.ndarray = NODES):
-    """Directions (R, n, n, 3) and Jacobians sin α dα/du (R, n, n) at the tensor ``nodes`` of every panel."""
+def _map_nodes(panels: _Panels, frame, widths, supports, nodes: np.ndarray = NODES, nodes_u: np.ndarray | None = None):
+    """Directions (R, n, m, 3) and Jacobians (R, n, m) at the tensor ``nodes`` (β) ⊗ ``nodes_u`` (u; or ``nodes``)."""
     beta_half = (panels.b1 - panels.b0) / 2
     u_half = (panels.u1 - panels.u0) / 2
     beta = ((panels.b0 + panels.b1) / 2)[:, None] + beta_half[:, None] * nodes  # (R, n)
-    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * nodes  # (R, n)
+    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * (nodes if nodes_u is None else nodes_u)
     return map_grid(panels.case, beta, u, (beta_half * u_half)[:, None], frame, widths, supports)
 
 
@@ -281,8 +281,7 @@ def integrate_hemisphere(
     noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call, epsilon)
     evaluations += PROBE_EVALUATIONS
     # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
-    # below its
-    # tolerance; the adaptive panels below take the cases it does not settle.
+    # below its tolerance; the adaptive panels below take the cases it does not settle.
     # (Not at all where a quarter of the budget would not cover its first grid.)
     global_nodes = min(GLOBAL_NODES, max_evaluations // 4)
     quiet = np.flatnonzero((rtol == 0) | np.all(noise_bound(noise_amplitude, 1.0) < rtol / 16, axis=-1))
@@ -342,16 +341,13 @@ def integrate_hemisphere(
         present[pool.case] = True
         panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         # Before a case within tolerance may stop, each of its panels not yet confirmed is recomputed as two
-        # halves by the 7-point Gauss-Lobatto rule in both directions (new nodes, a quarter of the cost of K15
-        # halves, among them the panel's edges), and the difference joins its error: a check that the embedded
-        # rules cannot pass together when a feature falls between all their nodes — including a kink or jump in
-        # the 0.43% of the panel next to an edge, beyond its outermost Kronrod node (_check_by_halves). The
-        # halves of a panel split later are confirmed again: a split keeps the panel's edges, and with them such
-        # a kink, out of sight of the Gauss-Kronrod nodes.
+        # halves on new nodes, among them its edges (_check_by_halves), and the difference joins its error: the
+        # embedded rules can pass together where a feature falls between all their nodes. Halves of a panel split
+        # later are confirmed again: a split keeps the edges, and a kink next to one, out of the K15 nodes' sight.
         confirming = within[pool.case] & ~pool.checked
         if confirming.any():
             change = _check_by_halves(pool.take(confirming), integrand, frame, widths, supports, max_nodes_per_call)
-            np.add.at(evaluations, pool.case[confirming], 2 * LOBATTO_NODES.size**2)
+            np.add.at(evaluations, pool.case[confirming], 2 * LOBATTO_NODES.size * GAUSS_NODES.size)
             pool.inherited[confirming] = np.maximum(pool.inherited[confirming], change)
             pool.checked[confirming] = True
             panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
@@ -444,36 +440,41 @@ def _stalled(history: list[tuple[np.ndarray, np.ndarray]], evaluations: np.ndarr
     return stalled & (evaluations > after)
 
 
-def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int):
-    """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, n, C))."""
-    chunk = max(1, max_nodes_per_call // nodes.size**2)
+def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int,
+                 nodes_u: np.ndarray | None = None):
+    """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, m, C))."""
+    chunk = max(1, max_nodes_per_call // (nodes.size * (nodes.size if nodes_u is None else nodes_u.size)))
     for start in range(0, panels.case.size, chunk):
         part = panels.take(slice(start, start + chunk))
-        omega, jacobian = _map_nodes(part, frame, widths, supports, nodes)
+        omega, jacobian = _map_nodes(part, frame, widths, supports, nodes, nodes_u)
         case_of_node = np.broadcast_to(part.case[:, None, None], jacobian.shape)
         values = np.asarray(integrand(omega.reshape(-1, 3), case_of_node.ravel()), dtype=float)
         yield part, omega, jacobian, values.reshape(jacobian.shape + (-1,))
 
 
 def _check_by_halves(panels: _Panels, integrand, frame, widths, supports, max_nodes_per_call) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum of Lobatto7⊗Lobatto7 over its two halves (split along its worse direction)|.
-
-    Why Lobatto: the outermost Kronrod node lies (1 − 0.99146)/2 = 0.43% of a panel's width inside each edge, and
-    the embedded Gauss nodes further in, so a kink (or a jump) of the integrand in that sliver is seen by neither
-    rule nor by the halves of a G7 check — and, the panel's edges being kept by every bisection, possibly by none
-    of its descendants either. FON at θ_V = 53.6° has its kink θ_L = θ_V at u = 0.4992, 0.0008 inside the edge
-    u = 1/2 of a panel 1/4 wide: the K15 value was 2.8e-7 off with |K − G| = 2e-15. A kink at distance δ from the
-    edge with a jump J in slope costs the K15 value J δ²/2 (δ < 0.0043 h), while the edge node, weighted
-    (1/21)(h/4) = 0.0119 h, moves the Lobatto halves by 0.0119 h J δ: at least 5.6 times the error (2.8 times for
-    a jump). Lobatto 7 is exact to degree 11 (G7: 13), so on smooth integrands the check stays at the same level."""
-    halves = panels.halves(panels.err_b.max(axis=1) >= panels.err_u.max(axis=1))
-    sums = []
+    """|K15⊗K15 of each panel − the sum over its two halves (split along its worse direction) by Gauss-Lobatto in
+    the split direction ⊗ G7 across. Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an
+    edge, beyond all Gauss-Kronrod nodes (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and
+    a jump J in slope, the error J δ²/2 is below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9).
+    G7 across, as Lobatto in both directions was weaker than G7 on steep integrands (Phong n = 1e4 at rtol 1e-12
+    stalled on the check's own error in u while its panels split along β). docs/kinks.md has the details."""
+    along_beta = panels.err_b.max(axis=1) >= panels.err_u.max(axis=1)
+    total = np.zeros((2 * panels.case.size, panels.value.shape[1]))
+    halves = panels.halves(along_beta)
+    order = np.concatenate([along_beta, along_beta])
     with np.errstate(all="ignore"):
-        for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, LOBATTO_NODES,
-                                                   max_nodes_per_call):
-            values = np.where(np.isfinite(values), values, 0.0)
-            sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, LOBATTO_WEIGHTS, LOBATTO_WEIGHTS))
-    total = np.concatenate(sums)
+        for group, nodes, weights in ((order, (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)),
+                                      (~order, (GAUSS_NODES, LOBATTO_NODES), (GAUSS_WEIGHTS, LOBATTO_WEIGHTS))):
+            index = np.flatnonzero(group)
+            if not index.size:
+                continue
+            sums = []
+            for _, _, jacobian, values in _node_values(halves.take(index), integrand, frame, widths, supports,
+                                                       nodes[0], max_nodes_per_call, nodes[1]):
+                values = np.where(np.isfinite(values), values, 0.0)
+                sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
+            total[index] = np.concatenate(sums)
     half = panels.case.size
     return refinement_change(panels.value, total[:half], total[half:])
 
