@@ -346,9 +346,14 @@ def integrate_hemisphere(
         # later are confirmed again: a split keeps the edges, and a kink next to one, out of the K15 nodes' sight.
         confirming = within[pool.case] & ~pool.checked
         if confirming.any():
-            change = _check_by_halves(pool.take(confirming), integrand, frame, widths, supports, max_nodes_per_call)
-            np.add.at(evaluations, pool.case[confirming], 2 * LOBATTO_NODES.size * GAUSS_NODES.size)
-            pool.inherited[confirming] = np.maximum(pool.inherited[confirming], change)
+            # Halved along β and along u in turn; each change joins that direction's error (the panel is split
+            # where the check found it wanting), less the panel's rounding-noise bound (charged to the case apart).
+            checked = pool.take(confirming)
+            own_noise = 2.0 * noise_bound(noise_amplitude[checked.case], checked.magnitude)
+            for along_beta, err in ((True, pool.err_b), (False, pool.err_u)):
+                change = _check_by_halves(checked, along_beta, integrand, frame, widths, supports, max_nodes_per_call)
+                err[confirming] = np.maximum(err[confirming], change - own_noise)
+            np.add.at(evaluations, pool.case[confirming], 4 * LOBATTO_NODES.size * GAUSS_NODES.size)
             pool.checked[confirming] = True
             panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         # (Every panel of a case still within tolerance has now been confirmed.)
@@ -452,29 +457,24 @@ def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.
         yield part, omega, jacobian, values.reshape(jacobian.shape + (-1,))
 
 
-def _check_by_halves(panels: _Panels, integrand, frame, widths, supports, max_nodes_per_call) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum over its two halves (split along its worse direction) by Gauss-Lobatto in
-    the split direction ⊗ G7 across. Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an
-    edge, beyond all Gauss-Kronrod nodes (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and
-    a jump J in slope, the error J δ²/2 is below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9).
-    G7 across, as Lobatto in both directions was weaker than G7 on steep integrands (Phong n = 1e4 at rtol 1e-12
-    stalled on the check's own error in u while its panels split along β). docs/kinks.md has the details."""
-    along_beta = panels.err_b.max(axis=1) >= panels.err_u.max(axis=1)
-    total = np.zeros((2 * panels.case.size, panels.value.shape[1]))
-    halves = panels.halves(along_beta)
-    order = np.concatenate([along_beta, along_beta])
+def _check_by_halves(panels: _Panels, along_beta: bool, integrand, frame, widths, supports,
+                     max_nodes_per_call) -> np.ndarray:
+    """|K15⊗K15 of each panel − the sum over its two halves (split along β or u) by Gauss-Lobatto in the split
+    direction ⊗ G7 across. Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an edge, beyond
+    all Gauss-Kronrod nodes (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and a jump J in
+    slope, the error J δ²/2 is below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9). G7 across,
+    as Lobatto was weaker than G7 on steep integrands (Phong n = 1e4, rtol 1e-12). docs/kinks.md has the details."""
+    halves = panels.halves(np.full(panels.case.size, along_beta))
+    nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
+    if not along_beta:
+        nodes, weights = nodes[::-1], weights[::-1]
+    sums = []
     with np.errstate(all="ignore"):
-        for group, nodes, weights in ((order, (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)),
-                                      (~order, (GAUSS_NODES, LOBATTO_NODES), (GAUSS_WEIGHTS, LOBATTO_WEIGHTS))):
-            index = np.flatnonzero(group)
-            if not index.size:
-                continue
-            sums = []
-            for _, _, jacobian, values in _node_values(halves.take(index), integrand, frame, widths, supports,
-                                                       nodes[0], max_nodes_per_call, nodes[1]):
-                values = np.where(np.isfinite(values), values, 0.0)
-                sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
-            total[index] = np.concatenate(sums)
+        for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
+                                                   max_nodes_per_call, nodes[1]):
+            values = np.where(np.isfinite(values), values, 0.0)
+            sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
+    total = np.concatenate(sums)
     half = panels.case.size
     return refinement_change(panels.value, total[:half], total[half:])
 
