@@ -57,7 +57,7 @@ def algebraic_floor(parent_error: np.ndarray, children_error: np.ndarray) -> np.
     panel converges algebraically — a kink or a jump inside, whose error shrinks like h² where a smooth
     integrand's drops by orders of magnitude per bisection — and there |K − G| is no estimate: both rules' errors
     are J h² times a coefficient that depends on where the kink falls between their nodes, and the two can agree
-    by accident (FON at θ_V = 45.7°, rtol 1e-8: a panel 0.002 wide across the kink θ_L = θ_V, |K − G| = 3.1e-10,
+    by accident (FON at θ_V = 71.2°, rtol 1e-8: a panel 0.002 wide across the kink θ_L = θ_V, |K − G| = 3.1e-10,
     error 1.7e-9; the ratios of successive |K − G| along its lineage were 2.6, 25, 0.34, 4.7, 4, 6.6, 10, 23).
     Each half then keeps half its parent's estimate as a floor, one level behind: an error that shrinks like h²
     is then overestimated about 4 times, and one lucky |K − G| alone cannot end the refinement. (A floor that
