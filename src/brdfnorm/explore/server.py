@@ -8,7 +8,8 @@ Routes (nothing else is served, and no path from a request is ever opened):
   version, checksum, licence), so the page needs no network. The assets are read once, gzipped once, and served
   under content-hashed URLs (``?v=HASH``, cached for a year) with ETags; the page itself is never cached.
 * ``GET /api/models`` the catalog (:mod:`.catalog`); ``GET /api/models/{id}`` one model's declared parameters.
-* ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`), ``POST /api/fit`` the fit panel.
+* ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`; ``phi`` the view azimuth,
+  ``overlay`` a second ``{model, params}`` drawn beside it), ``POST /api/fit`` the fit panel.
 * ``GET /api/events`` server-sent events: a watched ``.brdf`` file was reloaded (or failed to compile).
 
 Heavy work runs in worker threads, one computation at a time in each of two lanes — the coarse passes a slider
@@ -63,6 +64,7 @@ from .compute import (
     evaluate_view,
     fit_factor,
     view_angle,
+    view_azimuth,
 )
 
 STATIC = Path(__file__).with_name("static")
@@ -227,7 +229,8 @@ class Explorer:
             body = await read_json(request)
             check = self.claim("view", body, request)  # first: a newer move must cancel older work at once
             entry, model = await self.model_of(body)
-            view = view_angle(body.get("view"))
+            view, phi = view_angle(body.get("view")), view_azimuth(body.get("phi"))
+            overlay = await self.overlay_of(body.get("overlay"))
             received = time.perf_counter()
             started = []
 
@@ -235,7 +238,8 @@ class Explorer:
                 started.append(time.perf_counter())
                 return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
                                      check, params=body.get("params"), source=entry.source,
-                                     verdicts=self.verdicts, model_key=(entry.id, entry.version))
+                                     verdicts=self.verdicts, model_key=(entry.id, entry.version), phi_deg=phi,
+                                     overlay=overlay)
 
             lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
             result = await self.compute(request, check, timed, lane)
@@ -264,6 +268,15 @@ class Explorer:
         entry = self.catalog.entry(body.get("model"))
         model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
         return entry, model
+
+    async def overlay_of(self, raw: object) -> tuple[object, object, str] | None:
+        """The overlay's (model, page values, label), or None when the request has none."""
+        if raw is None:
+            return None
+        if not isinstance(raw, dict):
+            raise ArgumentError("overlay must be an object {model, params}", where="overlay")
+        entry, model = await self.model_of(raw)
+        return model, raw.get("params"), entry.label
 
     async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict], lane: str) -> dict:
         """Run ``work`` in a worker thread, one at a time per lane; a client that hangs up cancels it (``check``)."""

@@ -8,7 +8,13 @@ const state = {
   description: null,
   values: {},
   view: 30,
+  phi: 0,
   convention: "normal",
+  logScale: false,  // lobe radius in decades below its peak, E on a log axis
+  rawF: true,  // the raw f(L, V) beside the normalized lobe
+  overlay: { on: false, modelId: null, description: null, values: {}, label: "" },
+  lastData: null,
+  overlayOn: false,
   client: Math.random().toString(36).slice(2) + Date.now().toString(36),
   generation: 0,
   inflight: false,
@@ -85,71 +91,100 @@ function element(tag, attributes, text) {
   return node;
 }
 
-function buildControls(description, previous) {
-  const container = $("params");
+// One row per declared parameter, drawn as the server's `control` says (catalog.py's control_of): a slider with a
+// number box, numbers per channel (η, k, f0: any value in range, not 8-bit colour steps), a colour picker, a
+// switch labelled with its name and state, a menu. `values` is filled and changed in place; `prefix` names the
+// inputs (param-, overlay-param-).
+function buildControls(description, previous, container, values, prefix) {
   container.replaceChildren();
-  const values = {};
+  for (const key of Object.keys(values)) delete values[key];
   for (const p of description.parameters) {
+    const control = p.control || { float: "slider", bool: "switch", color: "colour" }[p.kind] || "menu";
     const kept = previous && Object.prototype.hasOwnProperty.call(previous, p.name)
-      && typeof previous[p.name] === typeof p.default && (p.kind !== "choice" || p.choices.includes(previous[p.name]));
+      && Array.isArray(previous[p.name]) === Array.isArray(p.default)
+      && typeof previous[p.name] === typeof p.default && (control !== "menu" || p.choices.includes(previous[p.name]));
     values[p.name] = kept ? previous[p.name] : p.default;
+    const id = prefix + p.name;
     const row = element("div", { class: "control" });
-    const label = element("label", { for: "param-" + p.name, title: p.description || "" }, p.name);
-    row.append(label);
-    if (p.kind === "float") {
+    if (control !== "switch") row.append(element("label", { for: id, title: p.description || "" }, p.name));
+    const range = `[${p.minimum ?? "−∞"}, ${p.maximum ?? "∞"}]${p.strict ? "" : " (slider range)"}`;
+    if (control === "slider") {
       const s = p.slider;
-      const range = element("input", {
-        type: "range", id: "param-" + p.name, "data-testid": "param-" + p.name,
-        min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high, step: "any",
+      const slider = element("input", {
+        type: "range", id, "data-testid": id, min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high,
+        step: s.log ? "any" : (s.step ?? "any"),
       });
-      range.value = valueToSlider(s, values[p.name]);
-      const box = element("input", { type: "number", step: "any", "data-testid": "param-" + p.name + "-value",
+      slider.value = valueToSlider(s, values[p.name]);
+      const box = element("input", { type: "number", step: s.step ?? "any", "data-testid": id + "-value",
         "aria-label": p.name });
       box.value = formatNumber(values[p.name]);
-      range.addEventListener("input", () => {
-        const value = sliderToValue(s, Number(range.value));
-        state.values[p.name] = s.log ? Number(value.toPrecision(6)) : value;
-        box.value = formatNumber(state.values[p.name]);
+      slider.addEventListener("input", () => {
+        const value = sliderToValue(s, Number(slider.value));
+        values[p.name] = s.log ? Number(value.toPrecision(6)) : value;
+        box.value = formatNumber(values[p.name]);
         schedule();
       });
       box.addEventListener("change", () => {
         const value = Number(box.value);
-        if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(state.values[p.name]); return; }
-        state.values[p.name] = value;
-        range.value = valueToSlider(s, value);
+        if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(values[p.name]); return; }
+        values[p.name] = value;
+        slider.value = valueToSlider(s, value);
         schedule();
       });
-      row.append(range, box);
-      const hint = p.strict ? "" : " (slider range)";
-      row.append(element("small", { class: "range" },
-        `[${p.minimum ?? "−∞"}, ${p.maximum ?? "∞"}]${hint}${s.log ? ", log slider" : ""}`));
-    } else if (p.kind === "bool") {
-      const box = element("input", { type: "checkbox", role: "switch", id: "param-" + p.name,
-        "data-testid": "param-" + p.name });
+      row.append(slider, box, element("small", { class: "range" }, range + (s.log ? ", log slider" : "")));
+    } else if (control === "channels") {
+      const perChannel = Array.isArray(values[p.name]);
+      const boxes = element("div", { class: "channels" });
+      const count = perChannel ? values[p.name].length : 1;
+      for (let c = 0; c < count; c++) {
+        const name = perChannel ? "RGB"[c] || String(c) : "";
+        const box = element("input", { type: "number", step: "any", min: p.minimum ?? "", max: p.maximum ?? "",
+          id: c === 0 ? id : id + "-" + name, "data-testid": id + (perChannel ? "-" + name : "-value"),
+          "aria-label": p.name + (perChannel ? " " + name : ""), title: name ? name + " channel" : p.name });
+        const current = () => (perChannel ? values[p.name][c] : values[p.name]);
+        box.value = formatNumber(current());
+        box.addEventListener("change", () => {
+          const value = Number(box.value);
+          if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(current()); return; }
+          if (perChannel) values[p.name] = values[p.name].map((v, k) => (k === c ? value : v));
+          else values[p.name] = value;
+          schedule();
+        });
+        boxes.append(perChannel ? element("span", { class: "channel" }, name) : "", box);
+      }
+      row.append(boxes, element("small", { class: "range" }, range + (perChannel ? " per channel (R, G, B)" : "")));
+    } else if (control === "switch") {
+      const label = element("label", { class: "switch", title: p.description || "" });
+      const box = element("input", { type: "checkbox", role: "switch", id, "data-testid": id });
+      const shown = element("span", { class: "switch-state", "data-testid": id + "-state" });
+      const show = () => { shown.textContent = box.checked ? "on" : "off"; };
       box.checked = values[p.name];
-      box.addEventListener("change", () => { state.values[p.name] = box.checked; schedule(); });
-      row.append(box);
-    } else if (p.kind === "color") {
-      const picker = element("input", { type: "color", id: "param-" + p.name, "data-testid": "param-" + p.name });
+      show();
+      box.addEventListener("change", () => { values[p.name] = box.checked; show(); schedule(); });
+      label.append(box, element("span", { class: "switch-name" }, p.name), shown);
+      row.classList.add("switch-row");
+      row.append(label);
+      if (p.description) row.append(element("small", { class: "range" }, p.description));
+    } else if (control === "colour") {
+      const picker = element("input", { type: "color", id, "data-testid": id });
       picker.value = rgbToHex(values[p.name]);
       const shown = element("small", { class: "range" }, values[p.name].map(formatNumber).join(", "));
       picker.addEventListener("input", () => {
-        state.values[p.name] = hexToRGB(picker.value);
-        shown.textContent = state.values[p.name].map(formatNumber).join(", ");
+        values[p.name] = hexToRGB(picker.value);
+        shown.textContent = values[p.name].map(formatNumber).join(", ");
         schedule();
       });
       row.append(picker, shown);
     } else {
-      const menu = element("select", { id: "param-" + p.name, "data-testid": "param-" + p.name });
+      const menu = element("select", { id, "data-testid": id });
       for (const choice of p.choices || []) menu.append(element("option", { value: choice }, choice));
       menu.value = values[p.name];
-      menu.addEventListener("change", () => { state.values[p.name] = menu.value; schedule(); });
+      menu.addEventListener("change", () => { values[p.name] = menu.value; schedule(); });
       row.append(menu);
     }
     container.append(row);
   }
-  state.values = values;
-  buildFitControls(description);
+  return values;
 }
 
 function buildFitControls(description) {
@@ -173,8 +208,12 @@ function setFitRange() {
 
 // -- the update loop ---------------------------------------------------------------------------------------------
 function request(quality, generation) {
-  return { model: state.modelId, params: state.values, view: state.view, convention: state.convention,
-           quality, client: state.client, generation };
+  const body = { model: state.modelId, params: state.values, view: state.view, phi: state.phi,
+                 convention: state.convention, quality, client: state.client, generation };
+  if (state.overlay.on && state.overlay.description) {
+    body.overlay = { model: state.overlay.modelId, params: state.overlay.values };
+  }
+  return body;
 }
 
 // A control moved: a new generation. One coarse request at a time; moves during it coalesce into one more.
@@ -201,7 +240,8 @@ const firstView = (() => {
 
 function prefetched(body) {  // the first view's answer, if this is the request it answered
   const first = firstView.body;
-  const same = ["model", "view", "convention", "quality", "generation"].every((key) => body[key] === first[key]);
+  const same = ["model", "view", "convention", "quality", "generation"].every((key) => body[key] === first[key])
+    && body.phi === 0 && !body.overlay;
   return same ? firstView.view : null;  // (generation 1 is the first model's first view, at its defaults)
 }
 
@@ -235,7 +275,8 @@ async function accept(response, generation) {
   if (response.status !== 200) {
     state.requestError = response.data.error || "request failed";
     showErrors();
-    setStatus("error", "failed");
+    clearReadouts();
+    setStatus("error: nothing computed for these inputs", "failed");
     return false;
   }
   state.requestError = null;
@@ -244,11 +285,32 @@ async function accept(response, generation) {
   return generation === state.generation;
 }
 
+const READOUTS = { albedo: "readout-albedo", factor_normal: "readout-factor-normal",
+                   factor_max: "readout-factor-max", factor_view: "readout-factor-view", energy: "readout-energy" };
+
+// An input the server refused: no number on screen belongs to these inputs, so none stays (nor the verdict);
+// the plots stay, greyed and marked as the last accepted inputs'.
+function clearReadouts() {
+  for (const id of [...Object.values(READOUTS), "readout-overlay"]) {
+    const node = $(id);
+    node.textContent = "—";
+    node.dataset.quality = "none";
+    delete node.dataset.value;
+  }
+  $("readout-energy").dataset.status = "withdrawn";
+  $("readout-energy").title = "no verdict: the inputs were refused";
+  $("readout-energy-command").textContent = "";
+  $("argmax").textContent = "";
+  $("quality").textContent = "none: the inputs were refused";
+  $("plots").classList.add("stale");
+  $("plots").dataset.stale = "true";
+}
+
 async function render(data, generation) {
   const readouts = data.readouts;
-  const targets = { albedo: "readout-albedo", factor_normal: "readout-factor-normal",
-                    factor_max: "readout-factor-max", factor_view: "readout-factor-view", energy: "readout-energy" };
-  for (const [key, id] of Object.entries(targets)) {
+  $("plots").classList.remove("stale");
+  delete $("plots").dataset.stale;
+  for (const [key, id] of Object.entries(READOUTS)) {
     const node = $(id);
     node.textContent = readouts[key].text;
     node.dataset.quality = data.quality;
@@ -262,6 +324,12 @@ async function render(data, generation) {
   $("readout-energy-command").textContent = readouts.energy.command ? "same as: " + readouts.energy.command : "";
   $("argmax").textContent = `(θ_o = ${readouts.factor_max.theta_deg.toFixed(2)}°)`;
   $("quality").textContent = data.quality === "fine" ? "refined" : "coarse, refining…";
+  const overlay = $("readout-overlay");
+  overlay.textContent = data.overlay ? `${data.overlay.label}: E(θ_o) = ${data.overlay.albedo.text}, `
+    + `α (${data.convention}) = ${data.overlay.factor.text}` : "—";
+  overlay.dataset.quality = data.overlay ? data.quality : "none";
+  overlay.dataset.generation = String(generation);
+  state.lastData = data;
   const warnings = $("warnings");
   warnings.replaceChildren(...data.warnings.map((w) => element("li", {}, w)));
   const numbers = performance.now();
@@ -298,24 +366,73 @@ const BASE_LAYOUT = {
   legend: { orientation: "h", y: -0.18, x: 0 },
 };
 
-function plotLobe(data) {
+// The lobe plot: the normalized α·f·(N·L) and, beside it, the raw f(L, V) (1/sr), each for the model and the
+// overlay, in the plane of N and V. On the log scale the radius is the number of decades above PEAK/10^DECADES
+// (0 at the centre, DECADES at the panel's peak), so a lobe a few degrees wide shows its shape and its tails.
+const DECADES = 5;
+const OVERLAY_COLOR = "#9467bd";
+
+function radius(r, peak, log) {
+  if (r === null) return null;
+  if (!log) return r;
+  return r > 0 ? Math.max(0, DECADES + Math.log10(r / peak)) : 0;
+}
+
+function lobePanel(traces, layout, n, curves, data, title) {
+  const axis = n === 1 ? "" : String(n);
+  const peak = Math.max(1e-300, ...curves.flatMap((c) => c.r.filter((v) => v !== null && Number.isFinite(v))));
+  const log = state.logScale;
+  const scale = log ? DECADES : peak;
   const t = data.lobe.t_deg.map((d) => d * Math.PI / 180);
-  const r = data.lobe.r;
-  const x = r.map((v, i) => (v === null ? null : v * Math.sin(t[i])));
-  const y = r.map((v, i) => (v === null ? null : v * Math.cos(t[i])));
-  const scale = Math.max(1e-300, ...r.filter((v) => v !== null));
+  for (const c of curves) {
+    const t_c = c.t_deg ? c.t_deg.map((d) => d * Math.PI / 180) : t;
+    const rho = c.r.map((v) => radius(v, peak, log));
+    traces.push({ x: rho.map((v, i) => (v === null ? null : v * Math.sin(t_c[i]))),
+                  y: rho.map((v, i) => (v === null ? null : v * Math.cos(t_c[i]))), xaxis: "x" + axis,
+                  yaxis: "y" + axis, type: "scatter", mode: "lines", name: c.name, meta: c.meta,
+                  line: { color: c.color, width: 2, dash: c.dash || "solid" },
+                  fill: c.dash ? "none" : "toself", fillcolor: "rgba(31,119,180,0.10)" });
+  }
   const view = data.view_deg * Math.PI / 180;
-  const traces = [
-    { x, y, type: "scatter", mode: "lines", name: "α·f·(N·L)", line: { color: "#1f77b4", width: 2 },
-      fill: "toself", fillcolor: "rgba(31,119,180,0.12)" },
-    { x: [0, scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter", mode: "lines+markers",
-      name: "V (view)", line: { color: "#ff7f0e", width: 2 }, marker: { size: [0, 7] } },
-    { x: [0, -scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter", mode: "lines",
-      name: "mirror of V", line: { color: "#888", dash: "dot", width: 1 } },
-  ];
-  const layout = { ...BASE_LAYOUT,
-    xaxis: { title: { text: "X" }, zeroline: true, range: [-1.1 * scale, 1.1 * scale] },
-    yaxis: { title: { text: "N" }, scaleanchor: "x", scaleratio: 1, range: [-0.05 * scale, 1.1 * scale] } };
+  traces.push({ x: [0, scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter", xaxis: "x" + axis,
+                yaxis: "y" + axis, mode: "lines+markers", name: "V (view)", showlegend: n === 1,
+                line: { color: "#ff7f0e", width: 2 }, marker: { size: [0, 7] } });
+  traces.push({ x: [0, -scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter",
+                xaxis: "x" + axis, yaxis: "y" + axis, mode: "lines", name: "mirror of V", showlegend: n === 1,
+                line: { color: "#888", dash: "dot", width: 1 } });
+  if (log) {  // decade rings, labelled by their value relative to the peak
+    for (let k = 1; k < DECADES; k++) {
+      const arc = Array.from({ length: 61 }, (_, i) => -Math.PI / 2 + Math.PI * i / 60);
+      traces.push({ x: arc.map((u) => k * Math.sin(u)), y: arc.map((u) => k * Math.cos(u)), xaxis: "x" + axis,
+                    yaxis: "y" + axis, type: "scatter", mode: "lines", hoverinfo: "skip", showlegend: false,
+                    line: { color: "#c9ced8", width: 1, dash: "dot" } });
+    }
+  }
+  const x = layout.raw ? [[0, 0.47], [0.53, 1]][n - 1] : [0, 1];
+  layout["xaxis" + axis] = { domain: x, zeroline: true, range: [-1.1 * scale, 1.1 * scale],
+    title: { text: log ? `${title} (decades, peak ${peak.toPrecision(3)})` : title, font: { size: 10 } } };
+  layout["yaxis" + axis] = { scaleanchor: "x" + axis, scaleratio: 1, range: [-0.05 * scale, 1.1 * scale],
+    anchor: "x" + axis, title: n === 1 ? { text: "N" } : undefined };
+}
+
+function plotLobe(data) {
+  const main = state.modelLabel || "model";
+  const second = data.overlay;
+  const normalized = [{ r: data.lobe.r, name: `α·f·(N·L): ${main}`, color: "#1f77b4", meta: "normalized" }];
+  const raw = [{ r: data.lobe.raw, name: `f: ${main}`, color: "#1f77b4", meta: "raw" }];
+  if (second) {
+    normalized.push({ r: second.lobe.r, t_deg: second.lobe.t_deg, name: `α·f·(N·L): ${second.label}`,
+                      color: OVERLAY_COLOR, dash: "dash", meta: "overlay normalized" });
+    raw.push({ r: second.lobe.raw, t_deg: second.lobe.t_deg, name: `f: ${second.label}`, color: OVERLAY_COLOR,
+               dash: "dash", meta: "overlay raw" });
+  }
+  const traces = [];
+  const layout = { ...BASE_LAYOUT, raw: state.rawF };
+  lobePanel(traces, layout, 1, normalized, data, "normalized α·f·(N·L)");
+  if (state.rawF) lobePanel(traces, layout, 2, raw, data, "raw f (1/sr)");
+  delete layout.raw;
+  layout.legend = { orientation: "h", y: -0.22, x: 0 };
+  layout.margin = { l: 40, r: 8, t: 8, b: 48 };
   Plotly.react("plot-lobe", traces, layout, PLOT_CONFIG);
 }
 
@@ -433,11 +550,20 @@ function plotAlbedo(data) {
                   name: `α·E (${data.convention})` + (c.normalized.length === 1 ? "" : names[k]),
                   line: { color: c.normalized.length === 1 ? "#2ca02c" : CHANNEL_COLORS[k], dash: "dash", width: 2 } });
   });
+  const second = data.overlay;
+  if (second) {  // the overlay's largest channel, dashed, in both panels
+    const largest = (columns) => columns[0].map((_, i) => Math.max(...columns.map((col) => col[i] ?? -Infinity)));
+    traces.push({ x: second.curve.theta_deg, y: largest(second.curve.value), type: "scatter", mode: "lines",
+                  name: `E(θ_o): ${second.label}`, line: { color: OVERLAY_COLOR, width: 2, dash: "dash" } });
+    traces.push({ x: second.curve.theta_deg, y: largest(second.curve.normalized), type: "scatter", mode: "lines",
+                  yaxis: "y2", name: `α·E: ${second.label}`, line: { color: OVERLAY_COLOR, width: 2, dash: "dot" } });
+  }
   // Two panels sharing θ_o: E with its band above, α·E (the energy kept, 1 = all of it) below.
+  const scale = state.logScale ? { type: "log", autorange: true } : { type: "linear", rangemode: "tozero" };
   const layout = { ...BASE_LAYOUT, margin: { l: 64, r: 16, t: 8, b: 64 },
     xaxis: { title: { text: "θ_o (degrees)", standoff: 4 }, range: [0, 90], anchor: "y2" },
-    yaxis: { title: { text: "E(θ_o)" }, rangemode: "tozero", domain: [0.45, 1] },
-    yaxis2: { title: { text: "α·E" }, rangemode: "tozero", domain: [0, 0.36] },
+    yaxis: { title: { text: "E(θ_o)" }, domain: [0.45, 1], ...scale },
+    yaxis2: { title: { text: "α·E" }, domain: [0, 0.36], ...scale },
     shapes: [
       { type: "line", xref: "x", yref: "paper", x0: data.view_deg, x1: data.view_deg, y0: 0, y1: 1,
         line: { color: "#ff7f0e", width: 1, dash: "dot" } },
@@ -451,13 +577,25 @@ function plotAlbedo(data) {
 async function selectModel(id, keepValues) {
   const first = id === firstView.model && !keepValues && state.modelId === null ? await firstView.description : null;
   const description = first || await getJSON("/api/models/" + encodeURIComponent(id));
-  const previous = keepValues ? state.values : null;
+  const previous = keepValues ? { ...state.values } : null;
   state.modelId = id;
   state.description = description;
+  state.modelLabel = description.label || id;
   $("formula").textContent = description.formula;
-  buildControls(description, previous);
+  buildControls(description, previous, $("params"), state.values, "param-");
+  buildFitControls(description);
   state.fileError = description.error ? description.error.text : null;
   showErrors();
+  schedule();
+}
+
+async function selectOverlay(id) {
+  const description = await getJSON("/api/models/" + encodeURIComponent(id));
+  const o = state.overlay;
+  o.modelId = id;
+  o.description = description;
+  o.label = description.label;
+  buildControls(description, null, $("overlay-params"), o.values, "overlay-param-");
   schedule();
 }
 
@@ -543,6 +681,37 @@ async function start() {
     slider.value = String(value);
     schedule();
   });
+  const azimuth = $("view-azimuth");
+  const azimuthBox = $("view-azimuth-value");
+  azimuth.addEventListener("input", () => { state.phi = Number(azimuth.value); azimuthBox.value = azimuth.value; schedule(); });
+  azimuthBox.addEventListener("change", () => {
+    const value = Number(azimuthBox.value);
+    if (azimuthBox.value.trim() === "" || !(value >= 0 && value <= 360)) { azimuthBox.value = String(state.phi); return; }
+    state.phi = value;
+    azimuth.value = String(value);
+    schedule();
+  });
+  const toggle = (id, key, redraw) => {
+    const box = $(id);
+    box.checked = state[key];
+    const show = () => { $(id + "-state").textContent = box.checked ? "on" : "off"; };
+    show();
+    box.addEventListener("change", () => { state[key] = box.checked; show(); redraw(); });
+  };
+  const redraw = () => { if (state.lastData) { plotLobe(state.lastData); plotAlbedo(state.lastData); } };
+  toggle("log-scale", "logScale", redraw);
+  toggle("raw-f", "rawF", redraw);
+  const overlayPicker = $("overlay-model");
+  overlayPicker.append(...[...picker.children].map((node) => node.cloneNode(true)));
+  overlayPicker.value = catalog.models.find((m) => m.id !== picker.value)?.id ?? picker.value;
+  toggle("overlay-on", "overlayOn", () => {
+    state.overlay.on = state.overlayOn;
+    overlayPicker.disabled = !state.overlay.on;
+    if (state.overlay.on && !state.overlay.description) selectOverlay(overlayPicker.value);
+    else schedule();
+  });
+  overlayPicker.disabled = true;
+  overlayPicker.addEventListener("change", () => selectOverlay(overlayPicker.value));
   $("fit-parameter").addEventListener("change", setFitRange);
   enableTurning();
   $("fit-run").addEventListener("click", runFit);
