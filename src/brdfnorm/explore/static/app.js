@@ -575,8 +575,10 @@ function plotAlbedo(data) {
 
 // -- models and live files ---------------------------------------------------------------------------------------
 async function selectModel(id, keepValues) {
+  state.requestedModel = id;
   const first = id === firstView.model && !keepValues && state.modelId === null ? await firstView.description : null;
   const description = first || await getJSON("/api/models/" + encodeURIComponent(id));
+  if (state.requestedModel !== id) return;  // another model was picked meanwhile: its answer decides
   const previous = keepValues ? { ...state.values } : null;
   state.modelId = id;
   state.description = description;
@@ -590,8 +592,10 @@ async function selectModel(id, keepValues) {
 }
 
 async function selectOverlay(id) {
+  state.overlay.requested = id;
   const description = await getJSON("/api/models/" + encodeURIComponent(id));
   const o = state.overlay;
+  if (o.requested !== id) return;  // another model was picked meanwhile: its answer decides
   o.modelId = id;
   o.description = description;
   o.label = description.label;
