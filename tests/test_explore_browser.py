@@ -438,16 +438,16 @@ def narrow(browser):
 
 def test_usable_at_900_px_and_each_model_listed_once(narrow):
     page = narrow
-    refined(page)
+    page.wait_for_function(CURRENT, timeout=TIMEOUT_MS, polling=50)  # the layout, not the refined numbers
     options = page.eval_on_selector_all("#model option", "(os) => os.map((o) => o.textContent)")
     assert len(options) == len(set(options)), options
     assert sum(o.startswith("ggx.brdf") for o in options) == 1
     for model, probe in (("arg0", "param-roughness-value"), ("builtin:ggx", "param-eta-R")):
         select(page, model, probe)
-        refined(page)
         if model == "builtin:ggx":
-            page.get_by_test_id("overlay-on").check()
-            refined(page)
+            page.get_by_test_id("overlay-on").check()  # the second lobe's controls take room too
+            page.locator("#overlay-params .control").first.wait_for(timeout=TIMEOUT_MS)
+        page.wait_for_function(CURRENT, timeout=TIMEOUT_MS, polling=50)
         assert page.evaluate("() => document.documentElement.scrollWidth") <= 900
         assert page.evaluate("() => document.body.scrollWidth") <= 900
         for testid in ("model-picker", "convention", probe, "view-angle-value", "view-azimuth-value", "log-scale",

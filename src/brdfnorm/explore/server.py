@@ -2,7 +2,7 @@
 
 Routes (nothing else is served, and no path from a request is ever opened):
 
-* ``GET /`` the page; ``GET /static/{app.js,style.css,plotly-basic.min.js}`` its assets — plotly.js's official
+* ``GET /`` the page; ``GET /static/{app.js,plots.js,style.css,plotly-basic.min.js}`` its assets — plotly.js's official
   *basic* partial bundle (scatter traces only, all the page draws: 1.2 MB against the full bundle's 4.8 MB, which
   took 1.4–3 s of a first load to compile), vendored beside the page (``static/VENDORED.md``: source,
   version, checksum, licence), so the page needs no network. The assets are read once, gzipped once, and served
@@ -73,7 +73,7 @@ MAX_BODY = 64 * 1024
 #: Clients whose generation numbers are remembered (the oldest are forgotten first).
 MAX_CLIENTS = 1024
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1", "[::1]")
-#: The page runs only its own two scripts (no eval: the basic bundle has no WebGL layer; plotly sets inline
+#: The page runs only its own three scripts (no eval: the basic bundle has no WebGL layer; plotly sets inline
 #: styles) and talks only to this server.
 PAGE_POLICY = ("default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
                "img-src 'self' data: blob:; connect-src 'self'; font-src 'self' data:; base-uri 'none'; "
@@ -82,7 +82,8 @@ log = logging.getLogger("brdfnorm.explore")
 
 
 #: The page's assets (nothing else under /static/ exists) and their media types.
-ASSET_TYPES = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8",
+ASSET_TYPES = {"app.js": "text/javascript; charset=utf-8", "plots.js": "text/javascript; charset=utf-8",
+               "style.css": "text/css; charset=utf-8",
                "plotly-basic.min.js": "text/javascript; charset=utf-8"}
 #: A content-hashed asset URL never changes meaning: browsers may keep it a year without asking again.
 IMMUTABLE = "public, max-age=31536000, immutable"
