@@ -472,10 +472,17 @@ async function start() {
   });
   const azimuth = $("view-azimuth");
   const azimuthBox = $("view-azimuth-value");
-  azimuth.addEventListener("input", () => { state.phi = Number(azimuth.value); azimuthBox.value = azimuth.value; schedule(); });
+  azimuth.addEventListener("input", () => {
+    state.phi = Number(azimuth.value);
+    azimuthBox.value = azimuth.value;
+    schedule();
+  });
   azimuthBox.addEventListener("change", () => {
     const value = Number(azimuthBox.value);
-    if (azimuthBox.value.trim() === "" || !(value >= 0 && value <= 360)) { azimuthBox.value = String(state.phi); return; }
+    if (azimuthBox.value.trim() === "" || !(value >= 0 && value <= 360)) {
+      azimuthBox.value = String(state.phi);
+      return;
+    }
     state.phi = value;
     azimuth.value = String(value);
     schedule();

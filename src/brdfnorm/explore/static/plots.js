@@ -53,12 +53,17 @@ function lobePanel(traces, layout, n, curves, data, title) {
                     yaxis: "y" + axis, type: "scatter", mode: "lines", hoverinfo: "skip", showlegend: false,
                     line: { color: "#c9ced8", width: 1, dash: "dot" } });
     }
+    const rings = Array.from({ length: DECADES }, (_, k) => k + 1);
+    const names = rings.map((k) => (k === DECADES ? "peak" : `1e-${DECADES - k}`));
+    traces.push({ x: rings.map(() => 0), y: rings, text: names,  // up the N axis: one text line per decade fits
+                  xaxis: "x" + axis, yaxis: "y" + axis, type: "scatter", mode: "text", textposition: "middle left",
+                  hoverinfo: "skip", showlegend: false, textfont: { size: 9, color: "#8a93a3" } });
   }
   const x = layout.raw ? [[0, 0.47], [0.53, 1]][n - 1] : [0, 1];
-  layout["xaxis" + axis] = { domain: x, zeroline: true, range: [-1.1 * scale, 1.1 * scale],
+  layout["xaxis" + axis] = { domain: x, zeroline: true, range: [-1.1 * scale, 1.1 * scale], showticklabels: !log,
     title: { text: log ? `${title} (decades, peak ${peak.toPrecision(3)})` : title, font: { size: 10 } } };
   layout["yaxis" + axis] = { scaleanchor: "x" + axis, scaleratio: 1, range: [-0.05 * scale, 1.1 * scale],
-    anchor: "x" + axis, title: n === 1 ? { text: "N" } : undefined };
+    anchor: "x" + axis, title: n === 1 ? { text: "N" } : undefined, showticklabels: !log };
 }
 
 function plotLobe(data) {
