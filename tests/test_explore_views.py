@@ -140,4 +140,7 @@ def test_the_overlay_is_a_second_lobe_under_the_same_convention(server_url):
     for overlay, status in (({"model": "nope"}, 404), ({"model": "arg1", "params": {"n": -1}}, 400), ([1], 400)):
         bad = post(server_url, "api/evaluate", view_request(client="overlay", generation=3, overlay=overlay))
         assert bad.status_code == status, bad.text
+    refused = post(server_url, "api/evaluate", view_request(client="overlay", generation=3,
+                                                            overlay={"model": "arg1", "params": {"n": -1}}))
+    assert refused.json()["error"].startswith("second lobe (phong): parameter n: ")
     assert post(server_url, "api/evaluate", view_request(client="overlay", generation=4, phi=-1)).status_code == 400

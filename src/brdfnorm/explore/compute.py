@@ -39,7 +39,14 @@ from .. import albedo, normalize
 from ..check import Budget
 from ..check import check as check_model
 from ..codegen import emit
-from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, ParameterError, ParameterTypeError
+from ..errors import (
+    ArgumentError,
+    ArgumentTypeError,
+    BrdfnormError,
+    EvaluationError,
+    ParameterError,
+    ParameterTypeError,
+)
 from ..fit import fit
 from ..models.base import Model
 from ..normalization import THETA_MAX
@@ -345,7 +352,7 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         model = bind_parameters(model, params)
-        second = bind_parameters(overlay[0], overlay[1]) if overlay is not None else None
+        second = _bind_overlay(*overlay) if overlay is not None else None
         m = cancellable(model, check)
         theta_v, phi_v = math.radians(view_deg), math.radians(phi_deg)
         a = albedos(m, theta_v, phi_v, q)
@@ -379,6 +386,15 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
                   "normalized": _columns(normalized), "rtol": q.curve_rtol},
         "readouts": readouts, "lobe": plane, "surface": surface, "overlay": drawn, "warnings": messages,
     }
+
+
+def _bind_overlay(model: Model, params: object, label: str) -> Model:
+    """The second lobe bound to its values; an error says it is the second lobe's (the page shows one line)."""
+    try:
+        return bind_parameters(model, params)
+    except BrdfnormError as error:
+        error.where = f"second lobe ({label})" + (f": {error.where}" if error.where else "")
+        raise
 
 
 def _overlay(m: Model, label: str, theta_v: float, phi_v: float, convention: str, q: Quality) -> dict:
