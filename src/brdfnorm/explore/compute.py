@@ -1,16 +1,19 @@
 """What the explorer computes for one view of one model, at a coarse or a fine tolerance, cancellably.
 
-For a model bound to the page's parameter values and a view direction V at polar angle θ_o (azimuth 0, the
-X–N plane), :func:`evaluate_view` returns, as JSON-ready data:
+For a model bound to the page's parameter values and a view direction V at polar angle θ_o and azimuth φ_o
+(φ_o = 0: the X–N plane), :func:`evaluate_view` returns, as JSON-ready data:
 
-* the albedo curve E(θ_o) = ∫ f(L, V)(N·L) dL over θ_o ∈ [0°, 89.9°] with its error estimate
+* the albedo curve E(θ_o) = ∫ f(L, V)(N·L) dL over θ_o ∈ [0°, 89.9°] at the azimuth φ_o, with its error estimate
   (:func:`brdfnorm.albedo`), and the normalized curve α·E(θ_o) — the energy kept under the chosen convention;
 * the readouts: E at the current view, the factors α = 1/E at ``normal``, ``max`` and ``view``
   (:func:`brdfnorm.normalize`), and the energy verdict of :func:`brdfnorm.check.check` (``checks=("energy",)``,
   every parameter held at the page's value, so only directions are searched) — in the fine pass; the coarse pass
   shows the albedo grid's maximum as a pending verdict;
-* the normalized lobe α·f(L, V)(N·L) for L in the plane of incidence (a polar plot) and over the hemisphere
-  (a 3-D surface, in polar coordinates about the mirror direction so a narrow lobe is resolved).
+* the normalized lobe α·f(L, V)(N·L) and the raw f(L, V) for L in the plane of incidence (polar plots) and the
+  normalized one over the hemisphere (a 3-D surface, in polar coordinates about the mirror direction so a narrow
+  lobe is resolved) — :mod:`.lobes`;
+* optionally a second model's (the overlay's) lobe, albedo curve and factor, under the same convention, for
+  comparison (no energy check of its own).
 
 The coarse pass (``quality="coarse"``) is what a slider move waits for; the fine pass refines every number in the
 background. Both are *cancellable*: the model's ``evaluate``/``projected`` are wrapped on a private copy so that
@@ -36,12 +39,22 @@ from .. import albedo, normalize
 from ..check import Budget
 from ..check import check as check_model
 from ..codegen import emit
-from ..errors import ArgumentError, ArgumentTypeError, EvaluationError, ParameterError, ParameterTypeError
+from ..errors import (
+    ArgumentError,
+    ArgumentTypeError,
+    BrdfnormError,
+    EvaluationError,
+    ParameterError,
+    ParameterTypeError,
+)
 from ..fit import fit
-from ..models.base import Model, mirror
+from ..models.base import Model
 from ..normalization import THETA_MAX
 from ..output.formats import format_with_error
 from ..validate import choice, count, real_array, real_number, short_repr
+from .catalog import control_of
+from .lobes import finite as _finite
+from .lobes import plane_lobe, surface_lobe
 
 CONVENTIONS = ("normal", "max", "view")
 FIT_LANGUAGES = ("glsl", "hlsl")
@@ -86,25 +99,27 @@ def describe_parameters(model: Model) -> list[dict]:
     """Declared parameters with the slider each gets (log scale where the range spans decades)."""
     described = []
     for p in model.parameters:
-        entry = p.declaration()  # kind, channels (3 for a spectrum or colour), integer, range, default …
+        entry = p.declaration() | {"control": control_of(p)}  # kind, channels, integer, range, default …
         if not entry["choices"]:
             del entry["choices"]
-        if p.kind in ("float", "int", "spectrum"):  # a spectrum's slider is each channel's
+        if entry["control"] == "slider":
             low = p.minimum if p.minimum is not None else min(0.0, float(p.default))
             high = p.maximum if p.maximum is not None else max(UNBOUNDED_SLIDER_MAX, float(p.default))
             low, high = float(low), float(high)
             log = high > 0 and (p.maximum is None or (low > 0 and high / low >= 1e3))
             if log:  # a slider spans at most six decades (α ≥ 1e-12 is a limit, not a useful place to drag to)
                 low = max(low, high * 1e-6) if low > 0 else max(1.0, high * 1e-6)
-            entry["slider"] = {"low": low, "high": high, "log": log, "step": 1 if p.kind == "int" else None}
+            entry["slider"] = {"low": low, "high": high, "log": log,
+                               "step": 1 if str(p.kind) in ("int", "integer") else "any"}
         described.append(entry)
     return described
 
 
 def bind_parameters(model: Model, raw: object) -> Model:
-    """The model bound to the page's values: one number per float, [R, G, B] per colour, true/false, a choice's
-    name. Arrays are refused where one number is meant (a sweep from a request would multiply the work); the
-    ranges, colour components and choices are checked by the parameters themselves."""
+    """The model bound to the page's values: one number per float, [R, G, B] (or one number) per colour or
+    per-channel number, true/false, a choice's name. Arrays are refused where one number is meant (a sweep from
+    a request would multiply the work); the ranges, colour components and choices are checked by the parameters
+    themselves."""
     if raw is None:
         return model
     if not isinstance(raw, dict):
@@ -113,18 +128,21 @@ def bind_parameters(model: Model, raw: object) -> Model:
     for name, value in raw.items():
         p = model.parameter(str(name)[:80])
         where = f"parameter {p.name}"
-        if p.kind in ("float", "int") or (p.kind == "spectrum" and not isinstance(value, list)):
+        control = control_of(p)
+        if control == "slider":
             number = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
             if number.ndim:
                 raise ParameterTypeError(f"expected one number, got {short_repr(value)}", where=where)
-            value = float(number)  # an int's wholeness and a spectrum's range: checked by the parameter
-        elif p.per_channel:
-            if not (isinstance(value, list) and len(value) == 3):
-                raise ParameterTypeError(f"expected [R, G, B], got {short_repr(value)}", where=where)
-            value = tuple(real_array(value, where, error=ParameterError, type_error=ParameterTypeError).tolist())
-        elif p.kind == "bool" and not isinstance(value, bool):
+            value = float(number)
+        elif control in ("channels", "colour"):
+            scalar = not isinstance(value, list)
+            if not scalar and len(value) != 3:
+                raise ParameterTypeError(f"expected [R, G, B] or one number, got {short_repr(value)}", where=where)
+            numbers = real_array(value, where, error=ParameterError, type_error=ParameterTypeError)
+            value = float(numbers) if scalar else tuple(numbers.tolist())
+        elif control == "switch" and not isinstance(value, bool):
             raise ParameterTypeError(f"expected true or false, got {short_repr(value)}", where=where)
-        elif p.kind == "choice" and not isinstance(value, str):  # a choice: its name
+        elif control == "menu" and not isinstance(value, str):  # a choice: its name
             raise ParameterTypeError(f"expected one of the choices, got {short_repr(value)}", where=where)
         values[p.name] = value
     return model.with_params(**values)
@@ -135,6 +153,16 @@ def view_angle(raw: object) -> float:
     degrees = real_number(raw, "view")
     if not 0.0 <= degrees <= VIEW_MAX_DEG:
         raise ArgumentError(f"view angle must be in [0, {VIEW_MAX_DEG:g}] degrees, got {degrees:g}", where="view")
+    return degrees
+
+
+def view_azimuth(raw: object) -> float:
+    """The page's view azimuth φ_o in degrees (absent: 0), checked: [0°, 360°]."""
+    if raw is None:
+        return 0.0
+    degrees = real_number(raw, "phi")
+    if not 0.0 <= degrees <= 360.0:
+        raise ArgumentError(f"view azimuth must be in [0, 360] degrees, got {degrees:g}", where="phi")
     return degrees
 
 
@@ -184,14 +212,6 @@ def factor_bound(E: np.ndarray, error: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 # -- the view -----------------------------------------------------------------------------------------------
 
-def _direction(theta_rad: float) -> np.ndarray:
-    return np.array([math.sin(theta_rad), 0.0, math.cos(theta_rad)])
-
-
-def _finite(values: np.ndarray) -> list:
-    return [None if not math.isfinite(v) else v for v in np.asarray(values, dtype=float).ravel().tolist()]
-
-
 ENERGY_VERDICTS = {"pass": "conserves energy", "fail": "gains energy",
                    "inconclusive": "at the limit (max E within its error of 1 + tolerance)"}
 
@@ -216,10 +236,10 @@ def check_command(source: str, model: Model) -> str:
             text = str(int(value))
         elif p.kind == "bool":
             text = "1" if value else "0"
-        elif p.per_channel:
+        elif isinstance(value, str):
+            text = value
+        else:  # a colour or numbers per channel
             text = ",".join(repr(float(c)) for c in np.atleast_1d(value))
-        else:
-            text = str(value)
         held += ["-p", f"{p.name}={text}"]
     return shlex.join(["brdfnorm", "check", source, "--only", "energy", *held,
                        "--budget", f"{ENERGY_EVALUATIONS:.0e}".replace("e+0", "e") + "evals"])
@@ -274,15 +294,51 @@ def energy_check(model: Model, source: str, verdicts: Verdicts | None = None,
     return verdict
 
 
+@dataclass
+class Albedos:
+    """The albedos one view needs: at V and at N, the curve over θ_o at φ_o, and the largest E (searched in the
+    fine pass, the curve's grid maximum — a lower bound — in the coarse one)."""
+
+    view: tuple[np.ndarray, np.ndarray]
+    normal: tuple[np.ndarray, np.ndarray]
+    curve: object  # brdfnorm.AlbedoResult over grid_deg
+    grid_deg: np.ndarray
+    max: tuple[np.ndarray, np.ndarray]
+    theta_max: float
+    searched: bool
+
+    def factor(self, convention: str) -> np.ndarray:
+        """α under ``convention`` (per channel); for ``view``, α = 1/E(V) (the lobe's normalization)."""
+        return factor_bound(*{"normal": self.normal, "max": self.max, "view": self.view}[convention])[0]
+
+
+def albedos(m: Model, theta_v: float, phi_v: float, q: Quality) -> Albedos:
+    kwargs = dict(max_evaluations=q.max_evaluations)
+    points = albedo(m, np.array([theta_v, 0.0]), np.array([phi_v, 0.0]), rtol=q.point_rtol, **kwargs)
+    grid_deg = np.linspace(0.0, VIEW_MAX_DEG, q.curve_points)
+    curve = albedo(m, np.radians(grid_deg), phi_v, rtol=q.curve_rtol, **kwargs)
+    if q.max_rtol is None:  # the grid's maximum: a lower bound on the true one
+        i = int(np.argmax(curve.value.max(axis=-1)))
+        E_max, theta_max, searched = (curve.value[i], curve.error[i]), float(grid_deg[i]), False
+    else:
+        result = normalize(m, at="max", rtol=q.max_rtol)
+        E_max, theta_max = (result.albedo[0, 0], result.error[0, 0]), float(np.degrees(result.theta[0, 0]))
+        searched = True
+    return Albedos((points.value[0], points.error[0]), (points.value[1], points.error[1]), curve, grid_deg,
+                   E_max, theta_max, searched)
+
+
 def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
                   check: Callable[[], None] = lambda: None, params: object = None, source: str | None = None,
-                  verdicts: Verdicts | None = None, model_key: Hashable | None = None) -> dict:
+                  verdicts: Verdicts | None = None, model_key: Hashable | None = None, phi_deg: float = 0.0,
+                  overlay: tuple[Model, object, str] | None = None) -> dict:
     """Everything the page shows for one state; see the module docstring.
 
     ``params`` are the page's values (:func:`bind_parameters`), bound here so that their warnings (a value
     outside a file's slider range) are reported with the computation's own; ``source`` is how the command line
     names the model (a built-in's name or the file's path; the model's name if not given); ``verdicts`` keeps
-    energy verdicts across calls for the model called ``model_key`` (which must change when the model does).
+    energy verdicts across calls for the model called ``model_key`` (which must change when the model does);
+    ``overlay`` is a second (model, page values, label) drawn beside the first.
     """
     choice(convention, CONVENTIONS, "convention")
     choice(quality, tuple(QUALITIES), "quality")
@@ -290,50 +346,62 @@ def evaluate_view(model: Model, view_deg: float, convention: str, quality: str,
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         model = bind_parameters(model, params)
+        second = _bind_overlay(*overlay) if overlay is not None else None
         m = cancellable(model, check)
-        kwargs = dict(max_evaluations=q.max_evaluations)
-        theta_v = math.radians(view_deg)
-        points = albedo(m, np.array([theta_v, 0.0]), rtol=q.point_rtol, **kwargs)
-        grid_deg = np.linspace(0.0, VIEW_MAX_DEG, q.curve_points)
-        curve = albedo(m, np.radians(grid_deg), rtol=q.curve_rtol, **kwargs)
-        E_view, err_view = points.value[0], points.error[0]
-        E_normal, err_normal = points.value[1], points.error[1]
-        if q.max_rtol is None:  # the grid's maximum: a lower bound on the true one
-            energy = curve.value.max(axis=-1)
-            i = int(np.argmax(energy))
-            E_max, err_max, theta_max, searched = curve.value[i], curve.error[i], float(grid_deg[i]), False
-        else:
-            result = normalize(m, at="max", rtol=q.max_rtol)
-            E_max, err_max = result.albedo[0, 0], result.error[0, 0]
-            theta_max, searched = float(np.degrees(result.theta[0, 0])), True
+        theta_v, phi_v = math.radians(view_deg), math.radians(phi_deg)
+        a = albedos(m, theta_v, phi_v, q)
         check()
-        chosen = {"normal": (E_normal, err_normal), "max": (E_max, err_max), "view": (E_view, err_view)}
-        alpha = factor_bound(*chosen[convention])[0] if convention != "view" else None
-        lobe_alpha = alpha if alpha is not None else factor_bound(E_view, err_view)[0]
-        plane, surface = _lobes(m, theta_v, lobe_alpha)
+        alpha = a.factor(convention) if convention != "view" else None
+        lobe_alpha = a.factor(convention)
+        plane = plane_lobe(m, theta_v, phi_v, lobe_alpha)
+        surface = surface_lobe(m, theta_v, phi_v, lobe_alpha)
+        drawn = _overlay(cancellable(second, check), overlay[2], theta_v, phi_v, convention, q) if second else None
         # Last: the lobe's numbers are all computed when the (longer) search starts, and a move cancels it.
-        energy = energy_check(m, source or model.name, verdicts, model_key) if searched else None
-    readouts = {"albedo": {**_readout(E_view, err_view), "theta_deg": view_deg}}
-    for name, (E, err) in (("normal", (E_normal, err_normal)), ("max", (E_max, err_max)),
-                           ("view", (E_view, err_view))):
+        energy = energy_check(m, source or model.name, verdicts, model_key) if a.searched else None
+    (E_view, err_view), (E_max, err_max) = a.view, a.max
+    readouts = {"albedo": {**_readout(E_view, err_view), "theta_deg": view_deg, "phi_deg": phi_deg}}
+    for name, (E, err) in (("normal", a.normal), ("max", a.max), ("view", a.view)):
         readouts[f"factor_{name}"] = _readout(*factor_bound(E, err))
     max_channel = int(np.argmax(E_max))
-    if not searched:  # the grid's largest channel is a lower bound of the true maximum: its factor an upper one
+    if not a.searched:  # the grid's largest channel is a lower bound of the true maximum: its factor an upper one
         lower = float(E_max[max_channel] - err_max[max_channel])
         channel = f"{'RGB'[max_channel]}, " if len(set(np.atleast_1d(E_max).tolist())) > 1 else ""
         readouts["factor_max"]["text"] = (f"≤ {1.0 / lower:.6g} ({channel}grid max, refining)" if lower > 0
                                           else "refining…")
-    readouts["factor_max"]["theta_deg"] = theta_max
-    readouts["energy"] = energy or grid_verdict(float(E_max[max_channel]), float(err_max[max_channel]), theta_max)
+    readouts["factor_max"]["theta_deg"] = a.theta_max
+    readouts["energy"] = energy or grid_verdict(float(E_max[max_channel]), float(err_max[max_channel]), a.theta_max)
+    curve = a.curve
     normalized = (curve.value * alpha) if alpha is not None else np.ones_like(curve.value)
     messages = sorted({str(w.message).splitlines()[0] for w in caught})
     return {
-        "quality": quality, "convention": convention, "view_deg": view_deg, "channels": model.channels,
-        "method": curve.method,
-        "curve": {"theta_deg": grid_deg.tolist(), "value": _columns(curve.value), "error": _columns(curve.error),
+        "quality": quality, "convention": convention, "view_deg": view_deg, "phi_deg": phi_deg,
+        "channels": model.channels, "method": curve.method,
+        "curve": {"theta_deg": a.grid_deg.tolist(), "value": _columns(curve.value), "error": _columns(curve.error),
                   "normalized": _columns(normalized), "rtol": q.curve_rtol},
-        "readouts": readouts, "lobe": plane, "surface": surface, "warnings": messages,
+        "readouts": readouts, "lobe": plane, "surface": surface, "overlay": drawn, "warnings": messages,
     }
+
+
+def _bind_overlay(model: Model, params: object, label: str) -> Model:
+    """The second lobe bound to its values; an error says it is the second lobe's (the page shows one line)."""
+    try:
+        return bind_parameters(model, params)
+    except BrdfnormError as error:
+        error.where = f"second lobe ({label})" + (f": {error.where}" if error.where else "")
+        raise
+
+
+def _overlay(m: Model, label: str, theta_v: float, phi_v: float, convention: str, q: Quality) -> dict:
+    """The second lobe: its plane lobe (normalized by its own factor under ``convention``, and raw), its
+    albedo curve and that factor."""
+    a = albedos(m, theta_v, phi_v, q)
+    E, err = {"normal": a.normal, "max": a.max, "view": a.view}[convention]
+    factor = a.factor(convention)
+    normalized = a.curve.value * factor if convention != "view" else np.ones_like(a.curve.value)
+    return {"label": label, "model": m.name, "lobe": plane_lobe(m, theta_v, phi_v, factor),
+            "curve": {"theta_deg": a.grid_deg.tolist(), "value": _columns(a.curve.value),
+                      "error": _columns(a.curve.error), "normalized": _columns(normalized)},
+            "factor": _readout(*factor_bound(E, err)), "albedo": _readout(*a.view)}
 
 
 def _columns(values: np.ndarray) -> list[list]:
@@ -344,44 +412,6 @@ def _columns(values: np.ndarray) -> list[list]:
     if np.all(values == values[:, :1]):
         values = values[:, :1]
     return [_finite(values[:, c]) for c in range(values.shape[1])]
-
-
-def _lobes(model: Model, theta_v: float, alpha: np.ndarray) -> tuple[dict, dict]:
-    """α·f(L, V)(N·L) (largest channel) in the plane of incidence and over the hemisphere.
-
-    The plane's samples are uniform plus geometrically graded about the mirror direction (t = −θ_o), so a lobe
-    a hundredth of a degree wide is still drawn; the surface uses polar coordinates (a, b) about the mirror
-    direction with a ∝ (i/N)², for the same reason.
-    """
-    V = _direction(theta_v)
-    offsets = np.geomspace(1e-4, np.pi, 90)
-    t = np.concatenate([np.linspace(-np.pi / 2, np.pi / 2, 241), -theta_v + offsets, -theta_v - offsets, [-theta_v]])
-    t = np.unique(t[(t >= -np.pi / 2) & (t <= np.pi / 2)])
-    L = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
-    with np.errstate(all="ignore"):
-        r = (model.eval(L, V) * np.asarray(alpha)).max(axis=-1) * np.cos(t)
-    plane = {"t_deg": np.degrees(t).tolist(), "r": _finite(np.where(np.cos(t) > 0, r, 0.0))}
-    P = mirror(V)
-    e1 = np.cross(P, [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(P, e1)
-    a = np.pi * np.linspace(0.0, 1.0, 25) ** 2
-    b = np.linspace(0.0, 2 * np.pi, 49)
-    A, B = np.meshgrid(a, b, indexing="ij")
-    L3 = (np.cos(A)[..., None] * P + np.sin(A)[..., None] * (np.cos(B)[..., None] * e1 + np.sin(B)[..., None] * e2))
-    with np.errstate(all="ignore"):
-        cos_l = L3[..., 2]
-        r3 = (model.eval(L3, np.broadcast_to(V, L3.shape)) * np.asarray(alpha)).max(axis=-1) * cos_l
-        r3 = np.where(cos_l > 0, r3, 0.0)
-    xyz = r3[..., None] * L3
-    # A drawing needs ~5 digits: rounding to 1e-5 of the lobe's size keeps the page's JSON small.
-    finite = np.isfinite(xyz)
-    scale = float(np.max(np.abs(xyz[finite]), initial=0.0)) or 1.0
-    step = 10.0 ** (math.floor(math.log10(scale)) - 5)
-    xyz = np.where(finite, np.round(xyz / step) * step, np.nan)
-    surface = {axis: [_finite(row) for row in xyz[..., k]] for k, axis in enumerate("xyz")}
-    surface["view"] = V.tolist()
-    return plane, surface
 
 
 # -- the fit panel ------------------------------------------------------------------------------------------

@@ -2,13 +2,14 @@
 
 Routes (nothing else is served, and no path from a request is ever opened):
 
-* ``GET /`` the page; ``GET /static/{app.js,style.css,plotly-basic.min.js}`` its assets — plotly.js's official
+* ``GET /`` the page; ``GET /static/{app.js,plots.js,style.css,plotly-basic.min.js}`` its assets — plotly.js's official
   *basic* partial bundle (scatter traces only, all the page draws: 1.2 MB against the full bundle's 4.8 MB, which
   took 1.4–3 s of a first load to compile), vendored beside the page (``static/VENDORED.md``: source,
   version, checksum, licence), so the page needs no network. The assets are read once, gzipped once, and served
   under content-hashed URLs (``?v=HASH``, cached for a year) with ETags; the page itself is never cached.
 * ``GET /api/models`` the catalog (:mod:`.catalog`); ``GET /api/models/{id}`` one model's declared parameters.
-* ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`), ``POST /api/fit`` the fit panel.
+* ``POST /api/evaluate`` one view of a model (:func:`.compute.evaluate_view`; ``phi`` the view azimuth,
+  ``overlay`` a second ``{model, params}`` drawn beside it), ``POST /api/fit`` the fit panel.
 * ``GET /api/events`` server-sent events: a watched ``.brdf`` file was reloaded (or failed to compile).
 
 Heavy work runs in worker threads, one computation at a time in each of two lanes — the coarse passes a slider
@@ -63,6 +64,7 @@ from .compute import (
     evaluate_view,
     fit_factor,
     view_angle,
+    view_azimuth,
 )
 from .guard import MAX_CONNECTIONS, GuardedH11Protocol
 
@@ -72,7 +74,7 @@ MAX_BODY = 64 * 1024
 #: Clients whose generation numbers are remembered (the oldest are forgotten first).
 MAX_CLIENTS = 1024
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1", "[::1]")
-#: The page runs only its own two scripts (no eval: the basic bundle has no WebGL layer; plotly sets inline
+#: The page runs only its own three scripts (no eval: the basic bundle has no WebGL layer; plotly sets inline
 #: styles) and talks only to this server.
 PAGE_POLICY = ("default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
                "img-src 'self' data: blob:; connect-src 'self'; font-src 'self' data:; base-uri 'none'; "
@@ -81,7 +83,8 @@ log = logging.getLogger("brdfnorm.explore")
 
 
 #: The page's assets (nothing else under /static/ exists) and their media types.
-ASSET_TYPES = {"app.js": "text/javascript; charset=utf-8", "style.css": "text/css; charset=utf-8",
+ASSET_TYPES = {"app.js": "text/javascript; charset=utf-8", "plots.js": "text/javascript; charset=utf-8",
+               "style.css": "text/css; charset=utf-8",
                "plotly-basic.min.js": "text/javascript; charset=utf-8"}
 #: A content-hashed asset URL never changes meaning: browsers may keep it a year without asking again.
 IMMUTABLE = "public, max-age=31536000, immutable"
@@ -228,7 +231,8 @@ class Explorer:
             body = await read_json(request)
             check = self.claim("view", body, request)  # first: a newer move must cancel older work at once
             entry, model = await self.model_of(body)
-            view = view_angle(body.get("view"))
+            view, phi = view_angle(body.get("view")), view_azimuth(body.get("phi"))
+            overlay = await self.overlay_of(body.get("overlay"))
             received = time.perf_counter()
             started = []
 
@@ -236,7 +240,8 @@ class Explorer:
                 started.append(time.perf_counter())
                 return evaluate_view(model, view, body.get("convention", "normal"), body.get("quality", "coarse"),
                                      check, params=body.get("params"), source=entry.source,
-                                     verdicts=self.verdicts, model_key=(entry.id, entry.version))
+                                     verdicts=self.verdicts, model_key=(entry.id, entry.version), phi_deg=phi,
+                                     overlay=overlay)
 
             lane = "coarse" if body.get("quality", "coarse") == "coarse" else "background"
             result = await self.compute(request, check, timed, lane)
@@ -265,6 +270,15 @@ class Explorer:
         entry = self.catalog.entry(body.get("model"))
         model = entry.model or await anyio.to_thread.run_sync(self.catalog.get, entry.id)
         return entry, model
+
+    async def overlay_of(self, raw: object) -> tuple[object, object, str] | None:
+        """The overlay's (model, page values, label), or None when the request has none."""
+        if raw is None:
+            return None
+        if not isinstance(raw, dict):
+            raise ArgumentError("overlay must be an object {model, params}", where="overlay")
+        entry, model = await self.model_of(raw)
+        return model, raw.get("params"), entry.label
 
     async def compute(self, request: Request, check: Callable[[], None], work: Callable[[], dict], lane: str) -> dict:
         """Run ``work`` in a worker thread, one at a time per lane; a client that hangs up cancels it (``check``)."""

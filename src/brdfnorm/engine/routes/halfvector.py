@@ -59,7 +59,8 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
-from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
+from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
+from ..machinery.kronrod import GAUSS, KRONROD, NODES
 from . import halfvector_global as global_rule
 
 _EPS = np.finfo(float).eps
@@ -94,9 +95,10 @@ class _Panels:
     value: np.ndarray | None = None
     err_a: np.ndarray | None = None
     err_b: np.ndarray | None = None
-    checked: np.ndarray | None = None  # (R, C) |K15⊗K15 − quarters by G7⊗G7| once confirmed, else NaN
+    checked: np.ndarray | None = None  # (R, C) |K15⊗K15 − quarters by Lobatto7⊗Lobatto7| once confirmed, else NaN
+    floor: np.ndarray | None = None  # (R, C) where its ancestors converged algebraically (hemisphere.algebraic_floor)
 
-    FIELDS = ("case", "a0", "a1", "b0", "b1", "value", "err_a", "err_b", "checked")
+    FIELDS = ("case", "a0", "a1", "b0", "b1", "value", "err_a", "err_b", "checked", "floor")
 
     def take(self, index) -> _Panels:
         return _Panels(*(None if (x := getattr(self, f)) is None else x[index] for f in self.FIELDS))
@@ -108,7 +110,7 @@ class _Panels:
         return _Panels(*(np.concatenate([getattr(first, f), getattr(second, f)]) for f in _Panels.FIELDS))
 
     def error(self) -> np.ndarray:
-        return self.err_a + self.err_b + np.nan_to_num(self.checked, nan=0.0)
+        return self.err_a + self.err_b + np.nan_to_num(self.checked, nan=0.0) + self.floor
 
 
 def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, sl: slice):
@@ -117,6 +119,10 @@ def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, 
     hb = (panels.b1[sl] - panels.b0[sl]) / 2
     a = ((panels.a0[sl] + panels.a1[sl]) / 2)[:, None] + ha[:, None] * nodes
     b = ((panels.b0[sl] + panels.b1[sl]) / 2)[:, None] + hb[:, None] * nodes
+    # A node on a panel's upper edge (Lobatto's) takes the limit from inside: the integrands pick their piece
+    # by floor(coordinate), and the last edge has no piece beyond it.
+    a = np.minimum(a, np.nextafter(panels.a1[sl], -np.inf)[:, None])
+    b = np.minimum(b, np.nextafter(panels.b1[sl], -np.inf)[:, None])
     piece = np.floor(panels.b0[sl]).astype(int)
     values = integrand(panels.case[sl], a[:, :, None], b[:, None, :], piece)
     return values * (ha * hb)[:, None, None, None]
@@ -142,10 +148,13 @@ def _evaluate(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> Non
         err_b[sl] = np.maximum(np.abs(kk - kg), floor)
     panels.value, panels.err_a, panels.err_b = value, err_a, err_b
     panels.checked = np.full_like(value, np.nan)
+    panels.floor = np.zeros_like(value)
 
 
 def _quarters(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> np.ndarray:
-    """The four quarters of every panel by G7 ⊗ G7, summed: (R, C)."""
+    """The four quarters of every panel by Lobatto7 ⊗ Lobatto7, summed: (R, C). Lobatto's nodes on the quarters'
+    edges see a kink or jump in the sliver next to a panel's edge, where no Gauss or Kronrod node lies
+    (:func:`brdfnorm.engine.routes.hemisphere._check_by_halves`); non-finite values there count as 0."""
     total = np.zeros_like(panels.value)
     for qa in (0, 1):
         for qb in (0, 1):
@@ -154,8 +163,10 @@ def _quarters(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> np.
                               np.where(qb, mb, panels.b0), np.where(qb, panels.b1, mb))
             for start in range(0, quarter.case.size, chunk):
                 sl = slice(start, start + chunk)
-                f = _rule_on(integrand, quarter, GAUSS_NODES, sl)
-                total[sl] += np.einsum("rabc,a,b->rc", f, GAUSS_WEIGHTS, GAUSS_WEIGHTS)
+                with np.errstate(all="ignore"):
+                    f = _rule_on(integrand, quarter, QUARTER_NODES, sl)
+                f = np.where(np.isfinite(f), f, 0.0)
+                total[sl] += np.einsum("rabc,a,b->rc", f, QUARTER_WEIGHTS, QUARTER_WEIGHTS)
     return total
 
 
@@ -176,10 +187,14 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
     active = np.ones(K, dtype=bool)
     pool: _Panels | None = None
     fresh = initial
-    per_panel, per_check = NODES.size**2, 4 * GAUSS_NODES.size**2
+    per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
+    parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
     while True:
         _evaluate(integrand, fresh, chunk)
         np.add.at(evaluations, fresh.case, per_panel)
+        if parent_error is not None:
+            # Where a split converged algebraically (a kink or a jump), the parent's estimate stays as a floor.
+            fresh.floor = algebraic_floor(parent_error, fresh.err_a + fresh.err_b)
         pool = _Panels.join(pool, fresh)
         if value is None:
             value = np.zeros((K, pool.value.shape[1]))
@@ -213,6 +228,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
         parents = pool.take(split)
         pool = pool.take(~split)
         along_a = np.max(parents.err_a, axis=1) >= np.max(parents.err_b, axis=1)
+        parent_error = parents.err_a + parents.err_b
         ma, mb = (parents.a0 + parents.a1) / 2, (parents.b0 + parents.b1) / 2
         fresh = _Panels(
             np.concatenate([parents.case, parents.case]),

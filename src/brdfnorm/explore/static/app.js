@@ -1,4 +1,5 @@
-// brdfnorm explore: the page's loop. Controls -> POST /api/evaluate (coarse, then fine) -> plots and readouts.
+// brdfnorm explore: the page's loop. Controls -> POST /api/evaluate (coarse, then fine) -> plots (plots.js) and
+// readouts.
 // Everything from the server is inserted as text (textContent, option labels), never as HTML.
 "use strict";
 
@@ -8,7 +9,13 @@ const state = {
   description: null,
   values: {},
   view: 30,
+  phi: 0,
   convention: "normal",
+  logScale: false,  // lobe radius in decades below its peak, E on a log axis
+  rawF: true,  // the raw f(L, V) beside the normalized lobe
+  overlay: { on: false, modelId: null, description: null, values: {}, label: "" },
+  lastData: null,
+  overlayOn: false,
   client: Math.random().toString(36).slice(2) + Date.now().toString(36),
   generation: 0,
   inflight: false,
@@ -22,8 +29,6 @@ const state = {
 // plotly.js is deferred after this script: requests start while it is parsed, drawing waits for it.
 const plotlyReady = new Promise((resolve) => window.addEventListener("DOMContentLoaded", resolve));
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => setTimeout(resolve, 0)));
-const CHANNEL_COLORS = ["#d62728", "#2ca02c", "#1f77b4"];
-const PLOT_CONFIG = { displaylogo: false, responsive: true, modeBarButtonsToRemove: ["sendDataToCloud"] };
 
 async function getJSON(url) {
   const response = await fetch(url, { cache: "no-store" });
@@ -85,71 +90,100 @@ function element(tag, attributes, text) {
   return node;
 }
 
-function buildControls(description, previous) {
-  const container = $("params");
+// One row per declared parameter, drawn as the server's `control` says (catalog.py's control_of): a slider with a
+// number box, numbers per channel (η, k, f0: any value in range, not 8-bit colour steps), a colour picker, a
+// switch labelled with its name and state, a menu. `values` is filled and changed in place; `prefix` names the
+// inputs (param-, overlay-param-).
+function buildControls(description, previous, container, values, prefix) {
   container.replaceChildren();
-  const values = {};
+  for (const key of Object.keys(values)) delete values[key];
   for (const p of description.parameters) {
+    const control = p.control || { float: "slider", bool: "switch", color: "colour" }[p.kind] || "menu";
     const kept = previous && Object.prototype.hasOwnProperty.call(previous, p.name)
-      && typeof previous[p.name] === typeof p.default && (p.kind !== "choice" || p.choices.includes(previous[p.name]));
+      && Array.isArray(previous[p.name]) === Array.isArray(p.default)
+      && typeof previous[p.name] === typeof p.default && (control !== "menu" || p.choices.includes(previous[p.name]));
     values[p.name] = kept ? previous[p.name] : p.default;
+    const id = prefix + p.name;
     const row = element("div", { class: "control" });
-    const label = element("label", { for: "param-" + p.name, title: p.description || "" }, p.name);
-    row.append(label);
-    if (p.kind === "float") {
+    if (control !== "switch") row.append(element("label", { for: id, title: p.description || "" }, p.name));
+    const range = `[${p.minimum ?? "−∞"}, ${p.maximum ?? "∞"}]${p.strict ? "" : " (slider range)"}`;
+    if (control === "slider") {
       const s = p.slider;
-      const range = element("input", {
-        type: "range", id: "param-" + p.name, "data-testid": "param-" + p.name,
-        min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high, step: "any",
+      const slider = element("input", {
+        type: "range", id, "data-testid": id, min: s.log ? 0 : s.low, max: s.log ? 1000 : s.high,
+        step: s.log ? "any" : (s.step ?? "any"),
       });
-      range.value = valueToSlider(s, values[p.name]);
-      const box = element("input", { type: "number", step: "any", "data-testid": "param-" + p.name + "-value",
+      slider.value = valueToSlider(s, values[p.name]);
+      const box = element("input", { type: "number", step: s.step ?? "any", "data-testid": id + "-value",
         "aria-label": p.name });
       box.value = formatNumber(values[p.name]);
-      range.addEventListener("input", () => {
-        const value = sliderToValue(s, Number(range.value));
-        state.values[p.name] = s.log ? Number(value.toPrecision(6)) : value;
-        box.value = formatNumber(state.values[p.name]);
+      slider.addEventListener("input", () => {
+        const value = sliderToValue(s, Number(slider.value));
+        values[p.name] = s.log ? Number(value.toPrecision(6)) : value;
+        box.value = formatNumber(values[p.name]);
         schedule();
       });
       box.addEventListener("change", () => {
         const value = Number(box.value);
-        if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(state.values[p.name]); return; }
-        state.values[p.name] = value;
-        range.value = valueToSlider(s, value);
+        if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(values[p.name]); return; }
+        values[p.name] = value;
+        slider.value = valueToSlider(s, value);
         schedule();
       });
-      row.append(range, box);
-      const hint = p.strict ? "" : " (slider range)";
-      row.append(element("small", { class: "range" },
-        `[${p.minimum ?? "−∞"}, ${p.maximum ?? "∞"}]${hint}${s.log ? ", log slider" : ""}`));
-    } else if (p.kind === "bool") {
-      const box = element("input", { type: "checkbox", role: "switch", id: "param-" + p.name,
-        "data-testid": "param-" + p.name });
+      row.append(slider, box, element("small", { class: "range" }, range + (s.log ? ", log slider" : "")));
+    } else if (control === "channels") {
+      const perChannel = Array.isArray(values[p.name]);
+      const boxes = element("div", { class: "channels" });
+      const count = perChannel ? values[p.name].length : 1;
+      for (let c = 0; c < count; c++) {
+        const name = perChannel ? "RGB"[c] || String(c) : "";
+        const box = element("input", { type: "number", step: "any", min: p.minimum ?? "", max: p.maximum ?? "",
+          id: c === 0 ? id : id + "-" + name, "data-testid": id + (perChannel ? "-" + name : "-value"),
+          "aria-label": p.name + (perChannel ? " " + name : ""), title: name ? name + " channel" : p.name });
+        const current = () => (perChannel ? values[p.name][c] : values[p.name]);
+        box.value = formatNumber(current());
+        box.addEventListener("change", () => {
+          const value = Number(box.value);
+          if (box.value.trim() === "" || !Number.isFinite(value)) { box.value = formatNumber(current()); return; }
+          if (perChannel) values[p.name] = values[p.name].map((v, k) => (k === c ? value : v));
+          else values[p.name] = value;
+          schedule();
+        });
+        boxes.append(perChannel ? element("span", { class: "channel" }, name) : "", box);
+      }
+      row.append(boxes, element("small", { class: "range" }, range + (perChannel ? " per channel (R, G, B)" : "")));
+    } else if (control === "switch") {
+      const label = element("label", { class: "switch", title: p.description || "" });
+      const box = element("input", { type: "checkbox", role: "switch", id, "data-testid": id });
+      const shown = element("span", { class: "switch-state", "data-testid": id + "-state" });
+      const show = () => { shown.textContent = box.checked ? "on" : "off"; };
       box.checked = values[p.name];
-      box.addEventListener("change", () => { state.values[p.name] = box.checked; schedule(); });
-      row.append(box);
-    } else if (p.kind === "color") {
-      const picker = element("input", { type: "color", id: "param-" + p.name, "data-testid": "param-" + p.name });
+      show();
+      box.addEventListener("change", () => { values[p.name] = box.checked; show(); schedule(); });
+      label.append(box, element("span", { class: "switch-name" }, p.name), shown);
+      row.classList.add("switch-row");
+      row.append(label);
+      if (p.description) row.append(element("small", { class: "range" }, p.description));
+    } else if (control === "colour") {
+      const picker = element("input", { type: "color", id, "data-testid": id });
       picker.value = rgbToHex(values[p.name]);
       const shown = element("small", { class: "range" }, values[p.name].map(formatNumber).join(", "));
       picker.addEventListener("input", () => {
-        state.values[p.name] = hexToRGB(picker.value);
-        shown.textContent = state.values[p.name].map(formatNumber).join(", ");
+        values[p.name] = hexToRGB(picker.value);
+        shown.textContent = values[p.name].map(formatNumber).join(", ");
         schedule();
       });
       row.append(picker, shown);
     } else {
-      const menu = element("select", { id: "param-" + p.name, "data-testid": "param-" + p.name });
+      const menu = element("select", { id, "data-testid": id });
       for (const choice of p.choices || []) menu.append(element("option", { value: choice }, choice));
       menu.value = values[p.name];
-      menu.addEventListener("change", () => { state.values[p.name] = menu.value; schedule(); });
+      menu.addEventListener("change", () => { values[p.name] = menu.value; schedule(); });
       row.append(menu);
     }
     container.append(row);
   }
-  state.values = values;
-  buildFitControls(description);
+  return values;
 }
 
 function buildFitControls(description) {
@@ -173,8 +207,12 @@ function setFitRange() {
 
 // -- the update loop ---------------------------------------------------------------------------------------------
 function request(quality, generation) {
-  return { model: state.modelId, params: state.values, view: state.view, convention: state.convention,
-           quality, client: state.client, generation };
+  const body = { model: state.modelId, params: state.values, view: state.view, phi: state.phi,
+                 convention: state.convention, quality, client: state.client, generation };
+  if (state.overlay.on && state.overlay.description) {
+    body.overlay = { model: state.overlay.modelId, params: state.overlay.values };
+  }
+  return body;
 }
 
 // A control moved: a new generation. One coarse request at a time; moves during it coalesce into one more.
@@ -201,7 +239,8 @@ const firstView = (() => {
 
 function prefetched(body) {  // the first view's answer, if this is the request it answered
   const first = firstView.body;
-  const same = ["model", "view", "convention", "quality", "generation"].every((key) => body[key] === first[key]);
+  const same = ["model", "view", "convention", "quality", "generation"].every((key) => body[key] === first[key])
+    && body.phi === 0 && !body.overlay;
   return same ? firstView.view : null;  // (generation 1 is the first model's first view, at its defaults)
 }
 
@@ -235,7 +274,8 @@ async function accept(response, generation) {
   if (response.status !== 200) {
     state.requestError = response.data.error || "request failed";
     showErrors();
-    setStatus("error", "failed");
+    clearReadouts();
+    setStatus("error: nothing computed for these inputs", "failed");
     return false;
   }
   state.requestError = null;
@@ -244,11 +284,32 @@ async function accept(response, generation) {
   return generation === state.generation;
 }
 
+const READOUTS = { albedo: "readout-albedo", factor_normal: "readout-factor-normal",
+                   factor_max: "readout-factor-max", factor_view: "readout-factor-view", energy: "readout-energy" };
+
+// An input the server refused: no number on screen belongs to these inputs, so none stays (nor the verdict);
+// the plots stay, greyed and marked as the last accepted inputs'.
+function clearReadouts() {
+  for (const id of [...Object.values(READOUTS), "readout-overlay"]) {
+    const node = $(id);
+    node.textContent = "—";
+    node.dataset.quality = "none";
+    delete node.dataset.value;
+  }
+  $("readout-energy").dataset.status = "withdrawn";
+  $("readout-energy").title = "no verdict: the inputs were refused";
+  $("readout-energy-command").textContent = "";
+  $("argmax").textContent = "";
+  $("quality").textContent = "none: the inputs were refused";
+  $("plots").classList.add("stale");
+  $("plots").dataset.stale = "true";
+}
+
 async function render(data, generation) {
   const readouts = data.readouts;
-  const targets = { albedo: "readout-albedo", factor_normal: "readout-factor-normal",
-                    factor_max: "readout-factor-max", factor_view: "readout-factor-view", energy: "readout-energy" };
-  for (const [key, id] of Object.entries(targets)) {
+  $("plots").classList.remove("stale");
+  delete $("plots").dataset.stale;
+  for (const [key, id] of Object.entries(READOUTS)) {
     const node = $(id);
     node.textContent = readouts[key].text;
     node.dataset.quality = data.quality;
@@ -262,6 +323,12 @@ async function render(data, generation) {
   $("readout-energy-command").textContent = readouts.energy.command ? "same as: " + readouts.energy.command : "";
   $("argmax").textContent = `(θ_o = ${readouts.factor_max.theta_deg.toFixed(2)}°)`;
   $("quality").textContent = data.quality === "fine" ? "refined" : "coarse, refining…";
+  const overlay = $("readout-overlay");
+  overlay.textContent = data.overlay ? `${data.overlay.label}: E(θ_o) = ${data.overlay.albedo.text}, `
+    + `α (${data.convention}) = ${data.overlay.factor.text}` : "—";
+  overlay.dataset.quality = data.overlay ? data.quality : "none";
+  overlay.dataset.generation = String(generation);
+  state.lastData = data;
   const warnings = $("warnings");
   warnings.replaceChildren(...data.warnings.map((w) => element("li", {}, w)));
   const numbers = performance.now();
@@ -291,173 +358,33 @@ async function render(data, generation) {
     + `move to plots ${timing.latency_ms} ms`;
 }
 
-// -- plots --------------------------------------------------------------------------------------------------------
-const BASE_LAYOUT = {
-  margin: { l: 48, r: 16, t: 8, b: 40 }, font: { size: 11, family: "system-ui, sans-serif" },
-  paper_bgcolor: "rgba(0,0,0,0)", plot_bgcolor: "#fbfbfd", showlegend: true,
-  legend: { orientation: "h", y: -0.18, x: 0 },
-};
-
-function plotLobe(data) {
-  const t = data.lobe.t_deg.map((d) => d * Math.PI / 180);
-  const r = data.lobe.r;
-  const x = r.map((v, i) => (v === null ? null : v * Math.sin(t[i])));
-  const y = r.map((v, i) => (v === null ? null : v * Math.cos(t[i])));
-  const scale = Math.max(1e-300, ...r.filter((v) => v !== null));
-  const view = data.view_deg * Math.PI / 180;
-  const traces = [
-    { x, y, type: "scatter", mode: "lines", name: "α·f·(N·L)", line: { color: "#1f77b4", width: 2 },
-      fill: "toself", fillcolor: "rgba(31,119,180,0.12)" },
-    { x: [0, scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter", mode: "lines+markers",
-      name: "V (view)", line: { color: "#ff7f0e", width: 2 }, marker: { size: [0, 7] } },
-    { x: [0, -scale * Math.sin(view)], y: [0, scale * Math.cos(view)], type: "scatter", mode: "lines",
-      name: "mirror of V", line: { color: "#888", dash: "dot", width: 1 } },
-  ];
-  const layout = { ...BASE_LAYOUT,
-    xaxis: { title: { text: "X" }, zeroline: true, range: [-1.1 * scale, 1.1 * scale] },
-    yaxis: { title: { text: "N" }, scaleanchor: "x", scaleratio: 1, range: [-0.05 * scale, 1.1 * scale] } };
-  Plotly.react("plot-lobe", traces, layout, PLOT_CONFIG);
-}
-
-// The 3-D lobe is drawn as a wireframe projected in this script (drag to turn it): SVG, like the other plots,
-// because a WebGL scene costs seconds to start and a third of a second per frame where WebGL runs in software.
-const camera = { azimuth: -55, elevation: 22 };
-const RING_COLORS = ["#440154", "#3b528b", "#21918c", "#5ec962", "#fde725"];
-
-function project(x, y, z) {
-  const a = camera.azimuth * Math.PI / 180;
-  const e = camera.elevation * Math.PI / 180;
-  const across = x * Math.cos(a) + y * Math.sin(a);
-  const depth = -x * Math.sin(a) + y * Math.cos(a);
-  return [across, z * Math.cos(e) + depth * Math.sin(e)];
-}
-
-function polyline(points) {  // [[x, y, z], ...] -> projected xs, ys with a null after the line
-  const xs = [], ys = [];
-  for (const [x, y, z] of points) {
-    if (x === null || y === null || z === null) { xs.push(null); ys.push(null); continue; }
-    const [u, v] = project(x, y, z);
-    xs.push(u); ys.push(v);
-  }
-  xs.push(null); ys.push(null);
-  return [xs, ys];
-}
-
-function plotSurface(data) {
-  const s = data.surface;
-  state.lastSurface = s;
-  const rows = s.x.length, columns = s.x[0].length;
-  let radius = 1e-300;
-  for (let i = 0; i < rows; i++) for (let j = 0; j < columns; j++) {
-    if (s.x[i][j] !== null) radius = Math.max(radius, Math.hypot(s.x[i][j], s.y[i][j], s.z[i][j]));
-  }
-  const traces = [];
-  const line = (points, color, width, name, dash) => {
-    const [x, y] = polyline(points);
-    traces.push({ x, y, type: "scatter", mode: "lines", hoverinfo: "skip", name,
-                  line: { color, width, dash: dash || "solid" } });
-  };
-  const circle = [];
-  for (let k = 0; k <= 72; k++) {
-    const t = 2 * Math.PI * k / 72;
-    circle.push([radius * Math.cos(t), radius * Math.sin(t), 0]);
-  }
-  line(circle, "#b8bec9", 1, "horizon", "dot");
-  line([[-radius, 0, 0], [radius, 0, 0]], "#b8bec9", 1, "X axis");
-  line([[0, -radius, 0], [0, radius, 0]], "#b8bec9", 1, "Y axis");
-  line([[0, 0, 0], [0, 0, radius]], "#8a93a3", 1.5, "N");
-  const meridians = [];  // lines of constant azimuth about the mirror direction
-  for (let j = 0; j < columns; j += 2) {
-    meridians.push(...Array.from({ length: rows }, (_, i) => [s.x[i][j], s.y[i][j], s.z[i][j]]), [null, null, null]);
-  }
-  line(meridians, "rgba(59,82,139,0.45)", 1, "lobe");
-  const bands = RING_COLORS.map(() => []);  // rings about the mirror direction, coloured from the peak outwards
-  for (let i = 1; i < rows; i++) {
-    const band = bands[Math.min(bands.length - 1, Math.floor(bands.length * i / rows))];
-    band.push(...Array.from({ length: columns }, (_, j) => [s.x[i][j], s.y[i][j], s.z[i][j]]), [null, null, null]);
-  }
-  bands.forEach((points, k) => line(points, RING_COLORS[k], 1.2, "lobe"));
-  line([[0, 0, 0], s.view.map((c) => c * radius)], "#ff7f0e", 3, "V (view)");
-  const labels = [["N", [0, 0, 1.08 * radius]], ["X", [1.1 * radius, 0, 0]], ["Y", [0, 1.1 * radius, 0]],
-                  ["V", s.view.map((c) => 1.1 * c * radius)]];
-  const placed = labels.map(([, p]) => project(...p));
-  traces.push({ x: placed.map((p) => p[0]), y: placed.map((p) => p[1]), text: labels.map(([t]) => t),
-                type: "scatter", mode: "text", hoverinfo: "skip", textfont: { size: 12, color: "#5d6677" } });
-  const layout = { ...BASE_LAYOUT, margin: { l: 8, r: 8, t: 8, b: 8 }, showlegend: false, dragmode: false,
-    plot_bgcolor: "rgba(0,0,0,0)",
-    xaxis: { visible: false, range: [-1.2 * radius, 1.2 * radius], fixedrange: true },
-    yaxis: { visible: false, scaleanchor: "x", scaleratio: 1, fixedrange: true },
-    annotations: [{ text: "drag to turn", xref: "paper", yref: "paper", x: 1, y: 0, showarrow: false,
-                    font: { size: 10, color: "#8a93a3" }, xanchor: "right", yanchor: "bottom" }] };
-  Plotly.react("plot-3d", traces, layout, { ...PLOT_CONFIG, staticPlot: false, displayModeBar: false });
-}
-
-function enableTurning() {
-  const div = $("plot-3d");
-  let last = null;
-  let queued = false;
-  div.addEventListener("pointerdown", (event) => { last = [event.clientX, event.clientY]; div.setPointerCapture(event.pointerId); });
-  div.addEventListener("pointerup", () => { last = null; });
-  div.addEventListener("pointermove", (event) => {
-    if (!last || !state.lastSurface) return;
-    camera.azimuth -= 0.4 * (event.clientX - last[0]);
-    camera.elevation = Math.min(89, Math.max(-10, camera.elevation + 0.4 * (event.clientY - last[1])));
-    last = [event.clientX, event.clientY];
-    if (!queued) {
-      queued = true;
-      requestAnimationFrame(() => { queued = false; plotSurface({ surface: state.lastSurface }); });
-    }
-  });
-}
-
-function plotAlbedo(data) {
-  const c = data.curve;
-  const traces = [];
-  const names = c.value.length === 1 ? [""] : [" R", " G", " B"];
-  c.value.forEach((values, k) => {
-    const error = c.error[Math.min(k, c.error.length - 1)];
-    const upper = values.map((v, i) => (v === null ? null : v + error[i]));
-    const lower = values.map((v, i) => (v === null ? null : v - error[i]));
-    const color = c.value.length === 1 ? "#1f77b4" : CHANNEL_COLORS[k];
-    traces.push({ x: c.theta_deg, y: lower, type: "scatter", mode: "lines", line: { width: 0 },
-                  showlegend: false, hoverinfo: "skip" });
-    traces.push({ x: c.theta_deg, y: upper, type: "scatter", mode: "lines", line: { width: 0 }, fill: "tonexty",
-                  fillcolor: "rgba(31,119,180,0.25)", name: "error band" + names[k], hoverinfo: "skip",
-                  showlegend: k === 0 });
-    traces.push({ x: c.theta_deg, y: values, type: "scatter", mode: "lines", name: "E(θ_o)" + names[k],
-                  line: { color, width: 2 }, customdata: error,
-                  hovertemplate: "θ_o %{x:.1f}°: E = %{y:.10g} ± %{customdata:.1e}<extra></extra>" });
-  });
-  c.normalized.forEach((values, k) => {
-    traces.push({ x: c.theta_deg, y: values, type: "scatter", mode: "lines", yaxis: "y2",
-                  name: `α·E (${data.convention})` + (c.normalized.length === 1 ? "" : names[k]),
-                  line: { color: c.normalized.length === 1 ? "#2ca02c" : CHANNEL_COLORS[k], dash: "dash", width: 2 } });
-  });
-  // Two panels sharing θ_o: E with its band above, α·E (the energy kept, 1 = all of it) below.
-  const layout = { ...BASE_LAYOUT, margin: { l: 64, r: 16, t: 8, b: 64 },
-    xaxis: { title: { text: "θ_o (degrees)", standoff: 4 }, range: [0, 90], anchor: "y2" },
-    yaxis: { title: { text: "E(θ_o)" }, rangemode: "tozero", domain: [0.45, 1] },
-    yaxis2: { title: { text: "α·E" }, rangemode: "tozero", domain: [0, 0.36] },
-    shapes: [
-      { type: "line", xref: "x", yref: "paper", x0: data.view_deg, x1: data.view_deg, y0: 0, y1: 1,
-        line: { color: "#ff7f0e", width: 1, dash: "dot" } },
-      { type: "line", xref: "paper", yref: "y2", x0: 0, x1: 1, y0: 1, y1: 1, line: { color: "#999", width: 1 } },
-    ],
-    legend: { orientation: "h", x: 0, y: -0.16, traceorder: "normal" } };
-  Plotly.react("plot-albedo", traces, layout, PLOT_CONFIG);
-}
-
 // -- models and live files ---------------------------------------------------------------------------------------
 async function selectModel(id, keepValues) {
+  state.requestedModel = id;
   const first = id === firstView.model && !keepValues && state.modelId === null ? await firstView.description : null;
   const description = first || await getJSON("/api/models/" + encodeURIComponent(id));
-  const previous = keepValues ? state.values : null;
+  if (state.requestedModel !== id) return;  // another model was picked meanwhile: its answer decides
+  const previous = keepValues ? { ...state.values } : null;
   state.modelId = id;
   state.description = description;
+  state.modelLabel = description.label || id;
   $("formula").textContent = description.formula;
-  buildControls(description, previous);
+  buildControls(description, previous, $("params"), state.values, "param-");
+  buildFitControls(description);
   state.fileError = description.error ? description.error.text : null;
   showErrors();
+  schedule();
+}
+
+async function selectOverlay(id) {
+  state.overlay.requested = id;
+  const description = await getJSON("/api/models/" + encodeURIComponent(id));
+  const o = state.overlay;
+  if (o.requested !== id) return;  // another model was picked meanwhile: its answer decides
+  o.modelId = id;
+  o.description = description;
+  o.label = description.label;
+  buildControls(description, null, $("overlay-params"), o.values, "overlay-param-");
   schedule();
 }
 
@@ -543,6 +470,44 @@ async function start() {
     slider.value = String(value);
     schedule();
   });
+  const azimuth = $("view-azimuth");
+  const azimuthBox = $("view-azimuth-value");
+  azimuth.addEventListener("input", () => {
+    state.phi = Number(azimuth.value);
+    azimuthBox.value = azimuth.value;
+    schedule();
+  });
+  azimuthBox.addEventListener("change", () => {
+    const value = Number(azimuthBox.value);
+    if (azimuthBox.value.trim() === "" || !(value >= 0 && value <= 360)) {
+      azimuthBox.value = String(state.phi);
+      return;
+    }
+    state.phi = value;
+    azimuth.value = String(value);
+    schedule();
+  });
+  const toggle = (id, key, redraw) => {
+    const box = $(id);
+    box.checked = state[key];
+    const show = () => { $(id + "-state").textContent = box.checked ? "on" : "off"; };
+    show();
+    box.addEventListener("change", () => { state[key] = box.checked; show(); redraw(); });
+  };
+  const redraw = () => { if (state.lastData) { plotLobe(state.lastData); plotAlbedo(state.lastData); } };
+  toggle("log-scale", "logScale", redraw);
+  toggle("raw-f", "rawF", redraw);
+  const overlayPicker = $("overlay-model");
+  overlayPicker.append(...[...picker.children].map((node) => node.cloneNode(true)));
+  overlayPicker.value = catalog.models.find((m) => m.id !== picker.value)?.id ?? picker.value;
+  toggle("overlay-on", "overlayOn", () => {
+    state.overlay.on = state.overlayOn;
+    overlayPicker.disabled = !state.overlay.on;
+    if (state.overlay.on && !state.overlay.description) selectOverlay(overlayPicker.value);
+    else schedule();
+  });
+  overlayPicker.disabled = true;
+  overlayPicker.addEventListener("change", () => selectOverlay(overlayPicker.value));
   $("fit-parameter").addEventListener("change", setFitRange);
   enableTurning();
   $("fit-run").addEventListener("click", runFit);
