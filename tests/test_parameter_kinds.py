@@ -49,7 +49,8 @@ def test_models_info_and_explore_read_the_same_declaration(capsys):
         assert {k: declared[p.name][k] for k in p.declaration()} == json.loads(json.dumps(p.declaration()))
     explored = {p["name"]: p for p in describe_parameters(bn.load("ggx"))}
     assert explored["eta"]["kind"] == "spectrum" and explored["eta"]["channels"] == 3
-    assert explored["eta"]["slider"]["log"] and explored["ms_table"]["slider"]["step"] == 1
+    assert explored["eta"]["control"] == "channels" and explored["eta"]["channels"] == 3  # numbers per channel
+    assert explored["ms_table"]["control"] == "slider" and explored["ms_table"]["slider"]["step"] == 1
     code, stdout, _ = run_cli(capsys, "models")
     assert code == 0 and "spectrum" in stdout and "whole" in stdout
 
