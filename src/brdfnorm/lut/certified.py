@@ -32,11 +32,12 @@ its integrand the inner Arb integral over s ∈ [0, 1] with t = t₀ + (t₁ −
 sin θ_L, cos θ_L written through tan(θ_L/2) and tan((π/2 − θ_L)/2) as products with sinh(Ls/2) and
 sinh(L(1 − s)/2), so they vanish exactly at the ends. The horizon is then exact, but the kernel's plain ball
 arithmetic still blows a complex ball of θ_V up (radius 0.01 at α = 1: sin θ_L ± 0.8, NaN; at α = 1e-4 only radius
-≲ 1e-4 gives a bound), so the outer integrator must bisect into ~10³ subintervals: GGX height-correlated α = 1
-took 370 s for 12 digits ([0.409137092586740 ± 4.7e-16]; the float64 route's 0.40913709258673825 ± 5.8e-12
-agrees) on the shared 2-core machine, and small α needs balls of radius ~α. (Python-flint's ``acb.asinh`` also returns NaN on complex balls of real
-part ~4·10³; the probe uses log(y + √(y² + 1)).) What would make it fast: a centred (mid + derivative, e.g.
-``acb_series``) evaluation of the kernel on complex balls, so that the outer ellipses can be O(1) wide.
+≲ 1e-4 gives a usable bound), so the outer integrator must bisect into ~10³ subintervals: GGX height-correlated
+α = 1 took 370 s for 12 digits ([0.409137092586740 ± 4.7e-16]; the float64 route's 0.40913709258673825 ± 5.8e-12
+agrees) on the shared 2-core machine, and small α needs balls of radius ~α. (python-flint's ``acb.asinh`` also
+returns NaN on complex balls of real part ~4·10³; the probe uses log(y + √(y² + 1)).) What would make it fast: a
+centred (mid + derivative, e.g. ``acb_series``) evaluation of the kernel on complex balls, so that the outer
+ellipses can be O(1) wide.
 """
 
 from __future__ import annotations
