@@ -24,9 +24,20 @@ and the outer integrator bisects without end (a third variant, the outer variabl
 √(cos²θ_L + α² sin²θ_L) written as √(1 − (1 − α²) sin²θ_L), bounds its inner integral on complex balls of d up to
 radius 0.02 but meets a corner: at d = 0 and θ_V = θ_L = π/2 the height-correlated G2 = 2μ cos θ_L/(cos θ_L R_V +
 μ R_L) is 0/0 — bounded but not analytic — so the outer integrand is not analytic at d = 0 and Arb bisects towards
-it level by level). What would work: a Gauss–Legendre rule in t with a remainder from
-Taylor coefficients in t on real balls (python-flint's ``arb_series``), or a bound of the continuation computed
-with a first-order (mid + derivative) enclosure instead of a plain ball.
+it level by level).
+
+A fourth route is rigorous and measured, but too slow to ship (``benchmarks/probe_certified_average.py`` has it and
+its docstring the derivation): Arb over θ_V on [0, π/2 − ε] (the rest is [0, ε²] because 0 ≤ E ≤ 1 for F = 1),
+its integrand the inner Arb integral over s ∈ [0, 1] with t = t₀ + (t₁ − t₀)s, so the inner domain is fixed, and
+sin θ_L, cos θ_L written through tan(θ_L/2) and tan((π/2 − θ_L)/2) as products with sinh(Ls/2) and
+sinh(L(1 − s)/2), so they vanish exactly at the ends. The horizon is then exact, but the kernel's plain ball
+arithmetic still blows a complex ball of θ_V up (radius 0.01 at α = 1: sin θ_L ± 0.8, NaN; at α = 1e-4 only radius
+≲ 1e-4 gives a usable bound), so the outer integrator must bisect into ~10³ subintervals: GGX height-correlated
+α = 1 took 370 s for 12 digits ([0.409137092586740 ± 4.7e-16]; the float64 route's 0.40913709258673825 ± 5.8e-12
+agrees) on the shared 2-core machine, and small α needs balls of radius ~α. (python-flint's ``acb.asinh`` also
+returns NaN on complex balls of real part ~4·10³; the probe uses log(y + √(y² + 1)).) What would make it fast: a
+centred (mid + derivative, e.g. ``acb_series``) evaluation of the kernel on complex balls, so that the outer
+ellipses can be O(1) wide.
 """
 
 from __future__ import annotations
