@@ -260,3 +260,18 @@ def test_without_mitsuba_one_line_install_hint(monkeypatch, capsys):
     code, out, err = run_cli(capsys, "albedo", "mitsuba:roughconductor")
     assert code == 2 and out == ""
     assert err.strip() == "error: mitsuba: Mitsuba 3 is not installed: pip install 'brdfnorm[mitsuba]'"
+
+
+def test_audit_of_a_separable_ggx_table_against_roughconductor(fast):
+    """`audit` takes a Mitsuba model: an exact separable-Smith GGX table (brdfnorm's built-in, computed
+    independently of Mitsuba) audited against roughconductor fits at float32's level, where the table's α reaches
+    below the plugin's declared α ≥ 1e-3 (evaluated at that end)."""
+    from brdfnorm import lut
+    from brdfnorm.audit import audit
+
+    axes = {"mu": (np.arange(6) + 0.5) / 6, "alpha": np.linspace(0.1, 1.0, 6)}
+    table = lut.compute(bn.load("ggx", shadowing="separable"), axes, average=False, rtol=1e-9)
+    model = bn.load("mitsuba:roughconductor", distribution="ggx")
+    result = audit(table["E"], model, axes=axes, dense=False, sweep=False)
+    (channel,) = result.best.channels
+    assert channel.max < 1e-5

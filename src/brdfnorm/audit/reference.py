@@ -47,6 +47,12 @@ class Reference:
         self.shadowings = DIELECTRIC_SHADOWING if self.refraction else SHADOWING
         self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
         self.computed = {"E": 0, "F90": 0, "E_avg": 0}
+        # A model whose α is declared on a narrower range (a Mitsuba plugin: α ≥ 1e-3) is evaluated at the range's
+        # end where a convention's grid or clamp reaches beyond it; for such a model the clamps below its minimum
+        # give the same reference values, and the audit cannot tell them apart.
+        declared = model.parameter("alpha")
+        self.alpha_range = (declared.minimum if declared.minimum is not None else -np.inf,
+                            declared.maximum if declared.maximum is not None else np.inf)
 
     def _model(self, quantity: str, shadowing: str) -> Model:
         names = {p.name for p in self.model.parameters}
@@ -61,7 +67,8 @@ class Reference:
     def values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray,
                                                                                                   np.ndarray]:
         """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) (broadcast together)."""
-        mu, alpha = np.broadcast_arrays(np.asarray(mu, dtype=float), np.asarray(alpha, dtype=float))
+        mu, alpha = np.broadcast_arrays(np.asarray(mu, dtype=float), np.clip(np.asarray(alpha, dtype=float),
+                                                                             *self.alpha_range))
         table = self.store.setdefault((quantity, shadowing), {})
         keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), strict=True))
         missing = sorted({k for k in keys if k not in table})
