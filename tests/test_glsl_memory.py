@@ -85,7 +85,7 @@ CASES = {
         lambda: brdf_text(SIGNATURE + " { return vec3(" + "(" * 500_000 + "1.0" + ")" * 500_000 + "); }"),
         "nested too deeply",
     ),
-    "file-60MB": (lambda: "analytic\n" + "# filler comment line\n" * (60 * 1024**2 // 22), "larger than 16 MiB"),
+    "file-60MB": (lambda: "analytic\n" + "# filler comment line\n" * (60 * 1024**2 // 22), "more than the 16 MiB"),
     "shader-2MB": (lambda: brdf_text(SIGNATURE + " { return vec3(1.0); }\n" + "//" + "x" * 2 * 1024**2), "too large"),
     "mat4[1024]-local": (lambda: brdf_text(SIGNATURE + " { mat4 m[1024]; return vec3(m[7][1].x); }"), "components"),
     "doubling-call-tree": (lambda: brdf_text(doubling_calls(40)), "calls inlined"),

@@ -59,7 +59,8 @@ def fon_albedo(_: np.ndarray) -> Claim:
                  "FON directional albedo E_F(μ) = A + (rA/π)(S(θ − Sμ) + (2/3)((S/μ)(1 − S³) − S))",
                  float(closed[worst]), float(numeric[worst]), float(errors[worst]), bool(errors.max() <= 1e-9),
                  f"numeric: hemisphere cubature of the FON lobe at rtol 1e-11; worst at r = {r[worst[0], 0]:g}, "
-                 f"θ = {np.degrees(theta[0, worst[1]]):g}° of 3 × 4 cases; tolerance 1e-9", cases)
+                 f"θ = {np.degrees(theta[0, worst[1]]):g}° of 3 × 4 cases; tolerance 1e-9", cases,
+                 criterion="|A − B| / |B| ≤ 1e-9 at every case")
 
 
 def _maximum(function, grid_mu: int = 2000, grid_r: int = 101) -> tuple[float, float, float]:
@@ -86,7 +87,8 @@ def eon_approx_error(_: np.ndarray) -> Claim:
                  error, numeric, float(rel_error(error, numeric)), bool(abs(error - numeric) <= 1e-9),
                  f"measured max |E_fit − E_F| = {error:.3e} at μ = {mu:.4f} (θ = {np.degrees(np.arccos(mu)):.2f}°), "
                  f"r = {r:.4f}, on a 2000 × 101 grid refined by L-BFGS-B; numeric: the same difference with E_F by "
-                 "hemisphere cubature of the FON lobe; ok when the two agree to 1e-9")
+                 "hemisphere cubature of the FON lobe; ok when the two agree to 1e-9",
+                 criterion="|A − B| ≤ 1e-9 (the fit's measured error against its value by cubature)")
 
 
 def eon_approx_excess(_: np.ndarray) -> Claim:
@@ -107,7 +109,8 @@ def eon_approx_excess(_: np.ndarray) -> Claim:
                  excess, numeric, float(rel_error(excess, numeric)), bool(excess > 0 and abs(excess - numeric) <= 1e-9),
                  f"measured max white albedo − 1 = {excess:.3e} at μ = {mu:.4f} (θ = {np.degrees(np.arccos(mu)):.2f}°),"
                  f" r = {r:.4f} (closed form, grid + L-BFGS-B); numeric: hemisphere cubature of the eon lobe "
-                 "(fon_albedo=approx) there; ok when it is an excess and both agree to 1e-9")
+                 "(fon_albedo=approx) there; ok when it is an excess and both agree to 1e-9",
+                 criterion="A > 0 and |A − B| ≤ 1e-9")
 
 
 def schlick_f_avg(_: np.ndarray) -> Claim:
@@ -122,7 +125,7 @@ def schlick_f_avg(_: np.ndarray) -> Claim:
     return Claim("schlick-f-avg", SOURCES["kulla-conty"], "F_avg = 2∫ F μ dμ = F0 + (1 − F0)/21 for Schlick's Fresnel",
                  float(formula[worst]), float(numeric[worst]), float(errors[worst]), bool(errors.max() <= 1e-13),
                  f"numeric: scipy quad; worst at F0 = {f0[worst]:g} of {', '.join(f'{a:g}' for a in f0)}; "
-                 "tolerance 1e-13", cases)
+                 "tolerance 1e-13", cases, criterion="|A − B| / |B| ≤ 1e-13 at every F0")
 
 
 def ggx_normal_alpha_one(_: np.ndarray) -> Claim:
@@ -134,7 +137,7 @@ def ggx_normal_alpha_one(_: np.ndarray) -> Claim:
     return Claim("ggx-normal-alpha-1", SOURCES["heitz"], "GGX albedo at μ = 1, α = 1 (F = 1) is 1 − ln 2",
                  formula, numeric, error, error <= 1e-10,
                  "numeric: hemisphere cubature of the ggx lobe (height-correlated Smith) at rtol 1e-11; "
-                 "tolerance 1e-10")
+                 "tolerance 1e-10", criterion="|A − B| / |B| ≤ 1e-10")
 
 
 def ggx_furnace_numbers(_: np.ndarray) -> Claim:
@@ -157,7 +160,8 @@ def ggx_furnace_numbers(_: np.ndarray) -> Claim:
                  "exact: " + ", ".join(f"{c['numeric_value']:.9f} at (r, μ) = ({c['roughness']:g}, {c['mu']:g})"
                                        for c in cases)
                  + " (1-D azimuthal route, height-correlated Smith; the hemisphere cubature agrees to 1e-9); ok when "
-                 "each printed number is within half a unit of its third decimal", cases)
+                 "each printed number is within half a unit of its third decimal", cases,
+                 criterion="|A − B| ≤ 5e-4 per printed number; cubature within 1e-9 of B")
 
 
 #: The group's checks in display order.

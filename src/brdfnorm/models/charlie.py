@@ -87,7 +87,8 @@ class Charlie(Model):
               "2.13 kulla, 3.80 neubelt; r = 0.2: 1.18, 1.99; neubelt still 1.09 at r = 0.4)")
 
     def _check(self) -> None:
-        if np.any(sheen_alpha(self._params) < ALPHA_MIN):
+        # (1 − 1e-12): the search's lower end √ALPHA_MIN squares back to ALPHA_MIN only within rounding
+        if np.any(sheen_alpha(self._params) < ALPHA_MIN * (1.0 - 1e-12)):
             raise ParameterError(f"the sheen width α (alpha, or roughness²) must be ≥ {ALPHA_MIN:g}",
                                  where="parameter roughness")
 
