@@ -1,8 +1,9 @@
 #!/usr/bin/env python
 """Time ``brdfnorm audit`` (issue 29) on the issue's workloads: a 64×64 E table (inference + dense interpolation
-error + resolution sweep; goal ≤ 10 s on the 2-core machine), a 32³ uint16 E(f0) table (goal ≤ 60 s), and a 16×16
-half-float split-sum table. The tables are made by ``brdfnorm.lut`` first (not timed); each audit must name the
-convention it was made in, or the script says so and exits 1.
+error + resolution sweep; goal ≤ 10 s on the 2-core machine), 32³ uint16 E(f0) tables (goal ≤ 60 s) with
+Schlick's factor and with the exact dielectric one, and 16×16 and 64×64 half-float split-sum tables (the latter
+goal ≤ 10 s). The tables are made by ``brdfnorm.lut`` (or the audit's exact reference) first, untimed; each
+audit must name the convention it was made in, or the script says so and exits 1.
 
 Usage: ``python benchmarks/bench_audit.py [--out FILE.md]``; ``benchmarks/run.py`` runs it as the ``audit``
 workload (``--only audit``) and puts the two goals in its targets table.
@@ -24,6 +25,7 @@ sys.path.insert(0, str(ROOT / "src"))
 import brdfnorm as bn  # noqa: E402
 from brdfnorm import lut  # noqa: E402
 from brdfnorm.audit import audit  # noqa: E402
+from brdfnorm.audit.reference import Reference  # noqa: E402
 
 
 def w_audit(cfg=None, refs=None) -> dict:
@@ -67,6 +69,17 @@ def w_audit(cfg=None, refs=None) -> dict:
                                r.fits and r.best.convention.meanings == ("DFG_f0", "DFG_f90"), r)
     cases["64x64-dfg"]["cpu_seconds"] = time.process_time() - cpu
     cases["64x64-dfg"]["f90_cells"] = r.inference.reference_cells.get("F90", 0)
+    # the exact dielectric Fresnel over an f0 axis: reached only after Schlick's E_f0 fits nothing, and every
+    # cell of the best convention is a quadrature
+    t = np.linspace(0.0, 1.0, 32)
+    f0, alpha, mu = np.meshgrid(t, np.maximum(t, 1e-8), (np.arange(32) + 0.5) / 32, indexing="ij")
+    exact, _ = Reference(ggx).meaning("E_f0_dielectric", "height-correlated", mu, alpha, f0)
+    codes = np.rint(exact * 65535) / 65535
+    wall = time.perf_counter()
+    r = audit(codes, "ggx", read={"dtype": "uint16"})
+    cases["32x32x32-dielectric"] = _case("32³ uint16 E(f0, α, μ) with the exact dielectric Fresnel, inference + "
+                                         "interpolation + sweep", time.perf_counter() - wall, 60.0,
+                                         r.fits and r.best.convention.meanings == ("E_f0_dielectric",), r)
     named = all(c["named"] for c in cases.values())
     return {"title": "brdfnorm audit of tables made in known conventions (issue 29)",
             "status": "ok" if named else "a convention was not named", "cases": cases,

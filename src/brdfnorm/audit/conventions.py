@@ -13,7 +13,10 @@ the roughness (and, for three axes, Schlick's f0):
   where the grid reaches below them);
 * Smith shadowing: ``height-correlated`` or ``separable`` (for rough dielectrics also the refraction's form,
   :data:`DIELECTRIC_SHADOWING`);
-* per channel, its meaning (:data:`MEANINGS`).
+* per channel, its meaning (:data:`MEANINGS`), which also says the Fresnel factor: none (E, 1 − E), Schlick's
+  (the split-sum channels; E_f0 over an f0 axis) or the exact dielectric one, at one index of refraction η
+  (``E_dielectric``, η = :attr:`Convention.eta`, 1.5 unless pinned) or at η = (1 + √f0)/(1 − √f0) over an f0
+  axis (``E_f0_dielectric``).
 """
 
 from __future__ import annotations
@@ -36,8 +39,14 @@ SHADOWING = ("height-correlated", "separable")
 DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-form",
                                     "height-correlated/refraction=separable")
 #: Channel meanings. DFG_f0 = ∫ f cos (1 − (1 − V·H)⁵) (Karis's split-sum scale), DFG_f90 = ∫ f cos (1 − V·H)⁵
-#: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ.
-MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg")
+#: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ;
+#: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
+#: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0).
+MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "E_dielectric", "E_f0_dielectric")
+#: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
+DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
+#: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).
+ETA = 1.5
 #: μ clamps searched where a grid reaches μ = 0: 1e-4 (brdfnorm lut's usual), cos(1.57) (LTC's θ ≤ 1.57), ...
 MU_FLOORS = (1e-4, float(np.cos(1.57)), 1e-3, 1e-2, 1e-5, 1e-6)
 #: α clamps searched where a grid reaches α = 0 (1e-8 stands for the α → 0 limit).
@@ -59,6 +68,7 @@ class Convention:
     mu_floor: float = 1e-4
     alpha_floor: float = 1e-8
     meanings: tuple[str | None, ...] = field(default=())
+    eta: float = ETA  # the index of refraction of an E_dielectric channel
     #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
     #: 'f0', values); such an axis is ``explicit`` and never flipped.
     explicit: tuple[tuple[str, tuple[float, ...]], ...] = ()
@@ -80,7 +90,7 @@ class Convention:
                 "direction": self.direction, "roughness": self.roughness,
                 **({"f0": self.f0} if self.f0_axis is not None else {}),
                 "mu_floor": self.mu_floor, "alpha_floor": self.alpha_floor, "shadowing": self.shadowing,
-                "channels": list(self.meanings)}
+                "channels": list(self.meanings), **({"eta": self.eta} if "E_dielectric" in self.meanings else {})}
 
     def text(self) -> str:
         d = self.describe()
@@ -91,6 +101,8 @@ class Convention:
         parts += [self.direction if self.direction_axis is not None else "", self.roughness,
                   f"mu>={self.mu_floor:g}", f"alpha>={self.alpha_floor:g}", self.shadowing,
                   "channels " + "/".join(m or "?" for m in self.meanings)]
+        if "E_dielectric" in self.meanings:
+            parts.append(f"eta={self.eta:g}")
         return "; ".join(p for p in parts if p)
 
 
@@ -241,7 +253,8 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
                                   direction=direction or "mu-node", roughness=rough, f0=f0 or "f0-node",
                                   flips=flips, shadowing=shadowing,
                                   mu_floor=float(pinned.get("mu_floor", 1e-4)),
-                                  alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen))
+                                  alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen,
+                                  eta=float(pinned.get("eta", ETA))))
     if not out:
         raise ArgumentError("the pinned parts leave no convention to test", where="--as")
     return out
@@ -255,7 +268,7 @@ def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[st
     return [pinned[key]]
 
 
-PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels")
+PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels", "eta")
 
 
 def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
@@ -278,6 +291,14 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
                 raise ArgumentError(f"{key} must be a number", where="--as") from None
             if not 0 <= value < 1:
                 raise ArgumentError(f"{key} must lie in [0, 1)", where="--as")
+    if "eta" in out:
+        try:
+            eta = float(out["eta"])
+        except ValueError:
+            raise ArgumentError("eta must be a number", where="--as") from None
+        if not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
+            raise ArgumentError("eta must lie in (1, 1000] (an E_dielectric table of an index of refraction)",
+                                where="--as")
     if "channels" in out:
         for meaning in out["channels"].split(","):
             if meaning.strip() not in MEANINGS and meaning.strip() != "-":

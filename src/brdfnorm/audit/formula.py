@@ -210,7 +210,7 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
         if q not in QUANTITIES:
             raise ArgumentError(f"unknown quantity {q!r} (known: {', '.join(QUANTITIES)})", where="--quantity")
     if size is None:  # nodes per axis: dense where the reference is cheap (E: ~25 µs a cell, F90: ~3 ms)
-        size = 33 if any(Reference.needs_f90(q) for q in quantities) else (129 if uses & {"mu", "theta"} else 257)
+        size = 33 if any(Reference.expensive(q) for q in quantities) else (129 if uses & {"mu", "theta"} else 257)
     env = domain(uses, size)
     alpha = np.maximum(env["alpha"], 1e-8)
     with np.errstate(all="ignore"):

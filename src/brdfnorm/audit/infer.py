@@ -9,7 +9,8 @@ Two stages, both against exact values (:mod:`.reference`):
    best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
-   α = 0, and ranked by their maximum residual. Where the meanings need F90 and the table has more than
+   α = 0, and ranked by their maximum residual. Where the meanings need F90 (or the exact Fresnel) and the table
+   has more than
    SUBGRID_CELLS cells, they are ranked on a strided subgrid of about RANK_CELLS interior cells (no endpoint
    clamp reaches them) and only the best is then measured on every cell, its clamps searched; the runners-up's
    statistics say they were sampled.
@@ -24,6 +25,10 @@ k = max(5, √(2 ln 2n) + 1) for n cells. A channel whose σ̂ exceeds MAX_NOISE
 deviation never fits (data that are mostly noise would fit any hypothesis). The
 result is never a silent best guess: :class:`Inference` says whether the best fits, and whether the runner-up
 fits too (then the table does not decide between them).
+
+Meanings with the exact dielectric Fresnel factor (E_dielectric, E_f0_dielectric) cost a quadrature per
+(μ, α, η) and are rarely what an engine ships; both stages run again with them only when nothing fits without
+them (or from the start when ``eta=`` or the channels are pinned).
 """
 
 from __future__ import annotations
@@ -31,9 +36,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy import optimize
 
 from ..errors import ArgumentError
-from .conventions import ALPHA_FLOORS, MU_FLOORS, Convention, coordinates, geometries
+from .conventions import ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, geometries
 from .reference import Reference
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
@@ -49,6 +55,10 @@ RANK_CELLS = 256
 NOISE_FACTOR = 5.0
 #: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
 MAX_NOISE_SHARE = 0.05
+#: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
+DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
+#: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
+DIELECTRIC_GEOMETRIES = 16
 
 
 @dataclass
@@ -137,15 +147,21 @@ def noise_sigma(residual: np.ndarray) -> float:
     return float(np.median(np.abs(d2 - np.median(d2))) / 0.6745 / np.sqrt(6.0))
 
 
-def allowed_meanings(grid_ndim: int, pins: dict, channels: int) -> list[list[str]]:
-    """Candidate meanings per channel."""
+def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
+    """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
     default = {1: ["E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90"], 3: ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
-        return [default] * channels
+        if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
+            default = default + DIELECTRIC_BY_NDIM[grid_ndim]
+        return [[m for m in default if reference is None or reference.supports(m)]] * channels
     given = [m.strip() for m in pins["channels"].split(",")]
     if len(given) != channels:
         raise ArgumentError(f"channels={pins['channels']}: give one meaning per channel ({channels}), - to skip",
                             where="--as")
+    for m in given:
+        if reference is not None and not reference.supports(m):
+            raise ArgumentError(f"channels: {m} needs a lobe with an exact dielectric Fresnel factor "
+                                f"(-p fresnel=dielectric); {reference.model.name} has none", where="--as")
     return [[] if m == "-" else [m] for m in given]
 
 
@@ -154,35 +170,95 @@ def _mesh(shape: tuple[int, ...], index: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> tuple[np.ndarray, np.ndarray]:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"))
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), c.eta)
 
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
           audit_channels: list[int] | None = None, keep_runners: int = 3,
           explicit: dict[str, np.ndarray] | None = None) -> Inference:
-    """The best conventions for ``values`` (*grid, channels) — see the module docstring."""
+    """The best conventions for ``values`` (*grid, channels) — see the module docstring. Meanings with the exact
+    dielectric Fresnel factor are searched in a second round, only when nothing fits without them (or from the
+    start when ``eta`` or the channels are pinned): each of their cells costs a quadrature."""
     grid = values.shape[:-1]
     ndim = len(grid)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
-    meanings = allowed_meanings(ndim, pins, values.shape[-1])
+    meanings = allowed_meanings(ndim, pins, values.shape[-1], reference)
     candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
                             where="--axis")
-    cheap = [[m for m in meanings[k] if not Reference.needs_f90(m)] for k in range(values.shape[-1])]
+    dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
+    if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
+        candidates = _with_fitted_eta(values, candidates, reference, chosen)
+    best, runners, _ = _rounds(values, names, reference, pins, step, chosen, candidates, meanings)
+    extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
+    if extra and not best.fits and "channels" not in pins and "eta" not in pins:
+        wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
+        second = _rounds(values, names, reference, pins, step, chosen, wider, [ms + extra for ms in meanings])
+        if second[0].fits or second[0].score < best.score:
+            best, runners, _ = second
+    return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
+
+
+def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
+    """The DIELECTRIC_GEOMETRIES geometries of a 2-D table that the exact dielectric factor at η = ETA fits best
+    on the stage-1 subset, each with the index of refraction at which it fits: η solves
+    mean(table − E_dielectric(η)) = 0 on the subset (E_dielectric grows with η at every cell) by Brent's method.
+
+    A wrong η shifts the whole table by a smooth amount, so the true geometry ranks among the first few at
+    η = 1.5 for tables made at η from 1.2 to 3 (it was first or second in tests/test_audit_fresnel.py's probes);
+    Schlick's factor with a free f0 or an interpolation in f0 ranked it 5th to 60th (they are several per cent off
+    at grazing cells, as much as a wrong sample position)."""
+    grid = values.shape[:-1]
+    mesh = _mesh(grid, [_subset(n, SUBSET_F90) for n in grid])
+    sample = values[np.ix_(*[_subset(n, SUBSET_F90) for n in grid])]
+    ranked = []
+    for c in candidates:
+        coords = coordinates(c, grid, mesh)
+        exact, _ = reference.meaning("E_dielectric", c.shadowing, coords["mu"], coords["alpha"], eta=ETA)
+        for channel in chosen:
+            data = sample[..., channel]
+            ok = np.isfinite(data)
+            if ok.any():
+                ranked.append((float(np.max(np.abs(data - exact)[ok])), channel, c))
+    ranked.sort(key=lambda item: item[0])
+    out = []
+    for _, channel, c in ranked[:DIELECTRIC_GEOMETRIES]:
+        coords = coordinates(c, grid, mesh)
+        data = sample[..., channel]
+        ok = np.isfinite(data)
+
+        def gap(eta: float, c=c, coords=coords, data=data, ok=ok) -> float:
+            exact, _ = reference.meaning("E_dielectric", c.shadowing, coords["mu"], coords["alpha"], eta=eta)
+            return float(np.mean(data[ok] - exact[ok]))
+
+        low, high = 1.0 + 1e-4, min(10.0, reference.eta_max)
+        if gap(high) > 0 and reference.eta_max > high:
+            high = reference.eta_max
+        if gap(low) > 0 > gap(high):
+            out.append(replace(c, eta=float(optimize.brentq(gap, low, high, xtol=1e-7, rtol=1e-10))))
+    return list(dict.fromkeys(out)) or [replace(c, eta=ETA) for _, _, c in ranked[:DIELECTRIC_GEOMETRIES]]
+
+
+def _rounds(values, names, reference, pins, step, chosen, candidates,
+            meanings) -> tuple[Hypothesis, list[Hypothesis], list[Convention]]:
+    """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
+    best hypothesis, the runners-up, and the candidates in stage 1's order."""
+    grid = values.shape[:-1]
+    cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
     loose = 10.0 * (step + 1e-3)
-    if (not scored or scored[0][0] > loose) and any(Reference.needs_f90(m) for ms in meanings for m in ms):
+    if (not scored or scored[0][0] > loose) and any(Reference.expensive(m) for ms in meanings for m in ms):
         scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
-    keep = STAGE2_F90 if any(Reference.needs_f90(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
+    keep = STAGE2_F90 if any(Reference.expensive(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
     search = ("mu_floor" not in pins, "alpha_floor" not in pins)
     top = [c for _, c in scored[:max(keep, 2)]]
     if keep == STAGE2_F90 and int(np.prod(grid)) > SUBGRID_CELLS:
-        # F90 costs ~3 ms a cell: the candidates are ranked on a strided subgrid (endpoints included), and only
-        # the best is measured on every cell; the runners-up say that they were sampled
-        # ranked on interior cells only (no endpoint clamp reaches them, so no clamp search is needed: it cost
-        # ~10 boundary rows of F90 per candidate); the best then gets its clamps searched on every cell
+        # an expensive meaning costs ~1-3 ms a cell: the candidates are ranked on a strided subgrid of interior
+        # cells (no endpoint clamp reaches them, so no clamp search is needed: it cost ~10 boundary rows per
+        # candidate), and only the best is measured on every cell with its clamps searched; the runners-up say
+        # that they were sampled
         per_axis = max(3, int(RANK_CELLS ** (1.0 / len(grid))))
         index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
                  else np.arange(n) for n in grid]
@@ -193,8 +269,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
         finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]
         finals.sort(key=lambda h: h.score)
     finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
-    return Inference(finals[0], finals[1:1 + keep_runners], len(candidates),
-                     dict(reference.computed))
+    return finals[0], finals[1:], [c for _, c in scored]
 
 
 def _stage1(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
@@ -303,7 +378,7 @@ def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, me
     changed = False
     for channel in chosen:
         fit = current.get(names[channel])
-        extra = [m for m in meanings[channel] if Reference.needs_f90(m) and m != c.meanings[channel]]
+        extra = [m for m in meanings[channel] if Reference.expensive(m) and m != c.meanings[channel]]
         if fit is None or fit.fits or not extra or fit.meaning is None:
             continue
         data = sample[..., channel]

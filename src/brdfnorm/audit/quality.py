@@ -89,7 +89,7 @@ def interpolate(table: np.ndarray, c: Convention, t: list[np.ndarray]) -> np.nda
 
 
 def _exact_at(reference: Reference, c: Convention, meaning: str, coords: dict) -> np.ndarray:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"))[0]
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), c.eta)[0]
 
 
 def dense_error(table: np.ndarray, c: Convention, meaning: str, reference: Reference,
@@ -117,7 +117,7 @@ def sweep(c: Convention, meaning: str, reference: Reference, points: tuple[list[
           ndim: int, sizes=SWEEP_SIZES) -> list[dict]:
     """Interpolation error of exact tables of each size (per axis) in convention ``c`` (unflipped)."""
     plain = replace(c, flips=(False,) * ndim)
-    budget = MAX_SWEEP_CELLS["f90" if Reference.needs_f90(meaning) else "cheap"]
+    budget = MAX_SWEEP_CELLS["f90" if Reference.expensive(meaning) else "cheap"]
     out = []
     pairs_axes = ndim - (c.f0_axis is not None)  # an f0 axis adds no new reference cells (E_f0 is linear in f0)
     for size in sizes:
@@ -134,4 +134,4 @@ def sweep(c: Convention, meaning: str, reference: Reference, points: tuple[list[
 
 
 def budget_points(meaning: str) -> int:
-    return MAX_POINTS["f90" if Reference.needs_f90(meaning) else "cheap"]
+    return MAX_POINTS["f90" if Reference.expensive(meaning) else "cheap"]

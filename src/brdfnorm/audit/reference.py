@@ -7,12 +7,15 @@ Two base quantities per (μ, α, shadowing), both by brdfnorm's albedo engine
 * F90(μ, α) = ∫ f cos (1 − V·H)⁵ dL — the split-sum bias (``lut --channels dfg``'s DFG_f90, by
   :func:`brdfnorm.lut.table.split_sum_models`).
 
-Every channel meaning is a linear combination of them: 1 − E; DFG_f0 = E − F90 (since (1 − (1 − c)⁵) + (1 − c)⁵ = 1);
-E_f0 = f0·E + (1 − f0)·F90 (Schlick's F = f0 + (1 − f0)(1 − c)⁵ with f90 = 1); and E_avg(α) = 2∫₀¹ E μ dμ by
-:func:`brdfnorm.lut.table.average_over_mu`. Many hypotheses share their μ and α values (a flip of a symmetric
-sample set, a transposed square table, the same grid with another clamp), so values are cached per
-(quantity, shadowing, μ, α) and only new pairs are computed. Each value keeps the engine's error estimate, which
-an audit adds to its tolerance.
+Every Schlick channel meaning is a linear combination of them: 1 − E; DFG_f0 = E − F90 (since
+(1 − (1 − c)⁵) + (1 − c)⁵ = 1); E_f0 = f0·E + (1 − f0)·F90 (Schlick's F = f0 + (1 − f0)(1 − c)⁵ with f90 = 1); and
+E_avg(α) = 2∫₀¹ E μ dμ by :func:`brdfnorm.lut.table.average_over_mu`. The exact dielectric Fresnel factor is not
+linear in anything tabulated, so E_dielectric(μ, α, η) = ∫ f cos F(η, V·H) dL is a third base quantity, computed
+per (μ, α, η) by the lobe with ``fresnel=dielectric`` (E_f0_dielectric sets η = (1 + √f0)/(1 − √f0) per cell).
+
+Many hypotheses share their μ and α values (a flip of a symmetric sample set, a transposed square table, the same
+grid with another clamp), so values are cached per (quantity, shadowing, μ, α, η) and only new ones are computed.
+Each value keeps the engine's error estimate, which an audit adds to its tolerance.
 """
 
 from __future__ import annotations
@@ -21,11 +24,11 @@ import numpy as np
 
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
-from .conventions import DIELECTRIC_SHADOWING, SHADOWING
+from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SHADOWING
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
-RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8}
+RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6}
 
 
 class Reference:
@@ -46,7 +49,9 @@ class Reference:
                            and str(model.params.get("refraction_shadowing")) == "auto")
         self.shadowings = DIELECTRIC_SHADOWING if self.refraction else SHADOWING
         self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
-        self.computed = {"E": 0, "F90": 0, "E_avg": 0}
+        self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0}
+        self.dielectric = "fresnel" in names and "dielectric" in model.parameter("fresnel").choices
+        self.eta_max = float(model.parameter("eta").maximum) if self.dielectric else np.inf
         # A model whose α is declared on a narrower range (a Mitsuba plugin: α ≥ 1e-3) is evaluated at the range's
         # end where a convention's grid or clamp reaches beyond it; for such a model the clamps below its minimum
         # give the same reference values, and the audit cannot tell them apart.
@@ -62,15 +67,19 @@ class Reference:
             base = base.with_params(refraction_shadowing=refraction)
         if quantity == "F90":
             return split_sum_models(base)[0]["DFG_f90"]
+        if quantity == "E_dielectric":
+            return base.with_params(fresnel="dielectric")
         return base
 
-    def values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray,
-                                                                                                  np.ndarray]:
-        """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) (broadcast together)."""
-        mu, alpha = np.broadcast_arrays(np.asarray(mu, dtype=float), np.clip(np.asarray(alpha, dtype=float),
-                                                                             *self.alpha_range))
+    def values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
+               eta: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) — triples with ``eta`` for
+        E_dielectric — broadcast together."""
+        mu, alpha, eta = np.broadcast_arrays(np.asarray(mu, dtype=float),
+                                             np.clip(np.asarray(alpha, dtype=float), *self.alpha_range),
+                                             np.asarray(eta, dtype=float))
         table = self.store.setdefault((quantity, shadowing), {})
-        keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), strict=True))
+        keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), eta.ravel().tolist(), strict=True))
         missing = sorted({k for k in keys if k not in table})
         if missing:
             m = np.array([k[0] for k in missing])
@@ -78,8 +87,11 @@ class Reference:
             if quantity == "E_avg":
                 value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=RTOL[quantity])
             else:
+                cell_params = {"alpha": a}
+                if quantity == "E_dielectric":
+                    cell_params["eta"] = np.array([k[2] for k in missing])
                 cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                      {"alpha": a}, rtol=RTOL[quantity])
+                                      cell_params, rtol=RTOL[quantity])
                 value, error = cells.value[:, 0], cells.error[:, 0]
             self.computed[quantity] += len(missing)
             for k, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
@@ -90,10 +102,15 @@ class Reference:
         return value, error
 
     def meaning(self, meaning: str, shadowing: str, mu: np.ndarray | None, alpha: np.ndarray,
-                f0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates."""
+                f0: np.ndarray | None = None, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:
+        """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates; ``eta``
+        is the index of refraction of an E_dielectric channel."""
         if meaning == "E_avg":
             return self.values("E_avg", shadowing, np.zeros_like(alpha), alpha)
+        if meaning == "E_dielectric":
+            return self.values("E_dielectric", shadowing, mu, alpha, eta)
+        if meaning == "E_f0_dielectric":
+            return self._f0_dielectric(shadowing, mu, alpha, f0)
         E, e_err = self.values("E", shadowing, mu, alpha)
         if meaning == "E":
             return E, e_err
@@ -109,9 +126,38 @@ class Reference:
             return f0 * E + (1.0 - f0) * F, f0 * e_err + (1.0 - f0) * f_err
         raise ValueError(meaning)
 
+    def _f0_dielectric(self, shadowing: str, mu, alpha, f0) -> tuple[np.ndarray, np.ndarray]:
+        """E_dielectric at η = (1 + √f0)/(1 − √f0) per cell (0 at f0 = 0: η = 1 reflects nothing). Beyond the
+        lobe's largest η (f0 → 1 sends η to infinity) the value is bracketed: the dielectric reflectance grows
+        with η at every angle and tends to 1, so E_dielectric lies between its value at the largest η and E; the
+        midpoint is returned with half the bracket added to the error estimate."""
+        mu, alpha, f0 = np.broadcast_arrays(mu, alpha, np.clip(np.asarray(f0, dtype=float), 0.0, 1.0))
+        root = np.sqrt(f0)
+        with np.errstate(divide="ignore"):
+            eta = (1.0 + root) / (1.0 - root)
+        beyond = (eta > self.eta_max) & (f0 < 1.0)  # f0 = 1 is the limit F = 1 itself: E
+        value, error = self.values("E_dielectric", shadowing, mu, alpha, np.minimum(eta, self.eta_max))
+        mirror = f0 >= 1.0
+        if mirror.any():
+            value, error = value.copy(), error.copy()
+            value[mirror], error[mirror] = self.values("E", shadowing, mu[mirror], alpha[mirror])
+        if beyond.any():
+            E, e_err = self.values("E", shadowing, mu[beyond], alpha[beyond])
+            value, error = value.copy(), error.copy()
+            low = value[beyond]
+            value[beyond] = 0.5 * (low + E)
+            error[beyond] += e_err + 0.5 * np.abs(E - low)
+        return value, error
+
+    def supports(self, meaning: str) -> bool:
+        """Whether this lobe can be audited for ``meaning`` (the dielectric Fresnel needs its ``fresnel``)."""
+        return meaning not in DIELECTRIC_MEANINGS or self.dielectric
+
     @staticmethod
-    def needs_f90(meaning: str) -> bool:
-        return meaning in ("DFG_f0", "DFG_f90", "E_f0")
+    def expensive(meaning: str) -> bool:
+        """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90 and the
+        exact dielectric Fresnel."""
+        return meaning in ("DFG_f0", "DFG_f90", "E_f0") + DIELECTRIC_MEANINGS
 
 
 def raise_unsupported(model: Model) -> None:
