@@ -1,6 +1,7 @@
 """brdfnorm audit (issue 29), slow tier: engine-style tables end to end through the command line — a 64×64
 LTC-style .js (four interleaved channels: albedo, Fresnel moment, zero, unrelated), a 16×16 half-float split-sum
-.js, a 32³ uint16 C header of E with Schlick's f0, a split-sum .png — plus the scale/bias swap, 1-D E_avg and the
+.js, a 32³ uint16 C header of E with Schlick's f0, a split-sum .png, a three-channel DFG header with the
+cloth channel — plus the scale/bias swap, 1-D E_avg and the
 timing goals. All fixtures are generated here by ``brdfnorm.lut`` (no engine's file is copied)."""
 
 from __future__ import annotations
@@ -249,3 +250,35 @@ def test_ltc_fresnel_channel_is_found_beside_the_albedo(capsys, tmp_path):
 
     again = read_table(fixed, shape=(16, 16, 4)).values
     assert np.array_equal(again[..., 2:].astype(np.float32), data[..., 2:])  # the same float32 values
+
+
+def test_three_channel_dfg_header_with_the_cloth_channel(capsys, tmp_path):
+    """A Filament-style DFG texture as a C header of half-float bit patterns (RGB16F: DFG_f0, DFG_f90 and the
+    cloth DG), its roughness rows stored upside down (GL order): every channel is named, the flip too, and the
+    cloth channel's values above 1 (Neubelt's visibility does not conserve energy) are not listed as bad cells.
+    The cloth value at its worst cell is checked against Gauss-Legendre over the half vector of the sheen lobe."""
+    n = 16
+    t = (np.arange(n) + 0.5) / n
+    dfg = lut.compute(GGX, {"roughness": t, "mu": t}, channels=["dfg"], rtol=1e-8, average=False)
+    rgb = np.stack([dfg["DFG_f0"], dfg["DFG_f90"], dfg["DFG_cloth"]], -1)[::-1]
+    assert rgb[..., 2].max() > 1.0  # the cloth channel exceeds 1 at grazing views of small roughness
+    codes = rgb.astype(np.float16).view(np.uint16).ravel()
+    path = tmp_path / "dfg.h"
+    path.write_text("// DFG LUT stored as an RG16F texture, in GL order\nconst uint16_t DFG_LUT[] = {\n"
+                    + ", ".join(f"0x{c:04x}" for c in codes) + "\n};\n")
+    code, r = _cli_json(capsys, str(path), "--dtype", "float16", "--shape", f"{n},{n},3", "--no-sweep")
+    c = r["best"]["convention"]
+    assert code == 0 and c["channels"] == ["DFG_f0", "DFG_f90", "DFG_cloth"]
+    assert (c["axes"], c["flipped"], c["direction"], c["roughness"]) == (
+        ["roughness (alpha = r^2)", "mu"], [True, False], "mu-texel", "r2-texel")
+    assert r["bad_cells"]["above_one"]["count"] == 0
+    cloth = r["best"]["channels"][2]
+    assert cloth["fits"] and cloth["max"] <= 2.0 ** -11 * rgb[..., 2].max() + 1e-6
+    from brdfnorm.lut.cloth import cloth_model
+    from tests.conftest import half_vector_gauss_legendre
+
+    mu, alpha = cloth["worst_at"]["mu"], cloth["worst_at"]["alpha"]
+    sheen = cloth_model({"alpha": np.array([alpha])})[0].with_params(alpha=max(alpha, 1e-3))
+    exact = float(half_vector_gauss_legendre(sheen, np.array([np.sqrt(1 - mu * mu), 0.0, mu]), 64, 256))
+    i, j = cloth["worst_cell"]
+    assert abs(float(np.float16(rgb[i, j, 2])) - exact) == pytest.approx(cloth["max"], abs=1e-6)

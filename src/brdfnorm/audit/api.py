@@ -86,13 +86,21 @@ class AuditResult:
                 "convention": self.best.convention.describe(), "replaces": os.path.basename(self.source.path)}
 
 
-def _bad_cells(source: Source, limit: int = 20) -> dict:
+#: Meanings that are not bounded by 1 (the cloth channel's Neubelt visibility does not conserve energy: its
+#: albedo reaches 7 at grazing views of a narrow sheen).
+UNBOUNDED = ("DFG_cloth",)
+
+
+def _bad_cells(source: Source, inference: Inference, limit: int = 20) -> dict:
     values = source.values
     slack = max(source.step(), 1e-12)  # rounding of a stored 1.0 is not a violation
+    bounded = np.ones(values.shape[-1], dtype=bool)
+    for channel, meaning in enumerate(inference.best.convention.meanings):
+        bounded[channel] = meaning not in UNBOUNDED
     out = {}
     for name, mask in (("non_finite", ~np.isfinite(values)),
                        ("negative", np.isfinite(values) & (values < -slack)),
-                       ("above_one", np.isfinite(values) & (values > 1 + slack))):
+                       ("above_one", np.isfinite(values) & (values > 1 + slack) & bounded)):
         where = np.argwhere(mask)
         out[name] = {"count": int(len(where)),
                      "cells": [[int(i) for i in w] for w in where[:limit]],
@@ -173,7 +181,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         chosen = [k]
     inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
                       explicit=explicit)
-    result = AuditResult(source, inference, _bad_cells(source), model=m.name)
+    result = AuditResult(source, inference, _bad_cells(source, inference), model=m.name)
     best = inference.best
     grid = source.grid_shape
     if dense or sweep:

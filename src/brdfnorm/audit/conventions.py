@@ -16,7 +16,8 @@ the roughness (and, for three axes, Schlick's f0):
 * per channel, its meaning (:data:`MEANINGS`), which also says the Fresnel factor: none (E, 1 − E), Schlick's
   (the split-sum channels; E_f0 over an f0 axis) or the exact dielectric one, at one index of refraction η
   (``E_dielectric``, η = :attr:`Convention.eta`, 1.5 unless pinned) or at η = (1 + √f0)/(1 − √f0) over an f0
-  axis (``E_f0_dielectric``).
+  axis (``E_f0_dielectric``); or the cloth channel of a three-channel DFG texture (``DFG_cloth``, the sheen lobe at
+  the same α).
 """
 
 from __future__ import annotations
@@ -41,8 +42,9 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: Channel meanings. DFG_f0 = ∫ f cos (1 − (1 − V·H)⁵) (Karis's split-sum scale), DFG_f90 = ∫ f cos (1 − V·H)⁵
 #: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ;
 #: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
-#: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0).
-MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "E_dielectric", "E_f0_dielectric")
+#: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
+#: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
+MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "E_dielectric", "E_f0_dielectric", "DFG_cloth")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
 DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
 #: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).

@@ -149,7 +149,7 @@ def noise_sigma(residual: np.ndarray) -> float:
 
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
-    default = {1: ["E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90"], 3: ["E_f0"]}[grid_ndim]
+    default = {1: ["E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth"], 3: ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
         if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
             default = default + DIELECTRIC_BY_NDIM[grid_ndim]

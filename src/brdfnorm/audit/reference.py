@@ -12,6 +12,8 @@ Every Schlick channel meaning is a linear combination of them: 1 − E; DFG_f0 =
 E_avg(α) = 2∫₀¹ E μ dμ by :func:`brdfnorm.lut.table.average_over_mu`. The exact dielectric Fresnel factor is not
 linear in anything tabulated, so E_dielectric(μ, α, η) = ∫ f cos F(η, V·H) dL is a third base quantity, computed
 per (μ, α, η) by the lobe with ``fresnel=dielectric`` (E_f0_dielectric sets η = (1 + √f0)/(1 − √f0) per cell).
+DFG_cloth is the albedo of another lobe, the white sheen distribution with Neubelt's visibility, at the same α
+clamped to that lobe's range (:func:`brdfnorm.lut.cloth.cloth_model`, what ``lut --channels dfg`` tabulates).
 
 Many hypotheses share their μ and α values (a flip of a symmetric sample set, a transposed square table, the same
 grid with another clamp), so values are cached per (quantity, shadowing, μ, α, η) and only new ones are computed.
@@ -22,13 +24,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..lut.cloth import cloth_model
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
+from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
 from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SHADOWING
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
-RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6}
+RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6, "DFG_cloth": 1e-7}
 
 
 class Reference:
@@ -49,7 +53,7 @@ class Reference:
                            and str(model.params.get("refraction_shadowing")) == "auto")
         self.shadowings = DIELECTRIC_SHADOWING if self.refraction else SHADOWING
         self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
-        self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0}
+        self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0, "DFG_cloth": 0}
         self.dielectric = "fresnel" in names and "dielectric" in model.parameter("fresnel").choices
         self.eta_max = float(model.parameter("eta").maximum) if self.dielectric else np.inf
         # A model whose α is declared on a narrower range (a Mitsuba plugin: α ≥ 1e-3) is evaluated at the range's
@@ -60,6 +64,8 @@ class Reference:
                             declared.maximum if declared.maximum is not None else np.inf)
 
     def _model(self, quantity: str, shadowing: str) -> Model:
+        if quantity == "DFG_cloth":
+            return cloth_model({"alpha": np.zeros(1)})[0]
         names = {p.name for p in self.model.parameters}
         shadowing, _, refraction = shadowing.partition("/refraction=")
         base = self.model.with_params(shadowing=shadowing) if "shadowing" in names else self.model
@@ -111,6 +117,8 @@ class Reference:
             return self.values("E_dielectric", shadowing, mu, alpha, eta)
         if meaning == "E_f0_dielectric":
             return self._f0_dielectric(shadowing, mu, alpha, f0)
+        if meaning == "DFG_cloth":  # another lobe, whatever this one's shadowing: one cache for all
+            return self.values("DFG_cloth", "", mu, np.clip(alpha, CLOTH_ALPHA_MIN, 1.0))
         E, e_err = self.values("E", shadowing, mu, alpha)
         if meaning == "E":
             return E, e_err
@@ -155,9 +163,9 @@ class Reference:
 
     @staticmethod
     def expensive(meaning: str) -> bool:
-        """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90 and the
-        exact dielectric Fresnel."""
-        return meaning in ("DFG_f0", "DFG_f90", "E_f0") + DIELECTRIC_MEANINGS
+        """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90, the
+        exact dielectric Fresnel and the cloth channel."""
+        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "DFG_cloth") + DIELECTRIC_MEANINGS
 
 
 def raise_unsupported(model: Model) -> None:
