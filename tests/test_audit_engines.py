@@ -282,3 +282,25 @@ def test_three_channel_dfg_header_with_the_cloth_channel(capsys, tmp_path):
     exact = float(half_vector_gauss_legendre(sheen, np.array([np.sqrt(1 - mu * mu), 0.0, mu]), 64, 256))
     i, j = cloth["worst_cell"]
     assert abs(float(np.float16(rgb[i, j, 2])) - exact) == pytest.approx(cloth["max"], abs=1e-6)
+
+
+def test_sheen_table_names_its_visibility_and_keeps_its_gain():
+    """A table of the sheen lobe (charlie): the shadowing searched is the lobe's own (Kulla's fitted Λ or
+    Neubelt's visibility), and its albedo above 1 at grazing views (the lobe gains energy there) is not listed as
+    a bad cell. The worst cell is checked against Gauss-Legendre over the half vector."""
+    from tests.conftest import half_vector_gauss_legendre
+
+    charlie = bn.load("charlie").with_params(shadowing="neubelt")
+    t = (np.arange(8) + 0.5) / 8
+    table = lut.compute(charlie, {"mu": t, "alpha": np.maximum(t * t, 1e-3)}, rtol=1e-8, average=False)["E"]
+    assert table.max() > 1.0
+    r = audit(table, "charlie", dense=False, sweep=False)
+    c = r.best.convention
+    assert r.fits and (c.shadowing, c.direction, c.roughness, c.meanings) == ("neubelt", "mu-texel", "r2-texel",
+                                                                             ("E",))
+    assert r.bad_cells["above_one"]["count"] == 0 and not r.inference.ambiguous
+    fit = r.best.channels[0]
+    mu, alpha = fit.worst_at["mu"], fit.worst_at["alpha"]
+    exact = float(half_vector_gauss_legendre(charlie.with_params(alpha=alpha),
+                                             np.array([np.sqrt(1 - mu * mu), 0.0, mu]), 64, 256))
+    assert abs(table[fit.worst] - exact) <= fit.max + 1e-8

@@ -91,12 +91,15 @@ class AuditResult:
 UNBOUNDED = ("DFG_cloth",)
 
 
-def _bad_cells(source: Source, inference: Inference, limit: int = 20) -> dict:
+def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 20) -> dict:
+    """Cells that are not finite, negative, or above 1 where the quantity is bounded by 1: a lobe that conserves
+    energy (its declared ``energy`` says "conserved", or says nothing) and a meaning that is not UNBOUNDED."""
     values = source.values
     slack = max(source.step(), 1e-12)  # rounding of a stored 1.0 is not a violation
-    bounded = np.ones(values.shape[-1], dtype=bool)
+    conserves = not model.energy or model.energy.startswith("conserved")
+    bounded = np.full(values.shape[-1], conserves)
     for channel, meaning in enumerate(inference.best.convention.meanings):
-        bounded[channel] = meaning not in UNBOUNDED
+        bounded[channel] &= meaning not in UNBOUNDED
     out = {}
     for name, mask in (("non_finite", ~np.isfinite(values)),
                        ("negative", np.isfinite(values) & (values < -slack)),
@@ -181,7 +184,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         chosen = [k]
     inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
                       explicit=explicit)
-    result = AuditResult(source, inference, _bad_cells(source, inference), model=m.name)
+    result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name)
     best = inference.best
     grid = source.grid_shape
     if dense or sweep:

@@ -216,7 +216,8 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
     ranked = []
     for c in candidates:
         coords = coordinates(c, grid, mesh)
-        exact, _ = reference.meaning("E_dielectric", c.shadowing, coords["mu"], coords["alpha"], eta=ETA)
+        with reference.ranking():
+            exact, _ = reference.meaning("E_dielectric", c.shadowing, coords["mu"], coords["alpha"], eta=ETA)
         for channel in chosen:
             data = sample[..., channel]
             ok = np.isfinite(data)
@@ -273,6 +274,11 @@ def _rounds(values, names, reference, pins, step, chosen, candidates,
 
 
 def _stage1(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
+    with reference.ranking():
+        return _rank(values, candidates, reference, meanings, chosen, k)
+
+
+def _rank(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
     grid = values.shape[:-1]
     index = [_subset(n, k) for n in grid]
     mesh = _mesh(grid, index)

@@ -22,6 +22,9 @@ Each value keeps the engine's error estimate, which an audit adds to its toleran
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import numpy as np
 
 from ..lut.cloth import cloth_model
@@ -33,6 +36,9 @@ from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SHADOWI
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
 RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6, "DFG_cloth": 1e-7}
+#: The tolerance of values that only rank hypotheses (:meth:`Reference.ranking`): E of a lobe without a fast route
+#: (the sheen: 36 ms a cell at 1e-9, 9 ms at 1e-6) is computed finely only for the few hypotheses kept.
+RANK_RTOL = 1e-6
 
 
 class Reference:
@@ -51,8 +57,12 @@ class Reference:
         # a rough dielectric whose refraction's shadowing is not given: that form is searched too
         self.refraction = ("refraction_shadowing" in names
                            and str(model.params.get("refraction_shadowing")) == "auto")
-        self.shadowings = DIELECTRIC_SHADOWING if self.refraction else SHADOWING
-        self.store: dict[tuple, dict[tuple[float, float], tuple[float, float]]] = {}
+        # the shadowing forms searched: the lobe's own choices (Smith's two for ggx/beckmann, Kulla's and
+        # Neubelt's for the sheen lobe), with the refraction's forms for a rough dielectric
+        own = tuple(model.parameter("shadowing").choices) if "shadowing" in names else ()
+        self.shadowings = DIELECTRIC_SHADOWING if self.refraction else (own or SHADOWING)
+        self.store: dict[tuple, dict[tuple[float, float, float], tuple[float, float, float]]] = {}
+        self.rank_rtol = 0.0
         self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0, "DFG_cloth": 0}
         self.dielectric = "fresnel" in names and "dielectric" in model.parameter("fresnel").choices
         self.eta_max = float(model.parameter("eta").maximum) if self.dielectric else np.inf
@@ -60,7 +70,9 @@ class Reference:
         # end where a convention's grid or clamp reaches beyond it; for such a model the clamps below its minimum
         # give the same reference values, and the audit cannot tell them apart.
         declared = model.parameter("alpha")
-        self.alpha_range = (declared.minimum if declared.minimum is not None else -np.inf,
+        lowest = getattr(model, "alpha_min", None)  # a lobe whose alpha = 0 means something else (the sheen)
+        self.alpha_range = (lowest if lowest is not None else declared.minimum if declared.minimum is not None
+                            else -np.inf,
                             declared.maximum if declared.maximum is not None else np.inf)
 
     def _model(self, quantity: str, shadowing: str) -> Model:
@@ -86,26 +98,37 @@ class Reference:
                                              np.asarray(eta, dtype=float))
         table = self.store.setdefault((quantity, shadowing), {})
         keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), eta.ravel().tolist(), strict=True))
-        missing = sorted({k for k in keys if k not in table})
+        rtol = max(RTOL[quantity], self.rank_rtol)
+        missing = sorted({k for k in keys if k not in table or table[k][2] > rtol})
         if missing:
             m = np.array([k[0] for k in missing])
             a = np.array([k[1] for k in missing])
             if quantity == "E_avg":
-                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=RTOL[quantity])
+                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol)
             else:
                 cell_params = {"alpha": a}
                 if quantity == "E_dielectric":
                     cell_params["eta"] = np.array([k[2] for k in missing])
                 cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                      cell_params, rtol=RTOL[quantity])
+                                      cell_params, rtol=rtol)
                 value, error = cells.value[:, 0], cells.error[:, 0]
             self.computed[quantity] += len(missing)
             for k, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
-                table[k] = (v, e)
+                table[k] = (v, e, rtol)
         pairs = [table[k] for k in keys]
         value = np.array([p[0] for p in pairs]).reshape(mu.shape)
         error = np.array([p[1] for p in pairs]).reshape(mu.shape)
         return value, error
+
+    @contextmanager
+    def ranking(self) -> Iterator[None]:
+        """Within: values computed to RANK_RTOL at most (stage 1 only ranks hypotheses, within a loose bound of
+        1e-2; a value computed finer before is used as it is)."""
+        self.rank_rtol = RANK_RTOL
+        try:
+            yield
+        finally:
+            self.rank_rtol = 0.0
 
     def meaning(self, meaning: str, shadowing: str, mu: np.ndarray | None, alpha: np.ndarray,
                 f0: np.ndarray | None = None, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:

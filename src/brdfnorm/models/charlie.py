@@ -83,6 +83,9 @@ class Charlie(Model):
         Parameter("terminator", "bool", False, description="kulla only: soften Λ(L) to Λ^(1+2(1−N·L)^8)"),
     )
     channels = 3
+    #: The smallest α the lobe takes (its ``alpha`` parameter declares 0 as "use roughness²"): tables and audits
+    #: evaluate narrower cells here.
+    alpha_min = ALPHA_MIN
     energy = ("a sheen layer, not a closed lobe; gains energy at grazing views at low roughness (89.9°, r = 0.1: "
               "2.13 kulla, 3.80 neubelt; r = 0.2: 1.18, 1.99; neubelt still 1.09 at r = 0.4)")
 
