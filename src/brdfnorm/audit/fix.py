@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..inputs import read_bounded
-from . import pngio
+from ..lut import pngio
 from .readers import MAX_BINARY_BYTES, MAX_TEXT_BYTES, Source
 
 

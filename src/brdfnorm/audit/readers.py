@@ -16,16 +16,15 @@ import csv
 import io
 import json
 import os
-import tempfile
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
-from ..inputs import element_count, parsing, read_bounded, regular_file
-from . import pngio
+from ..inputs import element_count, npz_arrays, parsing, read_bounded, regular_file
+from ..lut import pngio
+from ..lut.readers import exr_parts
 from .textarrays import find_literals
 
 #: The most elements a table may hold.
@@ -160,21 +159,8 @@ def _pick(names: list[str], array: str | None, where: str) -> str:
 
 
 def _read_npz(data, where, *, array, shape, dtype, order, scale) -> Source:
-    with zipfile.ZipFile(io.BytesIO(data)) as archive:
-        entries = {i.filename[:-4]: i for i in archive.infolist() if i.filename.endswith(".npy")}
-        for info in entries.values():
-            if info.file_size > MAX_ELEMENTS * 8 + 4096:
-                raise TableFileError(f"array {info.filename} inflates to {info.file_size} bytes", where)
-            with archive.open(info) as member:  # the declared shape, before numpy allocates it
-                version = np.lib.format.read_magic(member)
-                read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
-                    np.lib.format.read_array_header_2_0
-                declared, _, kind = read_header(member)
-                if kind.hasobject:
-                    raise TableFileError(f"array {info.filename} holds Python objects", where)
-                element_count(declared or (1,), MAX_ELEMENTS, where=where, what=f"array {info.filename[:-4]}")
-    arrays = np.load(io.BytesIO(data), allow_pickle=False)
-    numeric = [n for n in entries if arrays[n].dtype.kind in "fiu" and arrays[n].size > 1]
+    arrays = npz_arrays(data, where, max_elements=MAX_ELEMENTS, max_bytes=MAX_BINARY_BYTES)
+    numeric = [n for n, a in arrays.items() if a.dtype.kind in "fiu" and a.size > 1]
     name = _pick(numeric, array, where)
     raw = arrays[name]
     stored = dtype or raw.dtype.name
@@ -184,26 +170,13 @@ def _read_npz(data, where, *, array, shape, dtype, order, scale) -> Source:
                                 stored, scale, where)
     values, names = _with_channels(values)
     return Source(where, "npz", name, values, names, stored, factor,
-                  layout={"arrays": list(entries), "dtype": raw.dtype.str, "shape": raw.shape, "order": order,
+                  layout={"arrays": list(arrays), "dtype": raw.dtype.str, "shape": raw.shape, "order": order,
                           "reshaped": shape is not None})
 
 
 def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
-    import OpenEXR
-
-    if data[:4] != b"\x76\x2f\x31\x01":
-        raise TableFileError("not an OpenEXR file", where)
-    with tempfile.TemporaryDirectory() as scratch:
-        target = Path(scratch) / "in.exr"
-        target.write_bytes(data)
-        with OpenEXR.File(str(target), header_only=True) as image:  # the size first, then the pixels
-            width, height = _window_size(image.header())
-            count = max(1, len(image.header().get("channels", [None])))
-            element_count((height, width, count), MAX_ELEMENTS, where=where, what="the image (height × width × "
-                          "channels)")
-        with OpenEXR.File(str(target), separate_channels=True) as image:
-            header = dict(image.header())
-            channels = {n: np.array(c.pixels) for n, c in image.channels().items()}
+    headers, parts = exr_parts(data, where)  # the first part: an engine's image (brdfnorm's E_avg is a second)
+    header, channels = headers[0], parts[0]
     window = header.get("dataWindow")
     names = sorted(channels, key=lambda n: ("RGBAXYZ".find(n[-1]) if n[-1] in "RGBAXYZ" else 99, n))
     if array is not None:
@@ -215,11 +188,6 @@ def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
     return Source(where, "exr", array or "", values, names, stored, factor,
                   layout={"pixel": {n: channels[n].dtype.name for n in names}, "all": list(channels),
                           "window": str(window)})
-
-
-def _window_size(header: dict) -> tuple[int, int]:
-    low, high = header["dataWindow"]
-    return int(high[0]) - int(low[0]) + 1, int(high[1]) - int(low[1]) + 1
 
 
 def _read_png(data, where, *, array, shape, dtype, order, scale) -> Source:

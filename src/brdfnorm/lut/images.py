@@ -11,19 +11,17 @@ Read back (bounded, guarded) by :mod:`.readers`.
 from __future__ import annotations
 
 import json
-import struct
 import tempfile
-import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArgumentError
+from . import pngio
 from .layout import MAGIC, WriteOptions, _check_finite, _subset_meta
 from .table import Lut
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 CHANNEL_NAMINGS = ("rgba", "brdfnorm")
 RGBA = ("R", "G", "B", "A")
 
@@ -104,10 +102,6 @@ def _write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
 
 # -- PNG -------------------------------------------------------------------------------------------------------
 
-def _chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
-
-
 def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     parts = _image_parts(lut, tables, opts, "PNG")
     if len(parts) != 1:
@@ -125,20 +119,16 @@ def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
         image = (lut.full(name) if opts.broadcast_average else lut[name]).reshape(shape)
         lo, hi = float(image.min()), float(image.max())
         scale = (hi - lo) if hi > lo else 1.0
-        samples.append(np.rint((image - lo) / scale * 65535.0).astype(">u2"))
+        samples.append(np.rint((image - lo) / scale * 65535.0).astype(np.int64))
         mapping[channel] = {"table": name, "lo": lo, "hi": hi}
     if len(samples) == 2:  # no two-channel colour PNG: RGB with B = 0
-        samples.append(np.zeros(shape, dtype=">u2"))
+        samples.append(np.zeros(shape, dtype=np.int64))
     colour = {1: 0, 3: 2, 4: 6}[len(samples)]  # greyscale, RGB, RGBA
-    codes = np.stack(samples, axis=-1).astype(">u2")  # np.stack gives native byte order; PNG is big-endian
+    codes = np.stack(samples, axis=-1)
     meta = _subset_meta(lut, tables)
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["png"] = {"axes": part["axes"], "channels": mapping, "value": "lo + code / 65535 * (hi - lo)",
                    "colour": {0: "greyscale (read as R)", 2: "RGB", 6: "RGBA"}[colour]}
-    height, width = shape
-    raw = b"".join(b"\x00" + row.tobytes() for row in codes)  # filter type 0 on every row
-    text = MAGIC.encode("latin-1") + b"\x00" + json.dumps(meta, ensure_ascii=True).encode("latin-1")
-    return (PNG_SIGNATURE + _chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 16, colour, 0, 0, 0))
-            + _chunk(b"tEXt", text) + _chunk(b"IDAT", zlib.compress(raw, 9)) + _chunk(b"IEND", b""))
+    return pngio.encode(codes, 16, {MAGIC: json.dumps(meta, ensure_ascii=True)})
 
 

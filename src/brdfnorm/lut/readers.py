@@ -9,16 +9,16 @@ file:
 * ``.npz``: the zip's central directory is bounded from its end record, then each member's ``.npy`` header is read
   with :func:`numpy.lib.format.read_array_header_1_0` (or ``2_0``) from the member itself, its shape and dtype
   checked, and exactly the declared bytes read (the members' declared sizes bound what is inflated);
-* PNG (16-bit greyscale, RGB or RGBA, channels mapped to tables by ``meta["png"]``): the IHDR chunk is 13 bytes,
-  width and height each ≥ 1 and width × height × samples capped before anything is inflated (and inflating is
-  capped at the expected size);
+* PNG (16-bit greyscale, RGB or RGBA, channels mapped to tables by ``meta["png"]``), decoded by :mod:`.pngio`
+  (which ``brdfnorm audit`` reads engines' PNGs with too): the IHDR chunk is 13 bytes, width and height each ≥ 1
+  and width × height × samples capped before anything is inflated (and inflating is capped at the expected size);
 * CSV: rows are read one at a time into a flat float64 buffer, counted as they come, and a header without rows is
   refused;
 * C/GLSL/HLSL: declarations are found by an anchored head pattern and ``str.find`` of their ``;`` (no
   backtracking over the file), their sizes have at most 9 digits, every token of an initializer is a number;
-* EXR (one or more parts, channels R, G, B, A mapped to tables by ``meta["exr"]["parts"]``): the headers are
-  read first (every part's data window and its channels' values checked), the library's diagnostics kept off
-  stdout and stderr.
+* EXR (one or more parts, channels R, G, B, A mapped to tables by ``meta["exr"]["parts"]``), opened by
+  :func:`exr_parts` (the audit's EXR reader too): the headers are read first (every part's data window and its
+  channels' values checked), the library's diagnostics kept off stdout and stderr.
 
 Cells must be finite real numbers: NaN, ±inf, complex values and text are refused with the table's name and the
 cell's index (or the file's line and column). Tables keep the precision the file holds: float32 from EXR and code
@@ -33,10 +33,8 @@ import json
 import math
 import os
 import re
-import struct
 import sys
 import tempfile
-import zlib
 from array import array as float_buffer
 from contextlib import contextmanager
 
@@ -44,7 +42,8 @@ import numpy as np
 
 from ..errors import ArgumentError, TableFileError
 from ..inputs import element_count, npz_arrays, parsing, read_bounded
-from .images import PNG_SIGNATURE, RGBA
+from . import pngio
+from .images import RGBA
 from .images import _openexr as openexr
 from .layout import MAGIC
 from .table import Lut
@@ -348,7 +347,10 @@ def _exr_bounded(image, path: str) -> None:
                              f"{MAX_ARRAY_BYTES // 4}", path)
 
 
-def read_exr(data: bytes, path: str) -> Lut:
+def exr_parts(data: bytes, path: str) -> tuple[list[dict], list[dict[str, np.ndarray]]]:
+    """(header, {channel name: pixels}) of every part of an OpenEXR file, bounded from the headers before any
+    pixel is read (:func:`_exr_bounded`), the library's diagnostics kept off stdout and stderr, any failure one
+    :class:`~brdfnorm.errors.TableFileError` naming the file. Pixels keep their type (float32, or float16)."""
     OpenEXR = openexr()  # noqa: N806 - the module, by its own name
 
     if data[:4] != b"\x76\x2f\x31\x01":
@@ -359,13 +361,18 @@ def read_exr(data: bytes, path: str) -> Lut:
                 _exr_bounded(image, path)  # inside the block: the headers' dicts are emptied when the file closes
             # separate_channels: otherwise the bindings merge R, G, B (and A) into one RGB(A) array
             with OpenEXR.File(io.BytesIO(data), separate_channels=True) as image:
-                text = image.header().get("brdfnorm")
-                # the channels' own precision (float32, or float16 with half) is what the file holds
+                headers = [dict(part.header) for part in image.parts]
                 images = [{n: np.array(c.pixels) for n, c in part.channels.items()} for part in image.parts]
     except TableFileError:
         raise
     except Exception as error:  # noqa: BLE001 — the bindings raise bare RuntimeErrors on bad files
         raise TableFileError(f"unreadable OpenEXR ({str(error)[:200]})", path) from None
+    return headers, images
+
+
+def read_exr(data: bytes, path: str) -> Lut:
+    headers, images = exr_parts(data, path)
+    text = headers[0].get("brdfnorm")
     meta, table_axes = meta_from({"meta": load_json(str(text), path)}, path)
     try:
         axis_values = meta.pop("axis_values")
@@ -387,41 +394,14 @@ def read_exr(data: bytes, path: str) -> Lut:
 # -- PNG ---------------------------------------------------------------------------------------------------
 
 def read_png(data: bytes, path: str) -> Lut:
-    if not data.startswith(PNG_SIGNATURE):
-        raise TableFileError("not a PNG file", path)
-    position, header, text, idat = len(PNG_SIGNATURE), None, None, []
-    while position + 12 <= len(data):
-        (length,) = struct.unpack(">I", data[position:position + 4])
-        kind, body = data[position + 4:position + 8], data[position + 8:position + 8 + length]
-        tail = data[position + 8 + length:position + 12 + length]
-        if len(body) != length or len(tail) != 4 or zlib.crc32(kind + body) & 0xFFFFFFFF != struct.unpack(
-                ">I", tail)[0]:
-            raise TableFileError(f"corrupt PNG chunk {kind!r} at byte {position}", path)
-        if kind == b"IHDR":
-            if length != 13:
-                raise TableFileError(f"the IHDR chunk has {length} bytes, not 13", path)
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"tEXt" and body.startswith(MAGIC.encode() + b"\x00"):
-            text = body[len(MAGIC) + 1:]
-        elif kind == b"IDAT":
-            idat.append(body)
-        position += 12 + length
-    if header is None or text is None:
+    codes, depth, text = pngio.decode(data, path, max_samples=MAX_CELLS)  # bounded before inflating
+    if MAGIC not in text:
         raise TableFileError("no brdfnorm metadata (tEXt) in this PNG", path)
-    width, height, depth, colour, _, _, interlace = header
-    samples = {0: 1, 2: 3, 6: 4}.get(colour)  # greyscale, RGB, RGBA
-    if depth != 16 or samples is None or interlace != 0:
-        raise TableFileError("expected a 16-bit greyscale, RGB or RGBA non-interlaced PNG", path)
-    element_count([height, width, samples], MAX_CELLS, where=path, what="the image (height × width × samples)")
-    expected = height * (1 + 2 * samples * width)
-    raw = zlib.decompressobj().decompress(b"".join(idat), expected + 1)  # never inflates past the image's size
-    if len(raw) != expected:
-        raise TableFileError(f"image data holds {len(raw)} bytes, expected {expected}", path)
-    rows = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 2 * samples * width)
-    if np.any(rows[:, 0] != 0):
-        raise TableFileError("only PNG filter type 0 is read (as brdfnorm writes it)", path)
-    codes = rows[:, 1:].copy().view(">u2").astype(float).reshape(height, width, samples)
-    meta = load_json(text.decode("latin-1"), path)
+    samples = codes.shape[-1]
+    if depth != 16 or samples == 2:
+        raise TableFileError("expected a 16-bit greyscale, RGB or RGBA PNG (as brdfnorm writes it)", path)
+    codes = codes.astype(float)
+    meta = load_json(text[MAGIC], path)
     _, table_axes = meta_from({"meta": meta}, path)
     try:
         info = meta.pop("png")

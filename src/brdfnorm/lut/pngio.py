@@ -1,4 +1,5 @@
-"""PNG images of any table an engine ships: 8- or 16-bit, grey, grey + alpha, RGB or RGBA, read and written.
+"""PNG images of tables, read and written: 8- or 16-bit, grey, grey + alpha, RGB or RGBA — brdfnorm's own
+(:mod:`.images` writes them, :mod:`.readers` reads them back) and any an engine ships (``brdfnorm audit``).
 
 PNG (ISO/IEC 15948, W3C PNG 2nd edition §11–12): chunks with CRCs, IHDR first; the image is the zlib stream of
 the IDAT chunks, each row a filter byte (0 None, 1 Sub, 2 Up, 3 Average, 4 Paeth, §9.2) and the filtered bytes.
@@ -26,8 +27,9 @@ CHANNELS = {0: 1, 4: 2, 2: 3, 6: 4}  # colour type -> channels
 NAMES = {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}
 
 
-def decode(data: bytes, where: str) -> tuple[np.ndarray, int, dict[str, str]]:
-    """(codes (height, width, channels) as integers, bit depth, tEXt entries) of a PNG."""
+def decode(data: bytes, where: str, max_samples: int = MAX_SAMPLES) -> tuple[np.ndarray, int, dict[str, str]]:
+    """(codes (height, width, channels) as integers, bit depth, tEXt entries) of a PNG of at most
+    ``max_samples`` pixels × channels."""
     if not data.startswith(SIGNATURE):
         raise TableFileError("not a PNG file", where)
     position, header, idat, text = len(SIGNATURE), None, [], {}
@@ -63,7 +65,7 @@ def decode(data: bytes, where: str) -> tuple[np.ndarray, int, dict[str, str]]:
     if interlace:
         raise TableFileError("interlaced PNG is not read", where)
     channels = CHANNELS[colour]
-    element_count((height, width, channels), MAX_SAMPLES, where=where, what="the image (height × width × channels)")
+    element_count((height, width, channels), max_samples, where=where, what="the image (height × width × samples)")
     size = depth // 8
     stride = width * channels * size
     expected = height * (1 + stride)
