@@ -126,6 +126,8 @@ def test_e_avg_1d():
     e_avg = lut.compute(GGX, {"mu": [1.0], "alpha": np.maximum(grid, 1e-8)}, rtol=1e-10)["E_avg"]
     r = audit(e_avg, "ggx", dense=False, sweep=False)
     assert r.fits and r.best.convention.roughness == "alpha-node" and r.best.convention.meanings == ("E_avg",)
+    r = audit(1.0 - e_avg[::-1], "ggx", dense=False, sweep=False)  # stored as 1 − E_avg, roughness descending
+    assert r.fits and r.best.convention.meanings == ("1-E_avg",) and r.best.convention.flips == (True,)
 
 
 def test_report_figures(capsys, tmp_path):

@@ -193,7 +193,8 @@ def test_cycles_glass_slice_names_the_reflection_form_of_refraction_shadowing():
     """One η slice of Blender Cycles' table_ggx_glass_E (E = R + T of its GGX glass, 2²³ samples a cell): with
     η given and the sample positions pinned to its generator's (μ and roughness at nodes i/15, α = r²), the audit
     finds the refraction's shadowing to be the reflection's 1/(1 + Λ_V + Λ_L) — the form the issue says Cycles'
-    glass uses — and the table fits to its sampling noise; Heitz's Beta form (brdfnorm's default) misses by 0.71."""
+    glass uses — and the table fits to its sampling noise; with Heitz's Beta form (brdfnorm's default) pinned, the
+    closest hypothesis (ranked by its median) misses by 0.86."""
     path = ENGINES / "cycles_ggx_glass_E_slice.h"
     common = (str(path), "--model", "ggx-dielectric", "-p", f"eta={CYCLES_ETA!r}", "--shape", "16,16", "--as",
               "direction=mu-node", "--as", "roughness=r2-node", "--no-sweep", "--no-interpolation")
@@ -204,7 +205,7 @@ def test_cycles_glass_slice_names_the_reflection_form_of_refraction_shadowing():
     (fit,) = r["best"]["channels"]
     assert fit["max"] < 2e-5 and fit["median"] < 2e-6
     code, beta, _ = _audit(*common, "--as", "shadowing=height-correlated")
-    assert code == 1 and 0.6 < beta["best"]["channels"][0]["max"] < 0.8
+    assert code == 1 and 0.6 < beta["best"]["channels"][0]["max"] < 0.9
     # independent route at the worst cell of the Beta form: the facet reference's R + T (nested scipy quad)
     from tests.dielectric_reference import albedo_part
 
@@ -221,3 +222,41 @@ def test_cycles_glass_slice_names_the_reflection_form_of_refraction_shadowing():
     mu, alpha = max(y / 15, 1e-4), max((x / 15) ** 2, 1e-8)
     exact = sum(albedo_part("ggx", mu, alpha, CYCLES_ETA, part, refraction="reflection-form") for part in "RT")
     assert abs(table[y, x] - exact) == pytest.approx(fit["max"], abs=1e-7)
+
+
+def _moonray(name: str) -> np.ndarray:
+    """Array ``name`` of the MoonRay excerpt, read by a regular expression and numpy (rows roughness, 33 × 33)."""
+    text = (ENGINES / "moonray_reflection_albedo.h").read_text()
+    start = text.index(f"::{name}[")
+    body = text[text.index("{", start) + 1:text.index("};", start)]
+    return np.array([float(t.rstrip("f")) for t in re.split(r"[\s,]+", body) if t])
+
+
+@pytest.mark.parametrize("array, model", [("mGGXE", "ggx"), ("mBeckmannE", "beckmann")])
+def test_moonray_reflection_albedo_c_header(array, model):
+    """DreamWorks MoonRay's ReflectionAlbedo.h (Apache-2.0): E(cos θ, roughness) of its Cook-Torrance lobes, 33×33
+    floats (5 decimals) declared ``const float ReflectionAlbedo::mGGXE[COMP*COMP]`` (a qualified name and a size
+    expression: the shape is given). Its accessor reads row ⌊r·32⌋ and column ⌈cos θ·32⌉, so rows are the roughness
+    and columns μ = j/32. The audit names rows r with α = r², columns μ at nodes, separable Smith, E — ranked by the
+    median residual, as the table is Monte-Carlo noise at most cells but zero in its whole μ = 0 column (the exact
+    albedo there is 0.6 to 1) and biased at μ = 1/32. Both findings are checked by Gauss-Legendre."""
+    lobe = bn.load(model).with_params(shadowing="separable")
+    code, r, _ = _audit(str(ENGINES / "moonray_reflection_albedo.h"), "--array", array, "--shape", "33,33",
+                        "--model", model, "--no-sweep", "--no-interpolation")
+    c = r["best"]["convention"]
+    assert code == 1 and r["verdict"] == "no hypothesis fits"
+    assert (c["axes"], c["flipped"], c["direction"], c["roughness"], c["shadowing"], c["channels"]) == (
+        ["roughness (alpha = r^2)", "mu"], [False, False], "mu-node", "r2-node", "separable", ["E"])
+    (fit,) = r["best"]["channels"]
+    assert fit["median"] < 5e-3 and fit["max"] == pytest.approx(1.0, abs=1e-6) and fit["worst_cell"][1] == 0
+    table = _moonray(array).reshape(33, 33)
+    assert np.all(table[:, 0] == 0.0)
+    # the zeroed column: the exact albedo at grazing views (μ = 1e-4, the convention's clamp) is above 0.6 on every
+    # row (0.61 for GGX at α = 1 with separable shadowing, 0.93 at α = 1/16)
+    for row in (8, 16, 32):
+        exact, error = _exact(lobe.with_params(alpha=(row / 32) ** 2), 1e-4)
+        assert exact > 0.6 and error < 1e-3
+    # the bias at μ = 1/32: GGX's worst cell off the zeroed column (row 10, α = (10/32)²) is low by 0.089
+    if model == "ggx":
+        exact, error = _exact(lobe.with_params(alpha=(10 / 32) ** 2), 1 / 32)
+        assert 0.08 < exact - table[10, 1] < 0.1 and error < 1e-4

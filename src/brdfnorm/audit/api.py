@@ -153,12 +153,14 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
 
 def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None, dense: bool = True,
           sweep: bool = True, fix: bool = True, params: dict | None = None, read: dict | None = None,
-          axes: dict[str, np.ndarray] | None = None, **convention: str) -> AuditResult:
+          axes: dict[str, np.ndarray] | None = None, pins: dict[str, str] | None = None,
+          **convention: str) -> AuditResult:
     """Audit ``table`` (an array (*grid[, channels]) or a path, read with ``read`` options: fmt, array, shape,
-    dtype, order, scale) as a table of ``model`` (a name or a Model, with ``params``). ``convention`` pins parts
-    of the convention (axes, direction, roughness, f0, flip, shadowing, mu_floor, alpha_floor, channels; see
-    :mod:`.conventions`); ``axes`` gives the values of an axis outright (``mu``, ``theta`` in radians, ``alpha``,
-    ``r`` with α = r², ``f0``: values in array order, monotonic). ``dense`` measures the interpolation error,
+    dtype, order, scale) as a table of ``model`` (a name or a Model, with ``params``). ``pins`` and keywords
+    (``convention``) pin parts of the convention (axes, direction, roughness, f0, flip, shadowing, mu_floor,
+    alpha_floor, channels, eta; see :mod:`.conventions`); the pin ``axes=mu,alpha`` (the roles of the array axes)
+    goes in ``pins``, as the keyword ``axes`` gives the values of an axis outright (``mu``, ``theta`` in radians,
+    ``alpha``, ``r`` with α = r², ``f0``: values in array order, monotonic). ``dense`` measures the interpolation error,
     ``sweep`` the error against resolution."""
     explicit = _explicit_axes(axes)
     from .. import load
@@ -168,7 +170,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
     if params:
         m = m.with_params(**params)
     source = _as_source(table, dict(read or {}))
-    pins = parse_pins(convention)
+    pins = parse_pins({**(pins or {}), **convention})
     reference = Reference(m)
     chosen = None
     if channel is not None:
@@ -191,7 +193,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
         measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
         for fit in measured:
-            if fit.meaning is None or fit.meaning == "E_avg" and len(grid) != 1:
+            if fit.meaning is None or fit.meaning in ("E_avg", "1-E_avg") and len(grid) != 1:
                 continue
             points = quality.dense_points(best.convention, grid, quality.budget_points(fit.meaning))
             k = source.channel_names.index(fit.channel)

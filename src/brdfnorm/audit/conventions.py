@@ -40,11 +40,13 @@ SHADOWING = ("height-correlated", "separable")
 DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-form",
                                     "height-correlated/refraction=separable")
 #: Channel meanings. DFG_f0 = ∫ f cos (1 − (1 − V·H)⁵) (Karis's split-sum scale), DFG_f90 = ∫ f cos (1 − V·H)⁵
-#: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ;
+#: (the bias, the Fresnel moment), E_f0 = ∫ f cos F_Schlick(f0, f90 = 1) over an f0 axis, E_avg = 2∫ E μ dμ and
+#: 1-E_avg (the form Kulla–Conty's compensation divides by);
 #: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
 #: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
-MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "E_dielectric", "E_f0_dielectric", "DFG_cloth")
+MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
+            "DFG_cloth")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
 DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
 #: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).

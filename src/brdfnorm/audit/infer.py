@@ -5,11 +5,11 @@ Two stages, both against exact values (:mod:`.reference`):
 1. Every geometry (axis roles, flips, sample positions, shadowing) is scored on a subset of interior cells —
    the same indices on each axis, symmetric under a flip, so that flipped and transposed hypotheses reuse each
    other's reference values; boundary rows are left out there because only they depend on the endpoint clamps.
-   Each channel takes the meaning with the smallest maximum residual; a geometry's score is that of its
+   Each channel takes the meaning with the smallest median residual; a geometry's score is that of its
    best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
-   α = 0, and ranked by their maximum residual. Where the meanings need F90 (or the exact Fresnel) and the table
+   α = 0, and ranked by their median residual, then their maximum (:attr:`Hypothesis.rank`). Where the meanings need F90 (or the exact Fresnel) and the table
    has more than
    SUBGRID_CELLS cells, they are ranked on a strided subgrid of about RANK_CELLS interior cells (no endpoint
    clamp reaches them) and only the best is then measured on every cell, its clamps searched; the runners-up's
@@ -107,6 +107,15 @@ class Hypothesis:
         return min(fitted) if fitted else float("inf")
 
     @property
+    def rank(self) -> tuple[float, float]:
+        """Hypotheses are ranked by their median residual first, then by the maximum: the true convention of a
+        table made by Monte Carlo is off by its noise at most cells but by its bias at a few (grazing cells,
+        a zeroed μ = 0 column), and those few must not decide which convention the rest is in; whether it
+        *fits* is still judged by the maximum."""
+        fitted = [c.median for c in self.channels if c.meaning is not None]
+        return (min(fitted) if fitted else float("inf"), self.score)
+
+    @property
     def fits(self) -> bool:
         return any(c.fits for c in self.channels)
 
@@ -149,7 +158,7 @@ def noise_sigma(residual: np.ndarray) -> float:
 
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
-    default = {1: ["E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth"], 3: ["E_f0"]}[grid_ndim]
+    default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth"], 3: ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
         if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
             default = default + DIELECTRIC_BY_NDIM[grid_ndim]
@@ -196,7 +205,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
         wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
         second = _rounds(values, names, reference, pins, step, chosen, wider, [ms + extra for ms in meanings])
-        if second[0].fits or second[0].score < best.score:
+        if second[0].fits or second[0].rank < best.rank:
             best, runners, _ = second
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
 
@@ -264,11 +273,11 @@ def _rounds(values, names, reference, pins, step, chosen, candidates,
         index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
                  else np.arange(n) for n in grid]
         ranked = sorted(((_stage2(values, names, c, reference, step, chosen, (False, False), index), c)
-                         for c in top), key=lambda pair: pair[0].score)
+                         for c in top), key=lambda pair: pair[0].rank)
         finals = [_stage2(values, names, ranked[0][1], reference, step, chosen, search)] + [h for h, _ in ranked[1:]]
     else:
         finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]
-        finals.sort(key=lambda h: h.score)
+        finals.sort(key=lambda h: h.rank)
     finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
     return finals[0], finals[1:], [c for _, c in scored]
 
@@ -296,7 +305,7 @@ def _rank(values, candidates, reference, meanings, chosen, k) -> list[tuple[floa
             residuals = {}
             for meaning in meanings[channel]:
                 exact, _ = _exact(reference, c, meaning, coords)
-                residuals[meaning] = float(np.max(np.abs(data[ok] - exact[ok]))) if ok.any() else float("inf")
+                residuals[meaning] = float(np.median(np.abs(data[ok] - exact[ok]))) if ok.any() else float("inf")
             meaning = min(residuals, key=residuals.get)
             picks.append(meaning)
             best = min(best, residuals[meaning])
@@ -391,10 +400,11 @@ def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, me
         ok = np.isfinite(data)
         for meaning in extra:
             exact, _ = _exact(reference, c, meaning, coords)
-            if ok.any() and float(np.max(np.abs(data[ok] - exact[ok]))) < fit.max:
+            if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
                 candidate = _full(values, replace(c, meanings=tuple(
                     meaning if k == channel else m for k, m in enumerate(picks))), reference, names, step, [channel])
-                if candidate.channels[0].max < current[names[channel]].max:
+                if (candidate.channels[0].median, candidate.channels[0].max) < (current[names[channel]].median,
+                                                                               current[names[channel]].max):
                     current[names[channel]] = candidate.channels[0]
                     picks[channel] = meaning
                     changed = True

@@ -134,8 +134,9 @@ class Reference:
                 f0: np.ndarray | None = None, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:
         """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates; ``eta``
         is the index of refraction of an E_dielectric channel."""
-        if meaning == "E_avg":
-            return self.values("E_avg", shadowing, np.zeros_like(alpha), alpha)
+        if meaning in ("E_avg", "1-E_avg"):
+            value, error = self.values("E_avg", shadowing, np.zeros_like(alpha), alpha)
+            return (value if meaning == "E_avg" else 1.0 - value), error
         if meaning == "E_dielectric":
             return self.values("E_dielectric", shadowing, mu, alpha, eta)
         if meaning == "E_f0_dielectric":

@@ -173,14 +173,21 @@ def _declaration(recent: list[tuple], where: str) -> tuple[str, str | None, tupl
     name, dtype, dims = "", None, []
     start = recent[0][2] if recent[0][0] != "num" else recent[0][2][0]
     k = len(recent) - 1
+    unknown = False  # a dimension given by an expression (C++'s [COMP*COMP]): the shape comes from --shape
     while k >= 0 and recent[k][0] == "op" and recent[k][1] == "]":  # trailing [a][b]
         if k >= 2 and recent[k - 1][0] == "num" and recent[k - 2][0] == "op" and recent[k - 2][1] == "[":
             dims.insert(0, recent[k - 1][1])
             k -= 3
-        elif k >= 1 and recent[k - 1][0] == "op" and recent[k - 1][1] == "[":
-            k -= 2
-        else:
+            continue
+        opening = k - 1
+        while opening >= 0 and not (recent[opening][0] == "op" and recent[opening][1] in "[]"):
+            opening -= 1
+        if opening < 0 or recent[opening][1] != "[":
             break
+        unknown = unknown or opening < k - 1
+        k = opening - 1
+    if unknown:
+        dims = []
     if k >= 0 and recent[k][0] == "id":
         name = recent[k][1]
     for token in recent[:k]:

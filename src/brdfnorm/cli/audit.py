@@ -43,7 +43,7 @@ def audit_command(
                                   "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable (rough "
                                   "dielectrics also height-correlated/refraction=reflection-form|separable) "
                                   "mu_floor=1e-4 alpha_floor=1e-8 channels=DFG_f0,DFG_f90 (meanings: E 1-E DFG_f0 "
-                                  "DFG_f90 E_f0 E_avg E_dielectric E_f0_dielectric DFG_cloth) eta=1.5 (of "
+                                  "DFG_f90 E_f0 E_avg 1-E_avg E_dielectric E_f0_dielectric DFG_cloth) eta=1.5 (of "
                                   "E_dielectric)"),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
                                    "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "
@@ -88,7 +88,7 @@ def audit_command(
             name, values = parse_axis(spec, grid)
             axes[name] = np.radians(values) if name == "theta" else values
         result = audit(file, m, channel=channel, dense=not no_dense, sweep=not no_sweep, fix=fix, read=read,
-                       axes=axes, **pins)
+                       axes=axes, pins=pins)
         payload = result.to_json()
         if report is not None:
             from ..audit.report import figures
