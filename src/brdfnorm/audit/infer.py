@@ -9,11 +9,10 @@ Two stages, both against exact values (:mod:`.reference`):
    best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
-   α = 0, and ranked by their median residual, then their maximum (:attr:`Hypothesis.rank`). Where the meanings need F90 (or the exact Fresnel) and the table
-   has more than
-   SUBGRID_CELLS cells, they are ranked on a strided subgrid of about RANK_CELLS interior cells (no endpoint
-   clamp reaches them) and only the best is then measured on every cell, its clamps searched; the runners-up's
-   statistics say they were sampled.
+   α = 0, and ranked by their median residual, then their maximum (:attr:`Hypothesis.rank`). Where the meanings
+   need F90 (or the exact Fresnel) and the table has more than SUBGRID_CELLS cells, they are ranked on a strided
+   subgrid of about RANK_CELLS interior cells (no endpoint clamp reaches them) and only the best is then
+   measured on every cell, its clamps searched; the runners-up's statistics say they were sampled.
 
 A hypothesis *fits* a channel when its maximum residual is within the tolerance
 
