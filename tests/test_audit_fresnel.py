@@ -135,3 +135,32 @@ def test_three_axes_with_the_exact_factor_over_f0_and_its_fix(tmp_path):
     schlick = audit(codes, "ggx", read={"dtype": "uint16"}, sweep=False, dense=False, channels="E_f0")
     assert not schlick.fits and schlick.best.channels[0].max > 1e-3
     assert np.max(np.abs(r.fixed[..., 0] - values)) < 1e-6
+
+
+def _schlick_reflectance(cos: np.ndarray, f0: float) -> np.ndarray:
+    return f0 + (1.0 - f0) * (1.0 - cos) ** 5
+
+
+@pytest.mark.parametrize("f0", [0.04, 0.5])
+def test_schlick_table_at_one_f0_is_named_with_its_f0(f0):
+    """A 2-D table of ∫ f cos F_Schlick(f0, f90 = 1), made by the lobe's own fresnel=schlick: the audit names
+    E_schlick and finds f0 by least squares (f0·(E − F90) + F90 is linear in it); a wrong pinned f0 does not fit.
+    The worst cell is checked against Gauss-Legendre of the Fresnel-free lobe times Schlick's factor."""
+    t = (np.arange(N) + 0.5) / N
+    model = GGX.with_params(fresnel="schlick", f0=f0, f90=1.0)
+    table = lut.compute(model, {"mu": t, "alpha": t * t}, rtol=1e-10, average=False)["E"]
+    r = audit(table, "ggx", dense=False, sweep=False)
+    c, fit = r.best.convention, r.best.channels[0]
+    assert r.fits and c.meanings == ("E_schlick",) and abs(c.schlick_f0 - f0) < 1e-6 and fit.max < 1e-7
+    mu, alpha = fit.worst_at["mu"], fit.worst_at["alpha"]
+
+    class Schlick(_WithReflectance):
+        def eval(self, L, V):
+            H = (L + V) / np.linalg.norm(L + V, axis=-1, keepdims=True)
+            return self.lobe.eval(L, V) * _schlick_reflectance(np.sum(H * V, axis=-1), f0)[:, None]
+
+    V = np.array([np.sqrt(1.0 - mu * mu), 0.0, mu])
+    exact = float(half_vector_gauss_legendre(Schlick(alpha, 1.5), V, 48, 128))
+    assert abs(table[fit.worst] - exact) < 1e-7
+    wrong = audit(table, "ggx", dense=False, sweep=False, channels="E_schlick", schlick_f0=str(f0 + 0.02))
+    assert not wrong.fits and wrong.best.convention.schlick_f0 == pytest.approx(f0 + 0.02)

@@ -16,7 +16,8 @@ the roughness (and, for three axes, Schlick's f0):
 * per channel, its meaning (:data:`MEANINGS`), which also says the Fresnel factor: none (E, 1 − E), Schlick's
   (the split-sum channels; E_f0 over an f0 axis) or the exact dielectric one, at one index of refraction η
   (``E_dielectric``, η = :attr:`Convention.eta`, 1.5 unless pinned) or at η = (1 + √f0)/(1 − √f0) over an f0
-  axis (``E_f0_dielectric``); or the cloth channel of a three-channel DFG texture (``DFG_cloth``, the sheen lobe at
+  axis (``E_f0_dielectric``); Schlick's factor at one f0 over a 2-D table is ``E_schlick`` (f0 found, or pinned
+  with ``schlick_f0=``); or the cloth channel of a three-channel DFG texture (``DFG_cloth``, the sheen lobe at
   the same α).
 """
 
@@ -46,11 +47,13 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
 #: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
 MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
-            "DFG_cloth")
+            "DFG_cloth", "E_schlick")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
 DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
 #: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).
 ETA = 1.5
+#: Schlick's f0 of an E_schlick table (∫ f cos F_Schlick(f0, f90 = 1) over (μ, α)) unless found or pinned.
+SCHLICK_F0 = 0.04
 #: μ clamps searched where a grid reaches μ = 0: 1e-4 (brdfnorm lut's usual), cos(1.57) (LTC's θ ≤ 1.57), ...
 MU_FLOORS = (1e-4, float(np.cos(1.57)), 1e-3, 1e-2, 1e-5, 1e-6)
 #: α clamps searched where a grid reaches α = 0 (1e-8 stands for the α → 0 limit).
@@ -73,6 +76,8 @@ class Convention:
     alpha_floor: float = 1e-8
     meanings: tuple[str | None, ...] = field(default=())
     eta: float = ETA  # the index of refraction of an E_dielectric channel
+    schlick_f0: float = SCHLICK_F0  # Schlick's f0 of an E_schlick channel
+    free_f0: bool = True  # schlick_f0 is fitted to the table (least squares), not pinned
     #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
     #: 'f0', values); such an axis is ``explicit`` and never flipped.
     explicit: tuple[tuple[str, tuple[float, ...]], ...] = ()
@@ -94,7 +99,8 @@ class Convention:
                 "direction": self.direction, "roughness": self.roughness,
                 **({"f0": self.f0} if self.f0_axis is not None else {}),
                 "mu_floor": self.mu_floor, "alpha_floor": self.alpha_floor, "shadowing": self.shadowing,
-                "channels": list(self.meanings), **({"eta": self.eta} if "E_dielectric" in self.meanings else {})}
+                "channels": list(self.meanings), **({"eta": self.eta} if "E_dielectric" in self.meanings else {}),
+                **({"schlick_f0": self.schlick_f0} if "E_schlick" in self.meanings else {})}
 
     def text(self) -> str:
         d = self.describe()
@@ -107,6 +113,8 @@ class Convention:
                   "channels " + "/".join(m or "?" for m in self.meanings)]
         if "E_dielectric" in self.meanings:
             parts.append(f"eta={self.eta:g}")
+        if "E_schlick" in self.meanings:
+            parts.append(f"f0={self.schlick_f0:.6g}")
         return "; ".join(p for p in parts if p)
 
 
@@ -258,7 +266,9 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
                                   flips=flips, shadowing=shadowing,
                                   mu_floor=float(pinned.get("mu_floor", 1e-4)),
                                   alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen,
-                                  eta=float(pinned.get("eta", ETA))))
+                                  eta=float(pinned.get("eta", ETA)),
+                                  schlick_f0=float(pinned.get("schlick_f0", SCHLICK_F0)),
+                                  free_f0="schlick_f0" not in pinned))
     if not out:
         raise ArgumentError("the pinned parts leave no convention to test", where="--as")
     return out
@@ -272,7 +282,8 @@ def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[st
     return [pinned[key]]
 
 
-PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels", "eta")
+PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels", "eta",
+            "schlick_f0")
 
 
 def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
@@ -303,12 +314,24 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
         if not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
             raise ArgumentError("eta must lie in (1, 1000] (an E_dielectric table of an index of refraction)",
                                 where="--as")
+    if "schlick_f0" in out:
+        try:
+            value = float(out["schlick_f0"])
+        except ValueError:
+            raise ArgumentError("schlick_f0 must be a number", where="--as") from None
+        if not 0.0 <= value <= 1.0:
+            raise ArgumentError("schlick_f0 must lie in [0, 1]", where="--as")
     if "channels" in out:
         for meaning in out["channels"].split(","):
             if meaning.strip() not in MEANINGS and meaning.strip() != "-":
                 raise ArgumentError(f"channels: unknown meaning {meaning!r} (known: {', '.join(MEANINGS)}, - to "
                                     "skip a channel)", where="--as")
     return out
+
+
+def fresnel_of(c: Convention) -> dict[str, float]:
+    """The Fresnel constants a convention's meanings are evaluated with (``Reference.meaning``'s keywords)."""
+    return {"eta": c.eta, "schlick_f0": c.schlick_f0}
 
 
 def with_floors(c: Convention, mu_floor: float, alpha_floor: float) -> Convention:

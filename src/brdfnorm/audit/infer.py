@@ -38,7 +38,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import ArgumentError
-from .conventions import ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, geometries
+from .conventions import ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, fresnel_of, geometries
 from .reference import Reference
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
@@ -56,6 +56,8 @@ NOISE_FACTOR = 5.0
 MAX_NOISE_SHARE = 0.05
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
+#: A fitted Schlick f0 this close to 0 or 1 is DFG_f90 or E, which need no fitted number: those are preferred.
+SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
 
@@ -157,7 +159,8 @@ def noise_sigma(residual: np.ndarray) -> float:
 
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
-    default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth"], 3: ["E_f0"]}[grid_ndim]
+    default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth", "E_schlick"],
+               3: ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
         if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
             default = default + DIELECTRIC_BY_NDIM[grid_ndim]
@@ -178,7 +181,7 @@ def _mesh(shape: tuple[int, ...], index: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> tuple[np.ndarray, np.ndarray]:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), c.eta)
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), **fresnel_of(c))
 
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
@@ -257,7 +260,9 @@ def _rounds(values, names, reference, pins, step, chosen, candidates,
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
-    loose = 10.0 * (step + 1e-3)
+    # "loosely": a median residual within twice the storage step plus 1e-3 (a Monte-Carlo table's median residual
+    # is about 0.67 σ); a split-sum scale read as E is off by a median 1e-2
+    loose = 2.0 * (step + 1e-3)
     if (not scored or scored[0][0] > loose) and any(Reference.expensive(m) for ms in meanings for m in ms):
         scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
     keep = STAGE2_F90 if any(Reference.expensive(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
@@ -303,6 +308,10 @@ def _rank(values, candidates, reference, meanings, chosen, k) -> list[tuple[floa
             ok = np.isfinite(data)
             residuals = {}
             for meaning in meanings[channel]:
+                if meaning == "E_schlick" and c.free_f0:
+                    c = _fit_schlick(c, reference, coords, data)
+                    if not SCHLICK_ENDS < c.schlick_f0 < 1.0 - SCHLICK_ENDS:
+                        continue  # f0 = 0 is DFG_f90 and f0 = 1 is E: the meanings without a fitted number
                 exact, _ = _exact(reference, c, meaning, coords)
                 residuals[meaning] = float(np.median(np.abs(data[ok] - exact[ok]))) if ok.any() else float("inf")
             meaning = min(residuals, key=residuals.get)
@@ -311,6 +320,17 @@ def _rank(values, candidates, reference, meanings, chosen, k) -> list[tuple[floa
         out.append((best, replace(c, meanings=tuple(picks))))
     out.sort(key=lambda item: item[0])
     return out
+
+
+def _fit_schlick(c: Convention, reference, coords: dict, data: np.ndarray) -> Convention:
+    """``c`` with the f0 at which Schlick's factor fits ``data`` best in least squares: ∫ f cos F_Schlick =
+    f0·(E − F90) + F90 is linear in f0, so f0 = ⟨d − F90, E − F90⟩ / ⟨E − F90, E − F90⟩, clipped to [0, 1]."""
+    E, _ = _exact(reference, c, "E", coords)
+    bias, _ = _exact(reference, c, "DFG_f90", coords)
+    ok = np.isfinite(data)
+    scale = (E - bias)[ok]
+    f0 = float(np.sum((data[ok] - bias[ok]) * scale) / max(float(np.sum(scale * scale)), 1e-300)) if ok.any() else 0.0
+    return replace(c, schlick_f0=float(np.clip(f0, 0.0, 1.0)))
 
 
 def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, meaning: str,
@@ -359,6 +379,10 @@ def _stage2(values, names, c: Convention, reference, step, chosen, search=(True,
     reaches below them."""
     grid = values.shape[:-1]
     mesh = _mesh(grid, index if index is not None else [np.arange(n) for n in grid])
+    if c.free_f0 and "E_schlick" in c.meanings:  # refitted on the cells measured (stage 1 saw a subset)
+        channel = c.meanings.index("E_schlick")
+        data = values[np.ix_(*index)][..., channel] if index is not None else values[..., channel]
+        c = _fit_schlick(c, reference, coordinates(c, grid, mesh), data)
     raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, mesh)
     best = _full(values, c, reference, names, step, chosen, index)
     if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):

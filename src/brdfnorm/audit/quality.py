@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .conventions import Convention, axis_roles, role_value, unit_positions
+from .conventions import Convention, axis_roles, fresnel_of, role_value, unit_positions
 from .reference import Reference
 
 SWEEP_SIZES = (8, 16, 32, 64, 128)
@@ -89,7 +89,8 @@ def interpolate(table: np.ndarray, c: Convention, t: list[np.ndarray]) -> np.nda
 
 
 def _exact_at(reference: Reference, c: Convention, meaning: str, coords: dict) -> np.ndarray:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), c.eta)[0]
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"),
+                             **fresnel_of(c))[0]
 
 
 def dense_error(table: np.ndarray, c: Convention, meaning: str, reference: Reference,

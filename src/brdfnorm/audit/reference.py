@@ -31,7 +31,7 @@ from ..lut.cloth import cloth_model
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
 from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
-from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SHADOWING
+from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SCHLICK_F0, SHADOWING
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
@@ -131,9 +131,10 @@ class Reference:
             self.rank_rtol = 0.0
 
     def meaning(self, meaning: str, shadowing: str, mu: np.ndarray | None, alpha: np.ndarray,
-                f0: np.ndarray | None = None, eta: float = ETA) -> tuple[np.ndarray, np.ndarray]:
+                f0: np.ndarray | None = None, eta: float = ETA,
+                schlick_f0: float = SCHLICK_F0) -> tuple[np.ndarray, np.ndarray]:
         """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates; ``eta``
-        is the index of refraction of an E_dielectric channel."""
+        is the index of refraction of an E_dielectric channel, ``schlick_f0`` the f0 of an E_schlick one."""
         if meaning in ("E_avg", "1-E_avg"):
             value, error = self.values("E_avg", shadowing, np.zeros_like(alpha), alpha)
             return (value if meaning == "E_avg" else 1.0 - value), error
@@ -153,8 +154,8 @@ class Reference:
             return F, f_err
         if meaning == "DFG_f0":
             return E - F, e_err + f_err
-        if meaning == "E_f0":
-            f0 = np.broadcast_to(f0, np.broadcast(E, f0).shape)
+        if meaning in ("E_f0", "E_schlick"):  # Schlick's F = f0 + (1 − f0)(1 − V·H)⁵, per cell or one f0
+            f0 = np.broadcast_to(schlick_f0 if meaning == "E_schlick" else f0, E.shape)
             return f0 * E + (1.0 - f0) * F, f0 * e_err + (1.0 - f0) * f_err
         raise ValueError(meaning)
 
@@ -189,7 +190,7 @@ class Reference:
     def expensive(meaning: str) -> bool:
         """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90, the
         exact dielectric Fresnel and the cloth channel."""
-        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "DFG_cloth") + DIELECTRIC_MEANINGS
+        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "E_schlick", "DFG_cloth") + DIELECTRIC_MEANINGS
 
 
 def raise_unsupported(model: Model) -> None:
