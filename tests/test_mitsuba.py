@@ -276,3 +276,20 @@ def test_audit_of_a_separable_ggx_table_against_roughconductor(fast):
     result = audit(table["E"], model, axes=axes, dense=False, sweep=False)
     (channel,) = result.best.channels
     assert channel.max < 1e-5
+
+
+@pytest.mark.slow
+def test_cli_check_roughplastic_searches_the_interior_index_above_the_exterior(fast, capsys):
+    """``check mitsuba:roughplastic`` stopped with Mitsuba's refusal ("indices must differ") when its search reached
+    int_ior = ext_ior; the model holds the exterior index and searches the interior one above it."""
+    model = bn.load("mitsuba:roughplastic")
+    space = model.search_space()
+    assert space["ext_ior"] is None and space["int_ior"][0] > float(np.max(model.params["ext_ior"]))
+    code, out, err = run_cli(capsys, "check", "mitsuba:roughplastic", "--points", "4", "--budget", "2e6evals",
+                             "--json")
+    assert code in (0, 1), err
+    (report,) = json.loads(out)["reports"]
+    energy = report["checks"]["energy"]
+    # a coated diffuse base loses energy: its largest albedo found is about 0.71, at an interior index above air's
+    assert energy["status"] == "pass" and 0.5 < energy["value"] < 0.9
+    assert energy["params"]["int_ior"] > energy["params"]["ext_ior"]

@@ -163,6 +163,16 @@ class MitsubaModel(Model):
                                      where=self.source_path or self.name)
             self.transmits |= bool(mi.has_flag(bsdf.flags(), mi.BSDFFlags.Transmission))
 
+    def search_space(self) -> dict[str, tuple[float, float] | None]:
+        """``check`` holds the exterior index (the medium the surface is seen from, air by default) and searches the
+        interior one above it: Mitsuba refuses equal indices (no interface), which a search of both reaches."""
+        names = {p.name for p in self.parameters}
+        if not {"int_ior", "ext_ior"} <= names:
+            return {}
+        outside = float(np.max(self._params["ext_ior"]))
+        top = self.parameter("int_ior").maximum
+        return {"ext_ior": None, "int_ior": (min(outside * (1.0 + 1e-3), top), top)}
+
     def _value_sets(self, params: Mapping[str, object]) -> list[tuple]:
         """The distinct parameter-value tuples of (possibly array-valued) ``params``."""
         shape = np.broadcast_shapes(*self._batch_shapes(params))
