@@ -25,10 +25,12 @@ import functools
 import ipaddress
 import json
 import multiprocessing
+import os
 import re
 import socket
 import struct
 import sys
+import threading
 import time
 import uuid
 import warnings
@@ -209,7 +211,8 @@ class Workers:
         if self._pool is None:
             methods = multiprocessing.get_all_start_methods()
             context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-            self._pool = ProcessPoolExecutor(max_workers=self.count, mp_context=context)
+            self._pool = ProcessPoolExecutor(max_workers=self.count, mp_context=context,
+                                             initializer=watch_parent, initargs=(os.getpid(),))
         return self._pool
 
     def close(self) -> None:
@@ -227,6 +230,38 @@ class Workers:
         client, self._client = self._client, None
         if client is not None:
             client.close()
+
+
+#: How often a pool worker checks that the process that started the pool is still alive (seconds).
+PARENT_POLL_SECONDS = 0.5
+
+
+def watch_parent(parent: int) -> None:
+    """A pool worker's initializer: a daemon thread ends the worker when ``parent`` (the process that made the
+    pool) is gone. A parent killed outright (SIGKILL, a test's timeout) runs no clean-up, and the workers — children
+    of the forkserver, each holding both ends of the task queue — would otherwise wait for tasks forever."""
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_POLL_SECONDS)
+            if not _alive(parent):
+                os._exit(1)
+
+    threading.Thread(target=watch, name="brdfnorm-parent-watch", daemon=True).start()
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs: it exists (signal 0), is ours, and is not a zombie (a killed parent whose own
+    parent has not reaped it yet still exists; Linux says so in /proc)."""
+    try:
+        os.kill(pid, 0)
+    except (ProcessLookupError, PermissionError):  # gone, or the pid now belongs to another user's process
+        return False
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            return stat.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):  # no /proc (not Linux): existence is all there is to know
+        return True
 
 
 def _in_pool(pool: ProcessPoolExecutor, tasks: list[tuple]) -> Iterator[ChunkResult]:
