@@ -264,6 +264,13 @@ def test_formula_error_is_measured_against_an_independent_e_avg(capsys):
     assert row["max"] == pytest.approx(float(np.max(1.0 - exact)), abs=1e-7)
 
 
+def test_formula_report_is_a_new_directory(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "audit", "--formula", "1 + 0*r", "--quantity", "E_avg", "--report",
+                             str(tmp_path / "fig"))
+    assert code == 0, err
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [".brdfnorm-report", "formula_error_E_avg.png"]
+
+
 def test_axis_values_given_outright(capsys, tmp_path):
     alpha = np.linspace(0.05, 1.0, N)
     e = _table(mu=T_TEXEL, alpha=alpha)

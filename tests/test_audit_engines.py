@@ -134,9 +134,15 @@ def test_report_figures(capsys, tmp_path):
     n = 8
     t = (np.arange(n) + 0.5) / n
     np.savez(tmp_path / "t.npz", E=lut.compute(GGX, {"mu": t, "alpha": t}, average=False)["E"])
+    # a directory that holds other files is refused before any work, in one line naming the flag
     code, out, err = run_cli(capsys, "audit", str(tmp_path / "t.npz"), "--report", str(tmp_path))
-    assert code == 0 and (tmp_path / "error_map_0.png").stat().st_size > 1000
-    assert (tmp_path / "error_vs_resolution.png").exists() and "convention:" in out
+    assert code == 2 and "--report" in err and len(err.strip().splitlines()) == 1 and not out
+    report = tmp_path / "report"  # created whole, marked as a report, and replaced by the next audit
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "t.npz"), "--report", str(report))
+    assert code == 0 and (report / "error_map_0.png").stat().st_size > 1000
+    assert (report / "error_vs_resolution.png").exists() and "convention:" in out
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "t.npz"), "--report", str(report), "--no-sweep")
+    assert code == 0 and sorted(p.name for p in report.iterdir()) == [".brdfnorm-report", "error_map_0.png"]
 
 
 def test_glsl_fit_equals_the_same_fit_as_an_expression(capsys):
@@ -195,12 +201,12 @@ def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path)
     np.save(tmp_path / "t.npy", biased)
     np.savez(tmp_path / "t.npz", E=biased)
     code, r = _cli_json(capsys, str(tmp_path / "t.npz"), "--no-sweep", "--no-interpolation", "--report",
-                        str(tmp_path))
+                        str(tmp_path / "report"))
     assert code == 1 and r["verdict"] == "no hypothesis fits"
     best = r["best"]
     assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
     assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.1
-    assert (tmp_path / "error_map_0.png").exists()
+    assert (tmp_path / "report" / "error_map_0.png").exists()
 
 
 def test_large_split_sum_ranks_on_a_subgrid_and_measures_the_best_in_full():
@@ -222,11 +228,11 @@ def test_report_figures_for_one_and_three_axes(tmp_path):
     t = (np.arange(8) + 0.5) / 8
     dfg = lut.compute(GGX, {"alpha": t, "mu": t}, channels=["dfg"], rtol=1e-7, average=False)
     r = audit(t[:, None, None] * dfg["DFG_f0"][None] + dfg["DFG_f90"][None], "ggx", sweep=False)
-    assert r.fits and figures(r, str(tmp_path / ".")) == [str(tmp_path / "error_map_0.png")]
+    assert r.fits and figures(r, str(tmp_path / "three")) == [str(tmp_path / "three" / "error_map_0.png")]
     g = np.linspace(0, 1, 16)
     e_avg = lut.compute(GGX, {"mu": [1.0], "alpha": np.maximum(g, 1e-8)}, rtol=1e-10)["E_avg"]
     r = audit(e_avg, "ggx")
-    assert r.fits and len(figures(r, str(tmp_path))) == 2
+    assert r.fits and len(figures(r, str(tmp_path / "one"))) == 2
 
 
 def test_ltc_fresnel_channel_is_found_beside_the_albedo(capsys, tmp_path):

@@ -1,13 +1,28 @@
 """An audit for people: the terminal text, and ``--report DIR``'s figures (signed error maps with a colour bar,
-error against resolution), drawn with matplotlib (Agg) from :class:`.api.AuditResult`."""
+error against resolution), drawn with matplotlib (Agg) from :class:`.api.AuditResult`. The directory is written
+as ``brdfnorm report``'s is (:func:`brdfnorm.output.directories.staged`): created if absent, replaced whole only
+if it holds an earlier report, never half-written."""
 
 from __future__ import annotations
 
-from pathlib import Path
+import io
+import os
 
 import numpy as np
 
-from ..errors import OutputError
+from .. import __version__
+from ..output.directories import check_target, staged
+
+
+def check_report_directory(directory: str) -> None:
+    """Refuse a ``--report`` directory that cannot be written before any work is done (one error naming it)."""
+    check_target(directory, "--report")
+
+
+def _png(figure) -> bytes:
+    buffer = io.BytesIO()
+    figure.savefig(buffer, dpi=100, format="png")
+    return buffer.getvalue()
 
 
 def _g(x: float) -> str:
@@ -68,10 +83,7 @@ def figures(result, directory: str) -> list[str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    target = Path(directory)
-    if not target.is_dir():
-        raise OutputError(f"directory {directory!r} does not exist", where="--report")
-    written = []
+    files: dict[str, bytes] = {}
     for fit in result.best.channels:
         if fit.residual is None:
             continue
@@ -95,10 +107,8 @@ def figures(result, directory: str) -> list[str]:
             axes.set_xlabel(f"array axis {offset + 1} ({describe[offset + 1]})")
             axes.set_ylabel(f"array axis {offset} ({describe[offset]})")
         axes.set_title(title)
-        path = target / f"error_map_{fit.channel}.png"
-        figure.savefig(path, dpi=100)
+        files[f"error_map_{fit.channel}.png"] = _png(figure)
         plt.close(figure)
-        written.append(str(path))
     if result.resolution:
         figure, axes = plt.subplots(figsize=(6, 4))
         for channel, rows in result.resolution.items():
@@ -110,11 +120,17 @@ def figures(result, directory: str) -> list[str]:
         axes.set_xlabel("samples per axis (exact table)")
         axes.set_ylabel("interpolation error")
         axes.legend()
-        path = target / "error_vs_resolution.png"
-        figure.savefig(path, dpi=100)
+        files["error_vs_resolution.png"] = _png(figure)
         plt.close(figure)
-        written.append(str(path))
-    return written
+    return _write(directory, files)
+
+
+def _write(directory: str, files: dict[str, bytes]) -> list[str]:
+    """The figures written into ``directory`` at once; their paths."""
+    with staged(directory, f"brdfnorm {__version__} audit\n", "--report") as stage:
+        for name, data in files.items():
+            stage.write(name, data)
+    return [os.path.join(directory, name) for name in files]
 
 
 def formula_figures(arrays: dict, directory: str) -> list[str]:
@@ -124,10 +140,7 @@ def formula_figures(arrays: dict, directory: str) -> list[str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    target = Path(directory)
-    if not target.is_dir():
-        raise OutputError(f"directory {directory!r} does not exist", where="--report")
-    written = []
+    files: dict[str, bytes] = {}
     for quantity, (diff, mu, alpha) in arrays.items():
         figure, axes = plt.subplots(figsize=(6, 5))
         finite = diff[np.isfinite(diff)]
@@ -143,8 +156,6 @@ def formula_figures(arrays: dict, directory: str) -> list[str]:
             axes.set_xlabel("alpha")
             axes.set_ylabel("mu = cos θ")
         axes.set_title(f"{quantity}: max |error| {limit:.3g}")
-        path = target / f"formula_error_{quantity}.png"
-        figure.savefig(path, dpi=100)
+        files[f"formula_error_{quantity}.png"] = _png(figure)
         plt.close(figure)
-        written.append(str(path))
-    return written
+    return _write(directory, files)

@@ -66,6 +66,10 @@ def audit_command(
     """Audit a table or a fitted formula against exact values; name its convention; optionally fix it."""
     with guarded(debug):
         m = load_model(model, param)
+        if report is not None:  # before the work: a directory that cannot be written is refused now
+            from ..audit.report import check_report_directory
+
+            check_report_directory(report)
         if formula is not None:
             _formula(m, formula, function, args, quantity, json_out, report)
             return

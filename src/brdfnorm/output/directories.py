@@ -43,8 +43,9 @@ class Stage:
         write_file(self.path / name, data)
 
 
-def check_target(target: str | os.PathLike[str]) -> Path:
-    """The absolute target directory, or an OutputError saying why it cannot be (re)written."""
+def check_target(target: str | os.PathLike[str], option: str = "-o") -> Path:
+    """The absolute target directory, or an OutputError saying why it cannot be (re)written (``option``: the flag
+    that named it)."""
     where = os.fspath(target)
     if not where.strip():
         raise OutputError("empty output directory; give a directory name", where=repr(where))
@@ -62,14 +63,14 @@ def check_target(target: str | os.PathLike[str]) -> Path:
             raise OutputError("exists and is not a directory", where=where)
         if not (path / MARKER).is_file() and any(path.iterdir()):
             raise OutputError("directory is not empty and holds no brdfnorm report; refusing to replace it "
-                              "(choose another -o)", where=where)
+                              f"(choose another {option})", where=where)
     return path
 
 
 @contextlib.contextmanager
-def staged(target: str | os.PathLike[str], marker_text: str) -> Iterator[Stage]:
+def staged(target: str | os.PathLike[str], marker_text: str, option: str = "-o") -> Iterator[Stage]:
     """Yield a :class:`Stage` beside ``target``; on normal exit the staged directory becomes ``target``."""
-    path = check_target(target)
+    path = check_target(target, option)
     where = os.fspath(target)
     with signals_cleanup():
         try:
