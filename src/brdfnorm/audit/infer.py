@@ -223,8 +223,9 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
     interpolation in f0 between two exact η, ranked it 5th to 60th: they are several per cent off at grazing cells,
     as much as a wrong sample position."""
     grid = values.shape[:-1]
-    mesh = _mesh(grid, [_subset(n, SUBSET_F90) for n in grid])
-    sample = values[np.ix_(*[_subset(n, SUBSET_F90) for n in grid])]
+    index = [_subset(n, SUBSET_F90) for n in grid]
+    mesh = _mesh(grid, index)
+    sample = values[np.ix_(*index)]
     ranked = []
     for c in candidates:
         coords = coordinates(c, grid, mesh)
@@ -247,9 +248,11 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
             return float(np.mean(data[ok] - exact[ok]))
 
         low, high = 1.0 + 1e-4, min(10.0, reference.eta_max)
-        if gap(high) > 0 and reference.eta_max > high:
+        at_high = gap(high)
+        if at_high > 0 and reference.eta_max > high:
             high = reference.eta_max
-        if gap(low) > 0 > gap(high):
+            at_high = gap(high)
+        if gap(low) > 0 > at_high:
             out.append(replace(c, eta=float(optimize.brentq(gap, low, high, xtol=1e-7, rtol=1e-10))))
     return list(dict.fromkeys(out)) or [replace(c, eta=ETA) for _, _, c in ranked[:DIELECTRIC_GEOMETRIES]]
 

@@ -67,9 +67,9 @@ def audit_command(
     with guarded(debug):
         m = load_model(model, param)
         if report is not None:  # before the work: a directory that cannot be written is refused now
-            from ..audit.report import check_report_directory
+            from ..output.directories import check_target
 
-            check_report_directory(report)
+            check_target(report, "--report")
         if formula is not None:
             _formula(m, formula, function, args, quantity, json_out, report)
             return
