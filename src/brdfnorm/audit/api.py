@@ -96,7 +96,7 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
     energy (its declared ``energy`` says "conserved", or says nothing) and a meaning that is not UNBOUNDED."""
     values = source.values
     slack = max(source.step(), 1e-12)  # rounding of a stored 1.0 is not a violation
-    conserves = not model.energy or model.energy.startswith("conserved")
+    conserves = model.conserves_energy is not False  # a lobe that does not say is held to E ≤ 1
     bounded = np.full(values.shape[-1], conserves)
     for channel, meaning in enumerate(inference.best.convention.meanings):
         bounded[channel] &= meaning not in UNBOUNDED

@@ -64,6 +64,7 @@ class Model(ABC):
     #: One-line formula shown by ``brdfnorm models``.
     formula: str = ""
     #: Whether the lobe conserves energy, in words (``brdfnorm models``; "" where not stated); ``check`` measures it.
+    #: A lobe that does begins the words with "conserved" (:attr:`conserves_energy` reads it).
     energy: str = ""
     #: Where :meth:`closed_form_albedo` holds, in words (``brdfnorm models``).
     closed_form_domain: str = "normal incidence"
@@ -110,6 +111,11 @@ class Model(ABC):
 
     def _check(self) -> None:  # noqa: B027 - a hook: most lobes have nothing to check across their parameters
         """Checks across parameters, after each binding (a ParameterError for values that do not go together)."""
+
+    @property
+    def conserves_energy(self) -> bool | None:
+        """Whether E ≤ 1 at every view as declared in :attr:`energy`; None where the lobe does not say."""
+        return self.energy.startswith("conserved") if self.energy else None
 
     def parameter(self, name: str) -> Parameter:
         """The declared parameter called ``name``."""
