@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import difflib
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
@@ -36,6 +36,23 @@ class Lobe:
     direction: np.ndarray
     width: np.ndarray
     support: np.ndarray
+
+
+@dataclass(frozen=True)
+class NativeKernel:
+    """A model's BRDF as one compiled scalar function, for the compiled engine to call inside its own loops.
+
+    ``function`` is a Numba ``njit`` dispatcher ``f(lx, ly, lz, vx, vy, vz, u) -> tuple of channels float64``
+    (L and V as components in the local frame N = +z, X = +x, Y = +y; ``u`` a 1-D float64 array of the
+    parameter values packed by ``pack``). It returns f(L, V) itself, not f·(N·L), and must give the same
+    values as :meth:`Model.evaluate` to rounding. ``pack(params)`` turns one case's parameter values (scalars,
+    colours as 3-vectors) into ``u``; ``key`` identifies the compiled code (for caches).
+    """
+
+    function: Callable
+    channels: int
+    pack: Callable[[Mapping[str, object]], np.ndarray]
+    key: str
 
 
 def mirror(direction: np.ndarray) -> np.ndarray:
@@ -148,6 +165,11 @@ class Model(ABC):
         except ValueError:
             raise ArgumentError(f"L {L.shape} and V {V.shape} do not broadcast", where="V") from None
         return self.evaluate(L, V, self._params)
+
+    def native_kernel(self) -> NativeKernel | None:
+        """The lobe as a compiled scalar function (:class:`NativeKernel`), or None where there is none (the
+        engine then evaluates :meth:`evaluate` through numpy)."""
+        return None
 
     # -- facts for the integrator -------------------------------------------------------------------
     def lobe(self, fixed: np.ndarray, params: Mapping[str, object], over: Over) -> Lobe | None:
