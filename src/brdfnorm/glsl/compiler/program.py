@@ -148,6 +148,7 @@ def compile_shader(
     first_line: int = 1,
     first_column: int = 1,
     uniforms: Mapping[str, str] | None = None,
+    compiler_class: type[Compiler] = Compiler,
 ) -> Program:
     """Compile the GLSL text of a ``.brdf`` shader section into a :class:`Program`.
 
@@ -155,14 +156,15 @@ def compile_shader(
     every error is reported as ``FILE:LINE:COL`` of the file; ``uniforms`` declares the parameters
     (name → ``"float"``, ``"bool"`` or ``"vec3"``) as BRDF Explorer does. Raises
     :class:`~brdfnorm.errors.BrdfFileError` for any problem in the text, a bound of :mod:`..limits` hit
-    included.
+    included. ``compiler_class`` is :class:`Compiler` or a subclass (the native backend's, which runs loops its
+    own way).
     """
     # The compiler allocates a few objects per node, all alive until it returns: the cyclic garbage collector
     # would rescan them again and again (compile time growing faster than the shader), so it pauses.
     collecting = gc.isenabled()
     gc.disable()
     try:
-        compiler = Compiler(source, path, first_line, first_column, uniforms or {})
+        compiler = compiler_class(source, path, first_line, first_column, uniforms or {})
         compiler.compile()
     except RecursionError:  # the compiler recurses along the syntax tree
         raise BrdfFileError("shader is nested too deeply", path, first_line, first_column) from None

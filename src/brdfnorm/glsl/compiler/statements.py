@@ -10,6 +10,7 @@ bounded at run time by :data:`..limits.MAX_LOOP_ITERATIONS` per loop, and per ev
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from ...errors import EvaluationError
 from ..limits import MAX_LOOP_ITERATIONS, MAX_LOOP_NODES, MAX_TOTAL_ITERATIONS
@@ -71,6 +72,25 @@ def _continue(f: Frame) -> None:
     state = next(s for s in reversed(f.loops) if not s.switch)
     state.continued = mask_or(state.continued, f.mask)
     f.mask = False
+
+
+@dataclass(frozen=True)
+class LoopParts:
+    """A compiled loop's pieces: initializer, condition (None: none), update, body, whether the condition is
+    tested before the first iteration (not for ``do``), its place, and what one iteration costs."""
+
+    init: Statement | None
+    cond: Callable[[Frame], object] | None
+    update: Statement | None
+    body: Statement
+    test_first: bool
+    where: str
+    own_nodes: int
+    callees: list
+
+    def cost(self) -> int:
+        """Nodes one iteration runs with its calls inlined (known once every function is compiled)."""
+        return self.own_nodes + sum(c.inlined_size for c in self.callees)
 
 
 def mask_minus(mask, other):
@@ -212,6 +232,13 @@ class StatementsMixin(CompilerBase):
         where = self.where(node)
         # Nodes one iteration runs with its calls inlined; the callees' sizes are known once all are compiled.
         own_nodes, callees = self.compiled_nodes - nodes_before, [c for c, *_ in self.function.calls[calls_before:]]
+        return self.loop_runner(LoopParts(init, cond, update, body, test_first, where, own_nodes, callees))
+
+    def loop_runner(self, parts: LoopParts) -> Statement:
+        """The closure running a compiled loop over lane masks (the native backend runs its own)."""
+        init, cond, update, body, test_first, where = (
+            parts.init, parts.cond, parts.update, parts.body, parts.test_first, parts.where
+        )
         cost: list[int] = []
 
         def run(f):
@@ -237,7 +264,7 @@ class StatementsMixin(CompilerBase):
                     count += 1
                     f.budget[0] += 1
                     if not cost:
-                        cost.append(own_nodes + sum(c.inlined_size for c in callees))
+                        cost.append(parts.cost())
                     f.budget[1] += cost[0]
                     if count > MAX_LOOP_ITERATIONS:
                         raise EvaluationError(f"loop exceeded {MAX_LOOP_ITERATIONS} iterations", where)

@@ -1,0 +1,88 @@
+"""The native backend of ``.brdf`` shaders: a shader's ``BRDF`` as one scalar Numba function (issue 39).
+
+:func:`native_kernel` gives a :class:`~brdfnorm.models.base.NativeKernel` for a parsed ``.brdf`` file:
+``function(lx, ly, lz, vx, vy, vz, u) -> (r, g, b)`` is f(L, V) with N = +z, X = +x, Y = +y, the same float64
+values as the numpy backend (:mod:`..compiler`) to rounding of the transcendental functions; ``pack(params)``
+puts the parameter values in ``u``. The source is generated from the numpy backend's compiled program by
+tracing (:mod:`.generate`, :mod:`.tracer`): generated identifiers and printed literals only, nothing of the
+shader's text. Modules are cached on disk per user (:mod:`.cache`). A shader the backend cannot express gives
+None (the numpy backend evaluates it), as does a missing or failing Numba.
+
+A loop bound of :mod:`..limits` hit inside the compiled function raises :class:`.runtime.NativeLimit`;
+:func:`limit_error` gives the numpy backend's :class:`~brdfnorm.errors.EvaluationError` for it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ...errors import EvaluationError
+from ...models.base import NativeKernel
+from .runtime import NativeLimit
+
+_kernels: dict[tuple, tuple] = {}  # (path, shader text, place, uniforms) -> (NativeKernel, Generated) or None
+
+
+def _pack_function(layout: tuple, size: int):
+    def pack(params: Mapping[str, object]) -> np.ndarray:
+        """The parameter values as the compiled function's ``u`` (bools as 1.0 / 0.0, colours as 3 values)."""
+        u = np.empty(size)
+        for name, kind, offset in layout:
+            value = params[name]
+            if kind == "bool":
+                u[offset] = 1.0 if bool(np.asarray(value)) else 0.0
+            elif kind == "float":
+                u[offset] = float(np.asarray(value, dtype=float))
+            else:
+                u[offset : offset + 3] = np.asarray(value, dtype=float).reshape(3)
+        return u
+
+    return pack
+
+
+def native_kernel(brdf) -> NativeKernel | None:
+    """The compiled kernel of a parsed ``.brdf`` file (:class:`~brdfnorm.brdffile.BrdfFile`), or None where the
+    native backend cannot express the shader or Numba is missing."""
+    found = _entry(brdf)
+    return None if found is None else found[0]
+
+
+def _entry(brdf) -> tuple | None:
+    uniforms = brdf.uniforms
+    key = (brdf.path, brdf.shader.text, brdf.shader.line, brdf.shader.column, tuple(uniforms.items()))
+    if key in _kernels:
+        return _kernels[key]
+    _kernels[key] = None
+    try:
+        import numba  # noqa: F401 - the backend needs it; without it the numpy backend serves
+    except ImportError:
+        return None
+    from .cache import cache_key, load
+    from .generate import Unsupported, generate
+
+    try:
+        generated = generate(
+            brdf.shader.text, path=brdf.path, first_line=brdf.shader.line, first_column=brdf.shader.column,
+            uniforms=uniforms,
+        )
+    except Unsupported:
+        return None
+    digest = cache_key(generated.source)
+    function = load(generated.source, digest)
+    kernel = NativeKernel(function, 3, _pack_function(generated.layout, generated.size), digest)
+    _kernels[key] = (kernel, generated)
+    return _kernels[key]
+
+
+def limit_error(brdf, error: NativeLimit) -> EvaluationError:
+    """The numpy backend's :class:`EvaluationError` (the loop's ``FILE:LINE:COL`` and the bound) for a
+    :class:`NativeLimit` raised by ``brdf``'s compiled kernel."""
+    found = _entry(brdf)
+    if found is None:
+        return EvaluationError("a bound on the shader's loops was hit", brdf.path)
+    return found[1].limit_error(error)
+
+
+__all__ = ["NativeLimit", "limit_error", "native_kernel"]

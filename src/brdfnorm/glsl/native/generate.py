@@ -1,0 +1,312 @@
+"""From a ``.brdf`` shader to the Python source of one scalar function ``brdf(lx, ly, lz, vx, vy, vz, u)``.
+
+The shader is compiled by the numpy backend's own compiler (:mod:`..compiler`: the same typed syntax tree,
+overloads, conversions, Mesa's folds and built-ins), then its ``BRDF`` runs once on :class:`.tracer.Tracer`
+components: L and V as the arguments, N, X, Y as the constants +z, +x, +y, each parameter as ``u[k]``. Every
+operation becomes one line; control flow whose condition depends on the directions or the parameters is
+predicated (both branches, then a select: the numpy backend's own lane masks on one lane). Loops are the
+exception: :class:`NativeCompiler` runs them as real ``while`` loops whose loop-carried state (every variable,
+the lane mask, the return value, the bounds' counters) lives in generated variables, with the per-loop,
+total-iteration and loop-node bounds of :mod:`..limits` checked as the numpy backend checks them (a
+:class:`.runtime.NativeLimit` with a code; :func:`Generated.limit_error` names the loop).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ...errors import EvaluationError
+from ..compiler import Compiler, Program, compile_shader
+from ..compiler.components import BITWISE
+from ..compiler.statements import LoopParts
+from ..compiler.values import Expr, zeros
+from ..limits import MAX_LOOP_ITERATIONS, MAX_LOOP_NODES, MAX_TOTAL_ITERATIONS
+from ..runtime import LoopState, mask_and, mask_and_not, mask_or
+from .tracer import Recorder, Tracer, Unsupported, literal, operand, recording
+
+#: What each limit code's remainder (code % 3) stands for, in the numpy backend's words.
+_LIMITS = (
+    f"loop exceeded {MAX_LOOP_ITERATIONS} iterations",
+    f"loops exceeded {MAX_TOTAL_ITERATIONS} iterations in total in one evaluation",
+    f"loops ran more than {MAX_LOOP_NODES} nodes in one evaluation",
+)
+_ARGUMENTS = ("lx", "ly", "lz", "vx", "vy", "vz")
+_FRAME = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))  # N, X, Y as BrdfModel.evaluate passes them
+
+
+def _plain_arrays_refused(components: tuple) -> tuple:
+    """Integer bit operations go through ``np.asarray(..., int64)``, which a tracer cannot follow: its empty
+    data would come out as a plain array. Refuse such a result rather than trace a wrong value."""
+    for c in components:
+        if not isinstance(c, Tracer) and getattr(c, "ndim", 0):
+            raise Unsupported("an integer bit operation on a value known only at run time")
+    return components
+
+
+class NativeCompiler(Compiler):
+    """The numpy backend's compiler, with loops run as generated ``while`` loops when traced."""
+
+    #: The loops' FILE:LINE:COL in the order their limit codes number them (a list per compilation).
+    loop_places: list[str] = []
+
+    def binary_types(self, op, a, b, node):
+        t, fn = super().binary_types(op, a, b, node)
+        if op in BITWISE or op == "%":
+            inner = fn
+            fn = lambda x, y: _plain_arrays_refused(inner(x, y))  # noqa: E731
+        return t, fn
+
+    def apply_unary(self, op, e, node):
+        out = super().apply_unary(op, e, node)
+        if op != "~" or out.const is not None:
+            return out
+        ev = out.ev
+        return Expr(out.type, lambda f: _plain_arrays_refused(ev(f)), effects=out.effects)
+
+    def loop_runner(self, parts: LoopParts):
+        index = len(self.loop_places)
+        self.loop_places.append(parts.where)
+        ret_zeros = zeros(self.function.ret) if self.function.ret.size else ()
+        return lambda f: _traced_loop(f, parts, index, ret_zeros)
+
+
+class _Carried:
+    """The state a loop iteration reads and writes: every variable's components, the return value and the
+    bounds' counters, each held in a generated loop variable ``pN``."""
+
+    def __init__(self, f, ret_zeros: tuple) -> None:
+        self.f = f
+        if f.ret is None and ret_zeros:
+            f.ret = ret_zeros  # zeros where no lane returned yet: the same values in every lane that returns
+        self.slots = [i for i, v in enumerate(f.slots) if v is not None]
+        self.globals = [i for i, v in enumerate(f.globals) if v is not None]
+        self.names: list[tuple[str, str]] = []  # (generated name, kind) in the order of values()
+
+    def values(self) -> list:
+        f = self.f
+        out = [c for i in self.slots for c in f.slots[i]] + [c for i in self.globals for c in f.globals[i]]
+        out += list(f.ret or ()) + list(f.budget)
+        return out
+
+    def install(self, values: list) -> None:
+        f, k = self.f, 0
+        for i in self.slots:
+            n = len(f.slots[i])
+            f.slots[i], k = tuple(values[k : k + n]), k + n
+        for i in self.globals:
+            n = len(f.globals[i])
+            f.globals[i], k = tuple(values[k : k + n]), k + n
+        if f.ret is not None:
+            n = len(f.ret)
+            f.ret, k = tuple(values[k : k + n]), k + n
+        f.budget[:] = values[k:]
+
+    def declare(self, rec: Recorder) -> list[Tracer]:
+        """``pN = value`` for every component before the loop; the tracers for them, installed into the frame."""
+        phis = []
+        for value in self.values():
+            kind = value.kind if isinstance(value, Tracer) else ("b" if _is_bool(value) else "f")
+            name = rec.name("p")
+            rec.emit(f"{name} = {operand(value, kind)}")
+            self.names.append((name, kind))
+            phis.append(Tracer.of(name, kind))
+        self.install(phis)
+        return phis
+
+    def fresh(self) -> list[Tracer]:
+        """New tracers for the loop variables (after the loop, whatever the body did to the old objects)."""
+        return [Tracer.of(name, kind) for name, kind in self.names]
+
+
+def _is_bool(value) -> bool:
+    import numpy as np
+
+    return isinstance(value, bool | np.bool_)
+
+
+def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> None:
+    """``name = value`` for every pair, as one parallel assignment (a value may be another target's name)."""
+    sources = [operand(v, kind) for (_, kind), v in zip(targets, values, strict=True)]
+    names = {name for name, _ in targets}
+    staged = []
+    for source in sources:
+        if source in names:
+            temp = rec.name()
+            rec.emit(f"{temp} = {source}")
+            source = temp
+        staged.append(source)
+    for (name, _), source in zip(targets, staged, strict=True):
+        if name != source:
+            rec.emit(f"{name} = {source}")
+
+
+def _check(rec: Recorder, value, bound: int, code: int) -> None:
+    rec.emit(f"if {operand(value, 'f')} > {literal(bound)}:")
+    rec.emit(f"    raise NativeLimit({code})")
+
+
+def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
+    """One loop as a generated ``while True:``, with the numpy backend's per-iteration semantics (one lane)."""
+    from .tracer import current
+
+    rec = current()
+    if parts.init is not None:
+        parts.init(f)
+    state = LoopState()
+    f.loops.append(state)
+    try:
+        carried = _Carried(f, ret_zeros)
+        carried.declare(rec)
+        control = [("", "b"), ("", "b"), ("", "b"), ("", "f")]  # mask, exited, broken, iteration count
+        control = [(rec.name("p"), kind) for _, kind in control]
+        assign(rec, control, [True if f.mask is None else f.mask, False, False, 0.0])
+        mask, exited, broken, count = (Tracer.of(name, kind) for name, kind in control)
+        rec.emit("while True:")
+        rec.depth += 1
+        f.mask = mask
+
+        def test(exited):
+            c = parts.cond(f)
+            exited = mask_or(exited, mask_and_not(f.mask, c))
+            f.mask = mask_and(f.mask, c)
+            return exited
+
+        if parts.test_first:
+            if parts.cond is not None:
+                exited = test(exited)
+                assign(rec, control[1:2], [exited])
+            rec.emit(f"if not {operand(f.mask, 'b')}:")
+            rec.emit("    break")
+        count = rec.value(f"{count.sym} + 1.0", "f")
+        _check(rec, count, MAX_LOOP_ITERATIONS, 3 * index)
+        f.budget[0] = f.budget[0] + 1.0
+        _check(rec, f.budget[0], MAX_TOTAL_ITERATIONS, 3 * index + 1)
+        f.budget[1] = f.budget[1] + float(parts.cost())
+        _check(rec, f.budget[1], MAX_LOOP_NODES, 3 * index + 2)
+        state.broken = broken
+        parts.body(f)
+        f.mask = mask_or(f.mask, state.continued)
+        state.continued = False
+        if parts.update is not None:
+            parts.update(f)  # under the lanes still running: a lane that left keeps its values
+        if not parts.test_first and parts.cond is not None:
+            exited = test(exited)
+        assign(rec, carried.names + control, carried.values() + [f.mask, exited, state.broken, count])
+        if not parts.test_first:
+            rec.emit(f"if not {control[0][0]}:")
+            rec.emit("    break")
+        rec.depth -= 1
+        before_slots, before_globals = set(carried.slots), set(carried.globals)
+        for i in range(len(f.slots)):  # variables declared in the body are out of scope after the loop
+            if i not in before_slots:
+                f.slots[i] = None
+        for i in range(len(f.globals)):
+            if i not in before_globals:
+                f.globals[i] = None
+        carried.install(carried.fresh())
+        _, exited, broken, _ = (Tracer.of(name, kind) for name, kind in control)
+        f.mask = mask_or(exited, broken)
+    finally:
+        f.loops.pop()
+
+
+@dataclass(frozen=True)
+class Generated:
+    """A shader's generated source and what goes with it: the parameters' places in ``u`` (name, GLSL type,
+    offset), the number of values in ``u``, and the loops' places for the limit messages."""
+
+    source: str
+    layout: tuple[tuple[str, str, int], ...]
+    size: int
+    loop_places: tuple[str, ...]
+
+    def limit_error(self, error: Exception) -> EvaluationError:
+        """The numpy backend's :class:`EvaluationError` for a :class:`.runtime.NativeLimit` of this shader."""
+        code = int(error.args[0]) if error.args else -1
+        if not 0 <= code < 3 * len(self.loop_places):
+            return EvaluationError("a bound on the shader's loops was hit", "native shader")
+        return EvaluationError(_LIMITS[code % 3], self.loop_places[code // 3])
+
+
+HEADER = '''"""Generated by brdfnorm.glsl.native from a .brdf shader's syntax tree: do not edit (regenerated)."""
+import numpy as np
+from numba import njit
+
+from brdfnorm.glsl.native.runtime import NativeLimit
+
+NAN = np.nan
+INF = np.inf
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def brdf(lx, ly, lz, vx, vy, vz, u):
+'''
+
+
+def generate(text: str, *, path: str, first_line: int, first_column: int, uniforms: dict[str, str]) -> Generated:
+    """Trace a shader's ``BRDF`` into the source of one scalar function; :class:`Unsupported` where it cannot.
+
+    Compile errors are the numpy backend's :class:`~brdfnorm.errors.BrdfFileError` (the model compiled the same
+    text already). The loader compiles it without the disk cache where there is no safe cache directory.
+    """
+    places: list[str] = []
+
+    class Compiling(NativeCompiler):
+        loop_places = places
+
+    program = compile_shader(
+        text, path=path, first_line=first_line, first_column=first_column, uniforms=uniforms,
+        compiler_class=Compiling,
+    )
+    rec = Recorder()
+    layout: list[tuple[str, str, int]] = []
+    try:
+        with recording(rec):
+            ret, size = _trace(program, rec, layout)
+    except RecursionError:
+        raise Unsupported("nested too deeply to trace") from None
+    except (TypeError, ValueError, IndexError, AttributeError) as error:  # a path of the numpy code a tracer
+        raise Unsupported(f"{type(error).__name__} while tracing") from None  # cannot take: numpy evaluates
+    result = ", ".join(operand(c, "f") for c in ret)
+    body = "\n".join(rec.lines)
+    source = f"{HEADER}{body}\n    return ({result})\n"
+    return Generated(source, tuple(layout), size, tuple(places))
+
+
+def _trace(program: Program, rec: Recorder, layout: list) -> tuple[tuple, int]:
+    """Run the program's entry point on tracers: the result's three components, and the size of ``u``."""
+    from ..runtime import Frame
+
+    globals_ = list(program._global_defaults)
+    offset = 0
+    for name, (t, slot, caller, default) in program._uniforms.items():
+        if not caller:
+            globals_[slot] = default  # its initializer, else zero as OpenGL does
+            continue
+        if t.base not in ("float", "bool") or t.is_matrix or t.is_array:
+            raise Unsupported(f"a uniform of type {t}")
+        comps = []
+        for i in range(t.size):
+            c = rec.value(f"u[{offset + i}]", "f")
+            comps.append(rec.value(f"({c.sym} != 0.0)", "b") if t.base == "bool" else c)
+        globals_[slot] = tuple(comps)
+        layout.append((name, str(t), offset))
+        offset += t.size
+    budget = [0.0, 0.0]
+    entry = program._entry
+    frame = Frame(entry.nslots, globals_, None, budget)
+    directions = [
+        tuple(Tracer.of(name, "f") for name in _ARGUMENTS[:3]),
+        tuple(Tracer.of(name, "f") for name in _ARGUMENTS[3:]),
+        *_FRAME,
+    ]
+    for k in program._used_params:
+        frame.slots[entry.param_slots[k]] = directions[k]
+    init_frame = Frame(0, globals_, None, budget)
+    for init in program._inits:
+        init(init_frame)
+    entry.body(frame)
+    return (frame.ret if frame.ret is not None else (0.0, 0.0, 0.0)), offset
+
+
+__all__ = ["Generated", "NativeCompiler", "Unsupported", "generate"]
