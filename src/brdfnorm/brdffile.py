@@ -44,7 +44,7 @@ import numpy as np
 from .errors import BrdfFileError, ModelNotFoundError
 from .glsl.names import ENTRY_POINT, reserved_kind
 from .inputs import parsing, read_bounded
-from .models.base import Model
+from .models.base import Model, NativeKernel
 from .parameters import Parameter
 
 #: Refuse files larger than this before reading them whole (a .brdf is a few kilobytes; 16 MiB leaves room
@@ -400,6 +400,14 @@ class BrdfModel(Model):
         shaders, and a lobe misjudged anisotropic merely costs a search over φ.
         """
         return rotation_asymmetry(self) <= 1e-6
+
+    def native_kernel(self) -> NativeKernel | None:
+        """The shader as one compiled scalar function (:mod:`brdfnorm.glsl.native`: generated from the same
+        syntax tree, cached on disk per user), or None where that backend cannot express it or Numba is
+        missing."""
+        from .glsl.native import native_kernel
+
+        return native_kernel(self.brdf_file)
 
     def evaluate(self, L, V, params):
         frame = [np.broadcast_to(axis, np.shape(L)) for axis in (FRAME_N, FRAME_X, FRAME_Y)]

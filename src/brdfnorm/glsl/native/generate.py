@@ -126,18 +126,18 @@ def _is_bool(value) -> bool:
 
 def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> None:
     """``name = value`` for every pair, as one parallel assignment (a value may be another target's name)."""
-    sources = [operand(v, kind) for (_, kind), v in zip(targets, values, strict=True)]
-    names = {name for name, _ in targets}
+    pairs = [(name, operand(v, kind)) for (name, kind), v in zip(targets, values, strict=True)]
+    pairs = [(name, source) for name, source in pairs if name != source]
+    changed = {name for name, _ in pairs}
     staged = []
-    for source in sources:
-        if source in names:
+    for name, source in pairs:
+        if source in changed:
             temp = rec.name()
             rec.emit(f"{temp} = {source}")
             source = temp
-        staged.append(source)
-    for (name, _), source in zip(targets, staged, strict=True):
-        if name != source:
-            rec.emit(f"{name} = {source}")
+        staged.append((name, source))
+    for name, source in staged:
+        rec.emit(f"{name} = {source}")
 
 
 def _check(rec: Recorder, value, bound: int, code: int) -> None:

@@ -178,7 +178,7 @@ def _kind(value) -> str:
 
 _FLOAT_CALLS = (
     "sqrt exp exp2 log log2 sin cos tan arcsin arccos arctan sinh cosh tanh arcsinh arccosh arctanh "
-    "floor ceil trunc rint sign fmin fmax mod arctan2 power"
+    "floor ceil trunc rint sign"
 ).split()
 #: numpy ufunc name -> (result kind, operand kind or None when the operands' kinds decide, source template).
 UFUNCS: dict[str, tuple[str, str | None, str]] = {
@@ -191,7 +191,7 @@ UFUNCS: dict[str, tuple[str, str | None, str]] = {
     "positive": ("f", "f", "(+{0})"),
     "absolute": ("f", "f", "abs({0})"),
     **{name: ("f", "f", f"np.{name}({{0}})") for name in _FLOAT_CALLS},
-    **{name: ("f", "f", f"np.{name}({{0}}, {{1}})") for name in ("fmin", "fmax", "mod", "arctan2", "power")},
+    **{name: ("f", "f", f"np.{name}({{0}}, {{1}})") for name in ("fmin", "fmax", "remainder", "arctan2", "power")},
     "isnan": ("b", "f", "np.isnan({0})"),
     "isinf": ("b", "f", "np.isinf({0})"),
     "isfinite": ("b", "f", "np.isfinite({0})"),
