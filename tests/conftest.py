@@ -2,12 +2,21 @@
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
+import tempfile
 
 import numpy as np
 import pytest
 from hypothesis import settings
 from scipy import integrate
+
+# Compiled shaders (brdfnorm.glsl.native) are cached on disk: tests and the commands they run use a directory of
+# their own, never the user's ~/.cache/brdfnorm.
+_CACHE = tempfile.mkdtemp(prefix="brdfnorm-test-cache-")
+os.environ["BRDFNORM_CACHE_DIR"] = _CACHE
+atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)
 
 # CI runs the property tests on a fixed example sequence, so a verdict there is reproducible; locally they
 # keep exploring new inputs on every run.

@@ -14,6 +14,7 @@ A loop bound of :mod:`..limits` hit inside the compiled function raises :class:`
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
@@ -70,8 +71,18 @@ def _entry(brdf) -> tuple | None:
     except Unsupported:
         return None
     digest = cache_key(generated.source)
-    function = load(generated.source, digest)
-    kernel = NativeKernel(function, 3, _pack_function(generated.layout, generated.size), digest)
+    pack = _pack_function(generated.layout, generated.size)
+    try:
+        function = load(generated.source, digest)
+        # compiled here (or read from the disk cache), not inside the first engine kernel that calls it
+        function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, np.zeros(generated.size))
+    except NativeLimit:
+        pass  # compiled; the bound is the shader's own, met again where it is evaluated
+    except Exception as error:  # noqa: BLE001 - any failure of Numba's leaves the shader to the numpy backend
+        warnings.warn(f"{brdf.path}: the compiled backend failed ({type(error).__name__}); numpy evaluates "
+                      "this shader", RuntimeWarning, stacklevel=3)
+        return None
+    kernel = NativeKernel(function, 3, pack, digest)
     _kernels[key] = (kernel, generated)
     return _kernels[key]
 

@@ -1,0 +1,252 @@
+"""The native backend of ``.brdf`` shaders (issue 39): one scalar Numba function per shader, whose values are the
+numpy backend's (the reference) at random and special direction pairs and parameter values, for every example
+and fixture; loops with the numpy backend's bounds; the per-user disk cache; and a fixed Gauss–Legendre product
+rule over the compiled function agreeing with ``brdfnorm.albedo`` on the numpy path.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+pytest.importorskip("numba")
+
+import brdfnorm as bn  # noqa: E402 - after the skip: the backend needs Numba
+from brdfnorm.brdffile import load_brdf, parse_brdf  # noqa: E402
+from brdfnorm.errors import EvaluationError  # noqa: E402
+from brdfnorm.glsl.native import NativeLimit, cache, limit_error, native_kernel  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SHADERS = sorted((ROOT / "examples").glob("*.brdf")) + sorted((ROOT / "tests" / "fixtures").glob("*.brdf"))
+#: Cheap ones in the quick tier: a plain lobe, a per-lane do-while loop, a loop with break/continue on a parameter.
+QUICK = ["ggx.brdf", "layered_series.brdf", "multi_lobe.brdf"]
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def directions(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Random pairs over the whole sphere (below the horizon too), then the special pairs: N, grazing, L = V,
+    L = −V (0/0 in the half vector), the mirror pair (H = N), signed zeros and exact axes."""
+    L, V = _unit(rng.normal(size=(count, 3))), _unit(rng.normal(size=(count, 3)))
+    s = np.sqrt(0.5)
+    special = [
+        ([0, 0, 1], [0, 0, 1]), ([1, 0, 0], [0, 0, 1]), ([0, 0, 1], [1, 0, 0]), ([1, 0, 0], [-1, 0, 0]),
+        ([s, 0, s], [s, 0, s]), ([s, 0, s], [-s, 0, -s]), ([s, 0, s], [-s, 0, s]), ([0, 0, -1], [0, 0, 1]),
+        ([-0.0, -0.0, 1.0], [0.0, -0.0, 1.0]), ([0, 1, 0], [0, -1, 0]), ([0.6, 0.0, 0.8], [-0.6, 0.0, 0.8]),
+        ([1e-300, 0, 1], [0, 1e-300, 1]), ([0, s, -s], [0, -s, s]),
+    ]
+    Ls, Vs = (np.array([p[k] for p in special], dtype=float) for k in (0, 1))
+    return np.concatenate([L, _unit(Ls)]), np.concatenate([V, _unit(Vs)])
+
+
+def random_params(model, rng: np.random.Generator) -> dict:
+    """Each declared parameter drawn over its slider range (bools both ways, colours per channel)."""
+    values = {}
+    for p in model.parameters:
+        if p.kind == "bool":
+            values[p.name] = bool(rng.integers(2))
+        elif p.kind == "color":
+            values[p.name] = tuple(rng.uniform(0.0, 1.0, 3))
+        else:
+            values[p.name] = float(rng.uniform(p.minimum, p.maximum))
+    return values
+
+
+def native_values(kernel, L: np.ndarray, V: np.ndarray, params) -> np.ndarray:
+    u = kernel.pack(params)
+    return np.array([kernel.function(*l, *v, u) for l, v in zip(L, V, strict=True)])
+
+
+def assert_same(native: np.ndarray, reference: np.ndarray, where: str) -> None:
+    """Equal to 1e-13 of the value (or of the largest value, near a cancellation); NaN and ±inf where numpy."""
+    assert np.array_equal(np.isnan(native), np.isnan(reference)), where
+    infinite = np.isinf(reference)
+    assert np.array_equal(native[infinite], reference[infinite]), where
+    finite = np.isfinite(reference)
+    scale = np.max(np.abs(reference[finite]), initial=0.0)
+    np.testing.assert_allclose(native[finite], reference[finite], rtol=1e-13, atol=1e-13 * scale, err_msg=where)
+
+
+def check_shader(path: Path, rng: np.random.Generator, count: int, draws: int) -> None:
+    model = load_brdf(path)
+    kernel = model.native_kernel()
+    assert kernel is not None, f"{path.name}: the native backend must cover every example and fixture"
+    assert kernel.channels == 3 and len(kernel.key) == 40
+    L, V = directions(rng, count)
+    for draw in range(draws):
+        params = model.params if draw == 0 else model.with_params(**random_params(model, rng)).params
+        with np.errstate(all="ignore"):
+            reference = model.evaluate(L, V, params)
+        assert_same(native_values(kernel, L, V, params), reference, f"{path.name} {params}")
+
+
+@pytest.mark.parametrize("name", QUICK)
+def test_native_values_are_the_numpy_backends(name):
+    check_shader(ROOT / "examples" / name, np.random.default_rng(7), 200, 3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", SHADERS, ids=lambda p: p.name)
+def test_every_example_and_fixture_compiles_to_the_numpy_backends_values(path):
+    check_shader(path, np.random.default_rng(11), 600, 6)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.floats(0.0, np.pi), st.floats(-np.pi, np.pi), st.floats(0.0, np.pi), st.floats(-np.pi, np.pi),
+    st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(1.0, 2.0),
+)
+def test_a_per_lane_loop_agrees_at_any_directions_and_parameters(tl, pl, tv, pv, rho, f0, eta):
+    """layered_series sums a series whose length differs per direction pair (a do-while with a per-lane exit)."""
+    model = load_brdf(ROOT / "examples" / "layered_series.brdf", rho=rho, f0=f0, eta=eta)
+    L = np.array([[np.sin(tl) * np.cos(pl), np.sin(tl) * np.sin(pl), np.cos(tl)]])
+    V = np.array([[np.sin(tv) * np.cos(pv), np.sin(tv) * np.sin(pv), np.cos(tv)]])
+    with np.errstate(all="ignore"):
+        reference = model.evaluate(L, V, model.params)
+    assert_same(native_values(model.native_kernel(), L, V, model.params), reference, "layered_series")
+
+
+def brdf_file(tmp_path: Path, body: str, params: str = "float n 1 100 10") -> Path:
+    path = tmp_path / "shader.brdf"
+    path.write_text(f"analytic\n::begin parameters\n{params}\n::end parameters\n::begin shader\n{body}\n"
+                    "::end shader\n")
+    return path
+
+
+LOOP_BOUNDS = [
+    ("float x = 0.0; while (true) { x += 1.0; } return vec3(x);", "loop exceeded 10000 iterations"),
+    ("float x = 0.0; for (int i = 0; i < 200; i++) { for (int j = 0; j < 600; j++) { x += 1.0; } }"
+     " return vec3(x);", "loops exceeded 100000 iterations in total"),
+]
+
+
+@pytest.mark.parametrize(("statements", "message"), LOOP_BOUNDS)
+def test_loop_bounds_raise_the_numpy_backends_error(tmp_path, statements, message):
+    path = brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{ {statements} }}")
+    model = load_brdf(path)
+    with pytest.raises(EvaluationError, match=message) as numpy_error:
+        model.eval([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+    kernel = model.native_kernel()
+    with pytest.raises(NativeLimit) as native_error:
+        kernel.function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, kernel.pack(model.params))
+    assert str(limit_error(model.brdf_file, native_error.value)) == str(numpy_error.value)
+
+
+def test_integer_bit_operations_on_run_time_values_stay_with_numpy(tmp_path):
+    """``%`` and ``&`` work on 32-bit patterns through int64 arrays, which a trace cannot follow: no kernel, and
+    the numpy backend still evaluates the shader."""
+    path = brdf_file(tmp_path, "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {"
+                               " int k = int(n) % 7; return vec3(float(k & 3)); }")
+    model = load_brdf(path, n=13.0)
+    assert model.native_kernel() is None
+    assert model.eval([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])[0] == pytest.approx(2.0)
+
+
+def test_gauss_legendre_over_the_compiled_function_matches_albedo():
+    """A fixed 2-D Gauss–Legendre product rule in (cos θ, φ), summed by a Numba loop calling the compiled
+    shader, agrees with brdfnorm.albedo of the numpy backend (a smoke test of calling the kernel from compiled
+    code; the engine has its own integration)."""
+    import numba
+
+    @numba.njit(cache=False)
+    def integrate(f, u, vx, vy, vz, mu, wmu, phi, wphi):
+        total = np.zeros(3)
+        for i in range(mu.size):
+            s = np.sqrt(1.0 - mu[i] * mu[i])
+            for j in range(phi.size):
+                r, g, b = f(s * np.cos(phi[j]), s * np.sin(phi[j]), mu[i], vx, vy, vz, u)
+                w = wmu[i] * wphi[j] * mu[i]
+                total[0] += w * r
+                total[1] += w * g
+                total[2] += w * b
+        return total
+
+    model = load_brdf(ROOT / "examples" / "ggx.brdf", roughness=0.6)
+    kernel = model.native_kernel()
+    x, w = np.polynomial.legendre.leggauss(160)
+    mu, wmu = 0.5 * (x + 1.0), 0.5 * w
+    phi, wphi = np.pi * (x + 1.0), np.pi * w
+    theta = 0.7
+    value = integrate(kernel.function, kernel.pack(model.params), np.sin(theta), 0.0, np.cos(theta), mu, wmu, phi,
+                      wphi)
+    reference = bn.albedo(model, theta, rtol=1e-9).value
+    np.testing.assert_allclose(value, reference, rtol=1e-6)
+
+
+def test_the_module_is_cached_per_user_and_read_back(tmp_path, monkeypatch):
+    """Written under BRDFNORM_CACHE_DIR in a 0700 directory, named by the key, with Numba's machine code beside
+    it; read again (a new process in effect: the in-memory table cleared), it compiles nothing."""
+    monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(cache, "_loaded", {})
+    text = (ROOT / "examples" / "phong.brdf").read_text()
+    kernel = native_kernel(parse_brdf(text, "first.brdf"))
+    directory = tmp_path / "cache" / "glsl"
+    for d in (tmp_path / "cache", directory):
+        assert stat.S_IMODE(os.stat(d).st_mode) == 0o700
+    module = directory / f"brdf_{kernel.key}.py"
+    assert module.is_file() and any((directory / "__pycache__").glob("*.nbi"))
+    monkeypatch.setattr(cache, "_loaded", {})
+    sys.modules.pop(f"brdfnorm_glsl_native_{kernel.key}", None)
+    again = native_kernel(parse_brdf(text, "second.brdf"))  # another path: a new trace, the same source
+    assert again.key == kernel.key and again.function is not kernel.function
+    assert again.function.stats.cache_hits and not again.function.stats.cache_misses
+
+
+def test_a_tampered_cache_file_is_replaced_by_the_generated_source(tmp_path, monkeypatch):
+    monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(cache, "_loaded", {})
+    text = (ROOT / "examples" / "lambert.brdf").read_text()
+    kernel = native_kernel(parse_brdf(text, "a.brdf"))
+    module = tmp_path / "glsl" / f"brdf_{kernel.key}.py"
+    source = module.read_text()
+    module.write_text("raise SystemExit('not ours')\n")
+    monkeypatch.setattr(cache, "_loaded", {})
+    sys.modules.pop(f"brdfnorm_glsl_native_{kernel.key}", None)
+    assert native_kernel(parse_brdf(text, "b.brdf")).key == kernel.key
+    assert module.read_text() == source
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX permissions")
+def test_a_directory_others_may_write_to_is_not_used(tmp_path, monkeypatch):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(shared))
+    monkeypatch.setattr(cache, "_loaded", {})
+    monkeypatch.setattr(cache, "_warned", set())
+    text = (ROOT / "examples" / "lambert.brdf").read_text().replace("0.8", "0.7")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kernel = native_kernel(parse_brdf(text, "c.brdf"))
+    assert any("not cached" in str(w.message) for w in caught)
+    assert list(shared.iterdir()) == []
+    model = load_brdf(ROOT / "examples" / "lambert.brdf")
+    assert kernel.function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, kernel.pack(model.params)) is not None
+
+
+@pytest.mark.slow
+def test_a_second_process_compiles_nothing(tmp_path):
+    """Two runs of a fresh interpreter on the same shader: the second finds every function in Numba's cache."""
+    script = (
+        "import sys; from brdfnorm.brdffile import load_brdf\n"
+        "k = load_brdf(sys.argv[1]).native_kernel()\n"
+        "print(k.function.stats.cache_hits and 1 or 0, len(k.function.stats.cache_misses))\n"
+    )
+    env = {**os.environ, "BRDFNORM_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(ROOT / "src")}
+    runs = [
+        subprocess.run([sys.executable, "-c", script, str(ROOT / "examples" / "cook_torrance.brdf")], env=env,
+                       capture_output=True, text=True, check=True).stdout.split()
+        for _ in range(2)
+    ]
+    assert runs[0] == ["0", "1"] and runs[1] == ["1", "0"], runs
