@@ -71,9 +71,8 @@ def cache_key(source: str) -> str:
     """The module's key: the generated source, brdfnorm's version and Numba's."""
     import numba
 
-    from ... import __version__
-
-    text = "\0".join((source, __version__, numba.__version__))
+    version = sys.modules[__name__.split(".")[0]].__version__  # the package this module is part of: imported
+    text = "\0".join((source, version, numba.__version__))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:40]
 
 
