@@ -250,3 +250,17 @@ def test_a_second_process_compiles_nothing(tmp_path):
         for _ in range(2)
     ]
     assert runs[0] == ["0", "1"] and runs[1] == ["1", "0"], runs
+
+
+@pytest.mark.parametrize("body", [
+    # an array written at a computed index in a loop: 64 values carried from one iteration to the next
+    "float a[64]; for (int i = 0; i < 64; i++) a[i] = float(i) * L.z; float s = 0.0;"
+    " for (int i = 0; i < 64; i++) s += a[i] * a[63 - i]; return vec3(s);",
+    # 4 096 products once the macros are expanded: more lines than Numba compiles in a few seconds
+    "#define A0 (L.z * V.z)\n" + "".join(f"#define A{k} (A{k - 1} + A{k - 1})\n" for k in range(1, 13))
+    + "return vec3(A12);",
+])
+def test_shaders_numba_would_compile_for_long_stay_with_numpy(tmp_path, body):
+    model = load_brdf(brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{\n{body}\n}}"))
+    assert model.native_kernel() is None
+    assert np.isfinite(model.eval([0.0, 0.6, 0.8], [0.0, 0.0, 1.0])).all()

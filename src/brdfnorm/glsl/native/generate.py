@@ -124,8 +124,9 @@ def _is_bool(value) -> bool:
     return isinstance(value, bool | np.bool_)
 
 
-def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> None:
-    """``name = value`` for every pair, as one parallel assignment (a value may be another target's name)."""
+def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> int:
+    """``name = value`` for every pair, as one parallel assignment (a value may be another target's name); the
+    number of names that change."""
     pairs = [(name, operand(v, kind)) for (name, kind), v in zip(targets, values, strict=True)]
     pairs = [(name, source) for name, source in pairs if name != source]
     changed = {name for name, _ in pairs}
@@ -138,6 +139,7 @@ def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> None:
         staged.append((name, source))
     for name, source in staged:
         rec.emit(f"{name} = {source}")
+    return len(staged)
 
 
 def _check(rec: Recorder, value, bound: int, code: int) -> None:
@@ -191,7 +193,7 @@ def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
             parts.update(f)  # under the lanes still running: a lane that left keeps its values
         if not parts.test_first and parts.cond is not None:
             exited = test(exited)
-        assign(rec, carried.names + control, carried.values() + [f.mask, exited, state.broken, count])
+        rec.carry(assign(rec, carried.names + control, carried.values() + [f.mask, exited, state.broken, count]))
         if not parts.test_first:
             rec.emit(f"if not {control[0][0]}:")
             rec.emit("    break")

@@ -23,9 +23,13 @@ import threading
 
 import numpy as np
 
-#: Longest generated function body, in lines (the examples need 40–1 200): a bigger trace is left to numpy,
-#: whose compile time does not grow with the unrolled size.
-MAX_LINES = 40_000
+#: Longest generated function body, in lines (the examples need 15–410): Numba compiles about 300 lines a second
+#: on one core of the development machine, so a bigger trace is left to numpy, which compiles in milliseconds.
+MAX_LINES = 3_000
+#: Values one loop carries from one iteration to the next, its counters included (the examples: 7–15). Numba's
+#: compile time grows about quadratically with them (measured under load: 16 carried 1 s, 32 5 s, 64 17 s, 256 a
+#: RecursionError inside Numba after a minute): an array written at a computed index in a loop costs one each.
+MAX_LOOP_CARRIED = 40
 
 
 class Unsupported(Exception):  # noqa: N818 - not an error: the shader stays with the numpy backend
@@ -63,9 +67,14 @@ class Recorder:
         self.count = 0
 
     def name(self, prefix: str = "t") -> str:
-        """A new generated identifier (``t`` for values, ``p`` for loop-carried variables, ``k`` counters)."""
+        """A new generated identifier (``t`` for values, ``p`` for loop-carried variables)."""
         self.count += 1
         return f"{prefix}{self.count}"
+
+    def carry(self, count: int) -> None:
+        """Refuse a loop carrying more than :data:`MAX_LOOP_CARRIED` values."""
+        if count > MAX_LOOP_CARRIED:
+            raise Unsupported(f"a loop carries more than {MAX_LOOP_CARRIED} values")
 
     def emit(self, line: str) -> None:
         """Append one line at the current depth."""
