@@ -143,14 +143,25 @@ def test_loop_bounds_raise_the_numpy_backends_error(tmp_path, statements, messag
     assert str(limit_error(model.brdf_file, native_error.value)) == str(numpy_error.value)
 
 
-def test_integer_bit_operations_on_run_time_values_stay_with_numpy(tmp_path):
-    """``%`` and ``&`` work on 32-bit patterns through int64 arrays, which a trace cannot follow: no kernel, and
-    the numpy backend still evaluates the shader."""
-    path = brdf_file(tmp_path, "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {"
-                               " int k = int(n) % 7; return vec3(float(k & 3)); }")
-    model = load_brdf(path, n=13.0)
-    assert model.native_kernel() is None
-    assert model.eval([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])[0] == pytest.approx(2.0)
+def test_integer_bit_operations_on_run_time_values_agree(tmp_path):
+    """``%``, ``&``, ``|``, ``^``, ``<<``, ``>>`` and ``~`` on ints and uints computed from the directions and a
+    parameter (negative values, zero divisors and shifts past 31 included) give the numpy backend's values."""
+    body = """
+    int a = int(L.x * 1000.0) - int(n);          // negative and positive
+    int b = int(V.y * 7.0);                      // zero for some pairs: x % 0
+    uint c = uint(abs(L.z) * 4e9);               // above 2^31
+    int s = int(V.z * 40.0);                     // shift counts past 31
+    float r = float(a % 13) + float(a % b) + float(a & b) + float(a | 255) + float(a ^ b) + float(~a);
+    float q = float(c % 7u) + float(c >> 3u) + float(c << uint(s)) + float(a << s) + float(a >> s) + float(~c);
+    return vec3(r, q, float((c & 0xFFu) ^ uint(b)));
+    """
+    model = load_brdf(brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{{body}}}"))
+    kernel = model.native_kernel()
+    assert kernel is not None
+    L, V = directions(np.random.default_rng(2), 300)
+    for n in (10.0, 77.0):
+        params = model.with_params(n=n).params
+        assert_same(native_values(kernel, L, V, params), model.evaluate(L, V, params), f"n={n}")
 
 
 def test_gauss_legendre_over_the_compiled_function_matches_albedo():

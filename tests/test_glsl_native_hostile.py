@@ -25,11 +25,12 @@ pytest.importorskip("numba")
 from brdfnorm.brdffile import load_brdf, read_brdf  # noqa: E402 - after the skip: the backend needs Numba
 from brdfnorm.errors import BrdfnormError  # noqa: E402
 from brdfnorm.glsl import compile_shader  # noqa: E402
-from brdfnorm.glsl.native.generate import HEADER, Unsupported, generate  # noqa: E402
+from brdfnorm.glsl.native.generate import HEADER, INTEGER_FUNCTIONS, Unsupported, generate  # noqa: E402
 from brdfnorm.glsl.native.tracer import UFUNCS  # noqa: E402
 
 _GENERATED = re.compile(r"[tpk][0-9]+\Z")
-_NAMES = {"lx", "ly", "lz", "vx", "vy", "vz", "u", "np", "NAN", "INF", "float", "abs", "NativeLimit"}
+_NAMES = {"lx", "ly", "lz", "vx", "vy", "vz", "u", "np", "NAN", "INF", "float", "abs", "NativeLimit",
+          *INTEGER_FUNCTIONS.values()}
 _NUMPY = {m.group(1) for _, _, template in UFUNCS.values() for m in re.finditer(r"np\.(\w+)", template)}
 
 

@@ -7,7 +7,6 @@ results wrap to 32 bits (:func:`.components.wrap`); Mesa's folds of products wit
 
 from __future__ import annotations
 
-import operator
 from collections.abc import Callable
 
 import numpy as np
@@ -15,11 +14,9 @@ import numpy as np
 from ..runtime import is_uniform, mask_and, mask_and_not
 from ..types import BOOL, Type, converts
 from .base import CompilerBase
-from .components import ARITH, BITWISE, COMPARE, INT_ARITH, UFUNCS, bitwise, in_place, integer_op, sum_terms, wrap
+from .components import ARITH, BITWISE, COMPARE, INT_ARITH, UFUNCS, in_place, integer_op, sum_terms, wrap
 from .folds import constant_zeros
 from .values import ZERO, Expr, Node
-
-_NOT_ALL = bitwise(operator.xor)
 
 
 class OperatorsMixin(CompilerBase):
@@ -49,8 +46,8 @@ class OperatorsMixin(CompilerBase):
         if op == "~":
             if not t.is_integer:
                 raise self.error(f"'~' needs an integer, not {t}", node)
-            base = t.base
-            return self.make(t, lambda a: tuple(wrap(_NOT_ALL(x, -1.0), base) for x in a), [e])
+            base, xor = t.base, self.integer_function("^")
+            return self.make(t, lambda a: tuple(wrap(xor(x, -1.0), base) for x in a), [e])
         raise self.error(f"unsupported operator '{op}'", node)
 
     def binary_types(self, op: str, a: Type, b: Type, node: Node) -> tuple[Type, Callable]:
@@ -66,7 +63,7 @@ class OperatorsMixin(CompilerBase):
             raise self.error("operator '%' needs integers (use mod() for floats)", node)
         if op in BITWISE and not integer:
             raise self.error(f"operator '{op}' needs integers", node)
-        fn = integer_op((BITWISE if op in BITWISE else INT_ARITH)[op], base) if integer else ARITH[op]
+        fn = integer_op(self.integer_function(op), base) if integer else ARITH[op]
         if op == "*" and (a.is_matrix or b.is_matrix) and not (a.is_scalar or b.is_scalar):
             return self.linear_algebra(a, b, bad)
         if op in ("<<", ">>"):
@@ -84,6 +81,11 @@ class OperatorsMixin(CompilerBase):
         if a.is_scalar:
             return a.with_base(base), lambda x, y: (fn(x[0], y[0]),)
         return a.with_base(base), lambda x, y: tuple(map(fn, x, y))
+
+    def integer_function(self, op: str) -> Callable:
+        """The component function of an integer operator, before the 32-bit wrap (the native backend traces
+        the bit operations its own way)."""
+        return (BITWISE if op in BITWISE else INT_ARITH)[op]
 
     def linear_algebra(self, a: Type, b: Type, bad: Callable[[], Exception]) -> tuple[Type, Callable]:
         """Matrix × matrix, matrix × column vector and row vector × matrix products (§5.10)."""
