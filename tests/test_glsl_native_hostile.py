@@ -89,7 +89,7 @@ def test_hostile_names_and_comments_give_generated_names_only(tmp_path):
                          first_column=brdf.shader.column, uniforms=brdf.uniforms)
     check_source(generated.source)
     for word in ("os", "system", "PWNED", "eval", "__exec", "njit(", "import os", "abs_", "float_"):
-        assert word not in generated.source.split("@njit")[1].split("def brdf")[1], word
+        assert word not in generated.source[len(HEADER):], word
     kernel = model.native_kernel()
     L, V = directions(np.random.default_rng(3), 50)
     for params in (model.params, model.with_params(lz=False, u=0.9, np=0.0, NAN=1.0).params):

@@ -118,7 +118,7 @@ def load(source: str, key: str) -> Callable:
             raise
     else:
         module = type(sys)(name)
-        code = compile(source.replace("cache=True", "cache=False", 1), f"<brdfnorm native {key}>", "exec")
+        code = compile(source.replace("cache=True", "cache=False"), f"<brdfnorm native {key}>", "exec")
         exec(code, module.__dict__)  # noqa: S102 - generated source: generated names and printed literals only
     function = module.brdf
     _loaded[key] = function

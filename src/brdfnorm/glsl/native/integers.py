@@ -4,12 +4,14 @@ The same results as the numpy backend's :mod:`..compiler.components` (``int_mod`
 work on int64 arrays: ``%`` as Mesa llvmpipe evaluates it (an unsigned 32-bit remainder, ``x % 0`` all bits
 set), ``&``, ``|``, ``^`` on the two's complement patterns, ``<<`` and ``>>`` (arithmetic for negative values)
 by the low 5 bits of the count. The callers wrap the result to int or uint as GLSL's arithmetic does.
+
+:data:`SOURCE` is written into every generated module (fixed text of brdfnorm's, nothing of a shader's), so that
+Numba caches the helpers a shader uses next to it, in the per-user cache; unused ones are never compiled.
 """
 
 from __future__ import annotations
 
-from numba import njit
-
+SOURCE = '''
 _MASK = 0xFFFFFFFF
 _SIGN = 2**31
 _WORD = 2**32
@@ -58,3 +60,4 @@ def int_shr(a: float, b: float) -> float:
     if x >= _SIGN:
         x -= _WORD
     return _signed((x >> (int(b) & 31)) & _MASK)
+'''
