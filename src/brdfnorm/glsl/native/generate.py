@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ...errors import EvaluationError
 from ..compiler import Compiler, Program, compile_shader
 from ..compiler.statements import LoopParts
@@ -124,8 +126,6 @@ class _Carried:
 
 
 def _is_bool(value) -> bool:
-    import numpy as np
-
     return isinstance(value, bool | np.bool_)
 
 
