@@ -163,6 +163,22 @@ def test_integer_bit_operations_on_run_time_values_agree(tmp_path):
         assert_same(native_values(kernel, L, V, params), model.evaluate(L, V, params), f"n={n}")
 
 
+@pytest.mark.parametrize("scale", ["1.0", "n", "1e-20", "1e20"])
+def test_powers_with_small_integer_exponents_agree(tmp_path, scale):
+    """pow(x, 3.0) … pow(x, 16.0) are products in the kernel (a scalar pow is slow): within 1e-15 of numpy's,
+    NaN for x < 0 and 0 at x = 0 as Mesa's pow, overflowing to inf and underflowing as pow does."""
+    terms = " + ".join(f"pow(x, {k}.0) * {1.0 / k!r}" for k in range(3, 17))
+    body = f"float x = ({scale}) * L.z; return vec3({terms}, pow(x, 5.0), pow(x - 0.5 * ({scale}), 7.0));"
+    model = load_brdf(brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{ {body} }}"))
+    L, V = directions(np.random.default_rng(4), 300)
+    with np.errstate(all="ignore"):
+        reference = model.evaluate(L, V, model.params)
+    native = native_values(model.native_kernel(), L, V, model.params)
+    assert_same(native, reference, scale)
+    finite = np.isfinite(reference) & (np.abs(reference) > 1e-300)
+    np.testing.assert_allclose(native[finite], reference[finite], rtol=1e-15)
+
+
 def test_gauss_legendre_over_the_compiled_function_matches_albedo():
     """A fixed 2-D Gauss–Legendre product rule in (cos θ, φ), summed by a Numba loop calling the compiled
     shader, agrees with brdfnorm.albedo of the numpy backend (a smoke test of calling the kernel from compiled
