@@ -25,7 +25,8 @@ function or ``BRDF`` (it becomes a uniform of the shader). Every problem is a
 characters). Parsing is a single linear scan, so megabytes of comments cost milliseconds; files over
 :data:`MAX_BYTES` are refused unread, and the shader's own bounds are in :mod:`brdfnorm.glsl.limits`. The
 shader text is handed to :func:`brdfnorm.glsl.compile_shader`, which compiles it to numpy operations;
-nothing from the file is ever executed as Python.
+nothing from the file is ever executed as Python (:mod:`brdfnorm.glsl.native` writes Python source for Numba
+from the compiled program, of generated names and printed numbers only).
 """
 
 from __future__ import annotations
