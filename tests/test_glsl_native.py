@@ -261,6 +261,18 @@ def test_a_directory_others_may_write_to_is_not_used(tmp_path, monkeypatch):
     assert kernel.function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, kernel.pack(model.params)) is not None
 
 
+@pytest.mark.skipif(not hasattr(os, "symlink"), reason="symbolic links")
+def test_a_symbolic_link_as_cache_directory_is_not_used(tmp_path, monkeypatch):
+    """A link could point anywhere (another user's directory): the cache directory must be a directory itself."""
+    (tmp_path / "elsewhere").mkdir(mode=0o700)
+    (tmp_path / "link").symlink_to(tmp_path / "elsewhere")
+    monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path / "link"))
+    monkeypatch.setattr(cache, "_warned", set())
+    with pytest.warns(RuntimeWarning, match="not cached"):
+        assert cache.module_directory() is None
+    assert list((tmp_path / "elsewhere").iterdir()) == []
+
+
 @pytest.mark.slow
 def test_a_second_process_compiles_nothing(tmp_path):
     """Two fresh interpreters on one cache directory (the benchmark's own measurement): the first compiles the

@@ -58,7 +58,7 @@ def _entry(brdf) -> tuple | None:
     _kernels[key] = None
     try:
         import numba  # noqa: F401 - the backend needs it; without it the numpy backend serves
-    except ImportError:
+    except Exception:  # noqa: BLE001 - ImportError, or a Numba built for another numpy failing as it loads
         return None
     from .cache import cache_key, load
     from .generate import Unsupported, generate
@@ -70,21 +70,28 @@ def _entry(brdf) -> tuple | None:
         )
     except Unsupported:
         return None
+    except Exception as error:  # noqa: BLE001 - a path of the numpy code the trace does not foresee
+        return _failed(brdf, "trace", error)
     digest = cache_key(generated.source)
     pack = _pack_function(generated.layout, generated.size)
     try:
         function = load(generated.source, digest)
-        # compiled here (or read from the disk cache), not inside the first engine kernel that calls it
-        function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, np.zeros(generated.size))
-    except NativeLimit:
-        pass  # compiled; the bound is the shader's own, met again where it is evaluated
+        try:  # compiled here (or read from the disk cache), not inside the first engine kernel that calls it
+            function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, np.zeros(generated.size))
+        except NativeLimit:
+            pass  # compiled; the bound is the shader's own, met again where it is evaluated
     except Exception as error:  # noqa: BLE001 - any failure of Numba's leaves the shader to the numpy backend
-        warnings.warn(f"{brdf.path}: the compiled backend failed ({type(error).__name__}); numpy evaluates "
-                      "this shader", RuntimeWarning, stacklevel=3)
-        return None
+        return _failed(brdf, "compile", error)
     kernel = NativeKernel(function, 3, pack, digest)
     _kernels[key] = (kernel, generated)
     return _kernels[key]
+
+
+def _failed(brdf, stage: str, error: Exception) -> None:
+    """A one-line notice that the shader stays with the numpy backend (a defect of this backend's, not of the
+    shader's: the numpy backend compiled it)."""
+    warnings.warn(f"{brdf.path}: the compiled backend failed to {stage} this shader ({type(error).__name__}); "
+                  "numpy evaluates it", RuntimeWarning, stacklevel=4)
 
 
 def limit_error(brdf, error: NativeLimit) -> EvaluationError:
