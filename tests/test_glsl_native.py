@@ -127,12 +127,15 @@ LOOP_BOUNDS = [
     ("float x = 0.0; while (true) { x += 1.0; } return vec3(x);", "loop exceeded 10000 iterations"),
     ("float x = 0.0; for (int i = 0; i < 200; i++) { for (int j = 0; j < 600; j++) { x += 1.0; } }"
      " return vec3(x);", "loops exceeded 100000 iterations in total"),
+    ("#define A0 (x * 0.5)\n" + "".join(f"#define A{k} (A{k - 1} + A{k - 1})\n" for k in range(1, 9))
+     + "float x = 1.0; for (int i = 0; i < 9000; i++) { x = A8; } return vec3(x);",
+     r"loops ran more than 2000000 nodes in one evaluation \(\d+ per iteration"),
 ]
 
 
 @pytest.mark.parametrize(("statements", "message"), LOOP_BOUNDS)
 def test_loop_bounds_raise_the_numpy_backends_error(tmp_path, statements, message):
-    path = brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{ {statements} }}")
+    path = brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{\n{statements}\n}}")
     model = load_brdf(path)
     with pytest.raises(EvaluationError, match=message) as numpy_error:
         model.eval([0.0, 0.0, 1.0], [0.0, 0.0, 1.0])

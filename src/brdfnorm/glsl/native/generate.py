@@ -54,8 +54,8 @@ class NativeCompiler(Compiler):
     """The numpy backend's compiler, with loops run as generated ``while`` loops when traced, and the integer bit
     operators of run-time values as calls of :mod:`.integers`."""
 
-    #: The loops' FILE:LINE:COL in the order their limit codes number them (a list per compilation).
-    loop_places: list[str] = []
+    #: The loops in the order their limit codes number them (a list per compilation).
+    loops: list[LoopParts] = []
 
     def integer_function(self, op: str):
         original = super().integer_function(op)
@@ -71,8 +71,8 @@ class NativeCompiler(Compiler):
         return fn
 
     def loop_runner(self, parts: LoopParts):
-        index = len(self.loop_places)
-        self.loop_places.append(parts.where)
+        index = len(self.loops)
+        self.loops.append(parts)
         ret_zeros = zeros(self.function.ret) if self.function.ret.size else ()
         return lambda f: _traced_loop(f, parts, index, ret_zeros)
 
@@ -218,19 +218,23 @@ def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
 @dataclass(frozen=True)
 class Generated:
     """A shader's generated source and what goes with it: the parameters' places in ``u`` (name, GLSL type,
-    offset), the number of values in ``u``, and the loops' places for the limit messages."""
+    offset), the number of values in ``u``, and the loops' places and costs for the limit messages."""
 
     source: str
     layout: tuple[tuple[str, str, int], ...]
     size: int
-    loop_places: tuple[str, ...]
+    loops: tuple[tuple[str, int], ...]  # each loop's FILE:LINE:COL and nodes per iteration, calls inlined
 
     def limit_error(self, error: Exception) -> EvaluationError:
         """The numpy backend's :class:`EvaluationError` for a :class:`.runtime.NativeLimit` of this shader."""
         code = int(error.args[0]) if error.args else -1
-        if not 0 <= code < 3 * len(self.loop_places):
+        if not 0 <= code < 3 * len(self.loops):
             return EvaluationError("a bound on the shader's loops was hit", "native shader")
-        return EvaluationError(_LIMITS[code % 3], self.loop_places[code // 3])
+        where, cost = self.loops[code // 3]
+        message = _LIMITS[code % 3]
+        if code % 3 == 2:
+            message += f" ({cost} per iteration of this loop, calls inlined)"
+        return EvaluationError(message, where)
 
 
 HEADER = (
@@ -258,10 +262,12 @@ def generate(text: str, *, path: str, first_line: int, first_column: int, unifor
     Compile errors are the numpy backend's :class:`~brdfnorm.errors.BrdfFileError` (the model compiled the same
     text already). The loader compiles it without the disk cache where there is no safe cache directory.
     """
-    places: list[str] = []
+    loops: list[LoopParts] = []
 
     class Compiling(NativeCompiler):
-        loop_places = places
+        pass
+
+    Compiling.loops = loops
 
     program = compile_shader(
         text, path=path, first_line=first_line, first_column=first_column, uniforms=uniforms,
@@ -279,7 +285,7 @@ def generate(text: str, *, path: str, first_line: int, first_column: int, unifor
     result = ", ".join(operand(c, "f") for c in ret)
     body = "\n".join(rec.lines)
     source = f"{HEADER}{body}\n    return ({result})\n"
-    return Generated(source, tuple(layout), size, tuple(places))
+    return Generated(source, tuple(layout), size, tuple((parts.where, parts.cost()) for parts in loops))
 
 
 def _trace(program: Program, rec: Recorder, layout: list) -> tuple[tuple, int]:
