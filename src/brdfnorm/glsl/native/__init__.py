@@ -8,8 +8,9 @@ tracing (:mod:`.generate`, :mod:`.tracer`): generated identifiers and printed li
 shader's text. Modules are cached on disk per user (:mod:`.cache`). A shader the backend cannot express gives
 None (the numpy backend evaluates it), as does a missing or failing Numba.
 
-A loop bound of :mod:`..limits` hit inside the compiled function raises :class:`.runtime.NativeLimit`;
-:func:`limit_error` gives the numpy backend's :class:`~brdfnorm.errors.EvaluationError` for it.
+Where the numpy backend raises an :class:`~brdfnorm.errors.EvaluationError` (a loop bound of :mod:`..limits`),
+the compiled function returns NaN in every channel (an exception would be lost inside a Numba ``prange``): the
+caller reports it as today by evaluating that direction pair with the numpy backend.
 """
 
 from __future__ import annotations
@@ -19,11 +20,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ...errors import EvaluationError
 from ...models.base import NativeKernel
-from .runtime import NativeLimit
 
-_kernels: dict[tuple, tuple] = {}  # (path, shader text, place, uniforms) -> (NativeKernel, Generated) or None
+_kernels: dict[tuple, NativeKernel | None] = {}  # (path, shader text, place, uniforms) -> kernel
 
 
 def _pack_function(layout: tuple, size: int):
@@ -45,17 +44,16 @@ def _pack_function(layout: tuple, size: int):
 
 def native_kernel(brdf) -> NativeKernel | None:
     """The compiled kernel of a parsed ``.brdf`` file (:class:`~brdfnorm.brdffile.BrdfFile`), or None where the
-    native backend cannot express the shader or Numba is missing."""
-    found = _entry(brdf)
-    return None if found is None else found[0]
-
-
-def _entry(brdf) -> tuple | None:
+    native backend cannot express the shader or Numba is missing (made once per process and file)."""
     uniforms = brdf.uniforms
     key = (brdf.path, brdf.shader.text, brdf.shader.line, brdf.shader.column, tuple(uniforms.items()))
-    if key in _kernels:
-        return _kernels[key]
-    _kernels[key] = None
+    if key not in _kernels:
+        _kernels[key] = None  # also what a failure below leaves: it is not retried
+        _kernels[key] = _make(brdf, uniforms)
+    return _kernels[key]
+
+
+def _make(brdf, uniforms: dict[str, str]) -> NativeKernel | None:
     try:
         import numba  # noqa: F401 - the backend needs it; without it the numpy backend serves
     except Exception:  # noqa: BLE001 - ImportError, or a Numba built for another numpy failing as it loads
@@ -73,34 +71,20 @@ def _entry(brdf) -> tuple | None:
     except Exception as error:  # noqa: BLE001 - a path of the numpy code the trace does not foresee
         return _failed(brdf, "trace", error)
     digest = cache_key(generated.source)
-    pack = _pack_function(generated.layout, generated.size)
     try:
         function = load(generated.source, digest)
-        try:  # compiled here (or read from the disk cache), not inside the first engine kernel that calls it
-            function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, np.zeros(generated.size))
-        except NativeLimit:
-            pass  # compiled; the bound is the shader's own, met again where it is evaluated
+        # compiled here (or read from the disk cache), not inside the first engine kernel that calls it
+        function(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, np.zeros(generated.size))
     except Exception as error:  # noqa: BLE001 - any failure of Numba's leaves the shader to the numpy backend
         return _failed(brdf, "compile", error)
-    kernel = NativeKernel(function, 3, pack, digest)
-    _kernels[key] = (kernel, generated)
-    return _kernels[key]
+    return NativeKernel(function, 3, _pack_function(generated.layout, generated.size), digest)
 
 
 def _failed(brdf, stage: str, error: Exception) -> None:
     """A one-line notice that the shader stays with the numpy backend (a defect of this backend's, not of the
     shader's: the numpy backend compiled it)."""
     warnings.warn(f"{brdf.path}: the compiled backend failed to {stage} this shader ({type(error).__name__}); "
-                  "numpy evaluates it", RuntimeWarning, stacklevel=4)
+                  "numpy evaluates it", RuntimeWarning, stacklevel=5)
 
 
-def limit_error(brdf, error: NativeLimit) -> EvaluationError:
-    """The numpy backend's :class:`EvaluationError` (the loop's ``FILE:LINE:COL`` and the bound) for a
-    :class:`NativeLimit` raised by ``brdf``'s compiled kernel."""
-    found = _entry(brdf)
-    if found is None:
-        return EvaluationError("a bound on the shader's loops was hit", brdf.path)
-    return found[1].limit_error(error)
-
-
-__all__ = ["NativeLimit", "limit_error", "native_kernel"]
+__all__ = ["native_kernel"]

@@ -7,8 +7,11 @@ operation becomes one line; control flow whose condition depends on the directio
 predicated (both branches, then a select: the numpy backend's own lane masks on one lane). Loops are the
 exception: :class:`NativeCompiler` runs them as real ``while`` loops whose loop-carried state (every variable,
 the lane mask, the return value, the bounds' counters) lives in generated variables, with the per-loop,
-total-iteration and loop-node bounds of :mod:`..limits` checked as the numpy backend checks them (a
-:class:`.runtime.NativeLimit` with a code; :func:`Generated.limit_error` names the loop).
+total-iteration and loop-node bounds of :mod:`..limits` checked as the numpy backend checks them. Where the
+numpy backend raises its :class:`~brdfnorm.errors.EvaluationError`, the function returns NaN in every channel:
+an exception raised inside a Numba ``prange`` loop is lost (measured with Numba 0.68: the loop finishes as if
+nothing happened), a NaN is not. The caller reports it as today by evaluating that pair with the numpy backend,
+which raises the error naming the loop's ``FILE:LINE:COL``.
 """
 
 from __future__ import annotations
@@ -17,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import EvaluationError
 from ..compiler import Compiler, Program, compile_shader
 from ..compiler.statements import LoopParts
 from ..compiler.values import zeros
@@ -26,12 +28,6 @@ from ..runtime import LoopState, mask_and, mask_and_not, mask_or
 from .integers import SOURCE as INTEGER_SOURCE
 from .tracer import Recorder, Tracer, Unsupported, current, literal, operand, recording
 
-#: What each limit code's remainder (code % 3) stands for, in the numpy backend's words.
-_LIMITS = (
-    f"loop exceeded {MAX_LOOP_ITERATIONS} iterations",
-    f"loops exceeded {MAX_TOTAL_ITERATIONS} iterations in total in one evaluation",
-    f"loops ran more than {MAX_LOOP_NODES} nodes in one evaluation",
-)
 _ARGUMENTS = ("lx", "ly", "lz", "vx", "vy", "vz")
 _FRAME = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))  # N, X, Y as BrdfModel.evaluate passes them
 
@@ -54,9 +50,6 @@ class NativeCompiler(Compiler):
     """The numpy backend's compiler, with loops run as generated ``while`` loops when traced, and the integer bit
     operators of run-time values as calls of :mod:`.integers`."""
 
-    #: The loops in the order their limit codes number them (a list per compilation).
-    loops: list[LoopParts] = []
-
     def integer_function(self, op: str):
         original = super().integer_function(op)
         if op not in INTEGER_FUNCTIONS:
@@ -71,10 +64,8 @@ class NativeCompiler(Compiler):
         return fn
 
     def loop_runner(self, parts: LoopParts):
-        index = len(self.loops)
-        self.loops.append(parts)
         ret_zeros = zeros(self.function.ret) if self.function.ret.size else ()
-        return lambda f: _traced_loop(f, parts, index, ret_zeros)
+        return lambda f: _traced_loop(f, parts, ret_zeros)
 
 
 class _Carried:
@@ -147,12 +138,13 @@ def assign(rec: Recorder, targets: list[tuple[str, str]], values: list) -> int:
     return len(staged)
 
 
-def _check(rec: Recorder, value, bound: int, code: int) -> None:
+def _check(rec: Recorder, value, bound: int) -> None:
+    """Stop with NaN where the numpy backend raises: ``value`` past ``bound``."""
     rec.emit(f"if {operand(value, 'f')} > {literal(bound)}:")
-    rec.emit(f"    raise NativeLimit({code})")
+    rec.emit("    return (NAN, NAN, NAN)")
 
 
-def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
+def _traced_loop(f, parts: LoopParts, ret_zeros: tuple) -> None:
     """One loop as a generated ``while True:``, with the numpy backend's per-iteration semantics (one lane)."""
     rec = current()
     if parts.init is not None:
@@ -183,11 +175,11 @@ def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
             rec.emit(f"if not {operand(f.mask, 'b')}:")
             rec.emit("    break")
         count = rec.value(f"{count.sym} + 1.0", "f")
-        _check(rec, count, MAX_LOOP_ITERATIONS, 3 * index)
+        _check(rec, count, MAX_LOOP_ITERATIONS)
         f.budget[0] = f.budget[0] + 1.0
-        _check(rec, f.budget[0], MAX_TOTAL_ITERATIONS, 3 * index + 1)
+        _check(rec, f.budget[0], MAX_TOTAL_ITERATIONS)
         f.budget[1] = f.budget[1] + float(parts.cost())
-        _check(rec, f.budget[1], MAX_LOOP_NODES, 3 * index + 2)
+        _check(rec, f.budget[1], MAX_LOOP_NODES)
         state.broken = broken
         parts.body(f)
         f.mask = mask_or(f.mask, state.continued)
@@ -217,32 +209,18 @@ def _traced_loop(f, parts: LoopParts, index: int, ret_zeros: tuple) -> None:
 
 @dataclass(frozen=True)
 class Generated:
-    """A shader's generated source and what goes with it: the parameters' places in ``u`` (name, GLSL type,
-    offset), the number of values in ``u``, and the loops' places and costs for the limit messages."""
+    """A shader's generated source, the parameters' places in ``u`` (name, GLSL type, offset) and the number of
+    values in ``u``."""
 
     source: str
     layout: tuple[tuple[str, str, int], ...]
     size: int
-    loops: tuple[tuple[str, int], ...]  # each loop's FILE:LINE:COL and nodes per iteration, calls inlined
-
-    def limit_error(self, error: Exception) -> EvaluationError:
-        """The numpy backend's :class:`EvaluationError` for a :class:`.runtime.NativeLimit` of this shader."""
-        code = int(error.args[0]) if error.args else -1
-        if not 0 <= code < 3 * len(self.loops):
-            return EvaluationError("a bound on the shader's loops was hit", "native shader")
-        where, cost = self.loops[code // 3]
-        message = _LIMITS[code % 3]
-        if code % 3 == 2:
-            message += f" ({cost} per iteration of this loop, calls inlined)"
-        return EvaluationError(message, where)
 
 
 HEADER = (
     '''"""Generated by brdfnorm.glsl.native from a .brdf shader's syntax tree: do not edit (regenerated)."""
 import numpy as np
 from numba import njit
-
-from brdfnorm.glsl.native.runtime import NativeLimit
 
 NAN = np.nan
 INF = np.inf
@@ -262,16 +240,9 @@ def generate(text: str, *, path: str, first_line: int, first_column: int, unifor
     Compile errors are the numpy backend's :class:`~brdfnorm.errors.BrdfFileError` (the model compiled the same
     text already). The loader compiles it without the disk cache where there is no safe cache directory.
     """
-    loops: list[LoopParts] = []
-
-    class Compiling(NativeCompiler):
-        pass
-
-    Compiling.loops = loops
-
     program = compile_shader(
         text, path=path, first_line=first_line, first_column=first_column, uniforms=uniforms,
-        compiler_class=Compiling,
+        compiler_class=NativeCompiler,
     )
     rec = Recorder()
     layout: list[tuple[str, str, int]] = []
@@ -285,7 +256,7 @@ def generate(text: str, *, path: str, first_line: int, first_column: int, unifor
     result = ", ".join(operand(c, "f") for c in ret)
     body = "\n".join(rec.lines)
     source = f"{HEADER}{body}\n    return ({result})\n"
-    return Generated(source, tuple(layout), size, tuple((parts.where, parts.cost()) for parts in loops))
+    return Generated(source, tuple(layout), size)
 
 
 def _trace(program: Program, rec: Recorder, layout: list) -> tuple[tuple, int]:
