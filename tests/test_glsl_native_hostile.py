@@ -188,3 +188,16 @@ def _declared(p) -> str:
     if p.kind == "color":
         return " ".join(repr(float(c)) for c in p.default)
     return f"{p.minimum!r} {p.maximum!r} {p.default!r}"
+
+
+@pytest.mark.parametrize("line", [
+    "t1 = __import__", "t1 = 'x'", "t1 = os.system", "t1 = lx; exec(t1)", "t1 = q1", "t1 = np.load",
+    "t1 = lx  # comment", 't1 = f"{lx}"', "t1 = lambda: 0",
+])
+def test_the_generator_refuses_a_body_with_anything_but_its_own_words(line):
+    """The last check before compiling: a body holding another word, a string, a comment is refused."""
+    from brdfnorm.glsl.native.generate import _check_body
+
+    _check_body("    t1 = (lx * u[0])\n    return (t1, NAN, (-1.5e-300))\n")
+    with pytest.raises(Unsupported):
+        _check_body(f"    {line}\n    return (t1, t1, t1)\n")

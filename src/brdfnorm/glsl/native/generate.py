@@ -16,6 +16,9 @@ which raises the error naming the loop's ``FILE:LINE:COL``.
 
 from __future__ import annotations
 
+import io
+import re
+import tokenize
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +29,7 @@ from ..compiler.values import zeros
 from ..limits import MAX_LOOP_ITERATIONS, MAX_LOOP_NODES, MAX_TOTAL_ITERATIONS
 from ..runtime import LoopState, mask_and, mask_and_not, mask_or
 from .integers import SOURCE as INTEGER_SOURCE
-from .tracer import Recorder, Tracer, Unsupported, current, literal, operand, recording
+from .tracer import UFUNCS, Recorder, Tracer, Unsupported, current, literal, operand, recording
 
 _ARGUMENTS = ("lx", "ly", "lz", "vx", "vy", "vz")
 _FRAME = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))  # N, X, Y as BrdfModel.evaluate passes them
@@ -254,9 +257,37 @@ def generate(text: str, *, path: str, first_line: int, first_column: int, unifor
     except (TypeError, ValueError, IndexError, AttributeError) as error:  # a path of the numpy code a tracer
         raise Unsupported(f"{type(error).__name__} while tracing") from None  # cannot take: numpy evaluates
     result = ", ".join(operand(c, "f") for c in ret)
-    body = "\n".join(rec.lines)
-    source = f"{HEADER}{body}\n    return ({result})\n"
-    return Generated(source, tuple(layout), size)
+    body = f"{chr(10).join(rec.lines)}\n    return ({result})\n"
+    _check_body(body)
+    return Generated(HEADER + body, tuple(layout), size)
+
+
+#: The only words the generated body may hold besides generated names (``tN``, ``pN``).
+_WORDS = frozenset(
+    ["lx", "ly", "lz", "vx", "vy", "vz", "u", "np", "NAN", "INF", "float", "abs", "if", "else", "not", "and",
+     "or", "while", "True", "False", "break", "return", *INTEGER_FUNCTIONS.values()]
+    + [m.group(1) for _, _, template in UFUNCS.values() for m in re.finditer(r"np\.(\w+)", template)]
+)
+_GENERATED = re.compile(r"[tp][0-9]+\Z")
+
+
+def _check_body(body: str) -> None:
+    """Refuse a body holding anything but generated names, the words above, numbers and operators: what the
+    tracer writes, checked again on the text itself before it is ever compiled (defence in depth)."""
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(body).readline))
+    except (tokenize.TokenError, SyntaxError):
+        raise Unsupported("generated source that does not tokenize") from None
+    for token in tokens:
+        if token.type == tokenize.NAME:
+            if token.string not in _WORDS and not _GENERATED.match(token.string):
+                raise Unsupported(f"generated source holding the word {token.string!r}")
+        elif token.type not in _SAFE_TOKENS:
+            raise Unsupported(f"generated source holding a {tokenize.tok_name[token.type]} token")
+
+
+_SAFE_TOKENS = frozenset({tokenize.NUMBER, tokenize.OP, tokenize.NEWLINE, tokenize.NL, tokenize.INDENT,
+                          tokenize.DEDENT, tokenize.ENDMARKER})
 
 
 def _trace(program: Program, rec: Recorder, layout: list) -> tuple[tuple, int]:
