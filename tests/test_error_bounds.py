@@ -104,6 +104,13 @@ VIEWS = st.floats(0.0, np.radians(85.0))
 EXPONENTS = st.floats(0.0, 2.0).map(lambda e: 10.0**e)  # n in [1, 100]: mpmath's ₂F₁ quadrature stays fast
 
 
+def test_series_at_views_within_float64_of_the_normal():
+    # found by the property test below: at theta = 3.9e-157 the Legendre kernel underflowed and E was inf
+    for theta in (3.922492407662235e-157, 1e-300, 1e-12):
+        assert_bounds(brdfnorm.albedo(BlinnPhong(n=1.0), theta, method="series"), blinn_phong_seed_form(1.0, theta),
+                      f"series theta={theta!r}")
+
+
 @settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(n=EXPONENTS, theta=VIEWS)
 def test_series_bounds_its_error(n, theta):

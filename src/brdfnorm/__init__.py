@@ -21,7 +21,8 @@ from .models import REGISTRY, Model
 from .normalization import NormalizationResult, normalize
 from .validate import short_repr
 
-__version__ = "0.1.0"
+#: The release (CHANGELOG.md); pyproject.toml reads it, and every file brdfnorm writes records it.
+__version__ = "0.4.0"
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
            "normalize"]
 

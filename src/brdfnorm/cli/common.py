@@ -28,13 +28,19 @@ from ..models.base import Model
 from ..output import STDOUT, write_file
 from ..output.formats import render
 
+#: Help panels of the options every computing command shares (typer's rich_help_panel), so that a long --help
+#: reads as groups: what to compute (Options), where the result goes, where the work runs.
+OUTPUT_PANEL = "Output"
+PARALLEL_PANEL = "Parallel and resumable runs"
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
                             help="Set a model parameter (repeatable), e.g. -p n=512 or -p baseColor=0.5,0.5,0.5.")
-JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
-CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).")
+JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.", rich_help_panel=OUTPUT_PANEL)
+CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).",
+                          rich_help_panel=OUTPUT_PANEL)
 OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
-                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).")
+                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).",
+                             rich_help_panel=OUTPUT_PANEL)
 
 
 class At(str, Enum):
@@ -76,19 +82,21 @@ class Spread:
 #: The parallel layer's options, declared once (:func:`parallel_options` adds them to a command).
 PARALLEL_OPTIONS = {
     "workers": (int, typer.Option(None, "--workers", min=1, metavar="N",
-                                  help="Local processes computing the cells (default: all cores; 1: this process).")),
+                                  help="Local processes computing the cells (default: all cores; 1: this process).",
+                                  rich_help_panel=PARALLEL_PANEL)),
     "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
                                     help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
-                                    "instead of local processes.")),
+                                    "instead of local processes.", rich_help_panel=PARALLEL_PANEL)),
     "connect_timeout": (float, typer.Option(None, "--connect-timeout", min=0.1, max=3600, metavar="SECONDS",
                                             help="One deadline for reaching the --scheduler: connection and "
-                                            "handshake (default 10).")),
+                                            "handshake (default 10).", rich_help_panel=PARALLEL_PANEL)),
     "checkpoint": (str, typer.Option(None, "--checkpoint", metavar="DIR",
                                      help="Save each finished chunk of cells in DIR; rerunning the same command "
-                                     "resumes, computing only what is missing.")),
+                                     "resumes, computing only what is missing.", rich_help_panel=PARALLEL_PANEL)),
     "chunk_cells": (int, typer.Option(None, "--chunk-cells", min=1, metavar="N",
                                       help="Cells per chunk (part of the job's definition; default: sized by a "
-                                      "short probe so that a chunk takes about a second).")),
+                                      "short probe so that a chunk takes about a second).",
+                                      rich_help_panel=PARALLEL_PANEL)),
 }
 
 

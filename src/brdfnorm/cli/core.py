@@ -45,7 +45,8 @@ METHOD_OPTION = typer.Option("auto", "--method",
                              help=" | ".join(("auto", *METHODS)) + " (where it applies; auto takes the first that "
                                   "does, never certified; azimuthal: isotropic ggx and beckmann without Fresnel, "
                                   "a 1-D integral; microfacet: ggx and beckmann over the half vector).")
-RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
+RTOL_OPTION = typer.Option(1e-10, "--rtol",
+                           help="Relative tolerance of each albedo integral (at least 1e-14, below 1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
 

@@ -79,7 +79,7 @@ def lut_command(
                                        "(1 − (1 − V·H)⁵), DFG_f90 = ∫ f cos (1 − V·H)⁵, Fresnel off."),
     table: list[str] = typer.Option([], "--tables", "--table", metavar="NAMES", help="Write only these tables "
                                     "(comma list, repeatable). Default: all in .npz, .json, .csv; in .exr, .png, "
-                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_…), no errors or 1-E."),
+                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_f0, DFG_f90), no errors or 1-E."),
     layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS, y=AXIS, v=down|up: the axis "
                                "along the image's columns (x, u) and rows (y, v), and whether row 0 (the top) "
                                "holds the first y value (v=down) or the last (v=up). Default in .exr, .png, .h, .glsl, "

@@ -12,7 +12,7 @@ from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
 
 @app.command()
 def report(
-    models: list[str] = typer.Argument(None, metavar="[MODEL_OR_FILE]...",
+    models: list[str] = typer.Argument(None, metavar="MODEL_OR_FILE",
                                        help="Built-in model names or .brdf files; none: the seed lobes."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",

@@ -465,7 +465,8 @@ def albedo(
     value, error, evaluations, converged, bad, *extra = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})
-    error = with_final_rounding(value, error)
+    if chosen.name != "certified":  # a certified error is the enclosure's radius: it bounds the rounding already
+        error = with_final_rounding(value, error)
     extra = dict(extra[0]) if extra else {}
     reason = np.asarray(extra.pop("reason", np.where(converged, "", "budget")), dtype=str)
     S, C = problem.shape, value.shape[-1]
