@@ -51,9 +51,9 @@ def audit_command(
         "E_f0_dielectric, DFG_cloth or E_schlick",
         "eta=1.5 (of E_dielectric), schlick_f0=0.04 (of E_schlick)"])),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
-                                   "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "
+                                   "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:n=COUNT "
                                    "(spaced by --grid) or V,V,... in array order."),
-    grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:COUNT is spaced."),
+    grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:n=COUNT is spaced."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable result on stdout."),
     report: str = typer.Option(None, "--report", metavar="DIR", help="Write error maps and plots (PNG) there."),
     fix: bool = typer.Option(False, "--fix", help="Write the exact table in the input's format and layout (-o)."),

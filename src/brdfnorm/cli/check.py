@@ -72,7 +72,8 @@ def check_command(
     param: list[str] = PARAM_OPTION,
     sweep: list[str] = typer.Option([], "--sweep", metavar="NAME=SPEC",
                                     help="Values of a float parameter instead of its declared range (repeatable): "
-                                         "V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
+                                         "V,V,..., START:STOP:n=COUNT (add :log for log spacing) or "
+                                         "START:STOP:step=STEP."),
     only: str = typer.Option(None, "--only", metavar="CHECK,...",
                              help=f"Run only these checks, comma-separated ({', '.join(CHECKS)}); default: "
                                   f"{', '.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),

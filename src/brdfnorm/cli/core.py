@@ -71,8 +71,9 @@ def models(debug: bool = DEBUG_OPTION) -> None:
 def albedo(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
-    theta: str = typer.Option("0:80:5", "--theta", metavar="SPEC",
-                              help="Polar angle(s) in degrees: DEG, DEG,DEG,... or START:STOP:COUNT (inclusive)."),
+    theta: str = typer.Option("0:80:n=5", "--theta", metavar="SPEC",
+                              help="Polar angle(s) in degrees: DEG, DEG,DEG,..., START:STOP:n=COUNT or "
+                                   "START:STOP:step=STEP (inclusive; START:STOP:COUNT is n=COUNT)."),
     phi: float = typer.Option(0.0, "--phi", help="Azimuth in degrees."),
     over: Over = OVER_OPTION,
     method: str = METHOD_OPTION,
@@ -107,10 +108,11 @@ def normalize_command(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="Sweep a parameter: V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
+                              help="Sweep a parameter: V,V,..., START:STOP:n=COUNT (add :log for log "
+                                   "spacing) or START:STOP:step=STEP."),
     at: At = typer.Option(At.normal, "--at", help="normal (fixed direction N), max (over all directions) or "
                           "view (per direction, see --theta)."),
-    theta: str = typer.Option("0:80:9", "--theta", metavar="SPEC", help="Polar angles in degrees for --at view."),
+    theta: str = typer.Option("0:80:n=9", "--theta", metavar="SPEC", help="Polar angles in degrees for --at view."),
     phi: float = typer.Option(0.0, "--phi", help="Azimuth in degrees for --at view."),
     over: Over = OVER_OPTION,
     method: str = METHOD_OPTION,

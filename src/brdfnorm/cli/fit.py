@@ -108,7 +108,7 @@ def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="The fitted parameter: NAME=START:STOP:COUNT (add :log for log spacing) "
+                              help="The fitted parameter: NAME=START:STOP:n=COUNT (add :log for log spacing) "
                                    "or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
@@ -129,7 +129,8 @@ def fit_command(
                                   "--lut minimax-abs)."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
     theta: str = typer.Option(None, "--theta", metavar="SPEC",
-                              help="Polar angles in degrees for --at view (START:STOP:COUNT or list)."),
+                              help="Polar angles in degrees for --at view (START:STOP:n=COUNT, "
+                                   "START:STOP:step=STEP or a list)."),
     target: float = typer.Option(None, "--target", help="Max relative error that --form auto aims for (default "
                                  "1e-3; with --lut the max absolute error, default 5e-3)."),
     max_coefficients: int = typer.Option(None, "--max-coefficients",

@@ -30,11 +30,12 @@ from .common import (
 )
 
 AXIS_HELP = ("An axis NAME=SPEC (repeatable; the tables are indexed in this order): mu (cos θ_o), theta "
-             "(degrees) or a float parameter; SPEC is START:STOP:COUNT (spaced by --grid) or V,V,...")
+             "(degrees) or a float parameter; SPEC is START:STOP:n=COUNT (spaced by --grid), "
+             "START:STOP:step=STEP or V,V,...")
 
 
 def parse_axis(spec: str, grid: str) -> tuple[str, np.ndarray]:
-    """``NAME=START:STOP:COUNT`` (node or texel grid) or ``NAME=V,V,...`` (as given)."""
+    """``NAME=START:STOP:n=COUNT`` (node or texel grid) or ``NAME=V,V,...`` (as given)."""
     name, sep, values = spec.partition("=")
     name = name.strip()
     if not sep or not name:

@@ -16,7 +16,7 @@ def report(
                                        help="Built-in model names or .brdf files; none: the seed lobes."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="Parameter to study: V,V,..., START:STOP:COUNT or START:STOP:COUNT:log "
+                              help="Parameter to study: V,V,..., START:STOP:n=COUNT (add :log for log spacing) "
                                    "(default: each model's first float parameter over its range; with no "
                                    "models, the exponents n of the factor table)."),
     audit: list[str] = typer.Option([], "--audit", metavar="FILE_OR_DIR",

@@ -20,7 +20,7 @@ from .common import DEBUG_OPTION, console, guarded, parse_range
 def verify(
     exponents: str = typer.Option(
         None, "--n", metavar="LIST",
-        help="Exponents for the parametric claims: N,N,... or START:STOP:COUNT[:log] (default 1,10,100,512).",
+        help="Exponents for the parametric claims: N,N,... or START:STOP:n=COUNT[:log] (default 1,10,100,512).",
     ),
     claim: list[str] = typer.Option([], "--claim", metavar="ID", help="Check only this claim (repeatable)."),
     certified: bool = typer.Option(False, "--certified",
