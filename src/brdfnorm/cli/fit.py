@@ -17,7 +17,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from ..codegen import LANGUAGES, emit
+from ..codegen import LANGUAGES, emit, fit_context
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..exact_forms import EXACT, exact_form
 from ..fit import METRICS, FitResult, fit, parse_form
@@ -206,7 +206,8 @@ def fit_command(
         else:
             fitted = fit(x, y[:, 0], form=form, metric=metric.value, target=target,
                          max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
-        code = emit(fitted, emit_language, m.name, variable=name) if emit_language else None
+        code = emit(fitted, emit_language, m.name, variable=name,
+                    context=fit_context(m, name, at.value, job.settings.over)) if emit_language else None
         if output is not None:
             write_file(output, code)
         if plot is not None:
