@@ -450,3 +450,11 @@ def test_every_image_loads_in_chromium(default_report, tmp_path):
     for line in lines:
         src, complete, width, height = line.split()
         assert complete == "true" and int(width) > 0 and int(height) > 0, line
+
+
+@pytest.mark.slow
+def test_tables_fit_the_page_in_chromium(default_report):
+    # issue 43: the factor table was 1 394 px wide in the 1 240 px page
+    from test_report_layout import assert_tables_fit
+
+    assert_tables_fit(default_report / "index.html", "default-report")

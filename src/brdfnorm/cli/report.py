@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import time
+
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
@@ -36,12 +38,27 @@ def report(
                        err=True)
         swept = parse_sweep(sweep) if sweep else None
         console = Console(stderr=True)
-        with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                      console=console, transient=True, disable=not console.is_terminal) as progress:
-            task = progress.add_task("report", total=None)
+        if console.is_terminal:
+            # A bar that moves within a section (the sections report their parts), its part named beside it.
+            with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[section]}"),
+                          TimeElapsedColumn(), console=console, transient=True) as progress:
+                task = progress.add_task("report", total=None, section="")
 
-            def on_step(description: str, index: int, total: int) -> None:
-                progress.update(task, description=description, completed=index, total=total)
+                def on_step(description: str, position: float, total: int) -> None:
+                    section = f"{min(int(position) + 1, total)}/{total}"
+                    progress.update(task, description=description, completed=position, total=total,
+                                    section=section)
 
-            index = build_report(output, loaded, sweep=swept, on_step=on_step, audit=audit)
+                index = build_report(output, loaded, sweep=swept, on_step=on_step, audit=audit)
+        else:
+            # Not a terminal (a log, CI): one line as each section starts, and none within it.
+            started, announced = time.monotonic(), set()
+
+            def on_line(description: str, position: float, total: int) -> None:
+                if int(position) not in announced and position < total:  # a section's first call names it
+                    announced.add(int(position))
+                    typer.echo(f"report [{int(position) + 1}/{total}] {description} "
+                               f"({time.monotonic() - started:.0f} s)", err=True)
+
+            index = build_report(output, loaded, sweep=swept, on_step=on_line, audit=audit)
         typer.echo(f"wrote {index}", err=True)
