@@ -15,6 +15,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .. import __version__
 from ..check import CHECKS, DEFAULT_CHECKS, Budget, CheckReport
 from ..check import check as run_check
 from ..errors import ArgumentError
@@ -143,7 +144,8 @@ def check_command(
                 console().print(row_text(report), markup=False, highlight=False, soft_wrap=True)
         if json_output:
             shown = tolerance if tolerance is not None or not reports else reports[0].tolerance
-            write_file(STDOUT, to_json({"tolerance": shown, "over": over.value, "checks": list(checks),
+            write_file(STDOUT, to_json({"brdfnorm": __version__, "tolerance": shown, "over": over.value,
+                                        "checks": list(checks),
                                         "status": _overall(reports),
                                         "reports": [{**report_json(r), "partial": _partial(r)} for r in reports]})
                        + "\n")

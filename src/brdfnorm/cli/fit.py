@@ -17,6 +17,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .. import __version__
 from ..codegen import LANGUAGES, emit, fit_context
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..exact_forms import EXACT, exact_form
@@ -220,7 +221,7 @@ def fit_command(
             if code is not None:
                 data["language"] = emit_language
                 data["code"] = code
-            write_file(STDOUT, to_json(data) + "\n")
+            write_file(STDOUT, to_json({"brdfnorm": __version__, **data}) + "\n")
             return
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
@@ -259,7 +260,8 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
         write_file(output, code)
     if json_output:
         # the table's candidates, not the chosen FitResult's own (empty) ``tried``, which used to overwrite them
-        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], **best.to_dict(),
+        write_file(STDOUT, to_json({"brdfnorm": __version__, "lut": path, "table": table, "variables": [x, t],
+                                    **best.to_dict(),
                                     "front": result.front, "tried": result.tried,
                                     **({"language": emit_language, "code": code} if code else {})}) + "\n")
         return
