@@ -21,7 +21,7 @@ def test_one_version_everywhere(capsys):
     code, out, _ = run_cli(capsys, "--version")
     assert code == 0 and out == f"brdfnorm {brdfnorm.__version__}\n"
     pyproject = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
-    assert 'dynamic = ["version"]' in pyproject and 'attr = "brdfnorm.__version__"' in pyproject
+    assert 'dynamic = ["version"]' in pyproject and 'attr = "brdfnorm.version.__version__"' in pyproject
     changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
     releases = re.findall(r"^## (\d+\.\d+\.\d+) - \d{4}-\d\d-\d\d$", changelog, re.M)
     assert releases[0] == brdfnorm.__version__ and releases[-1] == "0.1.0"

@@ -12,10 +12,6 @@ Frame: N = +z, X = +x, Y = +y; angles in radians in the API, degrees on the comm
 
 from __future__ import annotations
 
-#: The release (CHANGELOG.md); pyproject.toml reads it, and every file brdfnorm writes records it. Defined before
-#: the imports below, so that modules writing files can read it while the package is still importing.
-__version__ = "0.4.0"
-
 import os
 from pathlib import Path
 
@@ -24,6 +20,7 @@ from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
 from .normalization import NormalizationResult, normalize
 from .validate import short_repr
+from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
            "normalize"]

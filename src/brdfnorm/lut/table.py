@@ -151,12 +151,18 @@ def _clamp_hint(model: Model, name: str, array: np.ndarray) -> str:
     minimum = model.parameter(target).minimum
     if minimum is None or axis_parameter(model, name, np.array([float(array.min())]))[1][0] >= minimum:
         return ""
-    low, high = float(array.min()), max(float(array.max()), 1.0)
-    for _ in range(200):  # the mapping is monotone: bisect for the first axis value it maps into range
+    high = _first_mapped_to(model, name, minimum, float(array.min()), max(float(array.max()), 1.0))
+    return f"; clamp it, e.g. --clamp {name}={float(f'{high:.2g}') if high < 1 else high:g}"
+
+
+def _first_mapped_to(model: Model, name: str, minimum: float, low: float = 0.0, high: float = 1.0) -> float:
+    """The smallest value of axis ``name`` whose parameter value is ≥ ``minimum``, by bisection in [low, high]
+    (the axis' mapping, e.g. α = roughness², is monotone)."""
+    for _ in range(200):
         middle = 0.5 * (low + high)
         inside = axis_parameter(model, name, np.array([middle]))[1][0] >= minimum
         low, high = (low, middle) if inside else (middle, high)
-    return f"; clamp it, e.g. --clamp {name}={float(f'{high:.2g}') if high < 1 else high:g}"
+    return high
 
 
 def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapping[str, float]):
@@ -181,8 +187,8 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
     for name, minimum in clamp.items():
         if name not in values:
             setters = [axis for axis in names if axis in model.aliases and model.aliases[axis][0] == name]
-            hint = (f"; the {setters[0]} axis sets it ({model.aliases[setters[0]][2]}): clamp {setters[0]} instead"
-                    if setters else "")
+            hint = (f"; the {setters[0]} axis sets it ({model.aliases[setters[0]][2]}): clamp it instead, e.g. "
+                    f"--clamp {setters[0]}={_first_mapped_to(model, setters[0], minimum):.3g}" if setters else "")
             raise ArgumentError(f"{name}: no axis of that name (the axes: {', '.join(names)}){hint}", where="clamp")
         if not np.isfinite(minimum):
             raise ArgumentError(f"clamp for {name} must be finite", where="clamp")

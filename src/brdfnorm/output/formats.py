@@ -141,7 +141,7 @@ def to_json(obj) -> str:
 
 
 def _json(records: Records) -> str:
-    from .. import __version__  # the package's release: every file brdfnorm writes says which one wrote it
+    from ..version import __version__  # every file brdfnorm writes says which release wrote it
 
     return to_json({"brdfnorm": __version__, **records.meta, "results": records.rows}) + "\n"
 
