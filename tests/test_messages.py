@@ -54,6 +54,7 @@ def test_parameter_value_not_a_numpy_dump():
     (("normalize", "ggx", "--at", "maximum"), "'maximum' is not one of 'normal', 'max', 'view'; did you mean 'max'?"),
     (("albedo", "ggx", "--rtol", "abc"), "'abc' is not a number"),
     (("albedo", "ggx", "--over", "lite"), "did you mean 'light'?"),
+    (("albedo", "ggx", "--rtol", "1e-20"), "--rtol: 1e-20 is below what float64 quadrature can honour"),
 ])
 def test_usage_errors_in_our_words(capsys, argv, expected):
     assert expected in _one_line_error(capsys, *argv)
