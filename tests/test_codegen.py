@@ -6,6 +6,7 @@ from __future__ import annotations
 import importlib.util
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -161,3 +162,14 @@ def test_comments_state_lobe_convention_domain_and_held_parameters():
     assert "Fitted over alpha in [0.05, 1]" in comment, comment
     assert "f0 = 0.04" in comment and "fresnel = schlick" in comment, comment
     assert all(" " <= c <= "~" for c in comment), comment  # ASCII only: every shader compiler reads it
+
+
+def test_a_brdf_file_is_named_without_the_users_path(tmp_path):
+    import brdfnorm as bn
+    from brdfnorm.codegen import fit_context
+
+    path = tmp_path / "private" / "ggx.brdf"
+    path.parent.mkdir()
+    shutil.copy(Path(__file__).resolve().parents[1] / "examples" / "ggx.brdf", path)
+    lines = fit_context(bn.load(str(path)), "roughness")
+    assert "ggx.brdf" in lines[0] and "private" not in " ".join(lines), lines

@@ -150,6 +150,8 @@ def fit_context(model, swept: str, at: str | None = "normal", over: str = "light
     factor (``at``; None for a table's values), and every parameter held at its bound value while ``swept``
     varied (the explorer's fit of a GGX holds f0 = 0.04, and the code must say so)."""
     formula = re.sub(r"\s*\((?:seed|Eq)[^)]*\)", "", getattr(model, "formula", "") or model.name)
+    # a .brdf file by its name, not by the user's path
+    formula = re.sub(r"(?<!\S)(?:[A-Za-z]:)?[/\\](?:[\w.-]+[/\\])+", "", formula)
     lines = textwrap.wrap(f"Lobe: {comment_text(formula, limit=400)}.", width=100, break_long_words=False)
     if at is not None:
         convention = CONVENTIONS.get(at, comment_text(at))
