@@ -10,8 +10,6 @@ report in tests/test_report.py's fixture the same way.
 from __future__ import annotations
 
 import math
-import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -108,29 +106,25 @@ def _fake_normalize(model, at, sweep, **kwargs):
     return type("Result", (), {"factor": ones, "albedo": ones, "error": 1e-12 * ones, "theta": np.zeros((n.size, 1))})
 
 
-def test_report_prints_one_line_per_section_when_not_a_terminal(tmp_path, monkeypatch):
-    import subprocess
+def test_report_prints_one_line_per_section_when_not_a_terminal(capsys, monkeypatch):
+    from conftest import run_cli
 
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
-    code = ("import sys\n"
-            "from brdfnorm.cli import report as r\n"
-            "def fake(output, models, sweep=None, on_step=None, audit=()):\n"
-            "    for i, d in enumerate(['one', 'two']):\n"
-            "        on_step(d, i, 2)\n"
-            "        for k in range(3):\n"
-            "            on_step(d + ': part', i + k / 3, 2)\n"
-            "    on_step('done', 2, 2)\n"
-            "    return output + '/index.html'\n"
-            "import brdfnorm.report\n"
-            "brdfnorm.report.build_report = fake\n"
-            "from brdfnorm.cli import main\n"
-            "main(['report', '-o', sys.argv[1]])\n")
-    result = subprocess.run([sys.executable, "-c", code, str(tmp_path / "r")], capture_output=True, text=True,
-                            timeout=120, env=env)
-    assert result.returncode == 0, result.stderr
-    lines = result.stderr.splitlines()
+    import brdfnorm.report
+
+    def fake(output, models, sweep=None, on_step=None, audit=()):
+        for i, description in enumerate(["one", "two"]):
+            on_step(description, i, 2)
+            for k in range(3):
+                on_step(description + ": part", i + k / 3, 2)
+        on_step("done", 2, 2)
+        return f"{output}/index.html"
+
+    monkeypatch.setattr(brdfnorm.report, "build_report", fake)
+    code, out, err = run_cli(capsys, "report", "-o", "somewhere")
+    assert code == 0 and out == "", err
+    lines = err.splitlines()
     assert [line.split(" (")[0] for line in lines[:-1]] == ["report [1/2] one", "report [2/2] two"], lines
-    assert lines[-1].startswith("wrote ")
+    assert lines[-1] == "wrote somewhere/index.html"
 
 
 def test_one_folklore_argmax_quoted_everywhere(tmp_path, monkeypatch):
