@@ -7,6 +7,7 @@ import time
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Column
 
 from .application import app
 from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
@@ -39,12 +40,21 @@ def report(
         swept = parse_sweep(sweep) if sweep else None
         console = Console(stderr=True)
         if console.is_terminal:
-            # A bar that moves within a section (the sections report their parts), its part named beside it.
-            with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[section]}"),
+            # A bar that moves within a section (the sections report their parts), the part named beside it; the
+            # description column is bounded, so that bar, section and time stay on one 80-column line.
+            what = TextColumn("{task.description}", table_column=Column(no_wrap=True, overflow="ellipsis",
+                                                                        max_width=48))
+            with Progress(what, BarColumn(bar_width=16), TextColumn("{task.fields[section]}"),
                           TimeElapsedColumn(), console=console, transient=True) as progress:
                 task = progress.add_task("report", total=None, section="")
+                current = [""]
 
                 def on_step(description: str, position: float, total: int) -> None:
+                    # a section's start names it; its parts ("SECTION: part") show the part, which changes
+                    if description.startswith(current[0] + ": ") and current[0]:
+                        description = description[len(current[0]) + 2:]
+                    else:
+                        current[0] = description
                     section = f"{min(int(position) + 1, total)}/{total}"
                     progress.update(task, description=description, completed=position, total=total,
                                     section=section)
