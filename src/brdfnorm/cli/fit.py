@@ -98,7 +98,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
         readable_log_ticks(axis)
     fig.tight_layout()
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    fig.savefig(buffer, format="png", dpi=110, metadata={"Software": f"brdfnorm {__version__}"})
     plt.close(fig)
     write_file(path, buffer.getvalue())
 

@@ -19,6 +19,7 @@ from matplotlib.text import Text
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from .. import closed_forms
+from ..version import __version__
 from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 
 #: Pixels per inch of the PNG files; the page shows them at 96 CSS px per inch (1.5 image pixels per CSS
@@ -68,7 +69,8 @@ def render(name: str, alt: str, draw) -> Image:
         for axis in figure.axes:
             readable_log_ticks(axis)
         buffer = io.BytesIO()
-        figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": None})
+        # the PNG names the release that drew it (and no matplotlib version: the bytes stay reproducible)
+        figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": f"brdfnorm {__version__}"})
     width, height = figure.get_size_inches()
     return Image(name, buffer.getvalue(), round(width * CSS_PER_INCH), round(height * CSS_PER_INCH), alt)
 
