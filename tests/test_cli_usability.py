@@ -16,7 +16,7 @@ import pytest
 from brdfnorm import closed_forms
 from brdfnorm.output.formats import Column, Records, render
 
-COMMANDS = ["models", "info", "albedo", "normalize", "lut", "fit", "check", "explore", "verify", "report"]
+COMMANDS = ["models", "info", "albedo", "normalize", "lut", "fit", "check", "audit", "explore", "verify", "report"]
 
 
 def cli(*args: str, cwd=None, columns: int = 80) -> subprocess.CompletedProcess:
@@ -54,12 +54,20 @@ def _help_words(command: str) -> list[str]:
     return words
 
 
-@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("command", ["", *COMMANDS])
 def test_help_at_80_columns(command):
-    result = cli(command, "--help")
+    result = cli(*([command] if command else []), "--help")
     assert result.returncode == 0, result.stderr
     text = result.stdout
     assert max(len(line) for line in text.splitlines()) <= 80
+    # Nothing cut (issue 43: `audit --help` showed "direction=mu-node|mu-t…", `lut --help` "DASK_SCHEDULER_ADDRES…")
+    assert "…" not in text, (command, [line for line in text.splitlines() if "…" in line])
+    usage = next(line for line in text.splitlines() if "Usage:" in line)
+    assert "[[" not in usage and "...]..." not in usage, usage  # report's was [[MODEL_OR_FILE]...]...
+    # The help column is wide enough to read: no command's help runs past 90 lines (lut was 161, fit 139).
+    assert len(text.splitlines()) <= 90, (command, len(text.splitlines()))
+    if not command:
+        return
     for leak in ("<bool>", "<str>", "<float>", "<int", "{MODEL", "<light|view>"):
         assert leak not in text, (command, leak)
     # No option text cut short: every word of every help text is there (the box's wrapping joined back).

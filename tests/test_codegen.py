@@ -6,6 +6,7 @@ from __future__ import annotations
 import importlib.util
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,47 @@ def test_glsl_rejects_a_broken_function(tmp_path):
     path.write_text("#version 450\nlayout(location = 0) out vec4 color;\n" + broken
                     + f"void main() {{ color = vec4({NAME}(gl_FragCoord.x)); }}\n")
     assert subprocess.run([GLSLANG, str(path)], capture_output=True).returncode != 0
+
+
+# -- comments in the user's terms, signs folded (issue 43) -----------------------------------------------------
+
+
+def test_signs_are_folded_into_the_operator():
+    # a cubic with a negative coefficient and a hyperbola whose centre is negative
+    x = np.linspace(0.05, 1.0, 12)
+    cubic = fit(x, 25.1 - 2.7 * x + 41.3 * x**2 + 17.7 * x**3, form="poly:3", names=("alpha", "t"))
+    hyperbola = fit(x, 0.2 - 0.01 * np.sqrt((x + 1.5) ** 2 + 2.0), form="hyperbola", names=("alpha", "t"))
+    for fitted in (cubic, hyperbola):
+        for language in ("glsl", "hlsl", "c", "python"):
+            code = emit(fitted, language, "ggx")
+            assert "+ -" not in code and "- -" not in code, code
+    assert "- 2.7" in emit(cubic, "glsl", "ggx")
+    namespace: dict = {}
+    exec(emit(hyperbola, "python", "m"), namespace)  # noqa: S102 - our own emitted code
+    np.testing.assert_allclose(namespace["brdfnorm_m_norm"](x), hyperbola(x), rtol=1e-7)
+
+
+def test_comments_state_lobe_convention_domain_and_held_parameters():
+    import brdfnorm as bn
+    from brdfnorm.explore.compute import fit_factor
+
+    model = bn.load("ggx", fresnel="schlick")
+    code = fit_factor(model, "alpha", 0.05, 1.0, 8, "normal", "glsl", params={"f0": 0.04})["code"]
+    comment = " ".join(line[3:] for line in code.splitlines() if line.startswith("//"))
+    assert "seed" not in comment.lower(), comment
+    assert "Lobe: f = D G2 F / (4 N.L N.V)" in comment, comment
+    assert "Convention: 1/E" in comment and "at V = N" in comment, comment
+    assert "Fitted over alpha in [0.05, 1]" in comment, comment
+    assert "f0 = 0.04" in comment and "fresnel = schlick" in comment, comment
+    assert all(" " <= c <= "~" for c in comment), comment  # ASCII only: every shader compiler reads it
+
+
+def test_a_brdf_file_is_named_without_the_users_path(tmp_path):
+    import brdfnorm as bn
+    from brdfnorm.codegen import fit_context
+
+    path = tmp_path / "private" / "ggx.brdf"
+    path.parent.mkdir()
+    shutil.copy(Path(__file__).resolve().parents[1] / "examples" / "ggx.brdf", path)
+    lines = fit_context(bn.load(str(path)), "roughness")
+    assert "ggx.brdf" in lines[0] and "private" not in " ".join(lines), lines

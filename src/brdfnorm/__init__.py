@@ -20,8 +20,8 @@ from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
 from .normalization import NormalizationResult, normalize
 from .validate import short_repr
+from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
-__version__ = "0.1.0"
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
            "normalize"]
 

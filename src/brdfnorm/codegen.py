@@ -5,7 +5,9 @@ Issue 4, item 5: shader writers need the cheap formula in their language. The fu
 e.g. ``cos_theta_o``), evaluates every polynomial in Horner form — one multiply-add per coefficient, which
 compilers contract to FMAs — and prints the coefficients to 9 significant digits (enough to round-trip a float32,
 and within ~1e-9 relative of the fit's double-precision coefficients). A comment states the form, the fitted
-range, the metric, the maximum relative error on the samples and the operation count.
+range, the metric, the maximum relative error on the samples and the operation count, and — in the user's terms
+(:func:`fit_context`) — the lobe's formula, the convention of the factor and the parameters held fixed. Signs are
+folded into the operator (``x - 47.95``, never ``x + -47.95``).
 
 GLSL and HLSL use ``float``; C uses ``double`` (CPU tools; the tests run it against the Python evaluation);
 Python uses only arithmetic and ``** 0.5`` so it works on floats and numpy arrays alike.
@@ -20,7 +22,10 @@ from __future__ import annotations
 
 import keyword
 import re
+import textwrap
 from dataclasses import dataclass
+
+import numpy as np
 
 from .exact_forms import ExactForm
 from .fit import FitResult
@@ -91,14 +96,24 @@ def function_name(model_name: str) -> str:
     return f"brdfnorm_{identifier(model_name).strip('_')}_norm"
 
 
-def comment_text(text: object) -> str:
-    """Outside text made safe inside any generated comment or docstring: printable ASCII only, without
-    backslashes (a C line continuation), ``?`` (C's trigraph ``??/`` is a backslash) or quotes (a Python
-    docstring's end), cut to :data:`COMMENT_QUOTE_LIMIT` characters; everything else becomes ``_``."""
-    text = str(text)
-    cut = text[:COMMENT_QUOTE_LIMIT]
+#: Mathematical characters of formulas and names spelled in ASCII for comments (``N·H`` → ``N.H``).
+ASCII_SPELLING = str.maketrans({
+    "·": ".", "−": "-", "–": "-", "—": "-", "×": "*", "²": "^2", "³": "^3", "⁴": "^4", "⁵": "^5", "½": "1/2",
+    "√": "sqrt", "π": "pi", "α": "alpha", "θ": "theta", "φ": "phi", "μ": "mu", "η": "eta", "ρ": "rho",
+    "σ": "sigma", "∫": "integral ", "≈": "~", "≤": "<=", "≥": ">=", "∞": "inf", "₀": "0", "₁": "1", "₂": "2",
+    "Λ": "Lambda", "λ": "lambda", "ψ": "psi", "ω": "omega", "Ω": "Omega", "∘": "o", "±": "+-", "′": "'",
+})
+
+
+def comment_text(text: object, limit: int = COMMENT_QUOTE_LIMIT) -> str:
+    """Outside text made safe inside any generated comment or docstring: printable ASCII only (mathematical
+    characters spelled out, :data:`ASCII_SPELLING`), without backslashes (a C line continuation), ``?`` (C's
+    trigraph ``??/`` is a backslash) or quotes (a Python docstring's end), cut to ``limit`` characters;
+    everything else becomes ``_``."""
+    text = str(text).translate(ASCII_SPELLING)
+    cut = text[:limit]
     safe = "".join(c if (" " <= c <= "~" and c not in "\\\"'`?") else "_" for c in cut)
-    return safe + ("..." if len(text) > COMMENT_QUOTE_LIMIT else "")
+    return safe + ("..." if len(text) > limit else "")
 
 
 def literal(value: float, language: str) -> str:
@@ -112,11 +127,58 @@ def literal(value: float, language: str) -> str:
     return text
 
 
+def _plus(expr: str, term: str) -> str:
+    """``expr + term`` with a negative literal's sign folded into the operator: ``x - 47.95``, not ``x + -47.95``."""
+    return f"{expr} - {term[1:]}" if term.startswith("-") else f"{expr} + {term}"
+
+
+def _minus(expr: str, term: str) -> str:
+    """``expr - term`` with a negative literal folded: ``x + 1.5``, not ``x - -1.5``."""
+    return f"{expr} + {term[1:]}" if term.startswith("-") else f"{expr} - {term}"
+
+
+#: What a normalization factor's convention means, in the words of a comment (``at`` of brdfnorm.normalize).
+CONVENTIONS = {
+    "normal": "1/E with E = integral of f(L, V) (N.L) dL at V = N (normal view)",
+    "max": "1/E with E the largest albedo over all view directions",
+    "view": "1/E(V) at each view direction, E(V) = integral of f(L, V) (N.L) dL",
+}
+
+
+def fit_context(model, swept: str, at: str | None = "normal", over: str = "light") -> list[str]:
+    """Comment lines that say what the function's number means: the lobe's formula, the convention of the
+    factor (``at``; None for a table's values), and every parameter held at its bound value while ``swept``
+    varied (the explorer's fit of a GGX holds f0 = 0.04, and the code must say so)."""
+    formula = re.sub(r"\s*\((?:seed|Eq)[^)]*\)", "", getattr(model, "formula", "") or model.name)
+    # a .brdf file by its name, not by the user's path
+    formula = re.sub(r"(?<!\S)(?:[A-Za-z]:)?[/\\](?:[\w.-]+[/\\])+", "", formula)
+    lines = textwrap.wrap(f"Lobe: {comment_text(formula, limit=400)}.", width=100, break_long_words=False)
+    if at is not None:
+        convention = CONVENTIONS.get(at, comment_text(at))
+        if over == "view":
+            convention = convention.replace("f(L, V) (N.L) dL", "f(L, V) (N.V) dV").replace("at V = N", "at L = N")
+        lines.append(f"Convention: {convention}.")
+    held = []
+    for name, value in sorted(getattr(model, "params", {}).items()):
+        if name == swept:
+            continue
+        if isinstance(value, str):
+            shown = value
+        else:
+            values = [float(v) for v in np.ravel(value)]
+            shown = ",".join(f"{v:.6g}" for v in (values[:1] if len(set(values)) == 1 else values))
+        held.append(f"{comment_text(name)} = {comment_text(shown)}")
+    if held:
+        lines += textwrap.wrap(f"Held fixed: {', '.join(held)}.", width=100, break_long_words=False,
+                               break_on_hyphens=False)
+    return lines
+
+
 def _horner(coefficients: list[str], var: str) -> str:
     """Σ c_i var^i as ((c_k·var + c_{k−1})·var + …)·var + c_0: one multiply-add per step."""
     expr = coefficients[-1]
     for i in range(len(coefficients) - 2, -1, -1):
-        expr = f"{expr} * {var} + {coefficients[i]}"
+        expr = _plus(f"{expr} * {var}", coefficients[i])
         if i:
             expr = f"({expr})"
     return expr
@@ -131,8 +193,8 @@ def _body(result: FitResult, language: str, x: str, t: str) -> list[str]:
     if isinstance(form, HyperbolaForm):
         a, s, x0, b = result.coefficients
         b2 = literal(b * b, language)
-        lines.append(f"{syn.declare}d = {x} - {literal(x0, language)}{syn.end}")
-        lines.append(f"return {lit[0]} + {lit[1]} * {sqrt(f'd * d + {b2}')}{syn.end}")
+        lines.append(f"{syn.declare}d = {_minus(x, literal(x0, language))}{syn.end}")
+        lines.append(f"return {_plus(lit[0], lit[1] + ' * ' + sqrt(f'd * d + {b2}'))}{syn.end}")
         return lines
     if isinstance(form, SmithForm):
         return _smith_body(form, result, language, x, t)
@@ -189,16 +251,20 @@ def _smith_body(form: SmithForm, result: FitResult, language: str, mu: str, alph
     denominator = [f"({_horner(den[j * kq:(j + 1) * kq], 'v')})" for j in range(form.Q + 1)]
     top = _horner(numerator, "u") if len(numerator) > 1 else numerator[0]
     bottom = _horner(denominator, "u") if len(denominator) > 1 else denominator[0]
-    lines.append(f"{syn.declare}p = {top} + l * {log_row}{syn.end}")
+    lines.append(f"{syn.declare}p = {top} + l * {log_row}{syn.end}")  # parenthesised rows: no sign to fold
     lines.append(f"{syn.declare}q = {bottom}{syn.end}")
     lines.append(f"return 1.0 - u * p / q{syn.end}")
     return lines
 
 
 def emit(result: FitResult, language: str, model_name: str, *, variable: str | None = None,
-         second: str = "cos_theta_o", quantity: str = "Normalization factor", suffix: str = "norm") -> str:
+         second: str = "cos_theta_o", quantity: str = "Normalization factor", suffix: str = "norm",
+         context: list[str] | tuple[str, ...] = ()) -> str:
     """Source text of one self-contained function evaluating ``result`` in ``language`` (``quantity`` names
-    what was fitted in the comment, ``suffix`` ends the function's name)."""
+    what was fitted in the comment, ``suffix`` ends the function's name, ``context`` adds comment lines after
+    the first: :func:`fit_context`'s lobe, convention and held parameters)."""
+    from .version import __version__
+
     syn = LANGUAGES[LANGUAGES.validate(language)]
     x = identifier(variable or result.variables[0])
     t = identifier(second)
@@ -209,17 +275,19 @@ def emit(result: FitResult, language: str, model_name: str, *, variable: str | N
     ops = ", ".join(f"{n} {c}" for n, c in result.operations.items() if c)
     ranges = "; ".join(f"{comment_text(k)} in [{lo:.9g}, {hi:.9g}]" for k, (lo, hi) in result.range.items())
     where = ", ".join(f"{comment_text(k)} = {v:.6g}" for k, v in result.argmax.items())
-    how = (f"the exact closed form (seed 000), checked against quadrature at {result.samples} samples,"
-           if result.form == "closed-form" else f"{result.form} fit ({result.metric}) over {result.samples} samples,")
+    how = (f"the exact closed form, checked against quadrature at {result.samples} samples."
+           if result.form == "closed-form" else f"{result.form} fit ({result.metric}) over {result.samples} samples.")
     comment = [
         f"{comment_text(quantity)} of {comment_text(model_name)}: {how}",
-        f"{ranges}.",
+        f"Fitted over {ranges}.",
+        *context,
         f"Max relative error {result.max_rel_error:.3g} (at {where}); max absolute error "
         f"{result.max_abs_error:.3g}.",
-        f"Operations: {ops or 'none'}. Generated by brdfnorm fit.",
+        f"Operations: {ops or 'none'}. Generated by brdfnorm {__version__} (brdfnorm fit).",
     ]
     if two_d:
-        comment.insert(2, f"Second argument {t}: the fit's variable {comment_text(result.variables[1])}.")
+        second_line = f"Second argument {t}: the fit's variable {comment_text(result.variables[1])}."
+        comment.insert(2 + len(context), second_line)
     body = _body(result, language, x, t)
     if language == "python":
         args = f"{x}, {t}" if two_d else x

@@ -79,6 +79,15 @@ class Parameter:
         each = " per channel (1 or 3 numbers)" if self.kind == "spectrum" else ""
         return f"[{lo}, {hi}]{whole}{each}"
 
+    def describe_outside(self, array: np.ndarray) -> str:
+        """The first value of ``array`` outside the range, as a user would type it, and how many there are
+        (not a numpy dump: ``0 (1 of 8 values)``)."""
+        flat = np.asarray(array, dtype=float).ravel()
+        outside = ((flat < self.minimum) if self.minimum is not None else np.zeros(flat.size, dtype=bool)) | (
+            (flat > self.maximum) if self.maximum is not None else np.zeros(flat.size, dtype=bool))
+        first = f"{flat[np.argmax(outside)]:.10g}"
+        return first if flat.size == 1 else f"{first} ({np.count_nonzero(outside)} of {flat.size} values)"
+
     def parse(self, text: str) -> float | bool | tuple[float, float, float]:
         """Parse a command-line value (``n=512``, ``normalized=0``, ``baseColor=0.5,0.5,0.5``)."""
         text = text.strip()
@@ -131,7 +140,7 @@ class Parameter:
         low = self.minimum is not None and np.any(array < self.minimum)
         high = self.maximum is not None and np.any(array > self.maximum)
         if low or high:
-            message = f"value {short_repr(value)} outside {self.describe_range()}"
+            message = f"value {self.describe_outside(array)} outside {self.describe_range()}"
             if self.strict:
                 raise ParameterError(message, where=where)
             warnings.warn(f"{where}: {message} (the file's slider range; evaluating anyway)", stacklevel=3)

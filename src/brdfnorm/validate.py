@@ -103,16 +103,16 @@ def tolerances(rtol: object, atol: object = 0.0, *, floor: float = RTOL_FLOOR) -
     """``rtol`` in [floor, 1) or 0 and ``atol`` ≥ 0, not both 0."""
     rtol, atol = real_number(rtol, "rtol"), real_number(atol, "atol")
     if rtol < 0:
-        raise ArgumentError(f"rtol must be ≥ 0, got {rtol:g}", where="rtol")
+        raise ArgumentError(f"must be ≥ 0, got {rtol:g}", where="rtol")
     if atol < 0:
-        raise ArgumentError(f"atol must be ≥ 0, got {atol:g}", where="atol")
+        raise ArgumentError(f"must be ≥ 0, got {atol:g}", where="atol")
     if rtol == 0 and atol == 0:
         raise ArgumentError("rtol and atol are both 0: no tolerance can be met", where="rtol")
     if rtol and rtol < floor:
-        raise ArgumentError(f"rtol {rtol:g} is below what float64 quadrature can honour (≥ {floor:g})",
+        raise ArgumentError(f"{rtol:g} is below what float64 quadrature can honour (≥ {floor:g})",
                             where="rtol")
     if rtol >= 1:
-        raise ArgumentError(f"rtol {rtol:g} is absurd (must be < 1)", where="rtol")
+        raise ArgumentError(f"{rtol:g} is not a relative tolerance (it must be < 1)", where="rtol")
     return rtol, atol
 
 

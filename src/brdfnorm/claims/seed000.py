@@ -35,7 +35,9 @@ def blinn_phong_normal(n: np.ndarray) -> Claim:
 
 def blinn_phong_folklore(n: np.ndarray) -> Claim:
     """ "… not (n+8)/8π": the folklore factor against the exact one on a dense n grid."""
-    grid = np.unique(np.concatenate([np.geomspace(0.01, 1e4, 400), n]))
+    # the grid holds the exact argmax (closed_forms.blinn_phong_folklore_worst), so the row quotes the same n as
+    # the report's findings and figure
+    grid = np.unique(np.concatenate([np.geomspace(0.01, 1e4, 400), n, [closed_forms.blinn_phong_folklore_worst()[0]]]))
     exact = 1.0 / blinn_phong_albedo_series(grid, 0.0).value  # numerical integral of seed 000's Eq. 3
     folk = closed_forms.blinn_phong_folklore_factor(grid)
     errors = rel_error(folk, exact)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import difflib
 import os
+import re
 import sys
 
 import typer
@@ -37,10 +39,33 @@ def main(argv: list[str] | None = None) -> None:
         if type(error).__name__ == "NoArgsIsHelpError":  # typer has printed the help already
             raise SystemExit(0) from None
         command_path = context.command_path if context is not None else "brdfnorm"
-        typer.echo(f"error: {error.format_message()} (see '{command_path} --help')", err=True)
+        typer.echo(f"error: {usage_message(error)} (see '{command_path} --help')", err=True)
         raise SystemExit(getattr(error, "exit_code", 2)) from None
     if isinstance(code, int) and code:
         raise SystemExit(code)
+
+
+def usage_message(error) -> str:
+    """A usage error's text in the product's words: without the validation library's "Value error, " prefix,
+    and, for a choice, the closest choice ("did you mean 'max'?")."""
+    message = error.format_message().replace("Value error, ", "")
+    wanted = re.search(r"Input should be (?:a valid |an? )?([\w ]+?)(?:,.*)?$", message)
+    if wanted:  # pydantic's words for a bad number: say what was given and what is expected
+        cause = error.__cause__
+        given = cause.errors()[0].get("input") if hasattr(cause, "errors") else None
+        shown = "" if given is None else f"{given!r} is not "
+        message = message[:wanted.start()] + f"{shown or 'expected '}a{'n' if wanted.group(1)[0] in 'aeiou' else ''} " \
+            f"{wanted.group(1)}"
+    param, value = getattr(error, "param", None), None
+    kind = getattr(param, "type_descriptor", None) or getattr(param, "type", None)
+    choices = [str(getattr(c, "value", c)) for c in getattr(kind, "choices", None) or ()]
+    found = re.search(r"'([^']*)' is not one of", message)
+    if found:
+        value = found.group(1)
+    close = difflib.get_close_matches(value, choices, n=1, cutoff=0.4) if value and choices else []
+    if close:
+        message = message.rstrip(".") + f"; did you mean {close[0]!r}?"
+    return message
 
 
 def _quiet_broken_pipe() -> None:

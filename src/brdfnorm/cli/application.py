@@ -19,13 +19,9 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        from importlib.metadata import PackageNotFoundError, version
+        from .. import __version__  # the source's own, also when run from a tree that was never installed
 
-        try:
-            number = version("brdfnorm")
-        except PackageNotFoundError:  # run from a source tree that was never installed
-            number = "unknown (not installed)"
-        typer.echo(f"brdfnorm {number}")
+        typer.echo(f"brdfnorm {__version__}")
         raise typer.Exit(0)
 
 

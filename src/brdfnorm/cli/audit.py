@@ -38,17 +38,22 @@ def audit_command(
     scale: float = typer.Option(None, "--scale", help="Stored value = table value × SCALE (default: an integer "
                                 "type's maximum, 1 for floats)."),
     fmt: str = typer.Option(None, "--format", help="Format when the extension does not say it (e.g. text, raw)."),
-    pin: list[str] = typer.Option([], "--as", metavar="KEY=VALUE", help="Pin part of the convention: axes=mu,alpha "
-                                  "direction=mu-node|mu-texel|theta-node|theta-texel|ltc roughness=alpha-node|"
-                                  "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable (rough "
-                                  "dielectrics also height-correlated/refraction=reflection-form|separable) "
-                                  "mu_floor=1e-4 alpha_floor=1e-8 channels=DFG_f0,DFG_f90 (meanings: E 1-E DFG_f0 "
-                                  "DFG_f90 E_f0 E_avg 1-E_avg E_dielectric E_f0_dielectric DFG_cloth E_schlick) "
-                                  "eta=1.5 (of E_dielectric) schlick_f0=0.04 (of E_schlick)"),
+    pin: list[str] = typer.Option([], "--as", metavar="KEY=VALUE", help="\n\n".join([
+        "Pin part of the convention (repeatable); KEY=VALUE is one of:",
+        "axes=mu,alpha (the axes in array order)",
+        "direction= mu-node, mu-texel, theta-node, theta-texel or ltc",
+        "roughness= alpha-node, alpha-texel, r2-node or r2-texel",
+        "flip= 0 or 1",
+        "shadowing= height-correlated or separable (rough dielectrics also height-correlated/refraction= "
+        "reflection-form or separable)",
+        "mu_floor=1e-4, alpha_floor=1e-8",
+        "channels=DFG_f0,DFG_f90, each a meaning: E, 1-E, DFG_f0, DFG_f90, E_f0, E_avg, 1-E_avg, E_dielectric, "
+        "E_f0_dielectric, DFG_cloth or E_schlick",
+        "eta=1.5 (of E_dielectric), schlick_f0=0.04 (of E_schlick)"])),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
-                                   "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "
+                                   "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:n=COUNT "
                                    "(spaced by --grid) or V,V,... in array order."),
-    grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:COUNT is spaced."),
+    grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:n=COUNT is spaced."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable result on stdout."),
     report: str = typer.Option(None, "--report", metavar="DIR", help="Write error maps and plots (PNG) there."),
     fix: bool = typer.Option(False, "--fix", help="Write the exact table in the input's format and layout (-o)."),

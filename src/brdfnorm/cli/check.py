@@ -15,6 +15,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .. import __version__
 from ..check import CHECKS, DEFAULT_CHECKS, Budget, CheckReport
 from ..check import check as run_check
 from ..errors import ArgumentError
@@ -72,7 +73,8 @@ def check_command(
     param: list[str] = PARAM_OPTION,
     sweep: list[str] = typer.Option([], "--sweep", metavar="NAME=SPEC",
                                     help="Values of a float parameter instead of its declared range (repeatable): "
-                                         "V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
+                                         "V,V,..., START:STOP:n=COUNT (add :log for log spacing) or "
+                                         "START:STOP:step=STEP."),
     only: str = typer.Option(None, "--only", metavar="CHECK,...",
                              help=f"Run only these checks, comma-separated ({', '.join(CHECKS)}); default: "
                                   f"{', '.join(DEFAULT_CHECKS)}, plus normalization with --normalized."),
@@ -142,7 +144,8 @@ def check_command(
                 console().print(row_text(report), markup=False, highlight=False, soft_wrap=True)
         if json_output:
             shown = tolerance if tolerance is not None or not reports else reports[0].tolerance
-            write_file(STDOUT, to_json({"tolerance": shown, "over": over.value, "checks": list(checks),
+            write_file(STDOUT, to_json({"brdfnorm": __version__, "tolerance": shown, "over": over.value,
+                                        "checks": list(checks),
                                         "status": _overall(reports),
                                         "reports": [{**report_json(r), "partial": _partial(r)} for r in reports]})
                        + "\n")

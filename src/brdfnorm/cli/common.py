@@ -28,13 +28,19 @@ from ..models.base import Model
 from ..output import STDOUT, write_file
 from ..output.formats import render
 
+#: Help panels of the options every computing command shares (typer's rich_help_panel), so that a long --help
+#: reads as groups: what to compute (Options), where the result goes, where the work runs.
+OUTPUT_PANEL = "Output"
+PARALLEL_PANEL = "Parallel and resumable runs"
 DEBUG_OPTION = typer.Option(False, "--debug", help="Show tracebacks instead of one-line errors.")
 PARAM_OPTION = typer.Option([], "--param", "-p", metavar="NAME=VALUE",
                             help="Set a model parameter (repeatable), e.g. -p n=512 or -p baseColor=0.5,0.5,0.5.")
-JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
-CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).")
+JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.", rich_help_panel=OUTPUT_PANEL)
+CSV_OPTION = typer.Option(False, "--csv", help="Print CSV (a header row, one row per point, full precision).",
+                          rich_help_panel=OUTPUT_PANEL)
 OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
-                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).")
+                             help="Write the table/JSON/CSV to FILE (replaced atomically; '-' is stdout).",
+                             rich_help_panel=OUTPUT_PANEL)
 
 
 class At(str, Enum):
@@ -76,19 +82,21 @@ class Spread:
 #: The parallel layer's options, declared once (:func:`parallel_options` adds them to a command).
 PARALLEL_OPTIONS = {
     "workers": (int, typer.Option(None, "--workers", min=1, metavar="N",
-                                  help="Local processes computing the cells (default: all cores; 1: this process).")),
+                                  help="Local processes computing the cells (default: all cores; 1: this process).",
+                                  rich_help_panel=PARALLEL_PANEL)),
     "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
                                     help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
-                                    "instead of local processes.")),
+                                    "instead of local processes.", rich_help_panel=PARALLEL_PANEL)),
     "connect_timeout": (float, typer.Option(None, "--connect-timeout", min=0.1, max=3600, metavar="SECONDS",
                                             help="One deadline for reaching the --scheduler: connection and "
-                                            "handshake (default 10).")),
+                                            "handshake (default 10).", rich_help_panel=PARALLEL_PANEL)),
     "checkpoint": (str, typer.Option(None, "--checkpoint", metavar="DIR",
                                      help="Save each finished chunk of cells in DIR; rerunning the same command "
-                                     "resumes, computing only what is missing.")),
+                                     "resumes, computing only what is missing.", rich_help_panel=PARALLEL_PANEL)),
     "chunk_cells": (int, typer.Option(None, "--chunk-cells", min=1, metavar="N",
                                       help="Cells per chunk (part of the job's definition; default: sized by a "
-                                      "short probe so that a chunk takes about a second).")),
+                                      "short probe so that a chunk takes about a second).",
+                                      rich_help_panel=PARALLEL_PANEL)),
 }
 
 
@@ -228,29 +236,54 @@ def _number(text: str, option: str) -> float:
     return value
 
 
+#: The spellings of a range, as the help texts and error messages give them.
+RANGE_FORMS = "START:STOP:n=COUNT, START:STOP:step=STEP or START:STOP:COUNT"
+
+
 def parse_range(spec: str, option: str, *, allow_log: bool) -> np.ndarray:
-    """``V``, ``V,V,...``, ``START:STOP:COUNT`` (inclusive) or, with ``allow_log``, ``START:STOP:COUNT:log``."""
+    """``V``, ``V,V,...`` or an inclusive range: ``START:STOP:n=COUNT`` (COUNT values), ``START:STOP:step=STEP``
+    (START, START + STEP, ... up to STOP) or the older ``START:STOP:COUNT`` (the same as ``n=COUNT``); with
+    ``allow_log``, ``:log`` after a count spaces the values geometrically (``1:1e4:n=9:log``)."""
     spec = spec.strip()
     if not spec:
         raise ArgumentError("empty value", where=option)
     if ":" in spec:
-        parts = spec.split(":")
-        log = allow_log and len(parts) == 4 and parts[3].strip().lower() == "log"
+        parts = [part.strip() for part in spec.split(":")]
+        log = allow_log and len(parts) == 4 and parts[3].lower() == "log"
         if len(parts) != 3 and not log:
-            form = "START:STOP:COUNT[:log]" if allow_log else "START:STOP:COUNT"
-            raise ArgumentError(f"expected {form}, got {spec!r}", where=option)
+            form = RANGE_FORMS + (" (a count may end in :log)" if allow_log else "")
+            raise ArgumentError(f"expected {form}; got {spec!r}", where=option)
         start, stop = _number(parts[0], option), _number(parts[1], option)
-        count = validate.count(parts[2].strip(), option)
         if stop < start:
             raise ArgumentError(f"reversed range: STOP {stop:g} < START {start:g}", where=option)
+        key, sep, third = parts[2].partition("=")
+        key = key.strip().lower() if sep else "n"
+        third = third if sep else parts[2]
+        if key == "step":
+            if log:
+                raise ArgumentError("a log range takes a count (n=COUNT), not a step", where=option)
+            return _stepped(start, stop, _number(third, option), option)
+        if key != "n":
+            raise ArgumentError(f"expected n=COUNT or step=STEP after START:STOP, got {parts[2]!r}", where=option)
+        count = validate.count(third.strip(), option)
         if count == 1 and stop != start:
-            raise ArgumentError("COUNT 1 needs START = STOP", where=option)
+            raise ArgumentError("n=1 needs START = STOP", where=option)
         if log:
             if start <= 0:
                 raise ArgumentError("a log range needs START > 0", where=option)
             return np.geomspace(start, stop, count)
         return np.linspace(start, stop, count)
     return np.array([_number(part, option) for part in spec.split(",")])
+
+
+def _stepped(start: float, stop: float, step: float, option: str) -> np.ndarray:
+    """START, START + STEP, ... while ≤ STOP (STOP itself where it is a whole number of steps, to rounding)."""
+    if step <= 0:
+        raise ArgumentError(f"step must be > 0, got {step:g}", where=option)
+    steps = (stop - start) / step
+    whole = math.floor(steps + 1e-9 * max(1.0, steps))
+    count = validate.count(str(whole + 1), option)  # bounded like any other range
+    return np.minimum(start + step * np.arange(count), stop)  # 0:1:step=0.1 ends at 1, not 1.0000000000000002
 
 
 def parse_angles(spec: str, option: str = "--theta") -> np.ndarray:
@@ -266,7 +299,7 @@ def parse_azimuth(value: float, option: str = "--phi") -> float:
 
 
 def parse_sweep(spec: str, option: str = "--sweep") -> tuple[str, np.ndarray]:
-    """``NAME=SPEC`` with SPEC ``V,V,...``, ``START:STOP:COUNT`` or ``START:STOP:COUNT:log``."""
+    """``NAME=SPEC`` with SPEC ``V,V,...`` or a range of :func:`parse_range` (``:log`` allowed)."""
     name, sep, values = spec.partition("=")
     if not sep or not name.strip():
         raise ArgumentError(f"expected NAME=SPEC, got {spec!r}", where=option)

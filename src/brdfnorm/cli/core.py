@@ -45,7 +45,8 @@ METHOD_OPTION = typer.Option("auto", "--method",
                              help=" | ".join(("auto", *METHODS)) + " (where it applies; auto takes the first that "
                                   "does, never certified; azimuthal: isotropic ggx and beckmann without Fresnel, "
                                   "a 1-D integral; microfacet: ggx and beckmann over the half vector).")
-RTOL_OPTION = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral (1e-14 … <1).")
+RTOL_OPTION = typer.Option(1e-10, "--rtol",
+                           help="Relative tolerance of each albedo integral (at least 1e-14, below 1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 
 
@@ -70,8 +71,9 @@ def models(debug: bool = DEBUG_OPTION) -> None:
 def albedo(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
-    theta: str = typer.Option("0:80:5", "--theta", metavar="SPEC",
-                              help="Polar angle(s) in degrees: DEG, DEG,DEG,... or START:STOP:COUNT (inclusive)."),
+    theta: str = typer.Option("0:80:n=5", "--theta", metavar="SPEC",
+                              help="Polar angle(s) in degrees: DEG, DEG,DEG,..., START:STOP:n=COUNT or "
+                                   "START:STOP:step=STEP (inclusive; START:STOP:COUNT is n=COUNT)."),
     phi: float = typer.Option(0.0, "--phi", help="Azimuth in degrees."),
     over: Over = OVER_OPTION,
     method: str = METHOD_OPTION,
@@ -106,10 +108,11 @@ def normalize_command(
     model: str = MODEL_ARGUMENT,
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="Sweep a parameter: V,V,..., START:STOP:COUNT or START:STOP:COUNT:log."),
+                              help="Sweep a parameter: V,V,..., START:STOP:n=COUNT (add :log for log "
+                                   "spacing) or START:STOP:step=STEP."),
     at: At = typer.Option(At.normal, "--at", help="normal (fixed direction N), max (over all directions) or "
                           "view (per direction, see --theta)."),
-    theta: str = typer.Option("0:80:9", "--theta", metavar="SPEC", help="Polar angles in degrees for --at view."),
+    theta: str = typer.Option("0:80:n=9", "--theta", metavar="SPEC", help="Polar angles in degrees for --at view."),
     phi: float = typer.Option(0.0, "--phi", help="Azimuth in degrees for --at view."),
     over: Over = OVER_OPTION,
     method: str = METHOD_OPTION,

@@ -17,7 +17,8 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from ..codegen import LANGUAGES, emit
+from .. import __version__
+from ..codegen import LANGUAGES, emit, fit_context
 from ..errors import ArgumentError, EvaluationError, OutputError
 from ..exact_forms import EXACT, exact_form
 from ..fit import METRICS, FitResult, fit, parse_form
@@ -97,7 +98,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
         readable_log_ticks(axis)
     fig.tight_layout()
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    fig.savefig(buffer, format="png", dpi=110, metadata={"Software": f"brdfnorm {__version__}"})
     plt.close(fig)
     write_file(path, buffer.getvalue())
 
@@ -108,7 +109,7 @@ def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),
     param: list[str] = PARAM_OPTION,
     sweep: str = typer.Option(None, "--sweep", metavar="NAME=SPEC",
-                              help="The fitted parameter: NAME=START:STOP:COUNT (add :log for log spacing) "
+                              help="The fitted parameter: NAME=START:STOP:n=COUNT (add :log for log spacing) "
                                    "or NAME=V,V,..."),
     lut: str = typer.Option(None, "--lut", metavar="FILE", help="Fit a table of `brdfnorm lut` over its two axes "
                             "(e.g. E(μ, α)) instead of a normalization factor; prints the Pareto front "
@@ -129,7 +130,8 @@ def fit_command(
                                   "--lut minimax-abs)."),
     at: At = typer.Option(At.normal, "--at", help="Normalization convention (view: fit in n and cos θ_o)."),
     theta: str = typer.Option(None, "--theta", metavar="SPEC",
-                              help="Polar angles in degrees for --at view (START:STOP:COUNT or list)."),
+                              help="Polar angles in degrees for --at view (START:STOP:n=COUNT, "
+                                   "START:STOP:step=STEP or a list)."),
     target: float = typer.Option(None, "--target", help="Max relative error that --form auto aims for (default "
                                  "1e-3; with --lut the max absolute error, default 5e-3)."),
     max_coefficients: int = typer.Option(None, "--max-coefficients",
@@ -205,7 +207,8 @@ def fit_command(
         else:
             fitted = fit(x, y[:, 0], form=form, metric=metric.value, target=target,
                          max_coefficients=max_coefficients, names=(name, SECOND_VARIABLE))
-        code = emit(fitted, emit_language, m.name, variable=name) if emit_language else None
+        code = emit(fitted, emit_language, m.name, variable=name,
+                    context=fit_context(m, name, at.value, job.settings.over)) if emit_language else None
         if output is not None:
             write_file(output, code)
         if plot is not None:
@@ -218,7 +221,7 @@ def fit_command(
             if code is not None:
                 data["language"] = emit_language
                 data["code"] = code
-            write_file(STDOUT, to_json(data) + "\n")
+            write_file(STDOUT, to_json({"brdfnorm": __version__, **data}) + "\n")
             return
         if code is not None and output is None:
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
@@ -257,7 +260,8 @@ def _fit_lut(path: str, table: str, form: str, metric: str, target: float, max_c
         write_file(output, code)
     if json_output:
         # the table's candidates, not the chosen FitResult's own (empty) ``tried``, which used to overwrite them
-        write_file(STDOUT, to_json({"lut": path, "table": table, "variables": [x, t], **best.to_dict(),
+        write_file(STDOUT, to_json({"brdfnorm": __version__, "lut": path, "table": table, "variables": [x, t],
+                                    **best.to_dict(),
                                     "front": result.front, "tried": result.tried,
                                     **({"language": emit_language, "code": code} if code else {})}) + "\n")
         return

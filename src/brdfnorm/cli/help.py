@@ -5,7 +5,12 @@ required argument in braces on the usage line (``{MODEL}``); neither means anyth
 every option a metavar a person reads (a flag none, a choice its values, a number ``N`` or ``NUMBER``), drops
 the type column of arguments, writes arguments plainly on the usage line, and reflows each command's help so that
 the lines of a docstring paragraph are one paragraph (typer keeps the docstring's line breaks). Commands are
-listed in the order a new user meets them (:data:`ORDER`).
+listed in the order a new user meets them (`ORDER`).
+
+Typer lays an option out in five columns (name, short name, negations, metavar, help); at 80 columns the help
+column was 23 characters wide and long words in it were cut with "…". :func:`options_panel` replaces typer's
+panel printer with two columns: the option as it is typed (``-p, --param NAME=VALUE``) and its help; an option
+longer than :data:`NAME_WIDTH` gets its own line with the help below it, and long words fold rather than cut.
 """
 
 from __future__ import annotations
@@ -13,11 +18,61 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import typer.rich_utils as rich_utils
+from rich import box
+from rich.console import Group
 from rich.markup import escape
+from rich.padding import Padding
+from rich.panel import Panel
+from rich.table import Table
+from rich.text import Text
 from typer.core import TyperArgument, TyperGroup, TyperOption
 
 #: The commands in the order a user meets them: discover, compute, tabulate and fit, audit, explore, study.
 ORDER = ("models", "info", "albedo", "normalize", "lut", "fit", "check", "audit", "explore", "verify", "report")
+
+
+#: The widest option column (characters); a longer option is on a line of its own, its help below it.
+NAME_WIDTH = 24
+
+
+def _typed(param) -> str:
+    """The option as a user types it: short and long names, then the metavar (an argument: its name)."""
+    if isinstance(param, TyperArgument):
+        return param.display_name_raw or param.name.upper()
+    names = sorted(param.opts, key=lambda o: (o.startswith("--"), o)) + list(param.secondary_opts)
+    metavar = param.metavar or ""
+    return ", ".join(names) + (f" {metavar}" if metavar else "")
+
+
+def options_panel(*, name: str, params, ctx, markup_mode, console) -> None:
+    """Typer's options panel in two columns (the module docstring says why); same signature as the function it
+    replaces, ``typer.rich_utils._print_options_panel``."""
+    if not params:
+        return
+    typed = {id(p): _typed(p) for p in params}
+    width = max((len(t) + 3 for t in typed.values() if len(t) + 3 <= NAME_WIDTH), default=NAME_WIDTH)  # marker, gap
+    rows = []
+    for param in params:
+        marker = Text("* ", style=rich_utils.STYLE_REQUIRED_SHORT) if param.required else Text("  ")
+        shown = rich_utils.highlighter(marker + Text(typed[id(param)]))
+        helped = rich_utils._get_parameter_help(param=param, ctx=ctx, markup_mode=markup_mode)
+        for item in getattr(helped, "renderables", ()):
+            if isinstance(item, Text):
+                item.overflow = "fold"  # a word wider than the column folds onto the next line, never cut
+        if shown.cell_len >= width:
+            rows.append(Group(shown, Padding(helped, (0, 0, 0, width + 1))))
+            continue
+        row = Table.grid(padding=(0, 1), expand=True)
+        row.add_column(width=width, no_wrap=True)
+        row.add_column(overflow="fold", ratio=1)
+        row.add_row(shown, helped)
+        rows.append(row)
+    console.print(Panel(Group(*rows), border_style=rich_utils.STYLE_OPTIONS_PANEL_BORDER, title=name,
+                        title_align=rich_utils.ALIGN_OPTIONS_PANEL, box=box.ROUNDED))
+
+
+rich_utils._print_options_panel = options_panel
 
 
 class OrderedGroup(TyperGroup):

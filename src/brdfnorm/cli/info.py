@@ -11,6 +11,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .. import __version__
 from ..brdffile import BrdfModel, reciprocity_check
 from ..errors import ArgumentError
 from ..output import STDOUT, write_file
@@ -64,7 +65,7 @@ def info(
             "isFunc": m.has_is_func if is_file else False,
         }
         if json_output:
-            write_file(STDOUT, to_json(data) + "\n")
+            write_file(STDOUT, to_json({"brdfnorm": __version__, **data}) + "\n")
             return
         out = console()
         title = f"{m.name}" + (f" ({m.source_path})" if is_file else " (built-in)")

@@ -30,11 +30,12 @@ from .common import (
 )
 
 AXIS_HELP = ("An axis NAME=SPEC (repeatable; the tables are indexed in this order): mu (cos θ_o), theta "
-             "(degrees) or a float parameter; SPEC is START:STOP:COUNT (spaced by --grid) or V,V,...")
+             "(degrees) or a float parameter; SPEC is START:STOP:n=COUNT (spaced by --grid), "
+             "START:STOP:step=STEP or V,V,...")
 
 
 def parse_axis(spec: str, grid: str) -> tuple[str, np.ndarray]:
-    """``NAME=START:STOP:COUNT`` (node or texel grid) or ``NAME=V,V,...`` (as given)."""
+    """``NAME=START:STOP:n=COUNT`` (node or texel grid) or ``NAME=V,V,...`` (as given)."""
     name, sep, values = spec.partition("=")
     name = name.strip()
     if not sep or not name:
@@ -79,7 +80,7 @@ def lut_command(
                                        "(1 − (1 − V·H)⁵), DFG_f90 = ∫ f cos (1 − V·H)⁵, Fresnel off."),
     table: list[str] = typer.Option([], "--tables", "--table", metavar="NAMES", help="Write only these tables "
                                     "(comma list, repeatable). Default: all in .npz, .json, .csv; in .exr, .png, "
-                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_…), no errors or 1-E."),
+                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_f0, DFG_f90), no errors or 1-E."),
     layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS, y=AXIS, v=down|up: the axis "
                                "along the image's columns (x, u) and rows (y, v), and whether row 0 (the top) "
                                "holds the first y value (v=down) or the last (v=up). Default in .exr, .png, .h, .glsl, "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
+from .. import __version__
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
 from .application import app
@@ -20,7 +21,7 @@ from .common import DEBUG_OPTION, console, guarded, parse_range
 def verify(
     exponents: str = typer.Option(
         None, "--n", metavar="LIST",
-        help="Exponents for the parametric claims: N,N,... or START:STOP:COUNT[:log] (default 1,10,100,512).",
+        help="Exponents for the parametric claims: N,N,... or START:STOP:n=COUNT[:log] (default 1,10,100,512).",
     ),
     claim: list[str] = typer.Option([], "--claim", metavar="ID", help="Check only this claim (repeatable)."),
     certified: bool = typer.Option(False, "--certified",
@@ -43,7 +44,8 @@ def verify(
                                    else parse_range(exponents, "--n", allow_log=True))
         claims = checks.verify(n, only=claim or None, certified=certified, digits=digits)
         if json_output:
-            write_file(STDOUT, to_json({"exponents": n, "claims": [c.as_dict() for c in claims]}) + "\n")
+            write_file(STDOUT, to_json({"brdfnorm": __version__, "exponents": n,
+                                        "claims": [c.as_dict() for c in claims]}) + "\n")
         else:
             groups = " and ".join(dict.fromkeys(c.group for c in claims))
             table = Table(title=f"{groups} ({sum(c.ok for c in claims)} of {len(claims)} ok)", show_lines=True)

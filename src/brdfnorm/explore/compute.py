@@ -38,7 +38,7 @@ import numpy as np
 from .. import albedo, normalize
 from ..check import Budget
 from ..check import check as check_model
-from ..codegen import emit
+from ..codegen import emit, fit_context
 from ..errors import (
     ArgumentError,
     ArgumentTypeError,
@@ -450,7 +450,7 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, sampl
                                   where="range")
         check()
         fitted = fit(values, y, form=form, metric="minimax-rel", target=1e-3, names=(p.name, "cos_theta_o"))
-        code = emit(fitted, language, model.name, variable=p.name)
+        code = emit(fitted, language, model.name, variable=p.name, context=fit_context(m, p.name, at))
     return {"code": code, "form": fitted.form, "expression": fitted.expression,
             "max_rel_error": fitted.max_rel_error, "samples": fitted.samples, "at": at, "parameter": p.name,
             "range": [float(values[0]), float(values[-1])], "language": language,

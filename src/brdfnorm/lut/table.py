@@ -36,7 +36,7 @@ from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
 from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
 from ..engine.machinery.kronrod import NODES as KRONROD_NODES
 from ..engine.methods import albedo
-from ..errors import ArgumentError
+from ..errors import ArgumentError, ParameterError
 from ..models.base import Model
 from ..parameters import CHANNELS as COLOUR_CHANNELS
 from ..parameters import NUMERIC, resolve
@@ -144,6 +144,27 @@ def axis_parameter(model: Model, name: str, values: np.ndarray) -> tuple[str, np
     return name, values
 
 
+def _clamp_hint(model: Model, name: str, array: np.ndarray) -> str:
+    """``; clamp it, e.g. --clamp NAME=MIN``: the smallest axis value the parameter it sets accepts (found by
+    bisection through an alias's mapping, e.g. roughness = √α_min), where the axis starts below it; else ''."""
+    target, _ = axis_parameter(model, name, np.array([1.0]))
+    minimum = model.parameter(target).minimum
+    if minimum is None or axis_parameter(model, name, np.array([float(array.min())]))[1][0] >= minimum:
+        return ""
+    high = _first_mapped_to(model, name, minimum, float(array.min()), max(float(array.max()), 1.0))
+    return f"; clamp it, e.g. --clamp {name}={float(f'{high:.2g}') if high < 1 else high:g}"
+
+
+def _first_mapped_to(model: Model, name: str, minimum: float, low: float = 0.0, high: float = 1.0) -> float:
+    """The smallest value of axis ``name`` whose parameter value is ≥ ``minimum``, by bisection in [low, high]
+    (the axis' mapping, e.g. α = roughness², is monotone)."""
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        inside = axis_parameter(model, name, np.array([middle]))[1][0] >= minimum
+        low, high = (low, middle) if inside else (middle, high)
+    return high
+
+
 def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapping[str, float]):
     if not axes:
         raise ArgumentError("give at least one axis", where="axes")
@@ -165,7 +186,10 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
         values[name] = array
     for name, minimum in clamp.items():
         if name not in values:
-            raise ArgumentError(f"--clamp {name}: no axis of that name", where="clamp")
+            setters = [axis for axis in names if axis in model.aliases and model.aliases[axis][0] == name]
+            hint = (f"; the {setters[0]} axis sets it ({model.aliases[setters[0]][2]}): clamp it instead, e.g. "
+                    f"--clamp {setters[0]}={_first_mapped_to(model, setters[0], minimum):.3g}" if setters else "")
+            raise ArgumentError(f"{name}: no axis of that name (the axes: {', '.join(names)}){hint}", where="clamp")
         if not np.isfinite(minimum):
             raise ArgumentError(f"clamp for {name} must be finite", where="clamp")
     evaluated = {name: np.maximum(v, clamp[name]) if name in clamp else v for name, v in values.items()}
@@ -181,7 +205,12 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
             raise ArgumentError("theta must lie in [0, π/2) radians ([0°, 90°) on the command line)", where="axes")
     for name, array in evaluated.items():
         if name not in DIRECTION_AXES:
-            resolve(model.parameters, per_cell(model, dict([axis_parameter(model, name, array)])), where=f"axis {name}")
+            try:
+                resolve(model.parameters, per_cell(model, dict([axis_parameter(model, name, array)])),
+                        where=f"axis {name}")
+            except ParameterError as error:
+                hint = _clamp_hint(model, name, array)
+                raise ParameterError(error.message + hint, where=error.where) from None
     return values, evaluated, dname
 
 

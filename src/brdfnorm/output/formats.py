@@ -5,7 +5,8 @@ describes itself as :class:`Records`: a title, top-level fields (model, paramete
 and one row per point. Each format of :data:`FORMATS` renders Records to text, so the command line, the report
 and the benchmarks print the same numbers the same way:
 
-* ``json`` — one object, the top-level fields plus ``results`` (the rows); non-finite floats become ``null``.
+* ``json`` — one object: ``brdfnorm`` (the version), the top-level fields and ``results`` (the rows); non-finite
+  floats become ``null``.
 * ``csv`` — a header row and one row per point; parameters get one column each; full precision (``repr``).
 * ``table`` — a rich table for people: 12 significant digits for values, 3 for error estimates (rounded *up*).
 
@@ -140,7 +141,9 @@ def to_json(obj) -> str:
 
 
 def _json(records: Records) -> str:
-    return to_json({**records.meta, "results": records.rows}) + "\n"
+    from ..version import __version__  # every file brdfnorm writes says which release wrote it
+
+    return to_json({"brdfnorm": __version__, **records.meta, "results": records.rows}) + "\n"
 
 
 def _csv(records: Records) -> str:

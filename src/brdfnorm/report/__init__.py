@@ -35,8 +35,9 @@ from .study import StudyConfig
 
 __all__ = ["StudyConfig", "build_report", "plan"]
 
-#: Called before each step with (description, index, total) and once more with ("done", total, total).
-OnStep = Callable[[str, int, int], None]
+#: Called before each step with (description, index, total), within a long step with ("step: detail",
+#: index + fraction done, total), and once more with ("done", total, total).
+OnStep = Callable[[str, float, int], None]
 
 
 def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[str, np.ndarray] | None = None,
@@ -96,6 +97,8 @@ def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, 
         built = []
         for index, (description, step) in enumerate(steps):
             report(description, index, len(steps))
+            ctx.tick = (lambda detail, fraction, description=description, index=index:
+                        report(f"{description}: {detail}", index + min(max(fraction, 0.0), 0.99), len(steps)))
             built.append(step(ctx))
         report("done", len(steps), len(steps))
         title = ("brdfnorm: energy normalization of the seed lobes" if not models

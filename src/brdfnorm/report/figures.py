@@ -18,6 +18,8 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
+from .. import closed_forms
+from ..version import __version__
 from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 
 #: Pixels per inch of the PNG files; the page shows them at 96 CSS px per inch (1.5 image pixels per CSS
@@ -67,7 +69,8 @@ def render(name: str, alt: str, draw) -> Image:
         for axis in figure.axes:
             readable_log_ticks(axis)
         buffer = io.BytesIO()
-        figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": None})
+        # the PNG names the release that drew it (and no matplotlib version: the bytes stay reproducible)
+        figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": f"brdfnorm {__version__}"})
     width, height = figure.get_size_inches()
     return Image(name, buffer.getvalue(), round(width * CSS_PER_INCH), round(height * CSS_PER_INCH), alt)
 
@@ -187,10 +190,10 @@ def folklore_figure(data: Folklore, name: str) -> Image:
         _label(left, "exponent n", "normalization factor α(n)", "Blinn-Phong normalization at L = N", "upper left")
         right.semilogx(data.n, 100.0 * data.relative_error, color="C3")
         right.axhline(0.0, color="0.3", linewidth=0.8)
-        worst = int(np.argmax(np.abs(data.relative_error)))
-        right.plot(data.n[worst], 100.0 * data.relative_error[worst], "o", color="C3", markersize=4)
-        right.annotate(f"{100 * data.relative_error[worst]:+.1f} % at n = {data.n[worst]:.3g}",
-                       (data.n[worst], 100.0 * data.relative_error[worst]), textcoords="offset points",
+        worst_n, worst_error = closed_forms.blinn_phong_folklore_worst()  # the one argmax the page quotes
+        right.plot(worst_n, 100.0 * worst_error, "o", color="C3", markersize=4)
+        right.annotate(f"{100 * worst_error:+.1f} % at n = {worst_n:.4g}",
+                       (worst_n, 100.0 * worst_error), textcoords="offset points",
                        xytext=(8, -4), fontsize=8)
         _label(right, "exponent n", "(n+8)/8π relative to α(n)  (%)", "Error of the folklore factor")
         return figure

@@ -22,13 +22,14 @@ nav ol { columns: 2; }
 figure { margin: 1em 0; }
 figure img { max-width: 100%; height: auto; }
 figcaption { color: #555; font-size: 0.92em; }
-table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.86em; }
-th, td { border: 1px solid #d6d6d6; padding: 0.2em 0.5em; }
-th { background: #f5f5f7; }
+table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.84em; }
+th, td { border: 1px solid #d6d6d6; padding: 0.2em 0.4em; }
+th { background: #f5f5f7; font-weight: 600; overflow-wrap: anywhere; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; font-family: ui-monospace, monospace; }
 td.bad { color: #b00020; font-weight: 600; }
 td.good { color: #1b7a2f; }
-.scroll { overflow-x: auto; }
+.scroll { overflow-x: auto; max-width: 100%; }
+.scroll tr > :first-child { position: sticky; left: 0; background: #f5f5f7; }
 .findings li { margin: 0.25em 0; }
 .note { color: #555; font-size: 0.92em; }
 small.detail { color: #555; }

@@ -123,6 +123,7 @@ def section(ctx) -> Section:
     quick = not ctx.config.extras
     size = QUICK_GRID if quick else GRID
     mu, alpha = grid_values(0.0, 1.0, size, "texel"), grid_values(0.0, 1.0, size, "texel")
+    ctx.tick(f"GGX tables {size}×{size}", 0.0)
     lut = compute(load("ggx"), {"mu": mu, "alpha": alpha}, clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=RTOL,
                   channels=["dfg"], grid="texel")
     energy = ctx.image(_image_panels("microfacet-e.png", "E(μ, α) and 1 − E(μ, α) of GGX", mu, alpha,
@@ -132,9 +133,11 @@ def section(ctx) -> Section:
     avg = ctx.image(_avg_figure(alpha, lut["E_avg"]))
     glass_size = QUICK_GLASS_GRID if quick else GLASS_GRID
     g_mu, g_alpha = grid_values(0.0, 1.0, glass_size, "texel"), grid_values(0.0, 1.0, glass_size, "texel")
-    glass = {eta: compute(load("ggx-dielectric", eta=eta), {"mu": g_mu, "alpha": g_alpha},
-                          clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=GLASS_RTOL, average=False, grid="texel")
-             for eta in GLASS_ETAS}
+    glass = {}
+    for index, eta in enumerate(GLASS_ETAS):
+        ctx.tick(f"rough glass η = {eta:.4g}", 0.5 + 0.5 * index / len(GLASS_ETAS))
+        glass[eta] = compute(load("ggx-dielectric", eta=eta), {"mu": g_mu, "alpha": g_alpha},
+                             clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=GLASS_RTOL, average=False, grid="texel")
     glass_image = ctx.image(_image_panels(
         "microfacet-glass.png", "E = R + T of rough glass (ggx-dielectric) seen from outside and inside", g_mu,
         g_alpha, [(f"E(μ, α), η = {eta:.4g}", glass[eta]["E"]) for eta in GLASS_ETAS]

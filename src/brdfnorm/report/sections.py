@@ -35,6 +35,8 @@ class Context:
     stage: Stage
     findings: list[str] = field(default_factory=list)
     results: dict = field(default_factory=dict)
+    #: Progress within the running section (study.Tick); build_report points it at its on_step.
+    tick: study.Tick = study._quiet
 
     def image(self, image: Image) -> Image:
         self.stage.write(image.name, image.png)
@@ -63,15 +65,15 @@ def _certified_line(data) -> str:
 
 def factor_section(ctx: Context) -> Section:
     config = ctx.config
-    data = study.factor_table(config)
+    data = study.factor_table(config, ctx.tick)
     ctx.results["factors"] = data
     tolerance = AGREEMENT * config.table_rtol
     top: list[Cell | str] = [Cell("n", rowspan=2)]
     sub: list[Cell | str] = []
     for lobe in study.SEED_LOBES:
         if lobe in data.closed:
-            top.append(Cell(lobe, colspan=3))
-            sub += [f"closed form {FACTOR_FORMULA[lobe]}", "quadrature", "relative difference"]
+            top.append(Cell(f"{lobe}: {FACTOR_FORMULA[lobe]}", colspan=3))
+            sub += ["closed form", "quadrature", "relative difference"]
         else:
             top.append(Cell(lobe + " (no closed form)", colspan=2))
             sub += ["quadrature", "error estimate (relative)"]
@@ -80,10 +82,12 @@ def factor_section(ctx: Context) -> Section:
         row: list[Cell | str] = [number(n, 6)]
         for lobe in study.SEED_LOBES:
             if lobe in data.closed:
-                row += [number(data.closed[lobe][s]), number(data.quadrature[lobe][s]),
+                # 10 digits shown (the relative difference says how far they agree; data-value keeps all 17),
+                # so that the 12 columns fit the page's 1240 px
+                row += [number(data.closed[lobe][s], 10), number(data.quadrature[lobe][s], 10),
                         relative(data.relative_difference(lobe)[s], tolerance)]
             else:
-                row += [number(data.quadrature[lobe][s]), relative(data.error[lobe][s])]
+                row += [number(data.quadrature[lobe][s], 10), relative(data.error[lobe][s])]
         rows.append(row)
     worst = max(float(np.max(np.abs(data.relative_difference(lobe)))) for lobe in data.closed)
     ctx.findings.append(
@@ -123,7 +127,7 @@ def factor_section(ctx: Context) -> Section:
 
 def albedo_section(ctx: Context) -> Section:
     config = ctx.config
-    curves = study.albedo_curves(config)
+    curves = study.albedo_curves(config, ctx.tick)
     image = ctx.image(figures.albedo_figure(curves, "albedo.png"))
     degrees = np.degrees(curves.theta)
     picks = sorted({int(np.argmin(np.abs(degrees - g))) for g in GRAZING})
@@ -163,11 +167,11 @@ def folklore_section(ctx: Context) -> Section:
              percent(folk_at_table[s] / exact_at_table[s] - 1.0)] for s, n in enumerate(data.table_n)]
     header = [["n", "α(n) exact (seed 000)", "α(n) quadrature", "folklore (n+8)/8π", "folklore error"]]
     error = data.relative_error
-    worst = int(np.argmax(np.abs(error)))
+    worst_n, worst_error = closed_forms.blinn_phong_folklore_worst()
     large = data.n >= 100
     ctx.findings.append(
-        f"The folklore Blinn-Phong factor (n+8)/8π is off by up to {100 * abs(error[worst]):.1f} % (at "
-        f"n ≈ {data.n[worst]:.2g}); for n ≥ 100 by at most {100 * np.max(np.abs(error[large])):.2f} %.")
+        f"The folklore Blinn-Phong factor (n+8)/8π is off by up to {100 * abs(worst_error):.1f} % (at "
+        f"n = {worst_n:.4g}); for n ≥ 100 by at most {100 * np.max(np.abs(error[large])):.2f} %.")
     body = (
         "<p>Seed 000 derives the exact Blinn-Phong normalization at L = N, α(n) = (n+2)(n+4)/(8π(2^(−n/2)+n)), "
         "and notes it is <em>not</em> the widely used (n+8)/8π. Left: both against n, with quadrature values; "
@@ -181,7 +185,7 @@ def folklore_section(ctx: Context) -> Section:
 
 def fit_section(fit: Callable) -> Callable[[Context], Section]:
     def build(ctx: Context) -> Section:
-        data = study.seed003_fits(ctx.config, fit)
+        data = study.seed003_fits(ctx.config, fit, ctx.tick)
         image = ctx.image(figures.fit_figure(data, "fits.png"))
         steep = data.n >= 16
         rows = []
@@ -217,7 +221,7 @@ def fit_section(fit: Callable) -> Callable[[Context], Section]:
 
 def polar_section(ctx: Context) -> Section:
     config = ctx.config
-    panels = study.polar_lobes(config)
+    panels = study.polar_lobes(config, ctx.tick)
     image = ctx.image(figures.polar_figure(panels, "polar.png"))
     views = ", ".join(f"{v:g}°" for v in config.polar_views)
     body = (
@@ -234,8 +238,12 @@ def polar_section(ctx: Context) -> Section:
 def verify_section(verify: Callable) -> Callable[[Context], Section]:
     def build(ctx: Context) -> Section:
         from ..claims import RELATIONS
+        from ..verify import CHECKS
 
-        claims = list(verify())
+        claims = []
+        for index, claim_id in enumerate(CHECKS):  # one claim at a time, so that the progress moves
+            ctx.tick(claim_id, index / len(CHECKS))
+            claims += verify(only=[claim_id])
         rows = []
         for claim in claims:
             # The difference column is recomputed here from the two values shown, so that it means
@@ -282,7 +290,7 @@ def _value_cell(value) -> Cell:
 
 def model_section(model, label: str, sweep, index: int) -> Callable[[Context], Section]:
     def build(ctx: Context) -> Section:
-        data = study.model_study(model, label, sweep, ctx.config)
+        data = study.model_study(model, label, sweep, ctx.config, ctx.tick)
         prefix = f"model{index}"
         shown = [ctx.image(figures.factor_figure(data, f"{prefix}-factors.png"))] if data.parameter else []
         curves = ctx.image(figures.albedo_figure(data.curves, f"{prefix}-albedo.png"))

@@ -75,6 +75,14 @@ class StudyConfig:
         return np.radians(np.linspace(0.0, 89.0, self.theta_count))
 
 
+#: Progress within a section: ``tick(detail, fraction)``, the fraction of the section done once ``detail`` starts.
+Tick = Callable[[str, float], None]
+
+
+def _quiet(detail: str, fraction: float) -> None:
+    """The default :data:`Tick`: report nothing."""
+
+
 # -- default study -----------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -123,19 +131,23 @@ def certified_factors(n: np.ndarray, quadrature: dict, error: dict, digits: int 
     return CertifiedFactors(digits, radius, inside, covered)
 
 
-def factor_table(config: StudyConfig) -> FactorTable:
+def factor_table(config: StudyConfig, tick: Tick = _quiet) -> FactorTable:
     n = np.asarray(config.table_n, dtype=float)
     closed, quad, error, theta_max, excess = {}, {}, {}, {}, {}
-    for lobe in SEED_LOBES:
+    parts = 2 * len(SEED_LOBES) + 1
+    for index, lobe in enumerate(SEED_LOBES):
         model = load(lobe)
+        tick(f"{lobe} at L = N", 2 * index / parts)
         at_normal = normalize(model, "normal", sweep={"n": n}, rtol=config.table_rtol, method="quadrature")
         quad[lobe] = at_normal.factor[:, 0, 0]
         error[lobe] = at_normal.error[:, 0, 0] / at_normal.albedo[:, 0, 0]
         if lobe in CLOSED_FORM_OF:
             closed[lobe] = 1.0 / closed_forms.CLOSED_FORMS[CLOSED_FORM_OF[lobe]].function(n)
+        tick(f"{lobe}: searching for the maximum", (2 * index + 1) / parts)
         at_max = normalize(model, "max", sweep={"n": n}, rtol=config.search_rtol, method="quadrature")
         theta_max[lobe] = at_max.theta[:, 0]
         excess[lobe] = at_max.albedo[:, 0, 0] * at_normal.factor[:, 0, 0] - 1.0
+    tick("certified enclosures", (parts - 1) / parts)
     return FactorTable(n, closed, quad, error, theta_max, excess, certified_factors(n, quad, error))
 
 
@@ -154,11 +166,12 @@ class AlbedoCurves:
             return curves / curves[:, :1, :]
 
 
-def albedo_curves(config: StudyConfig) -> AlbedoCurves:
+def albedo_curves(config: StudyConfig, tick: Tick = _quiet) -> AlbedoCurves:
     n = np.asarray(config.curve_n, dtype=float)
     theta = config.theta
     curves = {}
-    for lobe in SEED_LOBES:
+    for index, lobe in enumerate(SEED_LOBES):
+        tick(lobe, index / len(SEED_LOBES))
         # One batched call per lobe: the n values (K, 1) broadcast against the θ grid (1, T).
         swept = load(lobe).with_params(n=n[:, None])
         curves[lobe] = albedo(swept, theta[None, :], rtol=config.plot_rtol, method="quadrature").value
@@ -203,7 +216,7 @@ class Seed003Fits:
         return fit.prediction / self.factor - 1.0
 
 
-def seed003_fits(config: StudyConfig, fit: Callable) -> Seed003Fits:
+def seed003_fits(config: StudyConfig, fit: Callable, tick: Tick = _quiet) -> Seed003Fits:
     """Seed 003's line against refits by :func:`brdfnorm.fit.fit` (passed in: the fit module is optional).
 
     The factor is computed on seed 003's grid (n = 1, 2, …, 512); the least-squares line uses all of it, as
@@ -211,6 +224,7 @@ def seed003_fits(config: StudyConfig, fit: Callable) -> Seed003Fits:
     and the automatic choice) see only a geometrically spaced subset; their errors are shown on the whole grid.
     """
     n = np.linspace(*closed_forms.SEED_003_RANGE, config.fit_count)
+    tick("the factor on seed 003's grid", 0.0)
     result = normalize(load("blinn-phong-gaussian"), "normal", sweep={"n": n}, rtol=config.table_rtol,
                        method="quadrature")
     factor = result.factor[:, 0, 0]
@@ -223,6 +237,7 @@ def seed003_fits(config: StudyConfig, fit: Callable) -> Seed003Fits:
         ("hyperbola (minimax)", "hyperbola", "minimax-rel", subset),
         ("auto fit (minimax)", "auto", "minimax-rel", subset),
     ):
+        tick(label, 0.5 + 0.5 * len(fits) / 4)
         fitted = fit(n[points], factor[points], form=form, metric=metric, names=("n", "t"))
         fits.append(FitCurve(label, fitted.expression, np.asarray(fitted(n), dtype=float),
                              tuple(float(c) for c in fitted.coefficients)))
@@ -252,9 +267,10 @@ def polar_panel(model: Model, title: str, views_deg, points: int, factor: np.nda
     return PolarPanel(title, t, views, value)
 
 
-def polar_lobes(config: StudyConfig) -> list[PolarPanel]:
+def polar_lobes(config: StudyConfig, tick: Tick = _quiet) -> list[PolarPanel]:
     panels = []
-    for lobe in SEED_LOBES:
+    for index, lobe in enumerate(SEED_LOBES):
+        tick(lobe, index / len(SEED_LOBES))
         model = load(lobe, n=config.polar_n)
         factor = 1.0 / albedo(model, 0.0, rtol=config.plot_rtol, method="quadrature").value
         panels.append(polar_panel(model, f"{lobe}, n = {config.polar_n:g}", config.polar_views,
@@ -301,7 +317,8 @@ def first_float(model: Model) -> str | None:
     return next((p.name for p in model.parameters if p.kind == "float"), None)
 
 
-def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, config: StudyConfig) -> ModelStudy:
+def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, config: StudyConfig,
+                tick: Tick = _quiet) -> ModelStudy:
     if sweep is not None:
         name, values = sweep
         parameter = model.parameter(name)
@@ -312,9 +329,12 @@ def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, 
         name = first_float(model)
         values = sweep_values(model, name, config.sweep_count) if name else np.full(1, np.nan)
     sweep_arg = {name: values} if name else None
+    tick("factors at L = N", 0.0)
     normal = normalize(model, "normal", sweep=sweep_arg, rtol=config.model_rtol)
+    tick("searching for the maximum", 0.2)
     at_max = normalize(model, "max", sweep=sweep_arg, rtol=config.model_search_rtol,
                        search_points=config.model_search_points)
+    tick("albedo curves and polar plots", 0.7)
     closed = None
     if METHODS["closed-form"].applies(model, "light"):
         swept = model.with_params(**{name: values}) if name else model
