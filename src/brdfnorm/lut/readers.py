@@ -122,7 +122,12 @@ def cells(value: object, name: str, path: str) -> np.ndarray:
 
 def build(tables: dict, axes: dict, meta: dict, path: str) -> Lut:
     """The :class:`Lut` of arrays read from ``path``, each checked by :func:`cells`."""
-    checked_axes = {f"axis {name}": cells(array, f"axis {name}", path) for name, array in axes.items()}
+    declared = list(meta.get("tables", {})) if isinstance(meta.get("tables"), dict) else []
+    if sorted(tables) != sorted(declared):  # metadata that does not match the data is an error, not a drop
+        raise TableFileError(f"the metadata declares tables {', '.join(map(str, declared)) or 'none'}; the file "
+                             f"holds {', '.join(map(str, tables)) or 'none'}", path)
+    checked_axes = {f"axis {name}": _axis(cells(array, f"axis {name}", path), name, path)
+                    for name, array in axes.items()}
     checked_tables = {name: cells(array, f"table {name}", path) for name, array in tables.items()}
     for name, array in [*checked_tables.items(), *checked_axes.items()]:
         if array.size > MAX_CELLS:
@@ -134,6 +139,20 @@ def build(tables: dict, axes: dict, meta: dict, path: str) -> Lut:
         raise TableFileError(f"tables and axes do not match the metadata ({error})", path) from None
     except ArgumentError as error:
         raise TableFileError(error.message, path) from None
+
+
+def _axis(values: np.ndarray, name: str, path: str) -> np.ndarray:
+    """An axis's values if they are one-dimensional and strictly monotonic (a grid has no repeated node)."""
+    if values.ndim != 1:
+        raise TableFileError(f"axis {name}: {values.ndim}-D values of shape {values.shape}; an axis is a 1-D "
+                             "list", path)
+    steps = np.diff(values.astype(float))
+    if values.size > 1 and not (np.all(steps > 0) or np.all(steps < 0)):
+        k = int(np.argmax(steps == 0)) if np.any(steps == 0) else int(np.argmax(np.sign(steps) != np.sign(steps[0])))
+        what = (f"value {values[k]:g} repeated (index {k} and {k + 1})" if steps[k] == 0
+                else f"not monotonic at index {k + 1}")
+        raise TableFileError(f"axis {name}: {what}; an axis's values must strictly increase or decrease", path)
+    return values
 
 
 # -- npz ---------------------------------------------------------------------------------------------------
