@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError
+from ..inputs import png as pngio
 from ..inputs import read_bounded
-from ..lut import pngio
 from .readers import MAX_BINARY_BYTES, MAX_TEXT_BYTES, Source
 
 

@@ -21,8 +21,8 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..inputs import read_bounded
+from ..inputs.literals import Scanner
 from .reference import Reference
-from .textarrays import _Scanner
 
 FUNCTIONS = {
     "exp": np.exp, "log": np.log, "sqrt": np.sqrt, "pow": np.power, "sin": np.sin, "cos": np.cos,
@@ -99,7 +99,7 @@ def compile_expression(text: str, names: tuple[str, ...]):
 
 def _glsl_signature(text: str, name: str, where: str) -> tuple[str, list[tuple[str, str]]]:
     """(return type, [(type, name)]) of the first definition of function ``name`` — a linear token scan."""
-    tokens = list(_Scanner(text, where).tokens())
+    tokens = list(Scanner(text, where).tokens())
     for k in range(1, len(tokens) - 1):
         if tokens[k][:2] == ("id", name) and tokens[k + 1][:2] == ("op", "(") and tokens[k - 1][0] == "id":
             params, j, current = [], k + 2, []

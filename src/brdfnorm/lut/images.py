@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError
-from . import pngio
+from ..inputs import png as pngio
 from .layout import MAGIC, WriteOptions, _check_finite, _subset_meta
 from .table import Lut
 
