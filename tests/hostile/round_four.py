@@ -15,7 +15,6 @@ from hostile_cases import Case, small_lut
 
 from brdfnorm.inputs.png import SIGNATURE, encode
 from brdfnorm.lut.formats import dumps
-from brdfnorm.lut.table import Lut
 
 
 def _chunk(kind: bytes, body: bytes) -> bytes:

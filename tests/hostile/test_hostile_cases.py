@@ -1,7 +1,7 @@
-"""The runner of :mod:`hostile_cases` (issue 35) and :mod:`round_four` (issues 41, 46): each case is one command in a subprocess, under a 4 GB
-address-space limit (``RLIMIT_AS``), and must end within its time with exit 0 or 2, exactly one ``error:`` line
-naming its input (for exit 2), a clean stdout, nothing written beside its inputs, and at most 1 GB resident (the
-child's own ``ru_maxrss`` from ``os.wait4``).
+"""The runner of :mod:`hostile_cases` (issue 35) and :mod:`round_four` (issues 41, 46): each case is one command
+in a subprocess, under a 4 GB address-space limit (``RLIMIT_AS``), and must end within its time with exit 0 or 2,
+exactly one ``error:`` line naming its input (for exit 2), a clean stdout, no warning, nothing written beside its
+inputs, and at most 1 GB resident (the child's own ``ru_maxrss`` from ``os.wait4``).
 """
 
 from __future__ import annotations

@@ -7,9 +7,9 @@ no argument can land in numpy's positional ``out``); an exponent must be a numbe
 :data:`MAX_EXPONENT` or an expression (evaluated in float64, where overflow is inf, not a hang); anything else
 (attributes, subscripts, other names, lambdas, comprehensions, strings, complex numbers, keywords) is refused with
 one error naming the construct. A formula whose value is not finite somewhere on the domain (an overflow, a
-division by zero, a logarithm of a negative) is refused naming the first such point: its error is not a number. GLSL: the function ``NAME`` is called from a generated ``BRDF`` entry
-point that passes the arguments in the components of L and V; its result (float, vec2, vec3, vec4) gives
-one quantity per component (``quantities``).
+division by zero, a logarithm of a negative) is refused naming the first such point: its error is not a number.
+GLSL: the function ``NAME`` is called from a generated ``BRDF`` entry point that passes the arguments in the
+components of L and V; its result (float, vec2, vec3, vec4) gives one quantity per component (``quantities``).
 
 The domain is a node grid over μ ∈ [μ_min, 1] and the roughness axis (r with α = r², or α), with the same
 clamps as the tables (μ ≥ 1e-4, α ≥ 1e-8); the exact values come from :class:`.reference.Reference`.

@@ -23,6 +23,7 @@ limit                     what it bounds
 ``NPY_HEADER_BYTES``      bytes of one ``.npy`` header (numpy's own default)
 ``MAX_JSON_DEPTH``        nesting of a JSON document's arrays and objects
 ``MAX_ERROR_TEXT``        characters of any text quoted in an error line (the middle elided)
+``MAX_ERROR_LINE``        characters of a whole ``error:`` line of the command line: 1000
 ``MAX_AUDIT_VALUES``      values ``brdfnorm audit`` (and :func:`brdfnorm.audit.audit`) takes: 1 Mi
 ``MAX_AUDIT_GRID_AXES``   grid axes of an audited table (μ or θ, roughness, F0): 3
 ========================  ==============================================================================
@@ -57,6 +58,8 @@ NPY_HEADER_BYTES = 10_000
 MAX_JSON_DEPTH = 64
 #: Characters of a name or a cell quoted in an error line; longer ones keep their start and end.
 MAX_ERROR_TEXT = 80
+#: Characters of a whole error line (a path of thousands of characters is elided in the middle).
+MAX_ERROR_LINE = 1000
 #: Values an audit takes (checked from the shape, before any inference): each cell is compared against exact
 #: values under every hypothesis of its convention, so the work grows with the table (1024², or 512² × 4).
 MAX_AUDIT_VALUES = 1024 * 1024
