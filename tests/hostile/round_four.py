@@ -226,6 +226,11 @@ def lut_huge_values(directory: Path) -> list[str]:
     return _audit(_write(directory / "t.npz", buffer.getvalue()), "--no-interpolation", "--no-sweep")
 
 
+def xml_100000_deep(directory: Path) -> list[str]:
+    text = '<bsdf type="diffuse">' + "<a>" * 100_000 + "</a>" * 100_000 + "</bsdf>"  # 700 KB, under the 1 MiB cap
+    return ["albedo", str(_write(directory / "deep.xml", text))]
+
+
 _BROADCAST = "np.broadcast_to(0.5, (10**5, 10**5))"
 
 CASES = [
@@ -267,6 +272,7 @@ CASES = [
          api("from brdfnorm.audit.formula import compile_expression; compile_expression('1' * 400, ('mu',))"),
          names="--formula", api=True),
     # issue 41 (3): options and tables that raised internal errors
+    Case("albedo-mitsuba-xml-100000-deep", xml_100000_deep, cpu_seconds=10, seconds=30),
     Case("audit-as-flip-abc", audit_flag("--as", "flip=abc"), names="--as"),
     Case("audit-channel-superscript-two", audit_flag("--channel", "²"), names="--channel"),
     Case("api-audit-all-nan", api("from brdfnorm.audit import audit; audit(np.full((8, 8), np.nan), 'ggx')"),

@@ -22,6 +22,7 @@ limit                     what it bounds
 ``MAX_ZIP_DIRECTORY``     bytes of an ``.npz``'s central directory
 ``NPY_HEADER_BYTES``      bytes of one ``.npy`` header (numpy's own default)
 ``MAX_JSON_DEPTH``        nesting of a JSON document's arrays and objects
+``MAX_XML_DEPTH``         nesting of a Mitsuba XML file's elements
 ``MAX_ERROR_TEXT``        characters of any text quoted in an error line (the middle elided)
 ``MAX_ERROR_LINE``        characters of a whole ``error:`` line of the command line: 1000
 ``MAX_AUDIT_VALUES``      values ``brdfnorm audit`` (and :func:`brdfnorm.audit.audit`) takes: 1 Mi
@@ -56,6 +57,8 @@ MAX_ZIP_DIRECTORY = _MIB
 NPY_HEADER_BYTES = 10_000
 #: Nesting of a JSON document.
 MAX_JSON_DEPTH = 64
+#: Nesting of an XML file's elements (a Mitsuba BSDF nests a few levels).
+MAX_XML_DEPTH = 64
 #: Characters of a name or a cell quoted in an error line; longer ones keep their start and end.
 MAX_ERROR_TEXT = 80
 #: Characters of a whole error line (a path of thousands of characters is elided in the middle).
