@@ -83,9 +83,11 @@ def read_rows(data: bytes, where: str, *, header: bool | None = None) -> Rows:
     elif all(names):
         is_header = True
     else:
-        column = next(k for k, (number, name) in enumerate(zip(numbers, names, strict=True)) if not (number or name))
-        raise TableFileError(f"column {column + 1}: {shorten(repr(first[column]))} is neither a number nor a column "
-                             "name (a header holds names only, a row numbers only)", where, line)
+        odd = [k for k, (number, name) in enumerate(zip(numbers, names, strict=True)) if not (number or name)]
+        column = odd[0] if odd else numbers.index(True)  # a cell neither, or a number among names
+        what = "neither a number nor a column name" if odd else "a number in a row of names"
+        raise TableFileError(f"column {column + 1}: {shorten(repr(first[column]))} is {what} (a header holds names "
+                             "only, a row numbers only)", where, line)
     if header is not None and is_header != header:
         raise TableFileError("expected a header row" if header else "expected a row of numbers", where, line)
     body_start = position if not is_header else (len(text) if end < 0 else end + 1)
