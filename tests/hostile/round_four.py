@@ -178,6 +178,19 @@ def raw_offset_big_endian(directory: Path) -> list[str]:
             "assert np.array_equal(s.values.ravel(), np.linspace(0.1, 0.9, 512).astype(np.float32))"]
 
 
+def raw_big_endian_cli(directory: Path) -> list[str]:
+    """An exact GGX E table (8 × 8, μ texels, α nodes) as big-endian float32 after a 16-byte header: the audit
+    CLI's --offset and --byte-order read it, and it fits."""
+    import brdfnorm as bn
+    from brdfnorm import lut
+
+    axes = {"mu": (np.arange(8) + 0.5) / 8, "alpha": np.maximum(np.linspace(0, 1, 8), 1e-8)}
+    table = lut.compute(bn.load("ggx"), axes, average=False)["E"]
+    path = _write(directory / "t.bin", b"X" * 16 + table.astype(">f4").tobytes())
+    return _audit(path, "--shape", "8,8", "--offset", "16", "--byte-order", "big", "--as",
+                  "shadowing=height-correlated", "--no-interpolation", "--no-sweep", "--json")
+
+
 # -- issue 41: formulas ------------------------------------------------------------------------------------------
 
 def formula(text: str):
@@ -258,6 +271,8 @@ CASES = [
     Case("audit-csv-30m-rows", csv_30m_rows, cpu_seconds=10, seconds=30, slow=True),
     Case("audit-h-size-expression-is-the-shape", h_size_expression, exit=0, api=True),
     Case("audit-raw-offset-big-endian", raw_offset_big_endian, exit=0, api=True),
+    Case("audit-raw-offset-big-endian-cli", raw_big_endian_cli, exit=0, stdout_ok=True, seconds=30),
+    Case("audit-offset-of-a-npz", audit_flag("--offset", "8"), names="--offset"),
     # issue 41 (3, 6): formulas
     Case("formula-400-digit-integer", formula("mu*" + "9" * 400), names="--formula"),
     Case("formula-complex-exponent", formula("mu**2j"), names="--formula"),
