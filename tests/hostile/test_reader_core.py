@@ -137,3 +137,8 @@ def test_raw_offset_byte_order_and_memory_order():
     assert np.array_equal(got, values) and got.dtype.isnative
     with pytest.raises(TableFileError, match="after offset 2"):
         raw_decode(data, "t.bin", shape=(2, 3), dtype="uint16", byteorder=">", offset=2, max_elements=100)
+
+
+def test_literals_names_and_comments_beyond_ascii():
+    found = find_literals("const float é_t[2] = {1, 2}; // café²\nconst float u[2] = {3, 4};", "t.h")
+    assert [(lit.name, list(lit.values)) for lit in found] == [("é_t", [1, 2]), ("u", [3, 4])]

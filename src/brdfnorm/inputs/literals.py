@@ -71,7 +71,7 @@ class Literal:
 
 
 _SPACE = re.compile(r"[ \t\r\n\f\v]+")
-_IDENT = re.compile(r"[A-Za-z_$][A-Za-z0-9_$]*")
+_IDENT = re.compile(r"[\w$]+")  # from a letter, "_" or "$" (the scanner checks the first character)
 _HEX = re.compile(r"0[xX]([0-9a-fA-F]*)")
 _DECIMAL = re.compile(r"[0-9]*(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?")
 _SUFFIX = re.compile(r"[fFhHuUlL]*")
