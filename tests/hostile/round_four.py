@@ -161,6 +161,10 @@ def json_two_long_keys(directory: Path) -> list[str]:
     return _audit(_write(directory / "t.json", json.dumps(document)))
 
 
+def json_5m_numbers(directory: Path) -> list[str]:
+    return _audit(_write(directory / "t.json", '{"E": [' + "0," * 5_000_000 + "0]}"))
+
+
 def h_size_expression(directory: Path) -> list[str]:
     """A C declaration whose size is an expression of factors: its shape (32, 32, 2), read without --shape."""
     lut = np.full((32, 32, 2), 0.5, dtype=np.float32)
@@ -269,6 +273,7 @@ CASES = [
     Case("audit-h-empty-element", h_empty_element, extra={"contains": "empty element"}),
     Case("audit-h-8.5m-numbers", h_8m_numbers, cpu_seconds=10, seconds=30, slow=True),
     Case("audit-csv-30m-rows", csv_30m_rows, cpu_seconds=10, seconds=30, slow=True),
+    Case("audit-json-5m-numbers", json_5m_numbers, cpu_seconds=10, seconds=30, extra={"contains": "values"}),
     Case("audit-h-size-expression-is-the-shape", h_size_expression, exit=0, api=True),
     Case("audit-raw-offset-big-endian", raw_offset_big_endian, exit=0, api=True),
     Case("audit-raw-offset-big-endian-cli", raw_big_endian_cli, exit=0, stdout_ok=True, seconds=30),
