@@ -140,7 +140,7 @@ def _write_json(path, e):
 
 
 def _write_png(path, e):
-    from brdfnorm.lut.pngio import encode
+    from brdfnorm.inputs.png import encode
 
     path.write_bytes(encode(np.rint(e * 255).astype(int)[..., None], 8))
 
@@ -219,7 +219,7 @@ BAD = [
 def test_bad_input_is_one_line_exit_2(capsys, tmp_path, name, content, options, message):
     path = tmp_path / name
     if content is None:
-        from brdfnorm.lut.pngio import encode
+        from brdfnorm.inputs.png import encode
 
         content = encode(np.full((8, 8, 1), 7), 8)[:60]
     path.write_bytes(content if isinstance(content, bytes) else content.encode())

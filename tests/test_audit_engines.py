@@ -15,7 +15,7 @@ import pytest
 import brdfnorm as bn
 from brdfnorm import lut
 from brdfnorm.audit import audit
-from brdfnorm.lut.pngio import encode
+from brdfnorm.inputs.png import encode
 from tests.conftest import run_cli
 
 pytestmark = pytest.mark.slow

@@ -52,9 +52,10 @@ def test_png_size_counts_every_sample_before_inflating(table, tmp_path):
     data = formats.dumps(table, "png")  # E, DFG_f0, DFG_f90: RGB
     assert data[25] == 2
     for colour, expected in ((6, "height × width × samples"), (0, "image data holds")):
-        header = _chunk(b"IHDR", struct.pack(">IIBBBBB", 5000, 5000, 16, colour, 0, 0, 0))
+        header = _chunk(b"IHDR", struct.pack(">IIBBBBB", 3000, 3000, 16, colour, 0, 0, 0))
         message = _load_error(tmp_path / "t.png", data[:8] + header + data[8 + 25:])
-        # 25 M pixels pass as greyscale (then the tiny IDAT is short); × 4 samples is past the 50 M cap
+        # 9 M pixels pass as greyscale (then the tiny IDAT is short); × 4 samples is past the 16 Mi cap
+        # (brdfnorm.inputs.limits.MAX_ELEMENTS)
         assert expected in message, message
 
 

@@ -20,6 +20,8 @@ from .errors import ArgumentError, ArgumentTypeError, BrdfnormError
 MAX_COUNT = 1_000_000
 #: Largest number of albedo integrals one call may batch (angles × parameter values).
 MAX_INTEGRALS = 10_000_000
+#: Largest numpy array one argument may be (directions, angles, parameter values, samples): 64 Mi values.
+MAX_ARRAY_VALUES = 64 * 1024**2
 #: Finest relative tolerance float64 quadrature can honour.
 RTOL_FLOOR = 1e-14
 HALF_PI = np.pi / 2
@@ -35,13 +37,19 @@ def real_array(value: object, where: str, *, error: type[BrdfnormError] = Argume
                type_error: type[BrdfnormError] = ArgumentTypeError) -> np.ndarray:
     """``value`` (a real number or an array of them) as finite float64, or an error naming ``where``.
 
-    Accepted: Python ints and floats, numpy integer and floating scalars and arrays, nested sequences of them.
+    Accepted: Python ints and floats, numpy integer and floating scalars and arrays, nested sequences of them; a
+    numpy array of more than :data:`MAX_ARRAY_VALUES` values is refused from its shape, before its data is touched (a
+    ``np.broadcast_to`` view of 10¹⁰ values took 67 s and 19.6 GB to be refused once).
     Refused: bool (a flag is not a number), str/bytes, None, complex, datetime/timedelta, other objects, values
     beyond float64's range and NaN/inf. ``error`` and ``type_error`` are the classes raised (a model's
     parameters raise :class:`~brdfnorm.errors.ParameterError` and its TypeError twin).
     """
     if isinstance(value, (str, bytes)) or value is None or isinstance(value, (bool, np.bool_)):
         raise type_error(f"expected a number, got {type(value).__name__} {short_repr(value)}", where=where)
+    size = np.size(value) if isinstance(value, np.ndarray) else None  # metadata: a broadcast view stays a view
+    if size is not None and size > MAX_ARRAY_VALUES:
+        raise error(f"an array of shape {np.shape(value)} holds {size} values, more than the {MAX_ARRAY_VALUES} one "
+                    "argument may hold", where=where)
     try:
         array = np.asarray(value)
     except (TypeError, ValueError, OverflowError):

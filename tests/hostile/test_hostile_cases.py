@@ -1,7 +1,7 @@
-"""The runner of :mod:`hostile_cases` (issue 35): each case is one command in a subprocess, under a 4 GB
-address-space limit (``RLIMIT_AS``), and must end within its time with exit 0 or 2, exactly one ``error:`` line
-naming its input (for exit 2), a clean stdout, nothing written beside its inputs, and at most 1 GB resident (the
-child's own ``ru_maxrss`` from ``os.wait4``).
+"""The runner of :mod:`hostile_cases` (issue 35) and :mod:`round_four` (issues 41, 46): each case is one command
+in a subprocess, under a 4 GB address-space limit (``RLIMIT_AS``), and must end within its time with exit 0 or 2,
+exactly one ``error:`` line naming its input (for exit 2), a clean stdout, no warning, nothing written beside its
+inputs, and at most 1 GB resident (the child's own ``ru_maxrss`` from ``os.wait4``).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from hostile_cases import CASES, PYTHON_API, Case
+from round_four import CASES as ROUND_FOUR
 
 ADDRESS_SPACE = 4 * 1024**3
 PEAK_RSS_KIB = 1024**2  # 1 GiB (ru_maxrss is in KiB on Linux)
@@ -52,7 +53,8 @@ def run_limited(argv: list[str], cwd: Path, seconds: float) -> tuple[int, str, s
 
 
 def _params():
-    return [pytest.param(case, id=case.name, marks=[pytest.mark.slow] if case.slow else []) for case in CASES]
+    return [pytest.param(case, id=case.name, marks=[pytest.mark.slow] if case.slow else [])
+            for case in [*CASES, *ROUND_FOUR]]
 
 
 @pytest.mark.parametrize("case", _params())
@@ -77,6 +79,7 @@ def test_hostile_case(case: Case, tmp_path: Path) -> None:
     assert sorted(p.name for p in inputs.iterdir()) == before, "something was written beside the inputs"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["inputs"], "something was written"
     assert "Traceback" not in err and "internal error" not in err, report
+    assert "Warning:" not in err, report  # no numpy (or other) warnings on stderr
     if case.exit == 2:
         errors = [line for line in err.splitlines() if line.startswith("error:")]
         assert len(errors) == 1 and err.count("\n") == 1, report  # the error line, and nothing else

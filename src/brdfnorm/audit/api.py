@@ -14,6 +14,7 @@ False
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -21,7 +22,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import __version__
-from ..errors import ArgumentError
+from ..errors import ArgumentError, BrdfnormError
+from ..inputs import shorten
+from ..inputs.limits import MAX_AUDIT_GRID_AXES, MAX_AUDIT_VALUES, MAX_CHANNELS
 from ..models.base import Model
 from . import quality
 from .conventions import parse_pins
@@ -112,11 +115,26 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
 
 
 def _as_source(table, options: dict) -> Source:
+    scale = options.get("scale")
+    if scale is not None and not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
+        raise ArgumentError(f"{shorten(scale, 40)}: the scale must be a finite number > 0", where="--scale")
     if isinstance(table, (str, os.PathLike)):
         return read_table(table, **options)
-    array = np.asarray(table, dtype=float)
+    try:
+        shape = np.shape(table)  # from the metadata: a broadcast view is not materialised
+    except ValueError:
+        raise ArgumentError("not a regular array of numbers (rows of different lengths?)", where="table") from None
+    if math.prod(shape) > MAX_AUDIT_VALUES:
+        raise ArgumentError(f"a table of shape {shape} holds {math.prod(shape)} values, more than the "
+                            f"{MAX_AUDIT_VALUES} an audit takes", where="table")
+    try:
+        array = np.asarray(table, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ArgumentError("not an array of real numbers", where="table") from None
     if array.ndim == 0 or array.size < 2:
         raise ArgumentError("an audit needs a table of at least two values", where="table")
+    if not np.isfinite(array).any():
+        raise ArgumentError("no finite values in the table", where="table")
     names = options.pop("channel_names", None)
     if names is None:
         if array.ndim >= 3 and array.shape[-1] <= 4 and min(array.shape[:-1]) > 4:
@@ -132,6 +150,11 @@ def _as_source(table, options: dict) -> Source:
     return Source("<array>", "array", "", array, names, stored, scale)
 
 
+#: The domain of each axis an audit can be given: (lowest, highest, as said in an error).
+AXIS_DOMAINS = {"mu": (0.0, 1.0, "[0, 1]"), "theta": (0.0, np.pi / 2, "[0, π/2] radians ([0°, 90°])"),
+                "alpha": (0.0, np.inf, "α ≥ 0"), "f0": (0.0, 1.0, "[0, 1]")}
+
+
 def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
     out = {}
     for name, values in (axes or {}).items():
@@ -139,9 +162,14 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
         if name == "r":
             name, array = "alpha", array * array
         if name not in ("mu", "theta", "alpha", "f0"):
-            raise ArgumentError(f"axis {name!r}: known axes are mu, theta, alpha, r (alpha = r^2), f0", where="--axis")
+            raise ArgumentError(f"axis {shorten(repr(name), 40)}: known axes are mu, theta, alpha, r (alpha = r^2), "
+                                "f0", where="--axis")
         if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
             raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
+        low, high, text = AXIS_DOMAINS[name]
+        if array.min() < low or array.max() > high:
+            raise ArgumentError(f"axis {name}: values from {array.min():.6g} to {array.max():.6g} leave its domain "
+                                f"{text}", where="--axis")
         steps = np.diff(array)
         if not (np.all(steps > 0) or np.all(steps < 0)):
             raise ArgumentError(f"axis {name}: values must increase or decrease monotonically", where="--axis")
@@ -170,12 +198,30 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
     if params:
         m = m.with_params(**params)
     source = _as_source(table, dict(read or {}))
-    pins = parse_pins({**(pins or {}), **convention})
+    grid = source.grid_shape
+    if source.values.size > MAX_AUDIT_VALUES or len(grid) > MAX_AUDIT_GRID_AXES or source.values.shape[-1] > \
+            MAX_CHANNELS:
+        where = source.path if source.path != "<array>" else "table"
+        raise ArgumentError(f"a table of {len(grid)} grid axes {tuple(grid)} and {source.values.shape[-1]} "
+                            f"channel(s), {source.values.size} values: an audit takes at most "
+                            f"{MAX_AUDIT_GRID_AXES} grid axes, {MAX_CHANNELS} channels and {MAX_AUDIT_VALUES} "
+                            "values (give --shape or "
+                            "--array for another reading)", where=where)
+    try:
+        pins = parse_pins({**(pins or {}), **convention})
+    except BrdfnormError:
+        raise
+    except (ValueError, TypeError) as error:
+        raise ArgumentError(shorten(error, 200), where="--as") from None
+    flip = pins.get("flip")
+    if flip is not None and not all(part.strip() in ("0", "1") for part in str(flip).split(",")):
+        raise ArgumentError(f"flip={shorten(flip, 40)}: 0 or 1 per array axis, comma-separated (e.g. flip=0,1)",
+                            where="--as")
     reference = Reference(m)
     chosen = None
     if channel is not None:
         names = source.channel_names
-        if isinstance(channel, int) or str(channel).isdigit():
+        if isinstance(channel, int) or str(channel).isascii() and str(channel).isdigit():
             k = int(channel)
             if not 0 <= k < len(names):
                 raise ArgumentError(f"channel index {k} outside 0..{len(names) - 1}", where="--channel")
@@ -188,7 +234,6 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
                       explicit=explicit)
     result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name)
     best = inference.best
-    grid = source.grid_shape
     if dense or sweep:
         # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
         measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]

@@ -4,7 +4,7 @@ positions, storage dtype, channel order — with brdfnorm's metadata where the f
 Values are rounded to the storage the input used: integers to the nearest code of the same scale (clipped to
 the type's range), half and single floats by numpy's round-to-nearest conversion. Text sources are rewritten
 in place: every number of the audited array is replaced where it stood (its span, sign included, recorded by
-:mod:`.textarrays`), spelled as before (hex stays hex, suffixes stay), and a comment with the metadata goes
+:mod:`brdfnorm.inputs.literals`), spelled as before (hex stays hex, suffixes stay), and a comment with the metadata goes
 before the declaration; everything else in the file is kept byte for byte. Channels that fit no meaning are
 written back unchanged (requantized to the same storage).
 """
@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError
+from ..inputs import png as pngio
 from ..inputs import read_bounded
-from ..lut import pngio
 from .readers import MAX_BINARY_BYTES, MAX_TEXT_BYTES, Source
 
 

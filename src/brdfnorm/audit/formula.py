@@ -1,12 +1,15 @@
 """Audit a fitted formula: a Python-syntax expression (parsed by :mod:`ast` into a whitelist evaluator, never
 ``eval``) or a GLSL function compiled by brdfnorm's GLSL compiler, against the exact quantity it approximates.
 
-Expression: numbers, the named arguments, + − * / **, unary −, and calls of :data:`FUNCTIONS`; an exponent
-must be a number of magnitude ≤ :data:`MAX_EXPONENT` or an expression (evaluated in float64, where overflow is
-inf, not a hang); anything else (attributes, subscripts, other names, lambdas, comprehensions, strings) is refused
-with one error naming the construct. GLSL: the function ``NAME`` is called from a generated ``BRDF`` entry
-point that passes the arguments in the components of L and V; its result (float, vec2, vec3, vec4) gives
-one quantity per component (``quantities``).
+Expression: real numbers (an integer beyond float range refused), the named arguments, + − * / **, unary −, and
+calls of :data:`FUNCTIONS` with exactly their number of arguments (:data:`ARITY`, checked at compile time, so that
+no argument can land in numpy's positional ``out``); an exponent must be a number of magnitude ≤
+:data:`MAX_EXPONENT` or an expression (evaluated in float64, where overflow is inf, not a hang); anything else
+(attributes, subscripts, other names, lambdas, comprehensions, strings, complex numbers, keywords) is refused with
+one error naming the construct. A formula whose value is not finite somewhere on the domain (an overflow, a
+division by zero, a logarithm of a negative) is refused naming the first such point: its error is not a number.
+GLSL: the function ``NAME`` is called from a generated ``BRDF`` entry point that passes the arguments in the
+components of L and V; its result (float, vec2, vec3, vec4) gives one quantity per component (``quantities``).
 
 The domain is a node grid over μ ∈ [μ_min, 1] and the roughness axis (r with α = r², or α), with the same
 clamps as the tables (μ ≥ 1e-4, α ≥ 1e-8); the exact values come from :class:`.reference.Reference`.
@@ -20,9 +23,9 @@ import math
 import numpy as np
 
 from ..errors import ArgumentError
-from ..inputs import read_bounded
+from ..inputs import read_bounded, shorten
+from ..inputs.literals import Scanner
 from .reference import Reference
-from .textarrays import _Scanner
 
 FUNCTIONS = {
     "exp": np.exp, "log": np.log, "sqrt": np.sqrt, "pow": np.power, "sin": np.sin, "cos": np.cos,
@@ -31,6 +34,8 @@ FUNCTIONS = {
     "clamp": lambda x, a, b: np.clip(x, a, b), "saturate": lambda x: np.clip(x, 0.0, 1.0),
     "mix": lambda a, b, t: a + (b - a) * t,
 }
+#: How many arguments each function takes.
+ARITY = {name: 1 for name in FUNCTIONS} | {"pow": 2, "min": 2, "max": 2, "clamp": 3, "mix": 3}
 MAX_EXPONENT = 64.0
 MAX_TEXT = 4000
 MAX_NODES = 2000
@@ -58,8 +63,17 @@ def compile_expression(text: str, names: tuple[str, ...]):
             return build(node.body)
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value,
                                                                                                         bool):
-            value = float(node.value)
+            try:
+                value = float(node.value)
+            except OverflowError:
+                bits = abs(node.value).bit_length()  # str() of a huge integer is refused by Python itself
+                raise ArgumentError(f"an integer of about {int(bits * 0.30103) + 1} digits, beyond float range",
+                                    where=where) from None
             return lambda env: value
+        if isinstance(node, ast.Constant):
+            kind = "complex number" if isinstance(node.value, complex) else type(node.value).__name__
+            raise ArgumentError(f"a {kind} constant ({shorten(repr(node.value), 40)}); a formula takes real numbers "
+                                "only", where=where)
         if isinstance(node, ast.Name):
             if node.id not in names:
                 raise ArgumentError(f"unknown name {node.id!r} (the arguments are {', '.join(names)})", where=where)
@@ -69,24 +83,22 @@ def compile_expression(text: str, names: tuple[str, ...]):
             inner = build(node.operand)
             return (lambda env: -inner(env)) if isinstance(node.op, ast.USub) else inner
         if isinstance(node, ast.BinOp) and type(node.op) in binary:
+            op, left, right = binary[type(node.op)], build(node.left), build(node.right)  # operands checked first
             if isinstance(node.op, ast.Pow):
-                exponent = node.right
-                if isinstance(exponent, ast.UnaryOp) and isinstance(exponent.operand, ast.Constant):
-                    exponent = exponent.operand
-                if isinstance(exponent, ast.Constant) and abs(float(exponent.value)) > MAX_EXPONENT:
-                    raise ArgumentError(f"exponent {exponent.value} larger than {MAX_EXPONENT:g} in magnitude",
-                                        where=where)
-            op, left, right = binary[type(node.op)], build(node.left), build(node.right)
+                _exponent_bounded(node.right)
             return lambda env: op(left(env), right(env))
         if isinstance(node, ast.Call):
             if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS or node.keywords:
                 what = node.func.id if isinstance(node.func, ast.Name) else type(node.func).__name__.lower()
-                raise ArgumentError(f"call of {what!r} refused (allowed: {', '.join(sorted(FUNCTIONS))})",
-                                    where=where)
-            if node.func.id == "pow" and len(node.args) == 2 and isinstance(node.args[1], ast.Constant) \
-                    and abs(float(node.args[1].value)) > MAX_EXPONENT:
-                raise ArgumentError(f"exponent larger than {MAX_EXPONENT:g} in magnitude", where=where)
-            function, args = FUNCTIONS[node.func.id], [build(a) for a in node.args]
+                raise ArgumentError(f"call of {shorten(repr(what), 40)} refused (allowed: "
+                                    f"{', '.join(sorted(FUNCTIONS))}; no keyword arguments)", where=where)
+            name = node.func.id
+            if len(node.args) != ARITY[name] or any(isinstance(a, ast.Starred) for a in node.args):
+                raise ArgumentError(f"{name}() takes {ARITY[name]} argument{'s' if ARITY[name] > 1 else ''}, "
+                                    f"{len(node.args)} given", where=where)
+            function, args = FUNCTIONS[name], [build(a) for a in node.args]
+            if name == "pow":
+                _exponent_bounded(node.args[1])
             return lambda env: function(*(a(env) for a in args))
         raise ArgumentError(f"{type(node).__name__} is not allowed in a formula (numbers, arguments, + - * / **, "
                             "and math functions only)", where=where)
@@ -97,9 +109,18 @@ def compile_expression(text: str, names: tuple[str, ...]):
         raise ArgumentError("expression nested too deeply", where=where) from None
 
 
+def _exponent_bounded(exponent: ast.expr) -> None:
+    """A constant exponent (signed) of magnitude at most :data:`MAX_EXPONENT` (an operand already checked real)."""
+    if isinstance(exponent, ast.UnaryOp) and isinstance(exponent.operand, ast.Constant):
+        exponent = exponent.operand
+    if isinstance(exponent, ast.Constant) and abs(float(exponent.value)) > MAX_EXPONENT:
+        raise ArgumentError(f"exponent {shorten(exponent.value, 40)} larger than {MAX_EXPONENT:g} in magnitude",
+                            where="--formula")
+
+
 def _glsl_signature(text: str, name: str, where: str) -> tuple[str, list[tuple[str, str]]]:
     """(return type, [(type, name)]) of the first definition of function ``name`` — a linear token scan."""
-    tokens = list(_Scanner(text, where).tokens())
+    tokens = list(Scanner(text, where).tokens())
     for k in range(1, len(tokens) - 1):
         if tokens[k][:2] == ("id", name) and tokens[k + 1][:2] == ("op", "(") and tokens[k - 1][0] == "id":
             params, j, current = [], k + 2, []
@@ -220,6 +241,16 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
     if len(values) < len(quantities):
         raise ArgumentError(f"the formula gives {len(values)} components; {len(quantities)} quantities asked",
                             where="--quantity")
+    for value in values[:len(quantities)]:
+        bad = ~np.isfinite(np.broadcast_to(value, alpha.shape))
+        if bad.any():
+            k = np.unravel_index(int(np.argmax(bad)), bad.shape)
+            at = ", ".join(f"{name} = {float(np.broadcast_to(env[name], alpha.shape)[k]):.4g}"
+                           for name in ("mu", "alpha") if name in env)
+            shown = float(np.broadcast_to(value, alpha.shape)[k])
+            raise ArgumentError(f"the formula is not finite at {int(bad.sum())} of {bad.size} points ({shown} at "
+                                f"{at}): an overflow, a division by zero or a function outside its domain",
+                                where="--formula")
     out = []
     for q, value in zip(quantities, values, strict=False):
         exact, error = reference.meaning(q, shadowing, env.get("mu"), alpha)

@@ -1,9 +1,11 @@
 """Read a table someone else made: .npz, .exr, .png, .csv, .json, C/C++/GLSL/HLSL/JavaScript array literals, raw.
 
-Every reader goes through :mod:`brdfnorm.inputs` (regular file, size capped before reading, declared shapes
-checked by :func:`~brdfnorm.inputs.element_count` before an array exists, every parse failure one error naming
-the file). What comes back is a :class:`Source`: the values as floats, shaped (*grid, channels), with what
-:mod:`.fix` needs to write a drop-in replacement (storage dtype, scale, format and its layout details).
+The bytes are decoded by the reader core, :mod:`brdfnorm.inputs` (one bounded decoder per format, the limits of
+:mod:`brdfnorm.inputs.limits`, every parse failure one error naming the file); this module keeps what an audit
+needs: which array is the table, its storage (dtype, scale) and channels. What comes back is a :class:`Source`:
+the values as floats, shaped (*grid, channels), with what :mod:`.fix` needs to write a drop-in replacement
+(storage dtype, scale, format and its layout details). Raw binary takes an ``offset``, a ``shape``, a ``dtype``
+and a ``byteorder``; a C declaration's size expression (``g_dfg[32 * 32 * 2]``) is its shape.
 
 Storage: integer data are normalized by their type's maximum (uint8 / 255, uint16 / 65535) unless ``scale`` is
 given; ``dtype="float16"`` reads 16-bit integers (or raw bytes) as half-float bit patterns, as engines upload
@@ -12,9 +14,8 @@ them (``new Uint16Array([0x30b5, ...])`` with a half-float texture).
 
 from __future__ import annotations
 
-import csv
-import io
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,17 +23,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
-from ..inputs import element_count, npz_arrays, parsing, read_bounded, regular_file
-from ..lut import pngio
-from ..lut.readers import exr_parts
-from .textarrays import find_literals
+from ..inputs import element_count, npz_arrays, parsing, png, read_bounded, regular_file, shorten
+from ..inputs import raw as raw_binary
+from ..inputs.delimited import read_rows
+from ..inputs.exr import exr_parts
+from ..inputs.jsonio import at_path, load_json, numeric_arrays, to_array
+from ..inputs.limits import MAX_ARRAY_BYTES, MAX_ELEMENTS, MAX_FILE_BYTES
+from ..inputs.literals import find_literals
+from ..inputs.raw import DTYPES
 
-#: The most elements a table may hold.
-MAX_ELEMENTS = 16 * 1024 * 1024
-#: Byte caps per kind of file (text numbers take ~10 bytes each).
-MAX_BINARY_BYTES = 256 * 1024**2
-MAX_TEXT_BYTES = 64 * 1024**2
-DTYPES = ("float16", "float32", "float64", "uint8", "uint16", "uint32", "int8", "int16", "int32")
+#: Byte caps :mod:`.fix` reads a source back with (the reader core's, by kind of file).
+MAX_BINARY_BYTES = MAX_FILE_BYTES["raw"]
+MAX_TEXT_BYTES = MAX_FILE_BYTES["text"]
 TEXT_EXTENSIONS = {"h": "text", "hpp": "text", "c": "text", "cpp": "text", "cc": "text", "inl": "text",
                    "glsl": "text", "hlsl": "text", "frag": "text", "vert": "text", "fx": "text", "fxh": "text",
                    "js": "text", "mjs": "text", "ts": "text", "cs": "text"}
@@ -115,21 +117,28 @@ def _with_channels(array: np.ndarray, names: list[str] | None = None) -> tuple[n
 
 def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | None = None,
                shape: tuple[int, ...] | None = None, dtype: str | None = None, order: str = "C",
-               scale: float | None = None, channels: bool | None = None) -> Source:
+               scale: float | None = None, channels: bool | None = None, offset: int = 0,
+               byteorder: str = "<") -> Source:
     """Read the table in ``path`` (see the module docstring); ``array`` picks one of several; ``channels``
-    overrides the guess whether the last axis holds channels (True) or is a grid axis (False)."""
+    overrides the guess whether the last axis holds channels (True) or is a grid axis (False); ``offset`` and
+    ``byteorder`` (``<``/``little``, ``>``/``big``) place a raw file's values."""
     where = os.fspath(path)
     regular_file(where)  # a missing file or a directory is said so before its extension is judged
     kind = format_of(where, fmt)
     if dtype is not None and dtype not in DTYPES:
-        raise ArgumentError(f"unknown dtype {dtype!r} (known: {', '.join(DTYPES)})", where="--dtype")
+        raise ArgumentError(f"unknown dtype {shorten(repr(dtype))} (known: {', '.join(DTYPES)})", where="--dtype")
     if order not in ("C", "F"):
         raise ArgumentError("--order is C (last index fastest) or F (first index fastest)", where="--order")
     if shape is not None:
         element_count(shape, MAX_ELEMENTS, where="--shape", error=ArgumentError, what="--shape")
-    data = read_bounded(where, MAX_TEXT_BYTES if kind in ("text", "csv", "json") else MAX_BINARY_BYTES)
+    if (offset or byteorder not in ("<", "little")) and kind != "raw":
+        raise ArgumentError("--offset and --byte-order place a raw binary file's values (format raw)",
+                            where="--offset")
+    byteorder = raw_binary.byte_order(byteorder)
+    data = read_bounded(where, MAX_FILE_BYTES[kind])
     with parsing(where):
-        source = READERS[kind](data, where, array=array, shape=shape, dtype=dtype, order=order, scale=scale)
+        source = READERS[kind](data, where, array=array, shape=shape, dtype=dtype, order=order, scale=scale,
+                               offset=offset, byteorder=byteorder)
     if channels is False and source.channel_names != ["0"] and kind not in ("png", "exr"):
         source.values, source.channel_names = source.values[..., None], ["0"]
     elif channels is True and source.channel_names == ["0"] and source.values.ndim >= 3:
@@ -151,15 +160,17 @@ def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | 
 def _pick(names: list[str], array: str | None, where: str) -> str:
     if array is not None:
         if array not in names:
-            raise TableFileError(f"no array {array!r} (it holds: {', '.join(names) or 'none'})", where)
+            shown = ", ".join(shorten(n, 40) for n in names[:12]) + (", …" if len(names) > 12 else "")
+            raise TableFileError(f"no array {shorten(repr(array))} (it holds: {shown or 'none'})", where)
         return array
     if len(names) != 1:
-        raise TableFileError(f"holds {len(names)} arrays ({', '.join(names[:12])}); choose one with --array", where)
+        shown = ", ".join(shorten(n, 40) for n in names[:12]) + (", …" if len(names) > 12 else "")
+        raise TableFileError(f"holds {len(names)} arrays ({shown}); choose one with --array", where)
     return names[0]
 
 
-def _read_npz(data, where, *, array, shape, dtype, order, scale) -> Source:
-    arrays = npz_arrays(data, where, max_elements=MAX_ELEMENTS, max_bytes=MAX_BINARY_BYTES)
+def _read_npz(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
+    arrays = npz_arrays(data, where, max_elements=MAX_ELEMENTS, max_bytes=MAX_ARRAY_BYTES)
     numeric = [n for n, a in arrays.items() if a.dtype.kind in "fiu" and a.size > 1]
     name = _pick(numeric, array, where)
     raw = arrays[name]
@@ -174,7 +185,7 @@ def _read_npz(data, where, *, array, shape, dtype, order, scale) -> Source:
                           "reshaped": shape is not None})
 
 
-def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
+def _read_exr(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
     headers, parts = exr_parts(data, where)  # the first part: an engine's image (brdfnorm's E_avg is a second)
     header, channels = headers[0], parts[0]
     window = header.get("dataWindow")
@@ -190,11 +201,11 @@ def _read_exr(data, where, *, array, shape, dtype, order, scale) -> Source:
                           "window": str(window)})
 
 
-def _read_png(data, where, *, array, shape, dtype, order, scale) -> Source:
-    codes, depth, text = pngio.decode(data, where)
-    names = pngio.NAMES[codes.shape[-1]]
+def _read_png(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
+    codes, depth, text = png.decode(data, where)
+    names = png.NAMES[codes.shape[-1]]
     stored = f"uint{depth}"
-    own = pngio.brdfnorm_scaling(text)
+    own = _brdfnorm_scaling(text)
     if own is not None and scale is None and own[0].size == codes.shape[-1]:  # brdfnorm's own: lo + code/65535·span
         lo, hi = own
         span = np.where(hi > lo, hi - lo, 1.0)
@@ -209,46 +220,14 @@ def _read_png(data, where, *, array, shape, dtype, order, scale) -> Source:
     return Source(where, "png", "", values, names, stored, factor, layout={"depth": depth, "text": text})
 
 
-def _numbers(rows: list[list[str]], where: str) -> np.ndarray:
-    out = np.empty((len(rows), len(rows[0])))
-    for i, row in enumerate(rows):
-        if len(row) != len(rows[0]):
-            raise TableFileError(f"row {i + 1} has {len(row)} cells, the first has {len(rows[0])}", where)
-        for j, cell in enumerate(row):
-            try:
-                out[i, j] = float(cell)
-            except ValueError:
-                raise TableFileError(f"cell ({i + 1}, {j + 1}) is not a number: {cell.strip()[:30]!r}",
-                                     where) from None
-    return out
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _read_csv(data, where, *, array, shape, dtype, order, scale) -> Source:
-    text = data.decode("utf-8-sig")
-    rows = [r for r in csv.reader(io.StringIO(text)) if r and not r[0].lstrip().startswith("#")]
-    if not rows:
-        raise TableFileError("no rows", where)
-    header = None
-    if not all(_is_number(c) for c in rows[0]):
-        header, rows = rows[0], rows[1:]
-    if not rows:
-        raise TableFileError("a header and no rows", where)
-    element_count((len(rows), len(rows[0])), MAX_ELEMENTS, where=where, what="the rows × columns")
-    matrix = _numbers(rows, where)
+def _read_csv(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
+    rows = read_rows(data, where)  # bounded; the header rule: names only (a NUL in a cell is no name)
+    header, matrix = rows.header, rows.values
     stored = dtype or "float64"
     if array is not None:  # one column by name, reshaped by --shape
         if header is None or array not in header:
-            raise TableFileError(f"no column {array!r}", where)
-        raw = matrix[:, header.index(array)]
-        values = _shaped(raw, shape, order, where)
+            raise TableFileError(f"no column {shorten(repr(array))}", where)
+        values = _shaped(matrix[:, header.index(array)], shape, order, where)
     else:
         values = _shaped(matrix.ravel(), shape, order, where) if shape else matrix
     values, factor = _normalize(values, stored, scale, where)
@@ -258,31 +237,11 @@ def _read_csv(data, where, *, array, shape, dtype, order, scale) -> Source:
                           "shape": shape})
 
 
-def _json_arrays(node, path: tuple, found: dict, depth: int = 0) -> None:
-    """Numeric (nested) lists in a JSON document by key path."""
-    if depth > 64:
-        raise RecursionError  # inputs.parsing: "nested too deeply to read", naming the file
-    if isinstance(node, list) and node and all(isinstance(v, (int, float, list)) and not isinstance(v, bool)
-                                               for v in node):
-        found[path] = node
-    elif isinstance(node, dict):
-        for key, value in node.items():
-            _json_arrays(value, (*path, key), found, depth + 1)
-
-
-def _read_json(data, where, *, array, shape, dtype, order, scale) -> Source:
-    document = json.loads(data.decode("utf-8"))
-    found: dict[tuple, list] = {}
-    _json_arrays(document, (), found)
-    names = {".".join(map(str, p)) or "(root)": p for p in found}
+def _read_json(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
+    document = load_json(data, where, "the file")
+    names = numeric_arrays(document)
     name = _pick(list(names), array, where)
-    try:
-        raw = np.array(found[names[name]], dtype=float)
-    except ValueError:
-        raise TableFileError(f"array {name!r} is not a regular nested list of numbers", where) from None
-    if raw.dtype == object or not np.issubdtype(raw.dtype, np.number):
-        raise TableFileError(f"array {name!r} is not numeric", where)
-    element_count(raw.shape, MAX_ELEMENTS, where=where, what=f"array {name}")
+    raw = to_array(at_path(document, names[name]), name, where)
     stored = dtype or "float64"
     integers = stored.startswith(("uint", "int")) or stored == "float16"
     values, factor = _normalize(_shaped(raw.ravel(order=order), shape, order, where) if shape else
@@ -292,9 +251,9 @@ def _read_json(data, where, *, array, shape, dtype, order, scale) -> Source:
                   layout={"key": list(names[name]), "shape": raw.shape, "order": order, "reshaped": shape is not None})
 
 
-def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
+def _read_text(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
     text = data.decode("utf-8", errors="replace")
-    literals = [lit for lit in find_literals(text, where) if len(lit.values) > 1]
+    literals = [lit for lit in find_literals(text, where) if len(lit.values) > 1 and not lit.problem]
     if not literals:
         raise TableFileError("no numeric array literal found", where)
     by_name = {lit.name or f"#{i}": lit for i, lit in enumerate(literals)}
@@ -310,12 +269,12 @@ def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
             raise TableFileError(f"{name} declares {declared} elements; its initializer holds {flat.size}", where)
     stored = dtype or literal.dtype or "float32"
     if shape is None:
-        if literal.declared and int(np.prod(literal.declared)) == flat.size:
+        if literal.declared and math.prod(literal.declared) == flat.size:
             shape = literal.declared
         elif literal.nested is not None and len(literal.nested) > 1:
             shape = literal.nested
-        elif literal.declared and flat.size % int(np.prod(literal.declared)) == 0:  # float2 t[256]: 2 per element
-            shape = (*literal.declared, flat.size // int(np.prod(literal.declared)))
+        elif literal.declared and flat.size % math.prod(literal.declared) == 0:  # float2 t[256]: 2 per element
+            shape = (*literal.declared, flat.size // math.prod(literal.declared))
         else:
             raise TableFileError(f"{name} is a flat list of {flat.size} numbers; give its --shape (e.g. 64,64 or "
                                  "64,64,4 for four interleaved channels)", where)
@@ -334,19 +293,16 @@ def _read_text(data, where, *, array, shape, dtype, order, scale) -> Source:
                           "suffix": literal.suffix, "order": order, "shape": tuple(shape), "start": literal.start})
 
 
-def _read_raw(data, where, *, array, shape, dtype, order, scale) -> Source:
+def _read_raw(data, where, *, array, shape, dtype, order, scale, offset=0, byteorder="<", **_) -> Source:
     if shape is None:
         raise TableFileError("raw binary needs --shape (and --dtype, default float32)", where)
     stored = dtype or "float32"
-    storage = np.dtype(stored).newbyteorder("<")
-    count = element_count(shape, MAX_ELEMENTS, where=where, what="--shape")
-    if len(data) != count * storage.itemsize:
-        raise TableFileError(f"{len(data)} bytes; --shape {','.join(map(str, shape))} of {stored} needs "
-                             f"{count * storage.itemsize}", where)
-    raw = np.frombuffer(data, dtype=storage).reshape(shape, order=order)
-    values, factor = _normalize(raw, stored, scale, where)
+    values = raw_binary.decode(data, where, shape=shape, dtype=stored, byteorder=byteorder, offset=offset, order=order,
+                        max_elements=MAX_ELEMENTS)
+    values, factor = _normalize(values, stored, scale, where)
     values, names = _with_channels(values)
-    return Source(where, "raw", "", values, names, stored, factor, layout={"order": order, "shape": tuple(shape)})
+    return Source(where, "raw", "", values, names, stored, factor,
+                  layout={"order": order, "shape": tuple(shape), "offset": offset, "byteorder": byteorder})
 
 
 READERS = {"npz": _read_npz, "exr": _read_exr, "png": _read_png, "csv": _read_csv, "json": _read_json,
@@ -354,12 +310,31 @@ READERS = {"npz": _read_npz, "exr": _read_exr, "png": _read_png, "csv": _read_cs
 
 
 def parse_shape(text: str | None) -> tuple[int, ...] | None:
-    """``64,64,4`` -> (64, 64, 4) (checked against MAX_ELEMENTS before anything is allocated)."""
+    """``64,64,4`` (or ``64x64x4``) -> (64, 64, 4), checked against MAX_ELEMENTS before anything is allocated;
+    each size at most 18 digits (a longer one is refused before ``int`` reads it)."""
     if text is None:
         return None
-    try:
-        shape = tuple(int(part) for part in text.replace("x", ",").split(","))
-    except ValueError:
-        raise ArgumentError(f"expected sizes like 64,64,4, got {text!r}", where="--shape") from None
+    parts = [part.strip() for part in text.replace("x", ",").split(",")]
+    if any(not part.isascii() or not part.isdigit() or len(part) > 18 for part in parts):
+        raise ArgumentError(f"expected sizes like 64,64,4, got {shorten(repr(text))}", where="--shape")
+    shape = tuple(int(part) for part in parts)
     element_count(shape, MAX_ELEMENTS, where="--shape", error=ArgumentError, what="--shape")
     return shape
+
+
+def _brdfnorm_scaling(text: dict[str, str]) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi) per channel of a PNG that ``brdfnorm lut`` wrote (value = lo + code/65535·(hi − lo)), else None.
+    A channel without a table (B of a two-table RGB image) is lo = 0, hi = 1."""
+    payload = text.get("brdfnorm-lut")
+    if payload is None:
+        return None
+    try:
+        info = json.loads(payload)["png"]
+        if "channels" not in info:  # one greyscale table (before the R, G, B, A mapping)
+            return np.array([float(info["lo"])]), np.array([float(info["hi"])])
+        entries = list(info["channels"].values())
+        count = 1 if len(entries) == 1 else 3 if len(entries) <= 3 else 4
+        entries += [{"lo": 0.0, "hi": 1.0}] * (count - len(entries))
+        return (np.array([float(e["lo"]) for e in entries]), np.array([float(e["hi"]) for e in entries]))
+    except (KeyError, TypeError, ValueError, AttributeError):
+        return None

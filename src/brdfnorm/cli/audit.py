@@ -34,6 +34,8 @@ def audit_command(
     channels_last: bool = typer.Option(None, "--channels/--no-channels", help="Whether the last axis holds "
                                        "channels (default: a last axis of at most 4 after larger ones does)."),
     order: str = typer.Option("C", "--order", help="C: last index fastest; F: first index fastest."),
+    offset: int = typer.Option(0, "--offset", min=0, help="Raw binary: bytes to skip before the values."),
+    byte_order: str = typer.Option("little", "--byte-order", help="Raw binary: little or big endian."),
     channel: str = typer.Option(None, "--channel", help="Audit one channel, by name or index."),
     scale: float = typer.Option(None, "--scale", help="Stored value = table value × SCALE (default: an integer "
                                 "type's maximum, 1 for floats)."),
@@ -85,8 +87,10 @@ def audit_command(
         from ..audit import audit
         from ..audit.readers import parse_shape
 
+        if byte_order not in ("little", "big"):
+            raise ArgumentError(f"{byte_order[:20]!r}: little or big", where="--byte-order")
         read = {"fmt": fmt, "array": array, "shape": parse_shape(shape), "dtype": dtype, "order": order,
-                "scale": scale, "channels": channels_last}
+                "scale": scale, "channels": channels_last, "offset": offset, "byteorder": byte_order}
         pins = dict(p.partition("=")[::2] for p in pin)
         if "shadowing" in m.params and any(p.partition("=")[0].strip() == "shadowing" for p in param):
             pins.setdefault("shadowing", str(m.params["shadowing"]))  # -p shadowing=... pins it

@@ -174,7 +174,12 @@ def console(*, stderr: bool = False) -> Console:
 
 
 def fail(message: str, code: int = 2) -> typer.Exit:
-    typer.echo(f"error: {message}", err=True)
+    """One ``error:`` line on stderr, at most :data:`~brdfnorm.inputs.limits.MAX_ERROR_LINE` characters (a long
+    name elided in the middle)."""
+    from ..inputs import shorten
+    from ..inputs.limits import MAX_ERROR_LINE
+
+    typer.echo(f"error: {shorten(message, MAX_ERROR_LINE)}", err=True)
     return typer.Exit(code)
 
 

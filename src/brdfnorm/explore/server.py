@@ -462,9 +462,11 @@ def url_of(sock: socket.socket) -> str:
 
 def make_server(catalog: Catalog, host: str) -> _Server:
     explorer = Explorer(catalog, loopback_only=is_loopback(host), host=host.strip("[]"))
-    # the h11 protocol with a request-read deadline and connection limits (.guard); beyond the limit, 503
+    # the h11 protocol with a request-read deadline, connection limits and eviction (.guard); uvicorn's own 503
+    # limit sits above the guard's (evicted connections leave its count a moment after they are closed)
     config = uvicorn.Config(explorer.app, log_level="warning", access_log=False, lifespan="on",
-                            timeout_graceful_shutdown=2, http=GuardedH11Protocol, limit_concurrency=MAX_CONNECTIONS)
+                            timeout_graceful_shutdown=2, http=GuardedH11Protocol,
+                            limit_concurrency=2 * MAX_CONNECTIONS, h11_max_incomplete_event_size=16 * 1024)
     return _Server(config, explorer)
 
 

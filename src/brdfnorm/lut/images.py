@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError
-from . import pngio
+from ..inputs import png
 from .layout import MAGIC, WriteOptions, _check_finite, _subset_meta
 from .table import Lut
 
@@ -129,6 +129,6 @@ def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["png"] = {"axes": part["axes"], "channels": mapping, "value": "lo + code / 65535 * (hi - lo)",
                    "colour": {0: "greyscale (read as R)", 2: "RGB", 6: "RGBA"}[colour]}
-    return pngio.encode(codes, 16, {MAGIC: json.dumps(meta, ensure_ascii=True)})
+    return png.encode(codes, 16, {MAGIC: json.dumps(meta, ensure_ascii=True)})
 
 

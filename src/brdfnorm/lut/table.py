@@ -24,6 +24,7 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -173,6 +174,11 @@ def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapp
     if len(direction) != 1:
         raise ArgumentError(f"exactly one of the axes must give the view direction ({' or '.join(DIRECTION_AXES)}"
                             f"); got {direction or 'none'}", where="axes")
+    sizes = {name: int(np.size(axes[name])) for name in names}  # from the shapes, before any data is touched
+    if math.prod(sizes.values()) > validate.MAX_INTEGRALS:
+        shown = " × ".join(f"{sizes[n]:,}" for n in names) + " = " if len(names) > 1 else ""
+        raise ArgumentError(f"{shown}{math.prod(sizes.values()):,} albedo integrals in one call is more than the "
+                            f"limit of {validate.MAX_INTEGRALS:,}; split the work", where="axes")
     values: dict[str, np.ndarray] = {}
     for name in names:
         array = np.asarray(axes[name], dtype=float)

@@ -31,7 +31,9 @@ per channel — not reciprocal (it depends on the view only), so its albedo over
 E and E_avg come from :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way —
 E on an N × N node grid over (μ, α) ∈ [0, 1]², interpolated bilinearly, E_avg on N nodes in α, linearly (the
 μ = 0 row is evaluated at μ = 1e-4); with ``ms_table=0`` exact values at every evaluation (slow: an albedo
-integral per direction — meant for checks). Both need isotropic α ≤ 1 (the tables' range).
+integral per direction — meant for checks). Both need isotropic α ≤ 1 (the tables' range). The table size is at
+most :data:`MAX_MS_TABLE` (issue 41: N = 1024, inside the range once declared, allocated 880 MiB at once and
+peaked at 3.6 GB; N = 256 takes about 0.4 GB and 8 s, N = 512 1.3 GB).
 """
 
 from __future__ import annotations
@@ -44,6 +46,9 @@ from scipy.special import erfcx
 from ..errors import EvaluationError, ParameterError
 from ..parameters import Parameter
 from .base import Lobe, Model, mirror
+
+#: The largest Kulla–Conty table ``ms_table`` may ask for: what is computed within 1 GB and ~10 s.
+MAX_MS_TABLE = 256
 
 _SQRT_PI = np.sqrt(np.pi)
 #: Smallest roughness: below it D overflows float64 in ``evaluate`` (the albedo method itself works at α = 0).
@@ -219,7 +224,7 @@ def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
         Parameter("k", "spectrum", (0.0, 0.0, 0.0), 0.0, 1e3, "extinction coefficient (conductor)"),
         Parameter("ms", "choice", "none", choices=MULTIPLE_SCATTERING,
                   description="multiple-scattering compensation (Kulla & Conty 2017, Turquin 2019)"),
-        Parameter("ms_table", "int", 32, 0.0, 1024.0, "kulla-conty table size N (0: exact, slow)"),
+        Parameter("ms_table", "int", 32, 0.0, float(MAX_MS_TABLE), "kulla-conty table size N (0: exact, slow)"),
     )
 
 

@@ -386,6 +386,19 @@ def _refuse_textures(root: ElementTree.Element, where: str) -> None:
                                 "the XML it is given", where)
 
 
+def _depth_bounded(root: ElementTree.Element, where: str) -> None:
+    """Refuse elements nested deeper than :data:`~brdfnorm.inputs.limits.MAX_XML_DEPTH` (walked without recursion:
+    ``ElementTree.tostring`` and Mitsuba's loader recurse, and 100 000 nested ``<bsdf>`` raised RecursionError)."""
+    from ..inputs.limits import MAX_XML_DEPTH
+
+    stack = [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        if depth > MAX_XML_DEPTH:
+            raise BrdfFileError(f"elements nested more than {MAX_XML_DEPTH} deep", where)
+        stack.extend((child, depth + 1) for child in element)
+
+
 def load_xml(path: str | os.PathLike) -> MitsubaModel:
     """A Mitsuba XML file holding one ``<bsdf>`` (at its root, or the first in a ``<scene>``)."""
     from ..inputs import parsing, read_bounded
@@ -394,6 +407,7 @@ def load_xml(path: str | os.PathLike) -> MitsubaModel:
     data = read_bounded(path, MAX_XML_BYTES, error=BrdfFileError)
     with parsing(path, error=BrdfFileError):
         root = ElementTree.fromstring(data)  # the file is data: parsed here, loaded by Mitsuba as a string
+    _depth_bounded(root, where)
     bsdf = root if root.tag == "bsdf" else root.find(".//bsdf")
     if bsdf is None:
         raise BrdfFileError("no <bsdf> element", where)

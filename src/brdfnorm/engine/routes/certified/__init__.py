@@ -179,15 +179,15 @@ def enclose(model, theta: float, params: dict, over: str = "light", digits: int 
             angle = flint.arb(float(theta)) if mu is None else flint.arb(0)
             balls = reduction.compute(work, angle, params, over, **extra)
             evaluations += work.evaluations
+            for ball in balls:  # before Enclosure.of: an infinite endpoint has no decimal (issue 46: n=1e300)
+                if not ball.is_finite():
+                    where = f"theta={float(theta)!r}" if mu is None else f"mu={float(mu)!r}"
+                    raise EvaluationError(f"Arb could not enclose the albedo at {where} with {digits} digits "
+                                          "(an enclosure is not finite: a parameter too large?)", where=model.name)
             enclosures = [Enclosure.of(ball, digits, evaluations, work.bits) for ball in balls]
             if all(e.reached for e in enclosures):
                 break
             bits *= 2
-        for ball in balls:
-            if not ball.is_finite():
-                where = f"theta={float(theta)!r}" if mu is None else f"mu={float(mu)!r}"
-                raise EvaluationError(f"Arb could not enclose the albedo at {where} with {digits} digits",
-                                      where=model.name)
         return enclosures
     finally:
         flint.ctx.prec = old

@@ -8,20 +8,30 @@ numbers (decimal, exponent, hex, with C/GLSL suffixes ``f``, ``u``, ``h``, ``l``
 and constructor names (``float2``, ``vec4``, ``new``, ``Float32Array``). An initializer with any other
 expression (an operator, a variable) is not a table and is skipped. Every number keeps its span in the text, so
 that :mod:`.fix` can write exact values back in place.
+
+Bounded before scanning (issue 41): a vectorized pass over the bytes counts the numbers and the other tokens;
+more than :data:`~.limits.MAX_LITERAL_NUMBERS` numbers, or :data:`MAX_TOKENS` tokens, is refused before a list is
+built. The scanner matches runs (spaces, names, numbers) with anchored regular expressions, one match per token.
+An empty element (``{1,,2}``, ``{,1}``) is refused naming its line; a trailing comma is C's and allowed. A C
+declaration's size may be an expression of integer factors (``g_dfg[32 * 32 * 2]``): the factors are its shape.
 """
 
 from __future__ import annotations
 
+import re
 from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import TableFileError
-from ..inputs import element_count
+from .guard import element_count, shorten
+from .limits import MAX_LITERAL_NUMBERS
 
-#: The most numbers one file may hold (128³ × 4 channels; kept in typed arrays, 24 bytes a number with its span).
-MAX_NUMBERS = 128**3 * 4
+#: Tokens of one file (numbers, names, punctuation): a table's numbers, their commas, and room for the code.
+MAX_TOKENS = 2 * MAX_LITERAL_NUMBERS + 1024 * 1024
+#: Dimensions of a regular nesting kept as a shape (numpy's own limit is 64).
+MAX_NESTING = 32
 
 #: Declared element types -> the dtype their values are stored in (integers are normalized by their maximum).
 C_TYPES = {
@@ -56,18 +66,49 @@ class Literal:
     declared: tuple[int, ...] = ()  # C dimensions [a][b]
     nested: tuple[int, ...] | None = None  # shape of the bracket nesting when regular
     start: int = 0  # offset of the declaration's first token (a comment with metadata goes before it)
+    problem: str = ""  # why an initializer of numbers is not a table (its first token that is not a number)
+    line: int = 0  # the declaration's line
 
 
-def _is_ident_start(c: str) -> bool:
-    return c.isalpha() or c == "_" or c == "$"
+_SPACE = re.compile(r"[ \t\r\n\f\v]+")
+_IDENT = re.compile(r"[\w$]+")  # from a letter, "_" or "$" (the scanner checks the first character)
+_HEX = re.compile(r"0[xX]([0-9a-fA-F]*)")
+_DECIMAL = re.compile(r"[0-9]*(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?")
+_SUFFIX = re.compile(r"[fFhHuUlL]*")
+_STRINGS = {q: re.compile(q + r"(?:[^" + q + r"\\]|\\.)*" + q + "?", re.S) for q in "\"'`"}
 
 
 def _is_ident(c: str) -> bool:
     return c.isalnum() or c == "_" or c == "$"
 
 
-class _Scanner:
-    """Tokens of C-like text: ('id', text), ('num', value, span, hex, suffix), ('op', char); comments skipped."""
+def count_tokens(text: str) -> tuple[int, int]:
+    """(numbers, tokens) of ``text``, upper bounds counted by vectorized byte comparisons (no Python loop): a
+    number starts at a digit not preceded by a digit, a dot, a name's character or an exponent's sign, or at a
+    dot followed by a digit; a token is a number, a name or one punctuation character."""
+    b = np.frombuffer(text.encode("utf-8", "replace"), dtype=np.uint8)
+    if b.size == 0:
+        return 0, 0
+    digit = (b >= 48) & (b <= 57)
+    letter = ((b | 32) >= 97) & ((b | 32) <= 122) | (b == 95) | (b == 36) | (b >= 128)
+    dot = b == 46
+    before = np.zeros_like(digit)  # the previous byte continues a number or a name
+    before[1:] = (digit | letter | dot)[:-1]
+    exponent_sign = np.zeros_like(digit)  # '5' of '1e-5'
+    exponent_sign[2:] = ((b[1:-1] == 43) | (b[1:-1] == 45)) & ((b[:-2] | 32) == 101)
+    after_digit = np.zeros_like(digit)
+    after_digit[:-1] = digit[1:]
+    numbers = int(np.count_nonzero(digit & ~before & ~exponent_sign)
+                  + np.count_nonzero(dot & after_digit & ~before))
+    names = int(np.count_nonzero(letter & ~before))
+    space = (b == 32) | ((b >= 9) & (b <= 13))
+    punctuation = int(np.count_nonzero(~(digit | letter | dot | space)))
+    return numbers, numbers + names + punctuation
+
+
+class Scanner:
+    """Tokens of C-like text: ('id', text, start), ('num', value, (start, end), hex, suffix), ('op', char, at);
+    comments, strings and preprocessor lines skipped."""
 
     def __init__(self, text: str, where: str) -> None:
         self.text = text
@@ -75,30 +116,26 @@ class _Scanner:
         self.i = 0
         self.numbers = 0
 
+    def line(self, offset: int) -> int:
+        return self.text.count("\n", 0, offset) + 1
+
     def tokens(self):
         text, n = self.text, len(self.text)
         while self.i < n:
             c = text[self.i]
             if c in " \t\r\n\f\v":
-                self.i += 1
-            elif c == "/" and text.startswith("//", self.i):
+                self.i = _SPACE.match(text, self.i).end()
+            elif c == "/" and text.startswith("//", self.i) or c == "#":  # a line comment, a preprocessor line
                 end = text.find("\n", self.i)
                 self.i = n if end < 0 else end + 1
             elif c == "/" and text.startswith("/*", self.i):
                 end = text.find("*/", self.i + 2)
                 self.i = n if end < 0 else end + 2
-            elif c in "\"'`":
-                end = self.i + 1
-                while end < n and text[end] != c:
-                    end += 2 if text[end] == "\\" else 1
-                self.i = end + 1
-            elif c == "#":  # preprocessor line: skipped whole
-                end = text.find("\n", self.i)
-                self.i = n if end < 0 else end + 1
-            elif _is_ident_start(c):
+            elif c in _STRINGS:
+                self.i = _STRINGS[c].match(text, self.i).end()
+            elif c.isalpha() or c == "_" or c == "$":
                 start = self.i
-                while self.i < n and _is_ident(text[self.i]):
-                    self.i += 1
+                self.i = _IDENT.match(text, start).end()
                 yield ("id", text[start:self.i], start)
             elif c.isdigit() or (c == "." and self.i + 1 < n and text[self.i + 1].isdigit()):
                 yield self._number()
@@ -109,46 +146,38 @@ class _Scanner:
     def _number(self):
         text, n, start = self.text, len(self.text), self.i
         self.numbers += 1
-        if self.numbers > MAX_NUMBERS:
-            raise TableFileError(f"more than {MAX_NUMBERS} numbers", self.where)
-        if text.startswith(("0x", "0X"), start):
-            end = start + 2
-            while end < n and (text[end] in "0123456789abcdefABCDEF"):
-                end += 1
-            digits = text[start + 2:end]
+        if self.numbers > MAX_LITERAL_NUMBERS:
+            raise TableFileError(f"more than {MAX_LITERAL_NUMBERS} numbers", self.where)
+        hexadecimal = _HEX.match(text, start)
+        if hexadecimal is not None:
+            digits, end = hexadecimal.group(1), hexadecimal.end()
             if not digits or len(digits) > 16:
-                raise TableFileError(f"malformed hex number at offset {start}", self.where)
+                raise TableFileError(f"malformed hex number at offset {start}", self.where, self.line(start))
             value, is_hex = float(int(digits, 16)), True
         else:
-            end = start
-            while end < n and text[end].isdigit():
-                end += 1
-            if end < n and text[end] == ".":
-                end += 1
-                while end < n and text[end].isdigit():
-                    end += 1
-            if end < n and text[end] in "eE":
-                e = end + 1
-                if e < n and text[e] in "+-":
-                    e += 1
-                if e < n and text[e].isdigit():
-                    while e < n and text[e].isdigit():
-                        e += 1
-                    end = e
+            end = _DECIMAL.match(text, start).end()
             value, is_hex = float(text[start:end]), False
         number_end = end
-        while end < n and text[end] in "fFhHuUlL":
-            end += 1
+        end = _SUFFIX.match(text, end).end()
         if end < n and _is_ident(text[end]):
-            raise TableFileError(f"malformed number {text[start:end + 1][:30]!r} at offset {start}", self.where)
+            raise TableFileError(f"malformed number {shorten(text[start:end + 1][:30])!r} at offset {start}",
+                                 self.where, self.line(start))
         suffix = text[number_end:end]
         self.i = end
         return ("num", value, (start, number_end), is_hex, suffix)
 
 
 def find_literals(text: str, where: str) -> list[Literal]:
-    """Every literal array initializer in ``text`` (see the module docstring), in order."""
-    scanner = _Scanner(text, where)
+    """Every array initializer of ``text`` that holds numbers (see the module docstring), in order; one that
+    holds anything else too (a name, an operator) comes with its ``problem`` said."""
+    numbers, tokens = count_tokens(text)
+    if numbers > MAX_LITERAL_NUMBERS:
+        raise TableFileError(f"about {numbers} numbers, more than the {MAX_LITERAL_NUMBERS} a source file may hold",
+                             where)
+    if tokens > MAX_TOKENS:
+        raise TableFileError(f"about {tokens} tokens, more than the {MAX_TOKENS} a source file of tables may hold",
+                             where)
+    scanner = Scanner(text, where)
     found: list[Literal] = []
     recent: list[tuple] = []  # tokens since the last ';' (the declaration before an '=')
     tokens = scanner.tokens()
@@ -157,7 +186,7 @@ def find_literals(text: str, where: str) -> list[Literal]:
             recent = []
             continue
         if token[0] == "op" and token[1] == "=" and recent and not (recent[-1][0] == "op" and recent[-1][1] in "=!<>"):
-            literal = _initializer(tokens, recent, where)
+            literal = _initializer(tokens, recent, scanner)
             if literal is not None and literal.values:
                 found.append(literal)
             recent = []
@@ -168,23 +197,35 @@ def find_literals(text: str, where: str) -> list[Literal]:
     return found
 
 
+def _size(tokens: list[tuple]) -> list[int] | None:
+    """The dimensions one ``[...]`` of a declaration gives: ``[64]`` -> [64], ``[32 * 32 * 2]`` -> [32, 32, 2]
+    (a product of integers is read as a shape); None for any other expression (the shape comes from --shape)."""
+    if len(tokens) % 2 == 0:
+        return None
+    factors = tokens[0::2]
+    if any(t[0] != "num" or not float(t[1]).is_integer() for t in factors) or any(
+            t[:2] != ("op", "*") for t in tokens[1::2]):
+        return None
+    return [int(t[1]) for t in factors]
+
+
 def _declaration(recent: list[tuple], where: str) -> tuple[str, str | None, tuple[int, ...], int]:
     """Name, element type and C dimensions of the declaration ``recent`` (tokens before '=')."""
     name, dtype, dims = "", None, []
     start = recent[0][2] if recent[0][0] != "num" else recent[0][2][0]
     k = len(recent) - 1
-    unknown = False  # a dimension given by an expression (C++'s [COMP*COMP]): the shape comes from --shape
+    unknown = False  # a dimension given by another expression (C++'s [COMP+1]): the shape comes from --shape
     while k >= 0 and recent[k][0] == "op" and recent[k][1] == "]":  # trailing [a][b]
-        if k >= 2 and recent[k - 1][0] == "num" and recent[k - 2][0] == "op" and recent[k - 2][1] == "[":
-            dims.insert(0, recent[k - 1][1])
-            k -= 3
-            continue
         opening = k - 1
         while opening >= 0 and not (recent[opening][0] == "op" and recent[opening][1] in "[]"):
             opening -= 1
         if opening < 0 or recent[opening][1] != "[":
             break
-        unknown = unknown or opening < k - 1
+        size = _size(recent[opening + 1:k])
+        if size is None:
+            unknown = unknown or opening < k - 1  # '[]' (an open size) is no expression
+        else:
+            dims[:0] = size
         k = opening - 1
     if unknown:
         dims = []
@@ -197,15 +238,17 @@ def _declaration(recent: list[tuple], where: str) -> tuple[str, str | None, tupl
         dtype = "uint16"
     if [t[1] for t in recent[:k] if t[0] == "id"][-2:] == ["unsigned", "char"]:
         dtype = "uint8"
-    shape = tuple(int(d) if float(d).is_integer() else -1 for d in dims)
+    shape = tuple(dims)
     if shape:
-        element_count(shape, MAX_NUMBERS, where=where, what=f"the declared shape of {name or 'an array'}")
+        element_count(shape, MAX_LITERAL_NUMBERS, where=where,
+                      what=f"the declared shape of {shorten(name) or 'an array'}")
     return name, dtype, shape, start
 
 
-def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
+def _initializer(tokens, recent: list[tuple], scanner: Scanner) -> Literal | None:
     """Read the initializer after '=': a Literal if it is made of numbers and brackets only, else None (and the
     scan resumes after it)."""
+    where = scanner.where
     name, dtype, declared, start = _declaration(recent, where)
     literal = Literal(name=name, dtype=dtype, declared=declared, start=start)
     depth = 0
@@ -214,12 +257,17 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
     literal_ok = True
     # the nesting: counts of children per open bracket, to find a regular shape
     stack: list[list[int]] = []
+    recent_open = False
     leaf_shape: dict[int, set[int]] = {}
     opened = False
     after_type = False  # GLSL's float[16](...): the brackets after a type name are its size, not data
     skipping_size = False
+    element = False  # an element since the last '(', '[', '{' or ','
+    problem = ""
     for token in tokens:
         kind = token[0]
+        if kind != "op" or token[1] not in ",-+":
+            element = element or kind != "op" or token[1] in _CLOSE
         if skipping_size:
             skipping_size = not (kind == "op" and token[1] == "]")
             continue
@@ -235,6 +283,7 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
                 literal.dtype = JS_TYPES[token[1]]
             elif token[1] not in _SKIP_WORDS:
                 literal_ok = False
+                problem = problem or _not_a_number(literal, token[1], scanner.line(token[2]))
             continue
         if kind == "num":
             if not opened:
@@ -251,6 +300,7 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
             continue
         char = token[1]
         if char in _OPEN:
+            element, recent_open = False, True
             depth += 1
             opened = True
             if stack:
@@ -267,23 +317,40 @@ def _initializer(tokens, recent: list[tuple], where: str) -> Literal | None:
         elif char == "-":
             sign = -sign
             sign_at = token[2] if sign_at is None else sign_at  # the rewrite replaces the sign with the number
-        elif char == "+" or char == ",":
+        elif char == ",":
+            if not element and literal_ok and opened:  # '{1,,2}' or '{,1}': a hole in the table
+                raise TableFileError(f"{shorten(name) or 'an array'}: an empty element (',' after "
+                                     f"{'a bracket' if recent_open else 'a comma'})", where, scanner.line(token[2]))
+            element = False
+            recent_open = False
+        elif char == "+":
             pass
         elif char == ";" and depth == 0:
             return None
         else:
             literal_ok = False
+            problem = problem or _not_a_number(literal, char, scanner.line(token[2]))
         if not opened and depth == 0 and char not in "-+":
             return None
-    if not literal_ok or not opened:
+    if not opened:
         return None
+    literal.line = scanner.line(start)
+    if not literal_ok:
+        literal.problem = problem
+        return literal
     # A regular nesting: every bracket at each level holds the same number of children; the outermost
     # constructor (e.g. new Float32Array([...]) or float[16](...)) may wrap one child.
     levels = sorted(leaf_shape)
     if all(len(leaf_shape[level]) == 1 for level in levels):
         dims = [next(iter(leaf_shape[level])) for level in levels]
-        while len(dims) > 1 and dims[0] == 1:
-            dims = dims[1:]
-        if int(np.prod(dims)) == len(literal.values):
+        first = 0  # leading dimensions of 1 (wrappers) skipped by an index, not by copying the list
+        while first < len(dims) - 1 and dims[first] == 1:
+            first += 1
+        dims = dims[first:]
+        if len(dims) <= MAX_NESTING and int(np.prod(dims, dtype=object)) == len(literal.values):
             literal.nested = tuple(dims)
     return literal
+
+
+def _not_a_number(literal: Literal, text: str, line: int) -> str:
+    return f"element {len(literal.values)} (line {line}): {shorten(repr(text))} is not a number"

@@ -1,35 +1,36 @@
 """PNG images of tables, read and written: 8- or 16-bit, grey, grey + alpha, RGB or RGBA — brdfnorm's own
-(:mod:`.images` writes them, :mod:`.readers` reads them back) and any an engine ships (``brdfnorm audit``).
+(:mod:`brdfnorm.lut.images` writes them, :mod:`brdfnorm.lut.readers` reads them back) and any an engine ships
+(``brdfnorm audit``).
 
 PNG (ISO/IEC 15948, W3C PNG 2nd edition §11–12): chunks with CRCs, IHDR first; the image is the zlib stream of
 the IDAT chunks, each row a filter byte (0 None, 1 Sub, 2 Up, 3 Average, 4 Paeth, §9.2) and the filtered bytes.
-Bounded before inflating: the size of the decoded image follows from IHDR, is checked with
-:func:`brdfnorm.inputs.element_count`, and the inflate is capped at that length plus one byte (a zlib bomb stops
-there). Palette and interlaced images are refused (no LUT is stored that way). Written with filter 0 and a tEXt
-chunk for metadata.
+Bounded before inflating: the size of the decoded image follows from IHDR (width and height each at most
+:data:`~.limits.MAX_AXIS`, their product × samples at most :data:`~.limits.MAX_ELEMENTS`), and the inflate is
+capped at that length plus one byte (a zlib bomb stops there). Unfiltering is vectorized: rows of filters None,
+Sub and Up one numpy step per row; an image with Average or Paeth rows by anti-diagonal wavefronts (a pixel depends
+only on its left, upper and upper-left neighbours, all on earlier diagonals), height + width − 1 numpy steps.
+Palette and interlaced images are refused (no LUT is stored that way). Written with filter 0 and a tEXt chunk for
+metadata.
 """
 
 from __future__ import annotations
 
-import json
 import struct
 import zlib
 
 import numpy as np
 
 from ..errors import TableFileError
-from ..inputs import element_count
+from .guard import element_count
+from .limits import MAX_AXIS, MAX_ELEMENTS
 
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
-#: Most pixels × channels a table image may have.
-MAX_SAMPLES = 64 * 1024 * 1024
 CHANNELS = {0: 1, 4: 2, 2: 3, 6: 4}  # colour type -> channels
 NAMES = {1: ["Y"], 2: ["Y", "A"], 3: ["R", "G", "B"], 4: ["R", "G", "B", "A"]}
 
 
-def decode(data: bytes, where: str, max_samples: int = MAX_SAMPLES) -> tuple[np.ndarray, int, dict[str, str]]:
-    """(codes (height, width, channels) as integers, bit depth, tEXt entries) of a PNG of at most
-    ``max_samples`` pixels × channels."""
+def decode(data: bytes, where: str) -> tuple[np.ndarray, int, dict[str, str]]:
+    """(codes (height, width, channels) as integers, bit depth, tEXt entries) of a PNG within the limits."""
     if not data.startswith(SIGNATURE):
         raise TableFileError("not a PNG file", where)
     position, header, idat, text = len(SIGNATURE), None, [], {}
@@ -65,7 +66,11 @@ def decode(data: bytes, where: str, max_samples: int = MAX_SAMPLES) -> tuple[np.
     if interlace:
         raise TableFileError("interlaced PNG is not read", where)
     channels = CHANNELS[colour]
-    element_count((height, width, channels), max_samples, where=where, what="the image (height × width × samples)")
+    if width > MAX_AXIS or height > MAX_AXIS:
+        raise TableFileError(f"a {width} × {height} image: a table image has at most {MAX_AXIS} pixels a side",
+                             where)
+    element_count((height, width, channels), MAX_ELEMENTS, where=where,
+                  what="the image (height × width × samples)")
     size = depth // 8
     stride = width * channels * size
     expected = height * (1 + stride)
@@ -82,35 +87,48 @@ def decode(data: bytes, where: str, max_samples: int = MAX_SAMPLES) -> tuple[np.
 
 
 def _unfilter(rows: np.ndarray, bpp: int, where: str) -> np.ndarray:
-    height, stride = rows.shape[0], rows.shape[1] - 1
-    out = np.zeros((height, stride), dtype=np.uint8)
-    previous = np.zeros(stride, dtype=np.int64)
-    for y in range(height):
-        kind, line = int(rows[y, 0]), rows[y, 1:].astype(np.int64)
+    """The image bytes of filtered ``rows`` (each a filter byte, then the row), PNG §9.2."""
+    kinds = rows[:, 0]
+    unknown = np.flatnonzero(kinds > 4)
+    if unknown.size:
+        raise TableFileError(f"unknown PNG filter type {int(kinds[unknown[0]])} in row {int(unknown[0])}", where)
+    data = rows[:, 1:]
+    if np.any(kinds >= 3):
+        return _wavefront(data, kinds, bpp)
+    out = np.empty_like(data)
+    previous = np.zeros(data.shape[1], dtype=np.uint8)
+    for y, kind in enumerate(kinds.tolist()):  # one numpy step per row
+        line = data[y]
         if kind == 0:
             current = line
         elif kind == 2:
-            current = (line + previous) & 255
-        elif kind == 1:  # Sub: a running sum per byte of the pixel
-            current = np.cumsum(line.reshape(-1, bpp), axis=0).ravel() & 255
-        elif kind in (3, 4):  # Average and Paeth depend on the reconstructed left byte: byte by byte
-            current = np.zeros(stride, dtype=np.int64)
-            for x in range(stride):
-                a = int(current[x - bpp]) if x >= bpp else 0
-                b = int(previous[x])
-                if kind == 3:
-                    current[x] = (line[x] + (a + b) // 2) & 255
-                else:
-                    c = int(previous[x - bpp]) if x >= bpp else 0
-                    p = a + b - c
-                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                    predictor = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-                    current[x] = (line[x] + predictor) & 255
-        else:
-            raise TableFileError(f"unknown PNG filter type {kind} in row {y}", where)
+            current = line + previous  # uint8 arithmetic is modulo 256
+        else:  # Sub: a running sum (mod 256) over the pixels, byte lane by byte lane
+            current = np.cumsum(line.reshape(-1, bpp), axis=0, dtype=np.uint8).ravel()
         out[y] = current
         previous = current
     return out
+
+
+def _wavefront(data: np.ndarray, kinds: np.ndarray, bpp: int) -> np.ndarray:
+    """Unfiltering by anti-diagonals of pixels: pixel (y, x) needs (y, x − 1), (y − 1, x) and (y − 1, x − 1),
+    all on diagonals before y + x, so each diagonal is one vectorized step whatever its rows' filters."""
+    height, stride = data.shape
+    width = stride // bpp
+    pixels = data.reshape(height, width, bpp).astype(np.int16)
+    out = np.zeros((height + 1, width + 1, bpp), dtype=np.int16)  # a zero row above, a zero column to the left
+    kind = kinds.astype(np.int16)
+    for k in range(height + width - 1):
+        y = np.arange(max(0, k - width + 1), min(height - 1, k) + 1)
+        x = k - y
+        a, b, c = out[y + 1, x], out[y, x + 1], out[y, x]
+        p = a + b - c
+        pa, pb, pc = np.abs(p - a), np.abs(p - b), np.abs(p - c)
+        paeth = np.where((pa <= pb) & (pa <= pc), a, np.where(pb <= pc, b, c))
+        f = kind[y][:, None]
+        predictor = np.select([f == 1, f == 2, f == 3, f == 4], [a, b, (a + b) >> 1, paeth], 0)
+        out[y + 1, x + 1] = (pixels[y, x] + predictor) & 255
+    return out[1:, 1:].reshape(height, stride).astype(np.uint8)
 
 
 def _chunk(kind: bytes, body: bytes) -> bytes:
@@ -128,21 +146,3 @@ def encode(codes: np.ndarray, depth: int, text: dict[str, str] | None = None) ->
         chunks.append(_chunk(b"tEXt", key.encode("latin-1") + b"\x00" + value.encode("latin-1", "replace")))
     chunks += [_chunk(b"IDAT", zlib.compress(raw, 9)), _chunk(b"IEND", b"")]
     return SIGNATURE + b"".join(chunks)
-
-
-def brdfnorm_scaling(text: dict[str, str]) -> tuple[np.ndarray, np.ndarray] | None:
-    """(lo, hi) per channel of a PNG that ``brdfnorm lut`` wrote (value = lo + code/65535·(hi − lo)), else None.
-    A channel without a table (B of a two-table RGB image) is lo = 0, hi = 1."""
-    payload = text.get("brdfnorm-lut")
-    if payload is None:
-        return None
-    try:
-        info = json.loads(payload)["png"]
-        if "channels" not in info:  # one greyscale table (before the R, G, B, A mapping)
-            return np.array([float(info["lo"])]), np.array([float(info["hi"])])
-        entries = list(info["channels"].values())
-        count = 1 if len(entries) == 1 else 3 if len(entries) <= 3 else 4
-        entries += [{"lo": 0.0, "hi": 1.0}] * (count - len(entries))
-        return (np.array([float(e["lo"]) for e in entries]), np.array([float(e["hi"]) for e in entries]))
-    except (KeyError, TypeError, ValueError, AttributeError):
-        return None
