@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from functools import partial
 
@@ -32,6 +32,7 @@ from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
 from ..models.base import Lobe, Model, Over, mirror
 from ..output.formats import Column, Records, channel_value, degrees, format_value
 from ..registry import Registry
+from .compiled.backend import resolve as resolve_backend
 from .routes import halfvector_generic
 from .routes.hemisphere import (
     NonFiniteIntegrand,
@@ -125,6 +126,9 @@ class Problem:
     per_case: frozenset
     broadcast_params: dict  # per parameter, broadcast to S for reporting
     over: Over
+    #: The compiled integrand (:class:`brdfnorm.engine.compiled.drivers.NativeIntegrand`) under the compiled
+    #: backend, where the model has a compiled lobe; None: numpy evaluates.
+    native: object = None
 
     def case_params(self, case: np.ndarray) -> dict:
         """Parameter values for a vector of case indices (shared values stay shared)."""
@@ -132,6 +136,8 @@ class Problem:
 
     def integrand(self, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
         """f·cos over the free direction ω for the cases given, shape (M, C)."""
+        if self.native is not None:
+            return self.native(omega, case)
         fixed = self.fixed[case]
         params = self.case_params(case)
         with np.errstate(all="ignore"):
@@ -182,6 +188,28 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     fixed = _directions(theta_b, phi_b).reshape(-1, 3)
     per_case = frozenset(p.name for p, batch in zip(model.parameters, batch_shapes, strict=True) if batch)
     return Problem(model, shape, theta_b, phi_b, fixed, params, per_case, broadcast, over)
+
+
+def with_native(problem: Problem, backend: str) -> Problem:
+    """``problem`` with its compiled integrand under the ``"compiled"`` backend (already resolved), where the model
+    has a compiled lobe (:meth:`brdfnorm.models.base.Model.native_kernel`) that compiles."""
+    return replace(problem, native=_native(problem)) if backend == "compiled" else problem
+
+
+def _native(problem: Problem):
+    """The compiled integrand of ``problem`` (None where the model has no compiled lobe or it does not compile)."""
+    from .compiled.drivers import native_integrand
+
+    kernel = problem.model.native_kernel()
+    if kernel is None:
+        return None
+    K = problem.fixed.shape[0]
+    if problem.per_case:  # one packing per distinct parameter set
+        rows = [kernel.pack(problem.case_params(np.array([k]))) for k in range(K)]
+    else:
+        rows = [kernel.pack(problem.params)] * K
+    return native_integrand(kernel, problem.fixed, [np.asarray(r, dtype=float).ravel() for r in rows],
+                            problem.over == "light")
 
 
 # -- methods ----------------------------------------------------------------------------------------------
@@ -259,7 +287,8 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     K = problem.fixed.shape[0]
     side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
     if scale is None:
-        integrand, scale = side, np.ones(K)
+        # the compiled integrand itself where there is one: the routes then run their fused kernels on it
+        integrand, scale = (problem.native if problem.native is not None and not lower else side), np.ones(K)
     else:
         def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
             return side(omega, case) / scale[case, None]
@@ -440,6 +469,7 @@ def albedo(
     nonfinite: NonFinitePolicy = "raise",
     max_evaluations: int = 20_000_000,
     digits: int | None = None,
+    backend: str | None = None,
 ) -> AlbedoResult:
     """Directional albedo of ``model`` at polar angles ``theta`` and azimuths ``phi`` (radians, broadcast).
 
@@ -447,12 +477,15 @@ def albedo(
     Returns values of shape (*S, C) with an absolute error estimate; a point that did not reach the
     tolerance within ``max_evaluations`` has ``converged`` False and triggers a warning.
     ``digits`` (method ``"certified"`` only, default 30) is the number of significant digits asked of the
-    enclosure; the result then also carries ``lower`` and ``upper``.
+    enclosure; the result then also carries ``lower`` and ``upper``. ``backend`` ("numpy" or "compiled"; default
+    ``$BRDFNORM_BACKEND``, else "compiled" where Numba imports) chooses how the integrand and the cubature's inner
+    loops run (:mod:`brdfnorm.engine.compiled`); the answers agree within their error estimates.
     """
     rtol, atol = validate.tolerances(rtol, atol)
     validate.count(max_evaluations, "max_evaluations", maximum=10**12)
     validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
+    backend = resolve_backend(backend)
     if over == "view" and getattr(model, "transmits", False):
         raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
                             "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
@@ -462,6 +495,8 @@ def albedo(
     for name, given in options.items():
         if given is not None and name not in chosen.options:
             raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
+    if chosen.name == "quadrature":  # the only method that samples the model's own lobe
+        problem = with_native(problem, backend)
     value, error, evaluations, converged, bad, *extra = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})

@@ -1,0 +1,124 @@
+"""One copy of :mod:`brdfnorm.engine.compiled.kernels` per shader, cached on disk, and the compiled integrand of a
+batch of albedo cases (:class:`NativeIntegrand`) that the routes call instead of the numpy integrand.
+
+Why copies: Numba caches a compiled function by its source file and argument types; a kernel that received the
+shader as an argument would be typed by that dispatcher object and compiled again in every process. Each copy is the
+kernels' source with its own module-level ``shader``, written once into ``<cache>/kernels/`` (the per-user cache
+directory, created 0700: ``$BRDFNORM_CACHE_DIR``, else ``$XDG_CACHE_HOME/brdfnorm``, else ``~/.cache/brdfnorm``)
+under a name that hashes the kernels' source, the shader's key and the versions of brdfnorm and Numba, so a second
+run of the same model loads machine code and compiles nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import importlib.util
+import os
+import sys
+from functools import cache
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+from ...models.base import NativeKernel
+from .backend import notice
+
+_TEMPLATE = Path(__file__).with_name("kernels.py")
+
+
+def cache_directory() -> Path:
+    """The per-user cache directory of compiled kernels (created 0700 where missing)."""
+    root = os.environ.get("BRDFNORM_CACHE_DIR") or (
+        Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "brdfnorm")
+    path = Path(root) / "kernels"
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    return path
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("brdfnorm")
+    except importlib.metadata.PackageNotFoundError:
+        return "source"
+
+
+@cache
+def _module(key: str, numba_version: str) -> tuple[ModuleType, Path]:
+    source = _TEMPLATE.read_text(encoding="utf-8")
+    digest = hashlib.sha256("\0".join((source, key, _version(), numba_version)).encode()).hexdigest()[:24]
+    path = cache_directory() / f"brdfnorm_kernels_{digest}.py"
+    if not path.exists():
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_text(f"# brdfnorm compiled kernels for shader key {key!r} (generated; safe to delete)\n"
+                             + source, encoding="utf-8")
+        os.replace(temporary, path)
+    name = f"brdfnorm_kernels_{digest}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module, path
+
+
+def kernels_for(kernel: NativeKernel) -> ModuleType:
+    """The kernels module whose ``shader`` is ``kernel.function`` (one per key and process)."""
+    import numba
+
+    module, _ = _module(kernel.key, numba.__version__)
+    module.shader = kernel.function
+    return module
+
+
+#: Nodes per kernel call from which every core takes part: waking the threads costs ~10-50 µs on an idle machine
+#: and milliseconds on a loaded one, more than a smaller call's work (measured: 19 ms per call of a few thousand
+#: nodes with two threads at load 7 on two cores, 0.3 ms with one).
+PARALLEL_NODES = 200_000
+
+
+def threads_for(nodes: int) -> None:
+    """One thread for small calls, every core for large ones (:data:`PARALLEL_NODES`)."""
+    import numba
+
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS if nodes >= PARALLEL_NODES else 1)
+
+
+class NativeIntegrand:
+    """f·(N·ω) of K albedo cases as compiled kernels: called as ``(omega (M, 3), case (M,)) -> (M, C)`` like the
+    numpy integrand, with the fused panel kernels of :mod:`.kernels` alongside (``kernels``)."""
+
+    def __init__(self, kernel: NativeKernel, fixed: np.ndarray, U: np.ndarray, over_light: bool) -> None:
+        self.kernels = kernels_for(kernel)
+        self.channels = kernel.channels
+        self.fixed = np.ascontiguousarray(fixed, dtype=float)
+        self.U = np.ascontiguousarray(U, dtype=float)
+        self.over_light = bool(over_light)
+
+    def __call__(self, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+        omega = np.ascontiguousarray(omega, dtype=float).reshape(-1, 3)
+        out = np.empty((omega.shape[0], self.channels))
+        threads_for(omega.shape[0])
+        self.kernels.integrand_nodes(omega, np.ascontiguousarray(case, dtype=np.int64).ravel(), self.fixed, self.U,
+                                     self.over_light, out)
+        return out
+
+
+def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[np.ndarray],
+                     over_light: bool) -> NativeIntegrand | None:
+    """The compiled integrand of the cases whose packed parameters are ``rows`` (K,), compiled (or loaded) and run
+    once; None with a notice where it does not compile (the numpy integrand then computes)."""
+    if kernel is None:
+        return None
+    width = max((r.size for r in rows), default=0)
+    U = np.zeros((len(rows), max(width, 1)))
+    for k, r in enumerate(rows):
+        U[k, :r.size] = r
+    try:
+        native = NativeIntegrand(kernel, fixed, U, over_light)
+        native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
+    except Exception as error:  # noqa: BLE001 - any failure to compile means: the numpy backend computes
+        notice(f"the compiled kernel of {kernel.key} does not compile ({type(error).__name__}: "
+               f"{str(error).splitlines()[0] if str(error) else ''})")
+        return None
+    return native
