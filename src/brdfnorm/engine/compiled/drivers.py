@@ -122,3 +122,63 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
                f"{str(error).splitlines()[0] if str(error) else ''})")
         return None
     return native
+
+
+def _flat(*arrays: np.ndarray) -> list[np.ndarray]:
+    """Contiguous float64 copies of arrays broadcast against each other, raveled."""
+    return [np.ascontiguousarray(a, dtype=float).ravel() for a in np.broadcast_arrays(*arrays)]
+
+
+def hemisphere_panels(native: NativeIntegrand, case, b0, b1, u0, u1, frame, widths, supports, nodes, kronrod,
+                      gauss):
+    """The fused K15⊗K15 estimates of hemisphere panels (:func:`.kernels.hemisphere_panels`): value, err_b, err_u,
+    magnitude (R, C), bad (R,), first_bad (R,)."""
+    R, C = case.size, native.channels
+    out = [np.empty((R, C)) for _ in range(4)]
+    bad, first_bad = np.empty(R), np.empty(R, dtype=np.int64)
+    P, T, B = (np.ascontiguousarray(a, dtype=float) for a in frame)
+    threads_for(R * nodes.size**2)
+    native.kernels.hemisphere_panels(np.ascontiguousarray(case, dtype=np.int64), *_flat(b0), *_flat(b1),
+                                     *_flat(u0), *_flat(u1), P, T, B, *_flat(widths), *_flat(supports), native.fixed,
+                                     native.U, native.over_light, nodes, kronrod, gauss, *out, bad, first_bad)
+    return (*out, bad, first_bad)
+
+
+def hemisphere_sums(native: NativeIntegrand, case, b0, b1, u0, u1, frame, widths, supports, nodes_b, nodes_u,
+                    weights_b, weights_u) -> np.ndarray:
+    """Σ g·J w_b w_u of each hemisphere panel under a tensor rule (:func:`.kernels.hemisphere_sums`): (R, C)."""
+    total = np.empty((case.size, native.channels))
+    P, T, B = (np.ascontiguousarray(a, dtype=float) for a in frame)
+    threads_for(case.size * nodes_b.size * nodes_u.size)
+    native.kernels.hemisphere_sums(np.ascontiguousarray(case, dtype=np.int64), *_flat(b0), *_flat(b1), *_flat(u0),
+                                   *_flat(u1), P, T, B, *_flat(widths), *_flat(supports), native.fixed, native.U,
+                                   native.over_light, *_flat(nodes_b), *_flat(nodes_u), *_flat(weights_b),
+                                   *_flat(weights_u), total)
+    return total
+
+
+def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows: np.ndarray, failed: np.ndarray,
+                    linear: bool, log_horizon: bool):
+    """The half-vector route's rectangle integrand (case, φ (R, n, 1), v (R, 1, m), piece (R,)) -> (R, n, m, C + 1)
+    as one kernel (:func:`.kernels.slope_grid`); ``geometry`` holds the per-case arrays of the slope map (vz,
+    cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks
+    non-finite values."""
+    names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
+    per_case = [np.ascontiguousarray(geometry[name], dtype=float) for name in names]
+    F = np.ascontiguousarray(F, dtype=float)
+    rows = np.ascontiguousarray(rows, dtype=np.int64)
+
+    def integrand(case, phi, v, piece):
+        R = case.size
+        phi = np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1)
+        v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
+        out = np.empty((R, phi.shape[1], v.shape[1], native.channels + 1))
+        flags = np.zeros(failed.size, dtype=np.bool_)
+        threads_for(out.size)
+        native.kernels.slope_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v,
+                                  np.ascontiguousarray(piece, dtype=np.int64), linear, log_horizon, *per_case, F,
+                                  rows, native.fixed, native.U, native.over_light, out, flags)
+        failed[:] |= flags
+        return out
+
+    return integrand

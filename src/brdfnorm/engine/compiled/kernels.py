@@ -13,8 +13,9 @@ What the kernels fuse, per node and in one loop over the cells' panels (``prange
   (horizon grading p = 2), the shader, the Jacobian and the G7/K15 tensor sums and rounding floor of
   :func:`brdfnorm.engine.routes.hemisphere._estimate` for whole panels;
 * :func:`hemisphere_sums` — the same map and shader under any tensor rule (the Lobatto ⊗ G7 check on halves);
-* :func:`slope_weights` — the half-vector route's weight (:func:`brdfnorm.engine.routes.halfvector_generic.route`):
-  the reflection L = 2(V·H)H − V, the shader and the Jacobian of the slope measure.
+* :func:`slope_grid` — the half-vector route's rectangle integrand
+  (:func:`brdfnorm.engine.routes.halfvector_generic.route`): the slope map of the GGX measure, the reflection
+  L = 2(V·H)H − V, the shader and the Jacobian.
 
 The formulas are those of the numpy backend, term for term; the sums run in another order, so values agree to
 rounding (far inside the error estimates), not bit for bit.
@@ -163,35 +164,101 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                         total[r, c] += x * weights_b[b] * weights_u[j]
 
 
+@njit(cache=True, inline="always")
+def _round_half_even(x):  # pragma: no cover - compiled
+    r = math.floor(x + 0.5)
+    if r - x == 0.5 and r % 2.0 != 0.0:
+        r -= 1.0
+    return r
+
+
 @njit(cache=True, parallel=True)
-def slope_weights(k, s, dx, dy, one_sp, n2, Lz, weight_t, azimuth, F, alpha, rows, fixed, U, over_light, out,
-                  failed):  # pragma: no cover - compiled
-    """The half-vector route's g·J at slope nodes (flat arrays, ``k`` the local case, ``rows`` its row of fixed
-    and U; F the fixed directions of the local cases): out[:, :C] the weighted values, out[:, C] their largest
-    |value|; ``failed[k]`` set where a node inside the hemisphere is not finite."""
-    C = out.shape[1] - 1
-    for i in prange(s.size):
-        q = k[i]
-        root = math.sqrt(n2[i])
-        cos_fh = F[q, 2] * one_sp[i] / root
-        hx, hy = s[i] * dx[i] / root, s[i] * dy[i] / root
-        ox = 2.0 * cos_fh * hx - F[q, 0]
-        oy = 2.0 * cos_fh * hy - F[q, 1]
-        oz = Lz[i]
-        g = _integrand(rows[q], ox, oy, oz, fixed, U, over_light)
-        a = alpha[q]
-        one_s2 = 1.0 + s[i] * s[i]
-        jacobian = 4.0 * cos_fh * np.pi * a * a * one_s2 * one_s2 / (n2[i] * root) * weight_t[i] * azimuth[i]
-        inside = oz > 0
-        finite = True
-        for c in range(C):
-            if not math.isfinite(g[c] * oz):
-                finite = False
-        if inside and not finite:
-            failed[q] = True
-        largest = 0.0
-        for c in range(C):
-            x = g[c] * oz * jacobian if (inside and finite) else 0.0
-            out[i, c] = x
-            largest = max(largest, abs(x))
-        out[i, C] = largest
+def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
+               kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
+    """The half-vector route's rectangle integrand (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for
+    the GGX slope measure, with the generic weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`) on
+    grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,):
+    out (R, nφ, nv, C + 1), the weighted values and their largest |value|."""
+    C = out.shape[3] - 1
+    nphi, nv = phi.shape[1], v.shape[1]
+    for r in prange(k.size):
+        q = k[r]
+        for i in range(nphi):
+            ph = phi[r, i]
+            zero = math.pi * _round_half_even(ph / math.pi)
+            if linear:
+                epsilon, phi_jacobian = ph - zero, 1.0
+            else:
+                stretch = kappa[q] * abs(ph - zero) / (0.5 * math.pi)
+                sign = 1.0 if ph > zero else (-1.0 if ph < zero else 0.0)
+                epsilon = sign * delta[q] * math.sinh(stretch)
+                phi_jacobian = delta[q] * kappa[q] * math.cosh(stretch) / (0.5 * math.pi)
+            parity = 1.0 - 2.0 * (_round_half_even(zero / math.pi) % 2.0)
+            cos_e, sin_e = math.cos(epsilon), math.sin(epsilon)
+            cos_a = parity * (cos_offset[q] * cos_e - sin_offset[q] * sin_e)
+            sin_a = parity * (sin_offset[q] * cos_e + cos_offset[q] * sin_e)
+            dx, dy = ax[q] * cos_a, ay[q] * sin_a
+            d2 = dx * dx + dy * dy
+            p = -amplitude[q] * parity * sin_e
+            qq = math.sqrt(p * p + d2)
+            q_plus_p = qq + p if p > 0 else d2 / (qq - p)
+            q_minus_p = d2 / (qq + p) if p > 0 else qq - p
+            s_h = q_plus_p / d2
+            r_h2 = q_plus_p * q_plus_p / d2
+            gap = layer[q] * (1.0 + r_h2) / (2.0 * qq * vz[q])
+            s_split = s_h / (1.0 + gap / s_h)
+            s_middle = s_split / (1.0 + s_split)
+            s_end = s_h
+            azimuth = phi_jacobian * (multiplicity[q] / (2.0 * math.pi))
+            kind = piece[r]
+            for j in range(nv):
+                at = v[r, j] - kind
+                if kind == 0:
+                    length = math.atan(s_middle)
+                    t = at * length
+                    radius, density = math.tan(t), math.sin(2.0 * t)
+                elif kind == 1:
+                    start = math.asinh(s_middle)
+                    length = math.asinh(s_split) - start
+                    t = start + at * length
+                    e2 = math.exp(-2.0 * t)
+                    radius, density = math.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
+                elif log_horizon:
+                    log_ratio = math.log(s_end / s_split)
+                    radius = s_end * math.exp((at - 1.0) * log_ratio)
+                    length = radius * log_ratio
+                    density = 2.0 * radius / (1.0 + radius * radius) ** 2
+                    to_end = -s_end * math.expm1((at - 1.0) * log_ratio)
+                else:
+                    length = s_end - s_split
+                    radius = s_split + at * length
+                    density = 2.0 * radius / (1.0 + radius * radius) ** 2
+                    to_end = length * (1.0 - at)
+                gap_h = s_h - radius if kind < 2 else (s_h - s_end) + to_end
+                s = radius
+                weight_t = density * length
+                one_sp = 1.0 + s * p
+                n2 = 1.0 + s * s * d2
+                Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2
+                # the generic weight: g·J of the reflected direction
+                root = math.sqrt(n2)
+                cos_fh = F[q, 2] * one_sp / root
+                ox = 2.0 * cos_fh * (s * dx / root) - F[q, 0]
+                oy = 2.0 * cos_fh * (s * dy / root) - F[q, 1]
+                g = _integrand(rows[q], ox, oy, Lz, fixed, U, over_light)
+                a = ax[q]
+                one_s2 = 1.0 + s * s
+                jacobian = 4.0 * cos_fh * math.pi * a * a * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
+                inside = Lz > 0
+                finite = True
+                for c in range(C):
+                    if not math.isfinite(g[c] * Lz):
+                        finite = False
+                if inside and not finite:
+                    failed[q] = True
+                largest = 0.0
+                for c in range(C):
+                    x = g[c] * Lz * jacobian if (inside and finite) else 0.0
+                    out[r, i, j, c] = x
+                    largest = max(largest, abs(x))
+                out[r, i, j, C] = largest
