@@ -22,6 +22,7 @@ from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
     Spread,
+    backend_option,
     guarded,
     load_model,
     parallel_options,
@@ -64,6 +65,7 @@ def in_degrees(result: Lut, degrees: np.ndarray, clamp: float | None) -> Lut:
 
 
 @app.command("lut")
+@backend_option
 @parallel_options(chunk_cells=False)
 def lut_command(
     model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name, a .brdf file, "

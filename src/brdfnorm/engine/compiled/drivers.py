@@ -71,19 +71,6 @@ def kernels_for(kernel: NativeKernel) -> ModuleType:
     return module
 
 
-#: Nodes per kernel call from which every core takes part: waking the threads costs ~10-50 µs on an idle machine
-#: and milliseconds on a loaded one, more than a smaller call's work (measured: 19 ms per call of a few thousand
-#: nodes with two threads at load 7 on two cores, 0.3 ms with one).
-PARALLEL_NODES = 200_000
-
-
-def threads_for(nodes: int) -> None:
-    """One thread for small calls, every core for large ones (:data:`PARALLEL_NODES`)."""
-    import numba
-
-    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS if nodes >= PARALLEL_NODES else 1)
-
-
 class NativeIntegrand:
     """f·(N·ω) of K albedo cases as compiled kernels: called as ``(omega (M, 3), case (M,)) -> (M, C)`` like the
     numpy integrand, with the fused panel kernels of :mod:`.kernels` alongside (``kernels``)."""
@@ -98,7 +85,6 @@ class NativeIntegrand:
     def __call__(self, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
         omega = np.ascontiguousarray(omega, dtype=float).reshape(-1, 3)
         out = np.empty((omega.shape[0], self.channels))
-        threads_for(omega.shape[0])
         self.kernels.integrand_nodes(omega, np.ascontiguousarray(case, dtype=np.int64).ravel(), self.fixed, self.U,
                                      self.over_light, out)
         return out
@@ -137,7 +123,6 @@ def hemisphere_panels(native: NativeIntegrand, case, b0, b1, u0, u1, frame, widt
     out = [np.empty((R, C)) for _ in range(4)]
     bad, first_bad = np.empty(R), np.empty(R, dtype=np.int64)
     P, T, B = (np.ascontiguousarray(a, dtype=float) for a in frame)
-    threads_for(R * nodes.size**2)
     native.kernels.hemisphere_panels(np.ascontiguousarray(case, dtype=np.int64), *_flat(b0), *_flat(b1),
                                      *_flat(u0), *_flat(u1), P, T, B, *_flat(widths), *_flat(supports), native.fixed,
                                      native.U, native.over_light, nodes, kronrod, gauss, *out, bad, first_bad)
@@ -149,7 +134,6 @@ def hemisphere_sums(native: NativeIntegrand, case, b0, b1, u0, u1, frame, widths
     """Σ g·J w_b w_u of each hemisphere panel under a tensor rule (:func:`.kernels.hemisphere_sums`): (R, C)."""
     total = np.empty((case.size, native.channels))
     P, T, B = (np.ascontiguousarray(a, dtype=float) for a in frame)
-    threads_for(case.size * nodes_b.size * nodes_u.size)
     native.kernels.hemisphere_sums(np.ascontiguousarray(case, dtype=np.int64), *_flat(b0), *_flat(b1), *_flat(u0),
                                    *_flat(u1), P, T, B, *_flat(widths), *_flat(supports), native.fixed, native.U,
                                    native.over_light, *_flat(nodes_b), *_flat(nodes_u), *_flat(weights_b),
@@ -174,7 +158,6 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
         v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
         out = np.empty((R, phi.shape[1], v.shape[1], native.channels + 1))
         flags = np.zeros(failed.size, dtype=np.bool_)
-        threads_for(out.size)
         native.kernels.slope_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v,
                                   np.ascontiguousarray(piece, dtype=np.int64), linear, log_horizon, *per_case, F,
                                   rows, native.fixed, native.U, native.over_light, out, flags)

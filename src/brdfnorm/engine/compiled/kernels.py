@@ -5,7 +5,9 @@ This file is a template: :mod:`brdfnorm.engine.compiled.drivers` copies it once 
 directory and sets ``shader`` there before the first call, so that Numba's on-disk cache (``cache=True``) holds the
 compiled kernels of every shader (a kernel given the shader as an argument is compiled anew in every process).
 
-What the kernels fuse, per node and in one loop over the cells' panels (``prange``: every core):
+What the kernels fuse, per node and in one loop over the cells' panels (one thread: tables spread their cells over
+processes, :mod:`brdfnorm.parallel`; Numba's ``parallel=True`` took 20 s instead of 8 s to compile the kernels of
+one lobe and its threads, woken per call, cost more than they gave on a loaded machine):
 
 * :func:`integrand_nodes` — the integrand f·(N·ω) of :meth:`brdfnorm.engine.methods.Problem.integrand` at given
   directions (every route that samples the integrand: lobe search, rounding noise, global rules, isotropy test);
@@ -26,17 +28,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 shader = None  # set per copy (drivers.py)
 
 _EPS = 2.220446049250313e-16
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy")
 def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover - compiled
     """out[i] = f(ω_i, V) ω_z (over the light) or f(L, ω_i) ω_z (over the view), case[i] the row of fixed and U."""
-    for i in prange(omega.shape[0]):
+    for i in range(omega.shape[0]):
         k = case[i]
         wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
         if over_light:
@@ -47,7 +49,7 @@ def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover
             out[i, c] = r[c] * wz
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _node(k, beta, u, weight, P, T, B, widths, supports):  # pragma: no cover - compiled
     """ω and the Jacobian sin α dα/du · weight of map_grid (grading p = 2, width scale 1) at one node."""
     cos_b, sin_b = math.cos(beta), math.sin(beta)
@@ -71,14 +73,14 @@ def _node(k, beta, u, weight, P, T, B, widths, supports):  # pragma: no cover - 
     return ox, oy, oz, jacobian
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _integrand(k, ox, oy, oz, fixed, U, over_light):  # pragma: no cover - compiled
     if over_light:
         return shader(ox, oy, oz, fixed[k, 0], fixed[k, 1], fixed[k, 2], U[k])
     return shader(fixed[k, 0], fixed[k, 1], fixed[k, 2], ox, oy, oz, U[k])
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy")
 def hemisphere_panels(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, over_light, nodes, kronrod, gauss,
                       value, err_b, err_u, magnitude, bad, first_bad):  # pragma: no cover - compiled
     """K15⊗K15 value, |KK − GK| (β), |KK − KG| (u) with the floor 50ε·magnitude, and the K15⊗K15 integral of |g|,
@@ -86,7 +88,7 @@ def hemisphere_panels(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U,
     non-finite node b·n + u per panel, −1 where none."""
     n = nodes.size
     C = value.shape[1]
-    for r in prange(case.size):
+    for r in range(case.size):
         k = case[r]
         beta_half = 0.5 * (b1[r] - b0[r])
         u_half = 0.5 * (u1[r] - u0[r])
@@ -139,12 +141,12 @@ def hemisphere_panels(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U,
         bad[r] = lost
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy")
 def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, over_light, nodes_b, nodes_u,
                     weights_b, weights_u, total):  # pragma: no cover - compiled
     """Σ g·J w_b w_u over the tensor rule nodes_b ⊗ nodes_u of each panel (non-finite values count as 0)."""
     C = total.shape[1]
-    for r in prange(case.size):
+    for r in range(case.size):
         k = case[r]
         beta_half = 0.5 * (b1[r] - b0[r])
         u_half = 0.5 * (u1[r] - u0[r])
@@ -164,7 +166,7 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                         total[r, c] += x * weights_b[b] * weights_u[j]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _round_half_even(x):  # pragma: no cover - compiled
     r = math.floor(x + 0.5)
     if r - x == 0.5 and r % 2.0 != 0.0:
@@ -172,7 +174,7 @@ def _round_half_even(x):  # pragma: no cover - compiled
     return r
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, error_model="numpy")
 def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
                kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
     """The half-vector route's rectangle integrand (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for
@@ -181,7 +183,7 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     out (R, nφ, nv, C + 1), the weighted values and their largest |value|."""
     C = out.shape[3] - 1
     nphi, nv = phi.shape[1], v.shape[1]
-    for r in prange(k.size):
+    for r in range(k.size):
         q = k[r]
         for i in range(nphi):
             ph = phi[r, i]
