@@ -1,16 +1,20 @@
 """Which backend computes the albedos: ``"numpy"`` (the reference, vectorized over nodes) or ``"compiled"`` (Numba
 kernels fused over cells, :mod:`brdfnorm.engine.compiled.kernels`).
 
-The choice: the ``backend`` argument where given, else the ``BRDFNORM_BACKEND`` environment variable, else
-``"compiled"`` where Numba imports. Where Numba cannot be imported, or a kernel does not compile, the numpy backend
-takes over with one line on stderr (once per process and cause): the answers are the same either way, within
-their error estimates.
+The choice: the ``backend`` argument where given, else the innermost :func:`scope` (how a table passes its
+``backend`` to every albedo it computes), else the ``BRDFNORM_BACKEND`` environment variable (which worker processes
+inherit), else ``"compiled"`` where Numba imports. Where Numba cannot be imported, or a kernel does not compile,
+the numpy backend takes over with one line on stderr (once per process and cause): the answers are the same either
+way, within their error estimates.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
+from collections.abc import Iterator
+from contextvars import ContextVar
 from functools import cache
 
 from ...errors import ArgumentError
@@ -20,6 +24,19 @@ BACKENDS = ("numpy", "compiled")
 ENVIRONMENT = "BRDFNORM_BACKEND"
 
 _NOTICES: set[str] = set()
+_SCOPE: ContextVar[str | None] = ContextVar("brdfnorm_backend", default=None)
+
+
+@contextlib.contextmanager
+def scope(backend: str | None) -> Iterator[None]:
+    """Within the block, albedos given no ``backend`` use this one (None: no change)."""
+    if backend is not None:
+        requested(backend)  # validated here, where the caller's argument is named
+    token = _SCOPE.set(backend if backend is not None else _SCOPE.get())
+    try:
+        yield
+    finally:
+        _SCOPE.reset(token)
 
 
 def notice(message: str) -> None:
@@ -43,6 +60,8 @@ def numba_available() -> bool:
 def requested(backend: str | None = None) -> str:
     """The backend asked for: ``backend``, else ``$BRDFNORM_BACKEND``, else "compiled" (validated)."""
     where = "backend"
+    if backend is None:
+        backend = _SCOPE.get()
     if backend is None:
         backend, where = os.environ.get(ENVIRONMENT, "").strip() or "compiled", ENVIRONMENT
     if backend not in BACKENDS:
