@@ -32,8 +32,9 @@ def cache_directory() -> Path:
     """The per-user cache directory of compiled kernels (created 0700 where missing)."""
     root = os.environ.get("BRDFNORM_CACHE_DIR") or (
         Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "brdfnorm")
+    Path(root).mkdir(mode=0o700, parents=True, exist_ok=True)
     path = Path(root) / "kernels"
-    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    path.mkdir(mode=0o700, exist_ok=True)
     return path
 
 
