@@ -50,16 +50,26 @@ def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _node(k, beta, u, weight, P, T, B, widths, supports):  # pragma: no cover - compiled
-    """ω and the Jacobian sin α dα/du · weight of map_grid (grading p = 2, width scale 1) at one node."""
+def _azimuth(k, beta, P, T, B, widths, supports):  # pragma: no cover - compiled
+    """What map_grid (grading p = 2, width scale 1) computes once per azimuth β: the radial unit vector
+    cos β T + sin β B and A = atan(α_max/w)."""
     cos_b, sin_b = math.cos(beta), math.sin(beta)
     pz = P[k, 2]
     s = math.sqrt(max(1.0 - pz * pz, 0.0))
     alpha_max = min(math.atan2(pz, -s * cos_b), supports[k])
+    A = math.atan(alpha_max / widths[k])
+    rx = cos_b * T[k, 0] + sin_b * B[k, 0]
+    ry = cos_b * T[k, 1] + sin_b * B[k, 1]
+    rz = cos_b * T[k, 2] + sin_b * B[k, 2]
+    return rx, ry, rz, A
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _node(k, rx, ry, rz, A, u, weight, P, widths):  # pragma: no cover - compiled
+    """ω and the Jacobian sin α dα/du · weight of map_grid at the radial coordinate u of one azimuth."""
     w = widths[k]
     one_minus_u = 1.0 - u
     v = 1.0 - one_minus_u * one_minus_u
-    A = math.atan(alpha_max / w)
     t = math.tan(v * A)
     h = math.tan(t * (0.5 * w))
     h2 = h * h
@@ -67,10 +77,8 @@ def _node(k, beta, u, weight, P, T, B, widths, supports):  # pragma: no cover - 
     sin_a = h * (2.0 * scale)
     cos_a = (1.0 - h2) * scale
     jacobian = (t * t + 1.0) * (A * (w * weight)) * (2.0 * one_minus_u) * sin_a
-    ox = sin_a * (cos_b * T[k, 0] + sin_b * B[k, 0]) + cos_a * P[k, 0]
-    oy = sin_a * (cos_b * T[k, 1] + sin_b * B[k, 1]) + cos_a * P[k, 1]
-    oz = sin_a * (cos_b * T[k, 2] + sin_b * B[k, 2]) + cos_a * P[k, 2]
-    return ox, oy, oz, jacobian
+    return (sin_a * rx + cos_a * P[k, 0], sin_a * ry + cos_a * P[k, 1], sin_a * rz + cos_a * P[k, 2],
+            jacobian)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -105,13 +113,13 @@ def hemisphere_panels(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U,
         lost = 0.0
         first_bad[r] = -1
         for b in range(n):
-            beta = beta_mid + beta_half * nodes[b]
+            rx, ry, rz, A = _azimuth(k, beta_mid + beta_half * nodes[b], P, T, B, widths, supports)
             for c in range(C):
                 over_u_k[c] = 0.0
                 over_u_g[c] = 0.0
                 over_u_m[c] = 0.0
             for j in range(n):
-                ox, oy, oz, jac = _node(k, beta, u_mid + u_half * nodes[j], weight, P, T, B, widths, supports)
+                ox, oy, oz, jac = _node(k, rx, ry, rz, A, u_mid + u_half * nodes[j], weight, P, widths)
                 g = _integrand(k, ox, oy, oz, fixed, U, over_light)
                 finite = True
                 for c in range(C):
@@ -156,9 +164,9 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
         for c in range(C):
             total[r, c] = 0.0
         for b in range(nodes_b.size):
-            beta = beta_mid + beta_half * nodes_b[b]
+            rx, ry, rz, A = _azimuth(k, beta_mid + beta_half * nodes_b[b], P, T, B, widths, supports)
             for j in range(nodes_u.size):
-                ox, oy, oz, jac = _node(k, beta, u_mid + u_half * nodes_u[j], weight, P, T, B, widths, supports)
+                ox, oy, oz, jac = _node(k, rx, ry, rz, A, u_mid + u_half * nodes_u[j], weight, P, widths)
                 g = _integrand(k, ox, oy, oz, fixed, U, over_light)
                 for c in range(C):
                     x = g[c] * oz * jac
@@ -213,26 +221,32 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
             s_end = s_h
             azimuth = phi_jacobian * (multiplicity[q] / (2.0 * math.pi))
             kind = piece[r]
+            # the piece's extent in its coordinate, once per azimuth
+            start, length, log_ratio = 0.0, 0.0, 0.0
+            if kind == 0:
+                length = math.atan(s_middle)
+            elif kind == 1:
+                start = math.asinh(s_middle)
+                length = math.asinh(s_split) - start
+            elif log_horizon:
+                log_ratio = math.log(s_end / s_split)
+            else:
+                length = s_end - s_split
             for j in range(nv):
                 at = v[r, j] - kind
                 if kind == 0:
-                    length = math.atan(s_middle)
                     t = at * length
                     radius, density = math.tan(t), math.sin(2.0 * t)
                 elif kind == 1:
-                    start = math.asinh(s_middle)
-                    length = math.asinh(s_split) - start
                     t = start + at * length
                     e2 = math.exp(-2.0 * t)
                     radius, density = math.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
                 elif log_horizon:
-                    log_ratio = math.log(s_end / s_split)
                     radius = s_end * math.exp((at - 1.0) * log_ratio)
                     length = radius * log_ratio
                     density = 2.0 * radius / (1.0 + radius * radius) ** 2
                     to_end = -s_end * math.expm1((at - 1.0) * log_ratio)
                 else:
-                    length = s_end - s_split
                     radius = s_split + at * length
                     density = 2.0 * radius / (1.0 + radius * radius) ** 2
                     to_end = length * (1.0 - at)
