@@ -32,7 +32,7 @@ from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
 from ..models.base import Lobe, Model, Over, mirror
 from ..output.formats import Column, Records, channel_value, degrees, format_value
 from ..registry import Registry
-from .compiled.backend import resolve as resolve_backend
+from .compiled import backend as compiled_backend
 from .routes import halfvector_generic
 from .routes.hemisphere import (
     NonFiniteIntegrand,
@@ -191,9 +191,12 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
 
 
 def with_native(problem: Problem, backend: str) -> Problem:
-    """``problem`` with its compiled integrand under the ``"compiled"`` backend (already resolved), where the model
-    has a compiled lobe (:meth:`brdfnorm.models.base.Model.native_kernel`) that compiles."""
-    return replace(problem, native=_native(problem)) if backend == "compiled" else problem
+    """``problem`` with its compiled integrand under the ``"compiled"`` backend, where Numba imports (checked only
+    here: the routes that never sample the lobe do not pay for importing it) and the model has a compiled lobe
+    (:meth:`brdfnorm.models.base.Model.native_kernel`) that compiles."""
+    if backend != "compiled" or not compiled_backend.numba_available():
+        return problem
+    return replace(problem, native=_native(problem))
 
 
 def _native(problem: Problem):
@@ -485,7 +488,7 @@ def albedo(
     validate.count(max_evaluations, "max_evaluations", maximum=10**12)
     validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
-    backend = resolve_backend(backend)
+    backend = compiled_backend.requested(backend)
     if over == "view" and getattr(model, "transmits", False):
         raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
                             "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
