@@ -28,6 +28,9 @@ LOBES = [
     ("blinn-phong-gaussian", {"n": 50.0}),
     ("burley", {"roughness": 0.8, "reflectance": 0.9}),
     ("oren-nayar", {"sigma": 0.3, "reflectance": 0.8}),
+    ("fon", {"roughness": 0.7, "reflectance": 0.9}),
+    ("eon", {"roughness": 0.4, "reflectance": 0.8}),
+    ("eon", {"roughness": 1.0, "reflectance": 1.0, "fon_albedo": "approx"}),
     ("ggx", {"alpha": 0.2}),
     ("ggx", {"alpha_x": 0.1, "alpha_y": 0.5, "fresnel": "conductor", "eta": [0.2, 0.9, 1.1], "k": [3.0, 2.5, 2.2]}),
     ("beckmann", {"alpha": 0.6, "shadowing": "separable", "fresnel": "schlick"}),
@@ -63,7 +66,7 @@ def test_lobes_without_a_kernel_say_so():
     assert bn.load("charlie").native_kernel() is None
 
 
-@pytest.mark.parametrize(("name", "params"), LOBES[:7] + LOBES[8:9])
+@pytest.mark.parametrize(("name", "params"), LOBES[:8] + LOBES[11:12])
 def test_compiled_albedos_agree_with_numpy_within_the_estimates(name, params):
     model = bn.load(name, **params)
     theta = np.array([0.0, 0.7, 1.3, 1.55])

@@ -5,7 +5,7 @@ Each function is its lobe's :meth:`~brdfnorm.models.base.Model.evaluate` written
 (the same cancellation-free forms, the same clamps and horizon tests), returning f itself (not f·N·L) as a tuple of
 channels; ``error_model="numpy"`` gives IEEE results (inf, NaN) where numpy's would, never an exception. The
 parameters of one case are packed into a float64 vector ``u`` by the lobe's ``pack``. Lobes and options without a
-kernel here (Kulla–Conty and Turquin compensation, the rough dielectrics, charlie, fon, eon, Mitsuba plugins)
+kernel here (Kulla–Conty and Turquin compensation, the rough dielectrics, charlie, Mitsuba plugins)
 return None from ``native_kernel()`` and are evaluated through numpy.
 """
 
@@ -80,6 +80,69 @@ def oren_nayar(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     B = 0.45 * s2 / (s2 + 0.09)
     s = lx * vx + ly * vy + lz * vz - lz * vz
     return (u[1] / _PI * (A + B * max(s, 0.0) / max(lz, vz)),)
+
+
+# -- the energy-preserving Oren-Nayar family (fon.py, eon.py): u = (r, ρ) ----------------------------------------
+
+# fon.py's constants, restated (fon.py imports this module; the kernels' tests compare with its numpy lobes)
+_C1 = 0.5 - 2.0 / (3.0 * math.pi)
+_C2 = 2.0 / 3.0 - 28.0 / (15.0 * math.pi)
+_APPROX = (0.0571085289, 0.491881867, -0.332181442, 0.0714429953)
+
+
+@njit(**_OPTIONS)
+def _fon_single(lx, ly, lz, vx, vy, vz, r, rho):  # pragma: no cover - compiled
+    if not (lz > 0 and vz > 0):
+        return 0.0
+    s = lx * vx + ly * vy + lz * vz - lz * vz
+    s_over_t = s / max(lz, vz) if s > 0 else s
+    return rho / _PI / (1.0 + _C1 * r) * (1.0 + r * s_over_t)
+
+
+@njit(**_OPTIONS)
+def _fon_albedo_exact(mu, r):  # pragma: no cover - compiled
+    mu = min(max(mu, 0.0), 1.0)
+    S = math.sqrt(max(0.0, (1.0 - mu) * (1.0 + mu)))
+    g = S * (math.acos(mu) - S * mu) + (2.0 / 3.0) * (S * mu * (1.0 + S + S * S) / (1.0 + S) - S)
+    a = 1.0 / (1.0 + _C1 * r)
+    return a + r * a / _PI * g
+
+
+@njit(**_OPTIONS)
+def _fon_albedo_approx(mu, r):  # pragma: no cover - compiled
+    x = 1.0 - min(max(mu, 0.0), 1.0)
+    c1, c2, c3, c4 = _APPROX
+    return (1.0 + r * (x * (c1 + x * (c2 + x * (c3 + x * c4))))) / (1.0 + _C1 * r)
+
+
+@njit(**_OPTIONS)
+def fon_lobe(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
+    return (_fon_single(lx, ly, lz, vx, vy, vz, u[0], u[1]),)
+
+
+@njit(**_OPTIONS)
+def _eon(lx, ly, lz, vx, vy, vz, u, exact):  # pragma: no cover - compiled
+    r, rho = u[0], u[1]
+    single = _fon_single(lx, ly, lz, vx, vy, vz, r, rho)
+    average = (1.0 + _C2 * r) / (1.0 + _C1 * r)
+    if not (lz > 0 and vz > 0 and average < 1.0):
+        return single
+    if exact:
+        el, ev = _fon_albedo_exact(lz, r), _fon_albedo_exact(vz, r)
+    else:
+        el, ev = _fon_albedo_approx(lz, r), _fon_albedo_approx(vz, r)
+    rho_ms = rho * rho * average / (1.0 - rho * (1.0 - average))
+    return single + rho_ms / _PI * (1.0 - el) * (1.0 - ev) / (1.0 - average)
+
+
+@njit(**_OPTIONS)
+def eon_exact(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
+    return (_eon(lx, ly, lz, vx, vy, vz, u, True),)
+
+
+@njit(**_OPTIONS)
+def eon_approx(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
+    return (_eon(lx, ly, lz, vx, vy, vz, u, False),)
 
 
 # -- microfacet lobes: u = (α_x, α_y, separable, fresnel kind, f0[3], f90[3], η[3], k[3]) -----------------------
@@ -206,6 +269,7 @@ _SIMPLE = {
     "blinn-phong-gaussian": (blinn_phong_gaussian, ("n",)),
     "burley": (burley, ("roughness", "reflectance")),
     "oren-nayar": (oren_nayar, ("sigma", "reflectance")),
+    "fon": (fon_lobe, ("roughness", "reflectance")),
 }
 
 
@@ -214,6 +278,9 @@ def kernel_of(model: Model) -> NativeKernel | None:
     if model.name in _SIMPLE:
         function, names = _SIMPLE[model.name]
         return NativeKernel(function, 1, _floats(*names), f"builtin:{model.name}")
+    if model.name == "eon":
+        function = eon_exact if model.params["fon_albedo"] == "exact" else eon_approx
+        return NativeKernel(function, 1, _floats("roughness", "reflectance"), f"builtin:{function.py_func.__name__}")
     if model.name in ("ggx", "beckmann"):
         params = model.params
         if params["ms"] != "none":
