@@ -5,7 +5,7 @@ Each function is its lobe's :meth:`~brdfnorm.models.base.Model.evaluate` written
 (the same cancellation-free forms, the same clamps and horizon tests), returning f itself (not f·N·L) as a tuple of
 channels; ``error_model="numpy"`` gives IEEE results (inf, NaN) where numpy's would, never an exception. The
 parameters of one case are packed into a float64 vector ``u`` by the lobe's ``pack``. Lobes and options without a
-kernel here (Kulla–Conty and Turquin compensation, the rough dielectrics, charlie, Mitsuba plugins)
+kernel here (Kulla–Conty and Turquin compensation, the rough dielectrics, Mitsuba plugins)
 return None from ``native_kernel()`` and are evaluated through numpy.
 """
 
@@ -145,6 +145,60 @@ def eon_approx(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     return (_eon(lx, ly, lz, vx, vy, vz, u, False),)
 
 
+# -- the charlie sheen lobe (charlie.py): u = (α, neubelt, terminator, colour[3]) -----------------------------------
+
+# charlie.py's Λ fits at α = 0 and α = 1, restated (charlie.py imports this module)
+_FIT_0 = (25.3245, 3.32435, 0.16801, -1.27393, -4.85967)
+_FIT_1 = (21.5473, 3.82987, 0.19823, -1.97760, -4.32054)
+
+
+@njit(**_OPTIONS)
+def _charlie_fit(x, alpha):  # pragma: no cover - compiled
+    t = (1.0 - alpha) ** 2
+    a = t * _FIT_0[0] + (1.0 - t) * _FIT_1[0]
+    b = t * _FIT_0[1] + (1.0 - t) * _FIT_1[1]
+    c = t * _FIT_0[2] + (1.0 - t) * _FIT_1[2]
+    d = t * _FIT_0[3] + (1.0 - t) * _FIT_1[3]
+    e = t * _FIT_0[4] + (1.0 - t) * _FIT_1[4]
+    return a / (1.0 + b * math.pow(x, c)) + d * x + e
+
+
+@njit(**_OPTIONS)
+def _charlie_lambda(mu, alpha, soften):  # pragma: no cover - compiled
+    mu = min(max(mu, 0.0), 1.0)
+    if mu < 0.5:
+        value = math.exp(_charlie_fit(mu, alpha))
+    else:
+        value = math.exp(2.0 * _charlie_fit(0.5, alpha) - _charlie_fit(1.0 - mu, alpha))
+    return math.pow(value, 1.0 + 2.0 * (1.0 - mu) ** 8) if soften else value
+
+
+@njit(**_OPTIONS)
+def charlie(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
+    alpha = u[0]
+    if not (lz > 0 and vz > 0):
+        return (0.0, 0.0, 0.0)
+    sx, sy, sz = lx + vx, ly + vy, lz + vz
+    cos_h = sz / math.sqrt(sx * sx + sy * sy + sz * sz)
+    sin2 = min(max(1.0 - cos_h * cos_h, 0.0), 1.0)
+    inv = 1.0 / alpha
+    D = (2.0 + inv) * math.pow(sin2, 0.5 * inv) / (2.0 * _PI)
+    if u[1] == 1.0:
+        white = D * lz / (4.0 * (lz + vz - lz * vz))
+    else:
+        white = D / ((1.0 + _charlie_lambda(vz, alpha, False) + _charlie_lambda(lz, alpha, u[2] == 1.0)) * 4.0 * vz)
+    f = white / lz
+    return (f * u[3], f * u[4], f * u[5])
+
+
+def _pack_charlie(params: Mapping[str, object]) -> np.ndarray:
+    alpha = float(np.asarray(params["alpha"], dtype=float).reshape(-1)[0])
+    rough = float(np.asarray(params["roughness"], dtype=float).reshape(-1)[0])
+    colour = np.broadcast_to(np.asarray(params["color"], dtype=float).reshape(-1), (3,))
+    return np.concatenate([[alpha if alpha > 0 else rough * rough, 1.0 if params["shadowing"] == "neubelt" else 0.0,
+                            1.0 if bool(params["terminator"]) else 0.0], colour])
+
+
 # -- microfacet lobes: u = (α_x, α_y, separable, fresnel kind, f0[3], f90[3], η[3], k[3]) -----------------------
 
 @njit(**_OPTIONS)
@@ -278,6 +332,8 @@ def kernel_of(model: Model) -> NativeKernel | None:
     if model.name in _SIMPLE:
         function, names = _SIMPLE[model.name]
         return NativeKernel(function, 1, _floats(*names), f"builtin:{model.name}")
+    if model.name == "charlie":
+        return NativeKernel(charlie, 3, _pack_charlie, "builtin:charlie")
     if model.name == "eon":
         function = eon_exact if model.params["fon_albedo"] == "exact" else eon_approx
         return NativeKernel(function, 1, _floats("roughness", "reflectance"), f"builtin:{function.py_func.__name__}")
