@@ -129,6 +129,8 @@ class Problem:
     #: The compiled integrand (:class:`brdfnorm.engine.compiled.drivers.NativeIntegrand`) under the compiled
     #: backend, where the model has a compiled lobe; None: numpy evaluates.
     native: object = None
+    #: Whether the compiled backend was asked for (the routes with kernels of their own read it).
+    compiled: bool = False
 
     def case_params(self, case: np.ndarray) -> dict:
         """Parameter values for a vector of case indices (shared values stay shared)."""
@@ -500,6 +502,7 @@ def albedo(
             raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
     if chosen.name == "quadrature":  # the only method that samples the model's own lobe
         problem = with_native(problem, backend)
+    problem = replace(problem, compiled=backend == "compiled")
     value, error, evaluations, converged, bad, *extra = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})

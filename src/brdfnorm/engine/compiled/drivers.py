@@ -48,7 +48,9 @@ def _version() -> str:
 @cache
 def _module(key: str, numba_version: str) -> tuple[ModuleType, Path]:
     source = _TEMPLATE.read_text(encoding="utf-8")
-    digest = hashlib.sha256("\0".join((source, key, _version(), numba_version)).encode()).hexdigest()[:24]
+    # the helpers the kernels inline are part of their machine code: a change there is a new copy too
+    helpers = _TEMPLATE.with_name("slopes.py").read_text(encoding="utf-8")
+    digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
     path = cache_directory() / f"brdfnorm_kernels_{digest}.py"
     if not path.exists():
         temporary = path.with_suffix(f".{os.getpid()}.tmp")

@@ -30,6 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from brdfnorm.engine.compiled.slopes import azimuth_node, piece_extent, radial_node
+
 shader = None  # set per copy (drivers.py)
 
 _EPS = 2.220446049250313e-16
@@ -174,14 +176,6 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                         total[r, c] += x * weights_b[b] * weights_u[j]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _round_half_even(x):  # pragma: no cover - compiled
-    r = math.floor(x + 0.5)
-    if r - x == 0.5 and r % 2.0 != 0.0:
-        r -= 1.0
-    return r
-
-
 @njit(cache=True, error_model="numpy")
 def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
                kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
@@ -190,69 +184,17 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,):
     out (R, nφ, nv, C + 1), the weighted values and their largest |value|."""
     C = out.shape[3] - 1
-    nphi, nv = phi.shape[1], v.shape[1]
     for r in range(k.size):
         q = k[r]
-        for i in range(nphi):
-            ph = phi[r, i]
-            zero = math.pi * _round_half_even(ph / math.pi)
-            if linear:
-                epsilon, phi_jacobian = ph - zero, 1.0
-            else:
-                stretch = kappa[q] * abs(ph - zero) / (0.5 * math.pi)
-                sign = 1.0 if ph > zero else (-1.0 if ph < zero else 0.0)
-                epsilon = sign * delta[q] * math.sinh(stretch)
-                phi_jacobian = delta[q] * kappa[q] * math.cosh(stretch) / (0.5 * math.pi)
-            parity = 1.0 - 2.0 * (_round_half_even(zero / math.pi) % 2.0)
-            cos_e, sin_e = math.cos(epsilon), math.sin(epsilon)
-            cos_a = parity * (cos_offset[q] * cos_e - sin_offset[q] * sin_e)
-            sin_a = parity * (sin_offset[q] * cos_e + cos_offset[q] * sin_e)
-            dx, dy = ax[q] * cos_a, ay[q] * sin_a
-            d2 = dx * dx + dy * dy
-            p = -amplitude[q] * parity * sin_e
-            qq = math.sqrt(p * p + d2)
-            q_plus_p = qq + p if p > 0 else d2 / (qq - p)
-            q_minus_p = d2 / (qq + p) if p > 0 else qq - p
-            s_h = q_plus_p / d2
-            r_h2 = q_plus_p * q_plus_p / d2
-            gap = layer[q] * (1.0 + r_h2) / (2.0 * qq * vz[q])
-            s_split = s_h / (1.0 + gap / s_h)
-            s_middle = s_split / (1.0 + s_split)
-            s_end = s_h
-            azimuth = phi_jacobian * (multiplicity[q] / (2.0 * math.pi))
-            kind = piece[r]
-            # the piece's extent in its coordinate, once per azimuth
-            start, length, log_ratio = 0.0, 0.0, 0.0
-            if kind == 0:
-                length = math.atan(s_middle)
-            elif kind == 1:
-                start = math.asinh(s_middle)
-                length = math.asinh(s_split) - start
-            elif log_horizon:
-                log_ratio = math.log(s_end / s_split)
-            else:
-                length = s_end - s_split
-            for j in range(nv):
-                at = v[r, j] - kind
-                if kind == 0:
-                    t = at * length
-                    radius, density = math.tan(t), math.sin(2.0 * t)
-                elif kind == 1:
-                    t = start + at * length
-                    e2 = math.exp(-2.0 * t)
-                    radius, density = math.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
-                elif log_horizon:
-                    radius = s_end * math.exp((at - 1.0) * log_ratio)
-                    length = radius * log_ratio
-                    density = 2.0 * radius / (1.0 + radius * radius) ** 2
-                    to_end = -s_end * math.expm1((at - 1.0) * log_ratio)
-                else:
-                    radius = s_split + at * length
-                    density = 2.0 * radius / (1.0 + radius * radius) ** 2
-                    to_end = length * (1.0 - at)
-                gap_h = s_h - radius if kind < 2 else (s_h - s_end) + to_end
-                s = radius
-                weight_t = density * length
+        kind = piece[r]
+        for i in range(phi.shape[1]):
+            dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+                phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
+                kappa[q], multiplicity[q], vz[q], False)
+            start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, False)
+            for j in range(v.shape[1]):
+                s, weight_t, gap_h = radial_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end,
+                                                 log_horizon, False)
                 one_sp = 1.0 + s * p
                 n2 = 1.0 + s * s * d2
                 Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2

@@ -456,20 +456,28 @@ def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
 
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
                              rtol: float = 1e-10, atol: float | np.ndarray = 0.0,
-                             max_evaluations: int = 20_000_000, use_global: bool = True) -> CubatureResult:
+                             max_evaluations: int = 20_000_000, use_global: bool = True,
+                             compiled: bool = False) -> CubatureResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 
     Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
     estimates at looser tolerances were found optimistic (GGX against the 1-D route of
     :mod:`brdfnorm.engine.routes.azimuthal`, 150 random (μ ∈ [1e-6, 1e-2], α ∈ [1e-8, 1]) views: up to 5·10⁵ times the
     estimate at rtol 1e-3, μ = 1.5e-6, α = 0.84; 4.7 times at rtol 1e-5; 1.3e-7 ≤ μ: 0.056 off, estimated 1e-8,
-    at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate."""
+    at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate.
+    ``compiled``: the rectangle integrand as one compiled kernel (:mod:`brdfnorm.engine.compiled.slopes`)."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     # Per case (K, 1): both rules compare each case's estimate with max(atol, rtol·|E|) elementwise.
     rtol = np.where(fixed[:, 2] < GRAZING_MU, min(rtol, GRAZING_RTOL), rtol)[:, None]
     g = _geometry(distribution, fixed, params)
+    rectangle = None
+    if compiled:
+        from ..compiled.slopes import microfacet_rectangle
+
+        def rectangle(linear: bool) -> RectangleIntegrand:
+            return microfacet_rectangle(g, linear, linear and distribution.name in global_rule.GRADED, slope_map(g))
     result = integrate_slopes(g, _microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
-                              max_evaluations=max_evaluations, use_global=use_global)
+                              max_evaluations=max_evaluations, use_global=use_global, rectangle=rectangle)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
     mass, moment = distribution.truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
