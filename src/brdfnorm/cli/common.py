@@ -117,7 +117,8 @@ def backend_option(command: Callable) -> Callable:
     worker processes it starts, so every albedo the command computes, however deep, runs on that backend."""
     signature = inspect.signature(command, eval_str=True)
     parameters = list(signature.parameters.values())
-    at = next((i for i, p in enumerate(parameters) if p.name == "debug"), len(parameters))
+    # before the parallel options where the command has them (they stay together, just before --debug)
+    at = next((i for i, p in enumerate(parameters) if p.name in ("workers", "debug")), len(parameters))
     added = inspect.Parameter("backend", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=BACKEND_OPTION,
                               annotation=Backend)
 
