@@ -16,6 +16,7 @@ import importlib.metadata
 import importlib.util
 import os
 import sys
+import time
 from functools import cache
 from pathlib import Path
 from types import ModuleType
@@ -93,6 +94,36 @@ class NativeIntegrand:
         return out
 
 
+#: Seconds this process spent compiling (or loading from the disk cache) kernels: work budgets in seconds
+#: (:mod:`brdfnorm.check`) leave it out, so that a first run, which compiles, searches as far as a later one.
+COMPILING = {"seconds": 0.0}
+_WARM: set[str] = set()
+
+
+def compile_seconds() -> float:
+    """Seconds spent so far in this process compiling or loading kernels (:data:`COMPILING`)."""
+    return COMPILING["seconds"]
+
+
+def _warm(native: NativeIntegrand, key: str) -> None:
+    """Every kernel of ``native``'s copy once on the smallest input (compiled or loaded now, not in a route)."""
+    from ..machinery.kronrod import GAUSS, KRONROD, NODES
+    from .rules import tensor_sums
+
+    one, zero, unit = np.zeros(1, dtype=np.int64), np.zeros(1), np.ones(1)
+    frame = (np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+    bounds = (zero, unit, zero, unit)
+    hemisphere_panels(native, one, *bounds, frame, unit, np.full(1, np.pi), NODES, KRONROD, GAUSS)
+    hemisphere_sums(native, one, *bounds, frame, unit, np.full(1, np.pi), NODES[:1], NODES[:1], unit, unit)
+    geometry = dict.fromkeys(("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa",
+                              "multiplicity"), np.ones(1))
+    rectangle = slope_rectangle(native, geometry, np.array([[0.0, 0.0, 1.0]]), one, np.zeros(1, dtype=bool), True,
+                                True)
+    rectangle(one, np.full((1, 1, 1), 0.5), np.full((1, 1, 1), 0.5), one)
+    tensor_sums(np.zeros((1, 4, 3, native.channels)), np.ones(3), np.ones(1), np.zeros(0))
+    _WARM.add(key)
+
+
 def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[np.ndarray],
                      over_light: bool) -> NativeIntegrand | None:
     """The compiled integrand of the cases whose packed parameters are ``rows`` (K,), compiled (or loaded) and run
@@ -103,13 +134,18 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
     U = np.zeros((len(rows), max(width, 1)))
     for k, r in enumerate(rows):
         U[k, :r.size] = r
+    start = time.perf_counter()
     try:
         native = NativeIntegrand(kernel, fixed, U, over_light)
         native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
+        if kernel.key not in _WARM:
+            _warm(native, kernel.key)
     except Exception as error:  # noqa: BLE001 - any failure to compile means: the numpy backend computes
         notice(f"the compiled kernel of {kernel.key} does not compile ({type(error).__name__}: "
                f"{str(error).splitlines()[0] if str(error) else ''})")
         return None
+    finally:
+        COMPILING["seconds"] += time.perf_counter() - start
     return native
 
 
