@@ -203,4 +203,5 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
         failed[:] |= flags
         return out
 
+    integrand.compiled = True  # the route's sums run compiled too
     return integrand

@@ -182,4 +182,5 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
                         fresnel, out)
         return out
 
+    integrand.compiled = True  # the route's sums run compiled too
     return integrand
