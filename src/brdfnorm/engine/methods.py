@@ -30,10 +30,14 @@ from .. import validate
 from ..brdffile import random_hemisphere, rotation_about_normal
 from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
 from ..models.base import Lobe, Model, Over, mirror
+from ..models.blinn_phong import BlinnPhong
+from ..models.dielectric import MicrofacetDielectric
+from ..models.microfacet import MicrofacetModel
 from ..output.formats import Column, Records, channel_value, degrees, format_value
 from ..registry import Registry
 from .compiled import backend as compiled_backend
-from .routes import halfvector_generic
+from .routes import azimuthal, certified, halfvector_generic
+from .routes.dielectric import albedo_method as _dielectric
 from .routes.hemisphere import (
     NonFiniteIntegrand,
     NonFinitePolicy,
@@ -41,6 +45,9 @@ from .routes.hemisphere import (
     fibonacci_hemisphere,
     integrate_hemisphere,
 )
+from .routes.microfacet import azimuthal_method as _azimuthal_method
+from .routes.microfacet import halfvector_method as _microfacet
+from .routes.series import albedo_method as _series
 
 
 @dataclass(frozen=True)
@@ -419,13 +426,37 @@ def _has_closed_form(model: Model, over: Over) -> bool:
     return type(model).closed_form_albedo is not Model.closed_form_albedo
 
 
+def _reciprocal_microfacet(applies):
+    """``applies`` except for ms=turquin over the view: that lobe is not reciprocal (its factor depends on V), and
+    the microfacet methods integrate at the fixed direction as if it were; the generic quadrature takes it."""
+    return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
+
+
+#: The albedo methods. Besides the generic quadrature and the closed forms: seed 002's hypergeometric form for the
+#: built-in Blinn-Phong lobe (reciprocal, so over the light and the view alike; exact to 1e-12 and far faster);
+#: isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables) by a 1-D integral with the azimuth
+#: in closed form; the microfacet lobes over the half vector with the distribution as the measure (exact to the
+#: mirror limit, where the hemisphere coordinates fail); rough dielectrics (BSDFs), reflection and refraction over
+#: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
+#: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
 METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
     "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
+    "series": Method("series", lambda model, over: type(model) is BlinnPhong, _series,
+                     "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"),
+    "azimuthal": Method("azimuthal", _reciprocal_microfacet(azimuthal.applies), _azimuthal_method,
+                        "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
+    "microfacet": Method("microfacet",
+                         _reciprocal_microfacet(lambda model, over: isinstance(model, MicrofacetModel)), _microfacet,
+                         "half-vector cubature, the slope distribution's CDF as coordinates"),
+    "dielectric": Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
+                         "reflection + refraction over the facet normal, the slope distribution as measure"),
+    "certified": Method("certified", certified.applies, certified.albedo_method,
+                        "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)),
 })
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
-AUTO_ORDER: list[str] = ["quadrature"]
+AUTO_ORDER: list[str] = ["series", "azimuthal", "microfacet", "dielectric", "quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:
@@ -540,56 +571,3 @@ def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model
     if values.size == 0:
         raise ArgumentError(f"the sweep over {name} is empty", where="sweep")
     return model.with_params(**{name: values[:, None]}), name, values
-
-
-# Seed 002's hypergeometric form (brdfnorm.engine.routes.series): exact (≤ 1e-12 against quadrature) and far faster,
-# for the
-# built-in Blinn-Phong lobe (reciprocal, so over the light and over the view alike).
-from ..models.blinn_phong import BlinnPhong  # noqa: E402
-from .routes.series import albedo_method as _series  # noqa: E402
-
-register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
-                       "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
-
-# Isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables): the azimuth in closed form, a
-# 1-D integral (brdfnorm.engine.routes.azimuthal), tried before the half-vector cubature below.
-from .routes import azimuthal as _azimuthal  # noqa: E402
-from .routes.microfacet import azimuthal_method as _azimuthal_method  # noqa: E402
-from .routes.microfacet import halfvector_method as _microfacet  # noqa: E402
-
-
-def _reciprocal_microfacet(applies):
-    """``applies`` except for ms=turquin over the view: that lobe is not reciprocal (its factor depends on V), and
-    the microfacet methods integrate at the fixed direction as if it were; the generic quadrature takes it."""
-    return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
-
-
-register_method(Method("azimuthal", _reciprocal_microfacet(_azimuthal.applies), _azimuthal_method,
-                       "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
-                auto_priority=1)
-
-# Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
-# (brdfnorm.engine.routes.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates
-# fail.
-from ..models.microfacet import MicrofacetModel  # noqa: E402
-
-register_method(Method("microfacet", _reciprocal_microfacet(lambda model, over: isinstance(model, MicrofacetModel)),
-                       _microfacet,
-                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=2)
-
-# Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
-# (brdfnorm.engine.routes.dielectric); the result reports both parts.
-from ..models.dielectric import MicrofacetDielectric  # noqa: E402
-from .routes.dielectric import albedo_method as _dielectric  # noqa: E402
-
-register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
-                       "reflection + refraction over the facet normal, the slope distribution as measure"),
-                auto_priority=3)
-
-# Rigorous enclosures by Arb ball arithmetic (brdfnorm.engine.routes.certified; python-flint is an optional extra).
-# Never chosen
-# by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).
-from .routes import certified as _certified  # noqa: E402
-
-register_method(Method("certified", _certified.applies, _certified.albedo_method,
-                       "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)))
