@@ -40,6 +40,7 @@ sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
+from bench_backends import w_backends  # noqa: E402
 from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
 from bench_glsl_native import w_glsl_native  # noqa: E402
@@ -1062,6 +1063,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
     "engine": lambda c, r, _: w_engine(c, r), "audit": lambda c, r, _: w_audit(c, r),
     "certified": lambda c, r, _: w_certified(c, r), "glsl-native": lambda c, r, _: w_glsl_native(c, r),
+    "backends": lambda c, r, _: w_backends(c, r),
 })
 
 

@@ -265,7 +265,9 @@ def test_cli_bad_input(capsys, tmp_path, monkeypatch, argv, where):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_cli_unconverged_cells_exit_1_unless_allowed(capsys, tmp_path, monkeypatch):
+def test_cli_unconverged_cells_are_written_named_and_exit_3(capsys, tmp_path, monkeypatch):
+    """Computed work is never thrown away (issue 39): cells that miss --rtol are written with their estimates and a
+    mask, named on stderr, exit 3; --strict refuses (exit 1, nothing written); --allow-unconverged exits 0."""
     from brdfnorm.lut import table as table_module
 
     real = table_module.albedo
@@ -277,8 +279,15 @@ def test_cli_unconverged_cells_exit_1_unless_allowed(capsys, tmp_path, monkeypat
     monkeypatch.setattr(table_module, "albedo", stubborn)
     out = tmp_path / "E.json"
     argv = ["lut", "lambert", "--axis", "mu=0.5,1", "-o", str(out)]
-    code, _, stderr = run_cli(capsys, *argv)
+    code, _, stderr = run_cli(capsys, *argv, "--strict")
     assert code == 1 and "did not reach" in stderr and not out.exists()
+    code, _, stderr = run_cli(capsys, *argv)
+    table = lut.load(out)
+    # (the E cells go through brdfnorm.parallel, which the stub does not reach; E_avg's nodes do)
+    assert code == 3 and table.meta["unconverged"] == 1
+    assert table.meta["converged_mask"] == {"E": [True, True], "E_avg": False}
+    assert "did not reach --rtol 1e-10, written with their error estimates" in stderr
+    assert stderr.rstrip().endswith(": E_avg") and np.isclose(table["E_avg"], 1.0)
     code, _, stderr = run_cli(capsys, *argv, "--allow-unconverged")
     assert code == 0 and lut.load(out).meta["unconverged"] > 0
 
@@ -338,3 +347,15 @@ def test_cli_fit_lut_refusals(capsys, ggx_table, tmp_path):
     assert code == 2 and "two" in stderr and stderr.count("\n") == 1
     code, _, stderr = run_cli(capsys, "fit", "--lut", str(tmp_path / "missing.npz"))
     assert code == 2 and "missing.npz" in stderr
+
+
+def test_missed_cells_are_named_by_their_axis_values():
+    from brdfnorm.cli.lut import missed_cells
+    from brdfnorm.lut.table import Lut
+
+    E = np.zeros((2, 3))
+    mask = {"E": [[True, False, True], [True, True, False]], "E_avg": [True, True, False]}
+    table = Lut({"E": E, "E_avg": np.zeros(3)}, {"mu": np.array([0.5, 1.0]), "alpha": np.array([0.1, 0.2, 0.3])},
+                {"converged_mask": mask}, {"E": ("mu", "alpha"), "E_avg": ("alpha",)})
+    assert missed_cells(table) == "mu=0.5, alpha=0.2; mu=1, alpha=0.3; E_avg at alpha=0.3"
+    assert missed_cells(table, shown=1) == "mu=0.5, alpha=0.2 and 2 more"

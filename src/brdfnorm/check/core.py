@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..engine.compiled.drivers import compile_seconds
 from ..errors import ArgumentError
 from ..models.base import Over
 
@@ -43,10 +44,12 @@ class _Meter:
         self.budget = budget
         self.spread = spread
         self.start = time.perf_counter()
+        self.compiling = compile_seconds()
         self.evaluations = 0
 
     def elapsed(self) -> float:
-        return time.perf_counter() - self.start
+        """Seconds spent, less those spent compiling kernels (a first run searches as far as a later one)."""
+        return time.perf_counter() - self.start - (compile_seconds() - self.compiling)
 
     def allowance(self, cases: int, minimum_seconds: float = 0.0) -> float | None:
         """Evaluations per case that the rest of the budget (or at least ``minimum_seconds`` of work) pays for,

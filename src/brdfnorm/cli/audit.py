@@ -18,10 +18,11 @@ import typer
 from ..errors import ArgumentError
 from ..output import write_file
 from .application import app
-from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model
+from .common import DEBUG_OPTION, PARAM_OPTION, backend_option, guarded, load_model
 
 
 @app.command("audit")
+@backend_option
 def audit_command(
     file: str = typer.Argument(None, metavar="FILE", help="The table: .npz .exr .png .csv .json .h/.glsl/.hlsl/.js "
                                "array literals, or raw binary (.bin with --shape, --dtype)."),

@@ -28,6 +28,7 @@ from .common import (
     At,
     Over,
     Spread,
+    backend_option,
     console,
     guarded,
     load_model,
@@ -67,6 +68,7 @@ def parse_only(spec: str) -> tuple[str, ...]:
 
 
 @app.command("check")
+@backend_option
 @parallel_options
 def check_command(
     models: list[str] = typer.Argument(..., metavar="MODEL...", help="Built-in model names or .brdf files."),

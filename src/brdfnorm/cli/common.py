@@ -10,6 +10,7 @@ import contextlib
 import functools
 import inspect
 import math
+import os
 import shutil
 import sys
 import warnings
@@ -109,6 +110,38 @@ def parallel_options(command: Callable | None = None, /, *, chunk_cells: bool = 
     return _option_group(command, "spread", Spread, options)
 
 
+class Backend(str, Enum):
+    numpy = "numpy"
+    compiled = "compiled"
+
+
+BACKEND_OPTION = typer.Option(None, "--backend", case_sensitive=False,
+                              help="numpy (the reference) or compiled (Numba kernels; the default where Numba "
+                              "imports). Also $BRDFNORM_BACKEND.")
+
+
+def backend_option(command: Callable) -> Callable:
+    """Give a typer command ``--backend``: where given, it sets ``$BRDFNORM_BACKEND`` for this process and the
+    worker processes it starts, so every albedo the command computes, however deep, runs on that backend."""
+    signature = inspect.signature(command, eval_str=True)
+    parameters = list(signature.parameters.values())
+    # before the parallel options where the command has them (they stay together, just before --debug)
+    at = next((i for i, p in enumerate(parameters) if p.name in ("workers", "debug")), len(parameters))
+    added = inspect.Parameter("backend", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=BACKEND_OPTION,
+                              annotation=Backend)
+
+    @functools.wraps(command)
+    def with_backend(*args, backend: Backend | None = None, **kwargs):
+        if backend is not None:
+            from ..engine.compiled.backend import ENVIRONMENT
+
+            os.environ[ENVIRONMENT] = backend.value
+        return command(*args, **kwargs)
+
+    with_backend.__signature__ = signature.replace(parameters=[*parameters[:at], added, *parameters[at:]])
+    return with_backend
+
+
 @dataclass(frozen=True)
 class ResultOutput:
     """Where and how a command writes its result records: the values of --json, --csv and -o/--output."""
@@ -155,7 +188,7 @@ CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--
              "form": "--form", "metric": "--metric", "target": "--target", "max_coefficients": "--max-coefficients",
              "output": "--output", "n": "--n", "claim": "--claim", "digits": "--digits", "workers": "--workers",
              "scheduler": "--scheduler", "connect_timeout": "--connect-timeout", "checkpoint": "--checkpoint",
-             "chunk_cells": "--chunk-cells",
+             "chunk_cells": "--chunk-cells", "backend": "--backend",
              "axes": "--axis", "clamp": "--clamp", "channels": "--channels", "tables": "--table", "half": "--half",
              "grid": "--grid", "format": "--format"}
 

@@ -22,6 +22,7 @@ from .common import (
     Over,
     ResultOutput,
     Spread,
+    backend_option,
     compute_cells,
     console,
     guarded,
@@ -66,6 +67,7 @@ def models(debug: bool = DEBUG_OPTION) -> None:
 
 
 @app.command()
+@backend_option
 @parallel_options
 @result_options
 def albedo(
@@ -102,6 +104,7 @@ def albedo(
 
 
 @app.command("normalize")
+@backend_option
 @parallel_options
 @result_options
 def normalize_command(

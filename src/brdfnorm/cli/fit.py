@@ -31,6 +31,7 @@ from .common import (
     PARAM_OPTION,
     At,
     Spread,
+    backend_option,
     compute_cells,
     console,
     guarded,
@@ -104,6 +105,7 @@ def _plot(path: str, result: FitResult, x: np.ndarray, t: np.ndarray | None, y: 
 
 
 @app.command("fit")
+@backend_option
 @parallel_options
 def fit_command(
     model: str = typer.Argument(None, metavar="MODEL", help="A built-in model name or a .brdf file (not with --lut)."),

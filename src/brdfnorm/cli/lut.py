@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from .common import (
     DEBUG_OPTION,
     PARAM_OPTION,
     Spread,
+    backend_option,
     guarded,
     load_model,
     parallel_options,
@@ -54,6 +56,40 @@ def parse_clamp(spec: str) -> tuple[str, float]:
     return name.strip(), float(minimum)
 
 
+def missed_cells(result: Lut, shown: int = 8) -> str:
+    """The cells that missed their tolerance (``meta["converged_mask"]``), named by their axis values: the first
+    ``shown`` of them, and how many more."""
+    names = []
+    for table, mask in result.meta.get("converged_mask", {}).items():
+        axes = result.table_axes[table]
+        for index in np.argwhere(~np.asarray(mask, dtype=bool)):
+            where = ", ".join(f"{a}={float(result.axes[a][i]):.6g}" for a, i in zip(axes, index, strict=True))
+            names.append(where if table == "E" else f"{table} at {where}" if where else table)
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return "; ".join(names[:shown]) + more
+
+
+def stage_lines(name: str, axes: dict, channels: list[str], average: bool):
+    """Where stderr is not a terminal: a progress callback that writes one line per finished stage (E, E_avg and
+    the DFG channels), with its time."""
+    cells = int(np.prod([len(v) for v in axes.values()]))
+    others = [len(v) for a, v in axes.items() if a not in DIRECTION_AXES]
+    stages = [("E", cells)] + ([("E_avg", int(np.prod(others)))] if average else [])
+    stages += [(f"DFG_{c}", cells) for c in ("f0", "f90", "cloth")] if "dfg" in channels else []
+    ends = np.cumsum([size for _, size in stages])
+    state = {"stage": 0, "start": time.perf_counter(), "from": 0}
+
+    def on_progress(done: int, total: int) -> None:
+        while state["stage"] < len(stages) and done >= ends[state["stage"]]:
+            label, size = stages[state["stage"]]
+            now = time.perf_counter()
+            typer.echo(f"{name}: {label}: {size} {'values' if label == 'E_avg' else 'cells'} in "
+                       f"{now - state['start']:.2f} s", err=True)
+            state.update(stage=state["stage"] + 1, start=now)
+
+    return on_progress
+
+
 def in_degrees(result: Lut, degrees: np.ndarray, clamp: float | None) -> Lut:
     """The lut with its θ axis (and θ clamp) in degrees as the command line gave them; ``meta["units"]`` says so."""
     meta = dict(result.meta)
@@ -65,6 +101,7 @@ def in_degrees(result: Lut, degrees: np.ndarray, clamp: float | None) -> Lut:
 
 
 @app.command("lut")
+@backend_option
 @parallel_options(chunk_cells=False)
 def lut_command(
     model: str = typer.Argument(..., metavar="MODEL", help="A built-in model name, a .brdf file, "
@@ -100,7 +137,9 @@ def lut_command(
     digits: int = typer.Option(None, "--digits", min=1, help="With --method certified: every cell's enclosure has a "
                                "relative radius ≤ 10^-DIGITS (default 12)."),
     allow_unconverged: bool = typer.Option(False, "--allow-unconverged",
-                                           help="Write the table even if some cells miss --rtol (exit 0)."),
+                                           help="Exit 0 even if some cells miss --rtol (they are written with "
+                                           "their error estimates either way; exit 3 without this)."),
+    strict: bool = typer.Option(False, "--strict", help="Write nothing (exit 1) if any cell misses --rtol."),
     output: str = typer.Option(..., "--output", "-o", metavar="FILE",
                                help=f"The table file; the extension picks the format (.{', .'.join(formats.FORMATS)})"
                                     "; - writes a text format to stdout (with --format)."),
@@ -154,7 +193,8 @@ def lut_command(
         spec = formats.layouts.parse(layout)
         if digits is not None and method != "certified":
             raise ArgumentError("--digits applies to --method certified only", where="--digits")
-        with progress_bar(f"{m.name}: table cells") as progress:
+        with progress_bar(f"{m.name}: table cells") as bar:
+            progress = bar or stage_lines(m.name, axes, channels, not no_average)
             if method == "certified":
                 if spread.given():
                     raise ArgumentError("certified tables are computed in this process", where="--workers")
@@ -170,13 +210,17 @@ def lut_command(
         data = formats.dumps(result, name, tables=table_names, half=half, layout=spec, prefix=prefix,
                              channel_names=channel_names, broadcast_average=broadcast_average)
         unconverged = result.meta["unconverged"]
-        if unconverged and not allow_unconverged:
-            goal = f"--digits {result.meta['certified']['digits']}" if method == "certified" else f"--rtol {rtol:g}"
-            typer.echo(f"error: {unconverged} cells did not reach {goal}; nothing written (see their "
-                       "error estimates with --allow-unconverged)", err=True)
+        goal = f"--digits {result.meta['certified']['digits']}" if method == "certified" else f"--rtol {rtol:g}"
+        if unconverged and strict:
+            typer.echo(f"error: {unconverged} cells did not reach {goal}; nothing written (--strict)", err=True)
             raise typer.Exit(1)
         write_file(output, data)
         cells = int(np.prod([len(v) for v in axes.values()]))
         worst = float(np.max(result["E_error"])) if result["E_error"].size else 0.0
         typer.echo(f"{m.name}: {cells} cells, max error estimate {format_error(worst, 3)}, {unconverged} unconverged"
                    + ("" if to_stdout else f"; wrote {output}"), err=True)
+        if unconverged:
+            typer.echo(f"warning: {unconverged} cells did not reach {goal}, written with their error estimates "
+                       f"(meta converged_mask): {missed_cells(result)}", err=True)
+            if not allow_unconverged:
+                raise typer.Exit(3)

@@ -10,10 +10,11 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Column
 
 from .application import app
-from .common import DEBUG_OPTION, PARAM_OPTION, guarded, load_model, parse_sweep
+from .common import DEBUG_OPTION, PARAM_OPTION, backend_option, guarded, load_model, parse_sweep
 
 
 @app.command()
+@backend_option
 def report(
     models: list[str] = typer.Argument(None, metavar="MODEL_OR_FILE",
                                        help="Built-in model names or .brdf files; none: the seed lobes."),

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from functools import partial
 
@@ -30,9 +30,14 @@ from .. import validate
 from ..brdffile import random_hemisphere, rotation_about_normal
 from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
 from ..models.base import Lobe, Model, Over, mirror
+from ..models.blinn_phong import BlinnPhong
+from ..models.dielectric import MicrofacetDielectric
+from ..models.microfacet import MicrofacetModel
 from ..output.formats import Column, Records, channel_value, degrees, format_value
 from ..registry import Registry
-from .routes import halfvector_generic
+from .compiled import backend as compiled_backend
+from .routes import azimuthal, certified, halfvector_generic
+from .routes.dielectric import albedo_method as _dielectric
 from .routes.hemisphere import (
     NonFiniteIntegrand,
     NonFinitePolicy,
@@ -40,6 +45,9 @@ from .routes.hemisphere import (
     fibonacci_hemisphere,
     integrate_hemisphere,
 )
+from .routes.microfacet import azimuthal_method as _azimuthal_method
+from .routes.microfacet import halfvector_method as _microfacet
+from .routes.series import albedo_method as _series
 
 
 @dataclass(frozen=True)
@@ -125,6 +133,11 @@ class Problem:
     per_case: frozenset
     broadcast_params: dict  # per parameter, broadcast to S for reporting
     over: Over
+    #: The compiled integrand (:class:`brdfnorm.engine.compiled.drivers.NativeIntegrand`) under the compiled
+    #: backend, where the model has a compiled lobe; None: numpy evaluates.
+    native: object = None
+    #: Whether the compiled backend was asked for (the routes with kernels of their own read it).
+    compiled: bool = False
 
     def case_params(self, case: np.ndarray) -> dict:
         """Parameter values for a vector of case indices (shared values stay shared)."""
@@ -132,6 +145,8 @@ class Problem:
 
     def integrand(self, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
         """f·cos over the free direction ω for the cases given, shape (M, C)."""
+        if self.native is not None:
+            return self.native(omega, case)
         fixed = self.fixed[case]
         params = self.case_params(case)
         with np.errstate(all="ignore"):
@@ -182,6 +197,31 @@ def make_problem(model: Model, theta, phi=0.0, over: Over = "light") -> Problem:
     fixed = _directions(theta_b, phi_b).reshape(-1, 3)
     per_case = frozenset(p.name for p, batch in zip(model.parameters, batch_shapes, strict=True) if batch)
     return Problem(model, shape, theta_b, phi_b, fixed, params, per_case, broadcast, over)
+
+
+def with_native(problem: Problem, backend: str) -> Problem:
+    """``problem`` with its compiled integrand under the ``"compiled"`` backend, where Numba imports (checked only
+    here: the routes that never sample the lobe do not pay for importing it) and the model has a compiled lobe
+    (:meth:`brdfnorm.models.base.Model.native_kernel`) that compiles."""
+    if backend != "compiled" or not compiled_backend.numba_available():
+        return problem
+    return replace(problem, native=_native(problem))
+
+
+def _native(problem: Problem):
+    """The compiled integrand of ``problem`` (None where the model has no compiled lobe or it does not compile)."""
+    from .compiled.drivers import native_integrand
+
+    kernel = problem.model.native_kernel()
+    if kernel is None:
+        return None
+    K = problem.fixed.shape[0]
+    if problem.per_case:  # one packing per distinct parameter set
+        rows = [kernel.pack(problem.case_params(np.array([k]))) for k in range(K)]
+    else:
+        rows = [kernel.pack(problem.params)] * K
+    return native_integrand(kernel, problem.fixed, [np.asarray(r, dtype=float).ravel() for r in rows],
+                            problem.over == "light")
 
 
 # -- methods ----------------------------------------------------------------------------------------------
@@ -259,7 +299,8 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
     K = problem.fixed.shape[0]
     side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
     if scale is None:
-        integrand, scale = side, np.ones(K)
+        # the compiled integrand itself where there is one: the routes then run their fused kernels on it
+        integrand, scale = (problem.native if problem.native is not None and not lower else side), np.ones(K)
     else:
         def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
             return side(omega, case) / scale[case, None]
@@ -385,13 +426,37 @@ def _has_closed_form(model: Model, over: Over) -> bool:
     return type(model).closed_form_albedo is not Model.closed_form_albedo
 
 
+def _reciprocal_microfacet(applies):
+    """``applies`` except for ms=turquin over the view: that lobe is not reciprocal (its factor depends on V), and
+    the microfacet methods integrate at the fixed direction as if it were; the generic quadrature takes it."""
+    return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
+
+
+#: The albedo methods. Besides the generic quadrature and the closed forms: seed 002's hypergeometric form for the
+#: built-in Blinn-Phong lobe (reciprocal, so over the light and the view alike; exact to 1e-12 and far faster);
+#: isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables) by a 1-D integral with the azimuth
+#: in closed form; the microfacet lobes over the half vector with the distribution as the measure (exact to the
+#: mirror limit, where the hemisphere coordinates fail); rough dielectrics (BSDFs), reflection and refraction over
+#: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
+#: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
 METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
     "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
+    "series": Method("series", lambda model, over: type(model) is BlinnPhong, _series,
+                     "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"),
+    "azimuthal": Method("azimuthal", _reciprocal_microfacet(azimuthal.applies), _azimuthal_method,
+                        "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
+    "microfacet": Method("microfacet",
+                         _reciprocal_microfacet(lambda model, over: isinstance(model, MicrofacetModel)), _microfacet,
+                         "half-vector cubature, the slope distribution's CDF as coordinates"),
+    "dielectric": Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
+                         "reflection + refraction over the facet normal, the slope distribution as measure"),
+    "certified": Method("certified", certified.applies, certified.albedo_method,
+                        "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)),
 })
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
-AUTO_ORDER: list[str] = ["quadrature"]
+AUTO_ORDER: list[str] = ["series", "azimuthal", "microfacet", "dielectric", "quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:
@@ -440,6 +505,7 @@ def albedo(
     nonfinite: NonFinitePolicy = "raise",
     max_evaluations: int = 20_000_000,
     digits: int | None = None,
+    backend: str | None = None,
 ) -> AlbedoResult:
     """Directional albedo of ``model`` at polar angles ``theta`` and azimuths ``phi`` (radians, broadcast).
 
@@ -447,12 +513,15 @@ def albedo(
     Returns values of shape (*S, C) with an absolute error estimate; a point that did not reach the
     tolerance within ``max_evaluations`` has ``converged`` False and triggers a warning.
     ``digits`` (method ``"certified"`` only, default 30) is the number of significant digits asked of the
-    enclosure; the result then also carries ``lower`` and ``upper``.
+    enclosure; the result then also carries ``lower`` and ``upper``. ``backend`` ("numpy" or "compiled"; default
+    ``$BRDFNORM_BACKEND``, else "compiled" where Numba imports) chooses how the integrand and the cubature's inner
+    loops run (:mod:`brdfnorm.engine.compiled`); the answers agree within their error estimates.
     """
     rtol, atol = validate.tolerances(rtol, atol)
     validate.count(max_evaluations, "max_evaluations", maximum=10**12)
     validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
     problem = make_problem(model, theta, phi, over)
+    backend = compiled_backend.requested(backend)
     if over == "view" and getattr(model, "transmits", False):
         raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
                             "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
@@ -462,6 +531,9 @@ def albedo(
     for name, given in options.items():
         if given is not None and name not in chosen.options:
             raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
+    if chosen.name == "quadrature":  # the only method that samples the model's own lobe
+        problem = with_native(problem, backend)
+    problem = replace(problem, compiled=backend == "compiled")
     value, error, evaluations, converged, bad, *extra = chosen.run(
         problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
         **{name: given for name, given in options.items() if given is not None})
@@ -519,56 +591,3 @@ def sweep_model(model: Model, sweep: Mapping[str, object] | None) -> tuple[Model
     if values.size == 0:
         raise ArgumentError(f"the sweep over {name} is empty", where="sweep")
     return model.with_params(**{name: values[:, None]}), name, values
-
-
-# Seed 002's hypergeometric form (brdfnorm.engine.routes.series): exact (≤ 1e-12 against quadrature) and far faster,
-# for the
-# built-in Blinn-Phong lobe (reciprocal, so over the light and over the view alike).
-from ..models.blinn_phong import BlinnPhong  # noqa: E402
-from .routes.series import albedo_method as _series  # noqa: E402
-
-register_method(Method("series", lambda model, over: type(model) is BlinnPhong, _series,
-                       "seed 002's 2F1 form as a Legendre function; 1-D adaptive Gauss-Legendre"), auto_priority=0)
-
-# Isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables): the azimuth in closed form, a
-# 1-D integral (brdfnorm.engine.routes.azimuthal), tried before the half-vector cubature below.
-from .routes import azimuthal as _azimuthal  # noqa: E402
-from .routes.microfacet import azimuthal_method as _azimuthal_method  # noqa: E402
-from .routes.microfacet import halfvector_method as _microfacet  # noqa: E402
-
-
-def _reciprocal_microfacet(applies):
-    """``applies`` except for ms=turquin over the view: that lobe is not reciprocal (its factor depends on V), and
-    the microfacet methods integrate at the fixed direction as if it were; the generic quadrature takes it."""
-    return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
-
-
-register_method(Method("azimuthal", _reciprocal_microfacet(_azimuthal.applies), _azimuthal_method,
-                       "isotropic GGX or Beckmann, F = 1: the azimuth in closed form; 1-D adaptive Gauss-Legendre"),
-                auto_priority=1)
-
-# Microfacet lobes (ggx, beckmann) integrate over the half vector with the distribution as the measure
-# (brdfnorm.engine.routes.halfvector): exact to the mirror limit, where the generic engine's hemisphere coordinates
-# fail.
-from ..models.microfacet import MicrofacetModel  # noqa: E402
-
-register_method(Method("microfacet", _reciprocal_microfacet(lambda model, over: isinstance(model, MicrofacetModel)),
-                       _microfacet,
-                       "half-vector cubature, the slope distribution's CDF as coordinates"), auto_priority=2)
-
-# Rough dielectrics (BSDFs): reflection over the half vector as above, refraction over the facet normal likewise
-# (brdfnorm.engine.routes.dielectric); the result reports both parts.
-from ..models.dielectric import MicrofacetDielectric  # noqa: E402
-from .routes.dielectric import albedo_method as _dielectric  # noqa: E402
-
-register_method(Method("dielectric", lambda model, over: isinstance(model, MicrofacetDielectric), _dielectric,
-                       "reflection + refraction over the facet normal, the slope distribution as measure"),
-                auto_priority=3)
-
-# Rigorous enclosures by Arb ball arithmetic (brdfnorm.engine.routes.certified; python-flint is an optional extra).
-# Never chosen
-# by "auto": it is slower and answers a different question (a guaranteed interval, not an estimate).
-from .routes import certified as _certified  # noqa: E402
-
-register_method(Method("certified", _certified.applies, _certified.albedo_method,
-                       "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)))

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import validate
+from ..engine.compiled.backend import scope as backend_scope
 from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
 from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
 from ..engine.machinery.kronrod import NODES as KRONROD_NODES
@@ -544,13 +545,17 @@ class Lut(Mapping):
 def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
             rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
             grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None,
-            workers: int | None = 1, scheduler: str | None = None, checkpoint: str | None = None) -> Lut:
+            workers: int | None = 1, scheduler: str | None = None, checkpoint: str | None = None,
+            backend: str | None = None) -> Lut:
     """The energy tables of ``model`` over ``axes`` (name -> values; ``mu`` = cos θ_o or ``theta`` in radians,
     plus any float parameters), indexed in the order of ``axes``; ``source`` names the model as the user gave it
     (a built-in name or a ``.brdf`` path) in ``meta``. ``clamp`` raises axis values below a minimum
     before evaluation (μ ≥ 1e-4, α ≥ 1e-8 are the usual ones); ``grid`` only records how the values were made.
     ``workers`` (None: all cores), ``scheduler`` (a Dask address) and ``checkpoint`` (a directory) spread the
-    cells as :func:`brdfnorm.parallel.albedo_cells` does; the default computes in this process.
+    cells as :func:`brdfnorm.parallel.albedo_cells` does; the default computes in this process. ``backend``
+    ("numpy" or "compiled", :func:`brdfnorm.albedo`) computes every albedo of the tables. Where cells miss ``rtol``
+    their values and honest estimates are kept, ``meta["unconverged"]`` counts them and ``meta["converged_mask"]``
+    marks them (``{"E": ..., "E_avg": ...}``, nested lists over each table's axes).
 
     >>> import brdfnorm as bn
     >>> lut = compute(bn.load("blinn-phong"), {"mu": [0.5, 1.0], "n": [10.0, 100.0]}, rtol=1e-8)
@@ -563,8 +568,9 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
         raise ArgumentError("certified tables come from brdfnorm.lut.certified.compute", where="method")
     spread = None if (workers == 1 and scheduler is None and checkpoint is None) else \
         {"workers": workers, "scheduler": scheduler, "checkpoint": checkpoint}
-    result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
-                            average=average, progress=progress, spread=spread)
+    with backend_scope(backend):
+        result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
+                                average=average, progress=progress, spread=spread)
     unconverged = int(np.count_nonzero(~result.converged))
     if result.avg_converged is not None:
         unconverged += int(np.count_nonzero(~result.avg_converged))
@@ -573,6 +579,10 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": dict(clamp or {}),
             "rtol": rtol, "method": method, "units": {"mu": "cos theta_o", "theta": "radians"},
             "brdfnorm": __version__, "unconverged": unconverged, "evaluations": result.evaluations}
+    if unconverged:  # which cells missed rtol, as masks over their tables' axes (absent where every cell converged)
+        meta["converged_mask"] = {"E": result.converged.tolist()}
+        if result.avg_converged is not None:
+            meta["converged_mask"]["E_avg"] = np.asarray(result.avg_converged).tolist()
     if result.dfg is not None:
         meta["dfg"] = result.dfg
     if aliased:

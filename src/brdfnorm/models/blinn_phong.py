@@ -25,6 +25,11 @@ class BlinnPhong(Model):
     formula = "f = max(0, N·H)^n,  H = normalize(L + V)"
     parameters = (Parameter("n", "float", 32.0, 0.0, None, "specular exponent"),)
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         return np.power(half_vector_cosine(L, V), scalar_param(params, "n"))[..., None]
 

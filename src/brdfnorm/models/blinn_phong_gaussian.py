@@ -28,6 +28,11 @@ class BlinnPhongGaussian(Model):
     formula = "f = exp(−((N·H − 1)/(c − 1))²),  c = 0.04^(1/n)  (seed 003, unnormalized)"
     parameters = (Parameter("n", "float", 100.0, 0.0, None, "Blinn-Phong specular power"),)
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         c = threshold_cosine(scalar_param(params, "n"))
         angle = (half_vector_cosine(L, V) - 1.0) / (c - 1.0)

@@ -27,6 +27,11 @@ class Burley(Model):
         Parameter("reflectance", "float", 1.0, 0.0, 1.0, "base colour ρ"),
     )
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         r = scalar_param(params, "roughness")
         rho = scalar_param(params, "reflectance")

@@ -99,6 +99,11 @@ class Charlie(Model):
         """``check`` searches the roughness (from √ALPHA_MIN) and holds ``alpha`` (0 means roughness²)."""
         return {"alpha": None, "roughness": (float(np.sqrt(ALPHA_MIN)), 1.0)}
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def _white(self, L: np.ndarray, V: np.ndarray, params) -> np.ndarray:
         """D·G2/(4 N·V): f·(N·L) of the white lobe, (...); 0 below either horizon."""
         alpha = sheen_alpha(params)

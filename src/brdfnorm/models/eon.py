@@ -52,6 +52,11 @@ class EnergyPreservingOrenNayar(Model):
                   description="E_F in the multiple-scattering lobe: closed form, or the paper's fitted polynomial"),
     )
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         r = scalar_param(params, "roughness")
         rho = scalar_param(params, "reflectance")

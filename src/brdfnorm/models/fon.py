@@ -90,6 +90,11 @@ class FujiiOrenNayar(Model):
     energy = "conserved (E ≤ ρ; loses the interreflected part)"
     closed_form_domain = "every direction"
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         return fon_single_scattering(L, V, scalar_param(params, "roughness"),
                                      scalar_param(params, "reflectance"))[..., None]

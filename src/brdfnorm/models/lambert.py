@@ -15,6 +15,11 @@ class Lambert(Model):
     closed_form_domain = "every direction"
     parameters = (Parameter("reflectance", "float", 1.0, 0.0, 1.0, "diffuse reflectance (albedo)"),)
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         rho = scalar_param(params, "reflectance")
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(rho))

@@ -383,6 +383,11 @@ class MicrofacetModel(Model):
             value = value + self.multiple_scattering(L, V, params) * np.maximum(L[..., 2:3], 0.0)
         return value
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         with np.errstate(divide="ignore", invalid="ignore"):
             value = self.single_scattering(L, V, params) / L[..., 2:3]

@@ -28,6 +28,11 @@ class OrenNayar(Model):
         Parameter("reflectance", "float", 1.0, 0.0, 1.0, "diffuse reflectance ρ"),
     )
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         s2 = scalar_param(params, "sigma") ** 2
         rho = scalar_param(params, "reflectance")

@@ -37,6 +37,11 @@ class PhongOriginal(Model):
     formula = "f = max(0, R·V)^n / (N·L),  R = 2(N·L)N − L"
     parameters = (EXPONENT,)
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         return (_cosine_lobe(L, V, scalar_param(params, "n")) / L[..., 2])[..., None]
 
@@ -61,6 +66,11 @@ class PhongModified(Model):
     formula = "f = max(0, R·V)^n,  R = 2(N·L)N − L"
     parameters = (EXPONENT,)
 
+
+    def native_kernel(self):
+        from .native import kernel_of  # Numba is imported only by the compiled backend
+
+        return kernel_of(self)
     def evaluate(self, L, V, params):
         return _cosine_lobe(L, V, scalar_param(params, "n"))[..., None]
 

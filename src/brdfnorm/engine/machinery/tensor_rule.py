@@ -304,7 +304,8 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             finite = np.isfinite(F).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 F = np.where(finite[:, None, None, None], F, 0.0)
-                q, e_b, e_u, magnitude = _sums(F, group.level_u)
+                q, e_b, e_u, magnitude = (_compiled_sums if hasattr(integrand, "kernels") else _sums)(
+                    F, group.level_u)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
                     e_b = np.maximum(e_b, tail)
@@ -459,6 +460,19 @@ def _sums(F: np.ndarray, level_u: int):
     q_u = (by_channel[..., 1::2] @ fejer(level_u - 1)[1]).sum(axis=1) * (2 * np.pi / M)
     q_uu = (by_channel[..., 3::4] @ fejer(level_u - 2)[1]).sum(axis=1) * (2 * np.pi / M)
     magnitude = (np.abs(by_channel) @ w).sum(axis=1) * (2 * np.pi / M)
+    return q, _margin(np.abs(q - q_b), np.abs(q_b - q_bb)), _margin(np.abs(q - q_u), np.abs(q_u - q_uu)), magnitude
+
+
+def _compiled_sums(F: np.ndarray, level_u: int):
+    """:func:`_sums` by one compiled pass (:mod:`brdfnorm.engine.compiled.rules`), for the compiled backend."""
+    from ..compiled.rules import tensor_sums
+
+    M = F.shape[1]
+    q, q_b, q_bb, q_u, q_uu, magnitude = tensor_sums(F, fejer(level_u)[1], fejer(level_u - 1)[1],
+                                                     fejer(level_u - 2)[1])
+    step = 2 * np.pi / M
+    q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
+    q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
     return q, _margin(np.abs(q - q_b), np.abs(q_b - q_bb)), _margin(np.abs(q - q_u), np.abs(q_u - q_uu)), magnitude
 
 

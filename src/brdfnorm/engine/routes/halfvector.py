@@ -342,6 +342,19 @@ def _microfacet_weight(g: _Geometry) -> SlopeWeight:
     return weight_of
 
 
+def slope_map(g: _Geometry) -> dict[str, np.ndarray]:
+    """Per case, the constants of the slope map of (H1) that :func:`slope_integrand` uses (and the compiled
+    backend's kernel, :func:`brdfnorm.engine.compiled.kernels.slope_grid`)."""
+    Vz = g.V[:, 2]
+    cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
+    offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
+    delta = _grading_width(g)
+    return {"vz": Vz, "cos_offset": np.cos(offset), "sin_offset": np.sin(offset),
+            "amplitude": np.hypot(cx * g.ax, cy * g.ay), "ax": g.ax, "ay": g.ay,
+            "layer": _LAYER * np.maximum(g.ax, g.ay), "delta": delta, "kappa": np.arcsinh(0.5 * np.pi / delta),
+            "multiplicity": g.multiplicity}
+
+
 def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
     """The rectangle (φ, v) of (H1) with the weight ``weight_of``; ``linear``: φ is the azimuth from the offset
     itself (no φ-map), for the global rule (:mod:`brdfnorm.engine.routes.halfvector_global`), which clusters its own
@@ -443,20 +456,28 @@ def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
 
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
                              rtol: float = 1e-10, atol: float | np.ndarray = 0.0,
-                             max_evaluations: int = 20_000_000, use_global: bool = True) -> CubatureResult:
+                             max_evaluations: int = 20_000_000, use_global: bool = True,
+                             compiled: bool = False) -> CubatureResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 
     Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
     estimates at looser tolerances were found optimistic (GGX against the 1-D route of
     :mod:`brdfnorm.engine.routes.azimuthal`, 150 random (μ ∈ [1e-6, 1e-2], α ∈ [1e-8, 1]) views: up to 5·10⁵ times the
     estimate at rtol 1e-3, μ = 1.5e-6, α = 0.84; 4.7 times at rtol 1e-5; 1.3e-7 ≤ μ: 0.056 off, estimated 1e-8,
-    at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate."""
+    at rtol 1e-7), while at rtol 1e-10 every one of 300 views from μ = 1e-8 to 1e-4 was within its estimate.
+    ``compiled``: the rectangle integrand as one compiled kernel (:mod:`brdfnorm.engine.compiled.slopes`)."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     # Per case (K, 1): both rules compare each case's estimate with max(atol, rtol·|E|) elementwise.
     rtol = np.where(fixed[:, 2] < GRAZING_MU, min(rtol, GRAZING_RTOL), rtol)[:, None]
     g = _geometry(distribution, fixed, params)
+    rectangle = None
+    if compiled:
+        from ..compiled.slopes import microfacet_rectangle
+
+        def rectangle(linear: bool) -> RectangleIntegrand:
+            return microfacet_rectangle(g, linear, linear and distribution.name in global_rule.GRADED, slope_map(g))
     result = integrate_slopes(g, _microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
-                              max_evaluations=max_evaluations, use_global=use_global)
+                              max_evaluations=max_evaluations, use_global=use_global, rectangle=rectangle)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
     mass, moment = distribution.truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
@@ -465,11 +486,18 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
 
 def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
                      atol: float | np.ndarray, max_evaluations: int, use_global: bool = True,
-                     max_nodes: int = global_rule.MAX_NODES) -> CubatureResult:
+                     max_nodes: int = global_rule.MAX_NODES, chunk: int = PANELS_PER_CHUNK,
+                     rectangle: Callable[[bool], RectangleIntegrand] | None = None) -> CubatureResult:
     """∫∫ w du dφ/2π over the rectangle of (H1) for every case of ``g``: the global rule first (``max_nodes`` per
     radial piece), then the adaptive panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric
     about the plane of N and V, so half the azimuth range, counted twice, is the whole integral (the azimuth map's
-    zeros at φ = 0, π and its symmetry axes at φ = π/2, 3π/2)."""
+    zeros at φ = 0, π and its symmetry axes at φ = π/2, 3π/2). ``chunk``: panels per call of ``weight_of``;
+    ``rectangle(linear)``, where given, is the rectangle integrand itself (the compiled backend's fused kernel) in
+    place of :func:`slope_integrand` with ``weight_of``."""
+    if rectangle is None:
+        def rectangle(linear: bool) -> RectangleIntegrand:
+            return slope_integrand(g, weight_of, linear=linear)
+
     K = g.V.shape[0]
     g.multiplicity = np.where(symmetric, 2.0, 1.0)
     full = np.linspace(0.0, _TWO_PI, 5)
@@ -484,13 +512,13 @@ def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray
     lam = global_rule.clustering(g.V[:, 2])
     tried = np.arange(K) if use_global else np.arange(0)
     value, error, evaluations, settled = global_rule.integrate_global(
-        slope_integrand(g, weight_of, linear=True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
+        rectangle(True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
         atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name))
     initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:
-        panels = adaptive_rectangles(slope_integrand(g, weight_of), initial, K, rtol=rtol, atol=atol,
-                                     max_evaluations=max(max_evaluations - int(evaluations.max()), 1))
+        panels = adaptive_rectangles(rectangle(False), initial, K, rtol=rtol, atol=atol,
+                                     max_evaluations=max(max_evaluations - int(evaluations.max()), 1), chunk=chunk)
         shape = (K, max(value.shape[1], panels.value.shape[1]))  # 1 channel where no case ran on a side
         value, error = (np.broadcast_to(x, shape).copy() for x in (value, error))
         value[~settled] = np.broadcast_to(panels.value, shape)[~settled]

@@ -53,10 +53,11 @@ from collections.abc import Callable
 import numpy as np
 
 from ...models.microfacet import GGXDistribution
+from ..compiled import drivers as native
 from ..machinery.rounding import noise_bound
 from ..machinery.tensor_rule import GlobalResult
 from . import halfvector_global as global_rule
-from .halfvector import SlopeNodes, _Geometry, integrate_slopes
+from .halfvector import SlopeNodes, _Geometry, integrate_slopes, slope_map
 from .hemisphere import fibonacci_hemisphere
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
@@ -171,6 +172,7 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     F = fixed[cases]
     g = _Geometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
     failed = np.zeros(cases.size, dtype=bool)
+    fused = hasattr(integrand, "kernels")  # the compiled backend: the rectangle integrand is one kernel
 
     def weight_of(n: SlopeNodes) -> np.ndarray:
         root = np.sqrt(n.n2)
@@ -197,7 +199,11 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     with np.errstate(all="ignore"):
         # Half the budget for the global rule (three radial pieces), the rest for the panels.
         result = integrate_slopes(g, weight_of, symmetric, rtol=rtol, atol=atol, max_evaluations=budget,
-                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)))
+                                  max_nodes=min(global_rule.MAX_NODES, budget // (2 * global_rule.PIECES)),
+                                  rectangle=None if not fused else (
+                                      lambda linear: native.slope_rectangle(
+                                          integrand, slope_map(g), F, cases, failed, linear,
+                                          linear and _GGX.name in global_rule.GRADED)))
     value, error, magnitude = result.value[:, :-1], result.error[:, :-1], result.value[:, -1:]
     error = error + noise_bound(np.broadcast_to(noise_amplitude[cases], value.shape), magnitude)
     within = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=1)

@@ -68,6 +68,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
 from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
@@ -445,6 +446,11 @@ def _check_by_halves(panels: _Panels, along_beta: bool, integrand, frame, widths
     nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
     if not along_beta:
         nodes, weights = nodes[::-1], weights[::-1]
+    half = panels.case.size
+    if hasattr(integrand, "kernels"):  # the compiled backend: map, shader, Jacobian and sums in one kernel
+        total = native.hemisphere_sums(integrand, halves.case, halves.b0, halves.b1, halves.u0, halves.u1, frame,
+                                       widths, supports, *nodes, *weights)
+        return refinement_change(panels.value, total[:half], total[half:])
     sums = []
     with np.errstate(all="ignore"):
         for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
@@ -452,7 +458,6 @@ def _check_by_halves(panels: _Panels, along_beta: bool, integrand, frame, widths
             values = np.where(np.isfinite(values), values, 0.0)
             sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
     total = np.concatenate(sums)
-    half = panels.case.size
     return refinement_change(panels.value, total[:half], total[half:])
 
 
@@ -463,7 +468,20 @@ def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
 
 
 def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
-    """Fill in the estimates of ``panels``, calling the integrand on bounded chunks of nodes."""
+    """Fill in the estimates of ``panels``, calling the integrand on bounded chunks of nodes (or, under the compiled
+    backend, one fused kernel over all panels)."""
+    if hasattr(integrand, "kernels"):
+        value, err_b, err_u, magnitude, bad, first_bad = native.hemisphere_panels(
+            integrand, panels.case, panels.b0, panels.b1, panels.u0, panels.u1, frame, widths, supports, NODES,
+            KRONROD, GAUSS)
+        if nonfinite == "raise" and np.any(first_bad >= 0):
+            r = int(np.argmax(first_bad >= 0))
+            b, u = divmod(int(first_bad[r]), NODES.size)
+            omega, _ = _map_nodes(panels.take(slice(r, r + 1)), frame, widths, supports)
+            raise NonFiniteIntegrand(int(panels.case[r]), omega[0, b, u],
+                                     integrand(omega[0, b, u][None], panels.case[r:r + 1])[0])
+        panels.value, panels.err_b, panels.err_u, panels.magnitude, panels.bad = value, err_b, err_u, magnitude, bad
+        return
     parts = []
     for part, omega, jacobian, values in _node_values(panels, integrand, frame, widths, supports, NODES,
                                                       max_nodes_per_call):

@@ -27,6 +27,7 @@ from ...models.microfacet import (
     fresnel_normal,
     register_compensation,
 )
+from ..compiled import backend as compiled_backend
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
 from .series import adaptive_gauss_legendre
@@ -40,24 +41,26 @@ _EXACT_RTOL = 1e-11
 
 # -- the albedo methods -----------------------------------------------------------------------------------
 
-def _albedo_method(single_scattering):
+def _albedo_method(single_scattering, compiles: bool = False):
     """A ``brdfnorm.albedo`` method that integrates a :class:`brdfnorm.albedo.Problem`'s batch by
     ``single_scattering(distribution, fixed, params, rtol=, atol=, max_evaluations=)`` and adds the compensation
     lobe (:func:`with_compensation`). The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral
-    over the view with the light fixed is the same integral at the fixed direction."""
+    over the view with the light fixed is the same integral at the fixed direction. With ``compiles``,
+    ``single_scattering`` takes ``compiled=`` (the compiled backend asked for, and Numba there)."""
     def run(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
         model: MicrofacetModel = problem.model
         require_mu_min(problem.fixed[:, 2])
         params = problem.case_params(np.arange(problem.fixed.shape[0]))
+        options = {"compiled": problem.compiled and compiled_backend.numba_available()} if compiles else {}
         result = single_scattering(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
-                                   max_evaluations=max_evaluations)
+                                   max_evaluations=max_evaluations, **options)
         value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
         return value, error, result.evaluations, result.converged, None
     return run
 
 
 #: Method ``"microfacet"``: every ggx/beckmann lobe by the half-vector cubature.
-halfvector_method = _albedo_method(single_scattering_albedo)
+halfvector_method = _albedo_method(single_scattering_albedo, compiles=True)
 #: Method ``"azimuthal"``: isotropic lobes with F = 1 by :mod:`brdfnorm.engine.routes.azimuthal`'s 1-D integral.
 azimuthal_method = _albedo_method(
     lambda distribution, fixed, params, **options: white_albedo(distribution, params["shadowing"], fixed,

@@ -1,0 +1,146 @@
+"""The compiled backend against the numpy backend and scipy's dblquad (issue 39), side by side in one process.
+
+Rows (each the best of ``repeats`` timed runs after one untimed warm-up, both backends in the same run; wall and
+CPU seconds, ratios of CPU seconds):
+
+* ``generic-vs-dblquad``: one Blinn-Phong (n = 100) albedo at θ_o = 60° by the generic engine (method
+  "quadrature") at rtol 1e-9, and by ``scipy.integrate.dblquad`` at the same rtol; errors against mpmath;
+* ``evaluations``: integrand evaluations per generic Blinn-Phong albedo over θ_o = 0…89° (rtol 1e-9);
+* ``generic-table``: a 32 × 32 E(μ, α) table and E_avg of built-in GGX through the generic engine (method
+  "quadrature": the route a ``.brdf`` GGX takes, with the compiled lobe as its shader), rtol 1e-10;
+* ``brdf-table``: the same table of ``examples/ggx.brdf`` (its GLSL shader compiled where the GLSL native backend
+  is present, else through numpy closures);
+* ``ggx-table`` and ``dfg-table``: ``lut ggx`` 32 × 32 E + E_avg, and its split-sum channels, in-process;
+* ``cold-start``: a new process importing brdfnorm and computing one built-in albedo, and one generic albedo with
+  the kernel cache warm and with an empty cache (compiling the lobe's kernels).
+
+Run alone: ``.venv/bin/python benchmarks/bench_backends.py [--quick]``; in ``make bench`` as workload ``backends``.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import brdfnorm as bn
+from brdfnorm import lut
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+BACKENDS = ("numpy", "compiled")
+
+
+#: CPU seconds of the best run, beside its wall time (``_best``): on a shared machine the wall time scales with the
+#: load, the CPU time far less.
+CPU: dict[int, float] = {}
+
+
+def _best(call, repeats: int) -> tuple[float, object]:
+    """The best wall time of ``repeats`` runs after a warm-up (its CPU time in CPU[id(result)])."""
+    call()  # warm-up: kernel loading, caches
+    times, result = [], None
+    for _ in range(max(repeats, 1)):
+        start, cpu = time.perf_counter(), time.process_time()
+        result = call()
+        times.append((time.perf_counter() - start, time.process_time() - cpu))
+    wall, cpu = min(times)
+    CPU[id(result)] = cpu
+    return wall, result
+
+
+def _generic_vs_dblquad(repeats: int) -> dict:
+    sys.path.insert(0, str(HERE))
+    import peers
+
+    n, theta, rtol = 100.0, 60.0, 1e-9
+    model = bn.load("blinn-phong", n=n)
+    truth = peers.blinn_phong_reference(n, np.radians(theta))
+    row = {"title": f"Blinn-Phong n={n:g} albedo at {theta:g}°, rtol {rtol:g}"}
+    for backend in BACKENDS:
+        seconds, result = _best(lambda b=backend: bn.albedo(model, np.radians(theta), method="quadrature",
+                                                            rtol=rtol, backend=b), repeats)
+        row[backend] = {"time_s": seconds, "cpu_s": CPU[id(result)], "error": abs(float(result.value[0]) - truth),
+                        "estimate": float(result.error[0]), "evaluations": int(result.evaluations)}
+    seconds, peer = _best(lambda: peers.dblquad_albedo(peers.blinn_phong(n), np.radians(theta), rtol), 1)
+    row["dblquad"] = {"time_s": seconds, "cpu_s": CPU[id(peer)], "error": abs(peer.value - truth)}
+    for backend in BACKENDS:
+        row[f"dblquad_over_{backend}"] = row["dblquad"]["cpu_s"] / row[backend]["cpu_s"]
+    return row
+
+
+def _evaluations() -> dict:
+    theta = np.radians(np.arange(90.0))
+    result = bn.albedo(bn.load("blinn-phong", n=100.0), theta, method="quadrature", rtol=1e-9, backend="numpy")
+    return {"title": "evaluations per generic Blinn-Phong (n=100) albedo, θ_o = 0…89°, rtol 1e-9",
+            "mean": float(result.evaluations.mean()), "max": int(result.evaluations.max())}
+
+
+def _table(model, size: int, repeats: int, *, method: str = "auto", channels=(), backends=BACKENDS,
+           roughness: str = "alpha") -> dict:
+    axes = {"mu": np.linspace(0.0, 1.0, size), roughness: np.linspace(0.05, 1.0, size)}
+    row = {}
+    values = {}
+    for backend in backends:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            seconds, table = _best(lambda b=backend: lut.compute(model, axes, clamp={"mu": 1e-4}, rtol=1e-10,
+                                                                  method=method, channels=channels, backend=b),
+                                   repeats)
+        values[backend] = table
+        row[backend] = {"time_s": seconds, "cpu_s": CPU[id(table)], "unconverged": table.meta["unconverged"],
+                        "evaluations": table.meta["evaluations"]}
+    if len(values) == 2:
+        a, b = values["numpy"], values["compiled"]
+        row["compiled_within_estimates"] = bool(np.all(np.abs(a["E"] - b["E"]) <= a["E_error"] + b["E_error"]))
+        row["numpy_over_compiled"] = row["numpy"]["cpu_s"] / row["compiled"]["cpu_s"]
+    return row
+
+
+def _seconds_in_new_process(code: str, env: dict) -> float:
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True)
+    return time.perf_counter() - start
+
+
+def _cold_start() -> dict:
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    builtin = "import brdfnorm as bn; bn.albedo(bn.load('ggx', alpha=0.3), 0.5)"
+    generic = "import brdfnorm as bn; bn.albedo(bn.load('oren-nayar'), 0.5, method='quadrature')"
+    row = {"builtin_albedo_s": _seconds_in_new_process(builtin, env),
+           "generic_albedo_warm_cache_s": _seconds_in_new_process(generic, env)}
+    with tempfile.TemporaryDirectory() as empty:
+        row["generic_albedo_empty_cache_s"] = _seconds_in_new_process(generic, {**env, "BRDFNORM_CACHE_DIR": empty})
+    row["import_s"] = _seconds_in_new_process("import brdfnorm", env)
+    return row
+
+
+def w_backends(cfg, refs=None) -> dict:
+    """The workload as benchmarks/run.py reports it."""
+    quick = cfg.quick
+    size, repeats = (8, 1) if quick else (32, 2)
+    ggx = bn.load("ggx")
+    return {
+        "title": "compiled backend (issue 39): numpy vs compiled vs dblquad",
+        "status": "ok", "load_average": os.getloadavg()[0],
+        "generic_vs_dblquad": _generic_vs_dblquad(repeats),
+        "evaluations": _evaluations(),
+        "generic_table": _table(ggx, size, repeats, method="quadrature"),
+        "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness"),
+        "ggx_table": _table(ggx, size, repeats),
+        "dfg_table": _table(ggx, size, 1, channels=("dfg",)),
+        "cold_start": _cold_start(),
+    }
+
+
+if __name__ == "__main__":
+    import json
+    from types import SimpleNamespace
+
+    print(json.dumps(w_backends(SimpleNamespace(quick="--quick" in sys.argv[1:])), indent=1))

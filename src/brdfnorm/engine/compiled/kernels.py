@@ -1,0 +1,222 @@
+"""The compiled engine's kernels, written against one module-level ``shader`` (a model's
+:class:`brdfnorm.models.base.NativeKernel` function f(lx, ly, lz, vx, vy, vz, u) -> tuple of floats).
+
+This file is a template: :mod:`brdfnorm.engine.compiled.drivers` copies it once per shader into the per-user cache
+directory and sets ``shader`` there before the first call, so that Numba's on-disk cache (``cache=True``) holds the
+compiled kernels of every shader (a kernel given the shader as an argument is compiled anew in every process).
+
+What the kernels fuse, per node and in one loop over the cells' panels (one thread: tables spread their cells over
+processes, :mod:`brdfnorm.parallel`; Numba's ``parallel=True`` took 20 s instead of 8 s to compile the kernels of
+one lobe and its threads, woken per call, cost more than they gave on a loaded machine):
+
+* :func:`integrand_nodes` — the integrand f·(N·ω) of :meth:`brdfnorm.engine.methods.Problem.integrand` at given
+  directions (every route that samples the integrand: lobe search, rounding noise, global rules, isotropy test);
+* :func:`hemisphere_panels` — the lobe-aligned map of :func:`brdfnorm.engine.machinery.tensor_rule.map_grid`
+  (horizon grading p = 2), the shader, the Jacobian and the G7/K15 tensor sums and rounding floor of
+  :func:`brdfnorm.engine.routes.hemisphere._estimate` for whole panels;
+* :func:`hemisphere_sums` — the same map and shader under any tensor rule (the Lobatto ⊗ G7 check on halves);
+* :func:`slope_grid` — the half-vector route's rectangle integrand
+  (:func:`brdfnorm.engine.routes.halfvector_generic.route`): the slope map of the GGX measure, the reflection
+  L = 2(V·H)H − V, the shader and the Jacobian.
+
+The formulas are those of the numpy backend, term for term; the sums run in another order, so values agree to
+rounding (far inside the error estimates), not bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from brdfnorm.engine.compiled.slopes import azimuth_node, piece_extent, radial_node
+
+shader = None  # set per copy (drivers.py)
+
+_EPS = 2.220446049250313e-16
+
+
+@njit(cache=True, error_model="numpy")
+def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover - compiled
+    """out[i] = f(ω_i, V) ω_z (over the light) or f(L, ω_i) ω_z (over the view), case[i] the row of fixed and U."""
+    for i in range(omega.shape[0]):
+        k = case[i]
+        wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
+        if over_light:
+            r = shader(wx, wy, wz, fixed[k, 0], fixed[k, 1], fixed[k, 2], U[k])
+        else:
+            r = shader(fixed[k, 0], fixed[k, 1], fixed[k, 2], wx, wy, wz, U[k])
+        for c in range(len(r)):
+            out[i, c] = r[c] * wz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _azimuth(k, beta, P, T, B, widths, supports):  # pragma: no cover - compiled
+    """What map_grid (grading p = 2, width scale 1) computes once per azimuth β: the radial unit vector
+    cos β T + sin β B and A = atan(α_max/w)."""
+    cos_b, sin_b = math.cos(beta), math.sin(beta)
+    pz = P[k, 2]
+    s = math.sqrt(max(1.0 - pz * pz, 0.0))
+    alpha_max = min(math.atan2(pz, -s * cos_b), supports[k])
+    A = math.atan(alpha_max / widths[k])
+    rx = cos_b * T[k, 0] + sin_b * B[k, 0]
+    ry = cos_b * T[k, 1] + sin_b * B[k, 1]
+    rz = cos_b * T[k, 2] + sin_b * B[k, 2]
+    return rx, ry, rz, A
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _node(k, rx, ry, rz, A, u, weight, P, widths):  # pragma: no cover - compiled
+    """ω and the Jacobian sin α dα/du · weight of map_grid at the radial coordinate u of one azimuth."""
+    w = widths[k]
+    one_minus_u = 1.0 - u
+    v = 1.0 - one_minus_u * one_minus_u
+    t = math.tan(v * A)
+    h = math.tan(t * (0.5 * w))
+    h2 = h * h
+    scale = 1.0 / (1.0 + h2)
+    sin_a = h * (2.0 * scale)
+    cos_a = (1.0 - h2) * scale
+    jacobian = (t * t + 1.0) * (A * (w * weight)) * (2.0 * one_minus_u) * sin_a
+    return (sin_a * rx + cos_a * P[k, 0], sin_a * ry + cos_a * P[k, 1], sin_a * rz + cos_a * P[k, 2],
+            jacobian)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _integrand(k, ox, oy, oz, fixed, U, over_light):  # pragma: no cover - compiled
+    if over_light:
+        return shader(ox, oy, oz, fixed[k, 0], fixed[k, 1], fixed[k, 2], U[k])
+    return shader(fixed[k, 0], fixed[k, 1], fixed[k, 2], ox, oy, oz, U[k])
+
+
+@njit(cache=True, error_model="numpy")
+def hemisphere_panels(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, over_light, nodes, kronrod, gauss,
+                      value, err_b, err_u, magnitude, bad, first_bad):  # pragma: no cover - compiled
+    """K15⊗K15 value, |KK − GK| (β), |KK − KG| (u) with the floor 50ε·magnitude, and the K15⊗K15 integral of |g|,
+    per panel and channel; ``bad`` the solid angle of non-finite nodes (counted as 0); ``first_bad`` the first
+    non-finite node b·n + u per panel, −1 where none."""
+    n = nodes.size
+    C = value.shape[1]
+    for r in range(case.size):
+        k = case[r]
+        beta_half = 0.5 * (b1[r] - b0[r])
+        u_half = 0.5 * (u1[r] - u0[r])
+        beta_mid = 0.5 * (b0[r] + b1[r])
+        u_mid = 0.5 * (u0[r] + u1[r])
+        weight = beta_half * u_half
+        kk = np.zeros(C)
+        gk = np.zeros(C)
+        kg = np.zeros(C)
+        mag = np.zeros(C)
+        over_u_k = np.zeros(C)
+        over_u_g = np.zeros(C)
+        over_u_m = np.zeros(C)
+        lost = 0.0
+        first_bad[r] = -1
+        for b in range(n):
+            rx, ry, rz, A = _azimuth(k, beta_mid + beta_half * nodes[b], P, T, B, widths, supports)
+            for c in range(C):
+                over_u_k[c] = 0.0
+                over_u_g[c] = 0.0
+                over_u_m[c] = 0.0
+            for j in range(n):
+                ox, oy, oz, jac = _node(k, rx, ry, rz, A, u_mid + u_half * nodes[j], weight, P, widths)
+                g = _integrand(k, ox, oy, oz, fixed, U, over_light)
+                finite = True
+                for c in range(C):
+                    if not math.isfinite(g[c] * oz):
+                        finite = False
+                if not finite:
+                    if first_bad[r] < 0:
+                        first_bad[r] = b * n + j
+                    lost += jac * kronrod[b] * kronrod[j]
+                    continue
+                for c in range(C):
+                    x = g[c] * oz * jac
+                    over_u_k[c] += x * kronrod[j]
+                    over_u_g[c] += x * gauss[j]
+                    over_u_m[c] += abs(x) * kronrod[j]
+            for c in range(C):
+                kk[c] += over_u_k[c] * kronrod[b]
+                gk[c] += over_u_k[c] * gauss[b]
+                kg[c] += over_u_g[c] * kronrod[b]
+                mag[c] += over_u_m[c] * kronrod[b]
+        for c in range(C):
+            floor = 50.0 * _EPS * mag[c]
+            value[r, c] = kk[c]
+            err_b[r, c] = max(abs(kk[c] - gk[c]), floor)
+            err_u[r, c] = max(abs(kk[c] - kg[c]), floor)
+            magnitude[r, c] = mag[c]
+        bad[r] = lost
+
+
+@njit(cache=True, error_model="numpy")
+def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, over_light, nodes_b, nodes_u,
+                    weights_b, weights_u, total):  # pragma: no cover - compiled
+    """Σ g·J w_b w_u over the tensor rule nodes_b ⊗ nodes_u of each panel (non-finite values count as 0)."""
+    C = total.shape[1]
+    for r in range(case.size):
+        k = case[r]
+        beta_half = 0.5 * (b1[r] - b0[r])
+        u_half = 0.5 * (u1[r] - u0[r])
+        beta_mid = 0.5 * (b0[r] + b1[r])
+        u_mid = 0.5 * (u0[r] + u1[r])
+        weight = beta_half * u_half
+        for c in range(C):
+            total[r, c] = 0.0
+        for b in range(nodes_b.size):
+            rx, ry, rz, A = _azimuth(k, beta_mid + beta_half * nodes_b[b], P, T, B, widths, supports)
+            for j in range(nodes_u.size):
+                ox, oy, oz, jac = _node(k, rx, ry, rz, A, u_mid + u_half * nodes_u[j], weight, P, widths)
+                g = _integrand(k, ox, oy, oz, fixed, U, over_light)
+                for c in range(C):
+                    x = g[c] * oz * jac
+                    if math.isfinite(x):
+                        total[r, c] += x * weights_b[b] * weights_u[j]
+
+
+@njit(cache=True, error_model="numpy")
+def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
+               kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
+    """The half-vector route's rectangle integrand (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for
+    the GGX slope measure, with the generic weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`) on
+    grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,):
+    out (R, nφ, nv, C + 1), the weighted values and their largest |value|."""
+    C = out.shape[3] - 1
+    for r in range(k.size):
+        q = k[r]
+        kind = piece[r]
+        for i in range(phi.shape[1]):
+            dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+                phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
+                kappa[q], multiplicity[q], vz[q], False)
+            start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, False)
+            for j in range(v.shape[1]):
+                s, weight_t, gap_h = radial_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end,
+                                                 log_horizon, False)
+                one_sp = 1.0 + s * p
+                n2 = 1.0 + s * s * d2
+                Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2
+                # the generic weight: g·J of the reflected direction
+                root = math.sqrt(n2)
+                cos_fh = F[q, 2] * one_sp / root
+                ox = 2.0 * cos_fh * (s * dx / root) - F[q, 0]
+                oy = 2.0 * cos_fh * (s * dy / root) - F[q, 1]
+                g = _integrand(rows[q], ox, oy, Lz, fixed, U, over_light)
+                a = ax[q]
+                one_s2 = 1.0 + s * s
+                jacobian = 4.0 * cos_fh * math.pi * a * a * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
+                inside = Lz > 0
+                finite = True
+                for c in range(C):
+                    if not math.isfinite(g[c] * Lz):
+                        finite = False
+                if inside and not finite:
+                    failed[q] = True
+                largest = 0.0
+                for c in range(C):
+                    x = g[c] * Lz * jacobian if (inside and finite) else 0.0
+                    out[r, i, j, c] = x
+                    largest = max(largest, abs(x))
+                out[r, i, j, C] = largest

@@ -1,0 +1,186 @@
+"""The half-vector route's slope map (:func:`brdfnorm.engine.routes.halfvector.slope_integrand`, equation (H1) of
+:mod:`brdfnorm.engine.routes.halfvector`) for one azimuth and one radial node, compiled; and the microfacet lobes'
+rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector._microfacet_weight``), which needs no
+shader and so is one cached kernel for every ggx/beckmann lobe.
+
+The shader kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) use the same two helpers. Term for term the
+numpy formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
+three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps its accuracy at the horizon.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...models.native import _beckmann_lambda, _fresnel, _ggx_lambda
+
+_OPTIONS = dict(cache=True, error_model="numpy")
+#: Beckmann's slope radius cap (``BeckmannDistribution.CAP``).
+CAP = 8.0
+
+
+@njit(**_OPTIONS, inline="always")
+def _round_half_even(x):  # pragma: no cover - compiled
+    r = math.floor(x + 0.5)
+    if r - x == 0.5 and r % 2.0 != 0.0:
+        r -= 1.0
+    return r
+
+
+@njit(**_OPTIONS, inline="always")
+def azimuth_node(ph, linear, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, vz,
+                 beckmann):  # pragma: no cover - compiled
+    """Per azimuth φ: (dx, dy, d2, p, q − p, s_h, s_split, s_middle, s_end, dφ/dξ · multiplicity/2π)."""
+    zero = math.pi * _round_half_even(ph / math.pi)
+    if linear:
+        epsilon, phi_jacobian = ph - zero, 1.0
+    else:
+        stretch = kappa * abs(ph - zero) / (0.5 * math.pi)
+        sign = 1.0 if ph > zero else (-1.0 if ph < zero else 0.0)
+        epsilon = sign * delta * math.sinh(stretch)
+        phi_jacobian = delta * kappa * math.cosh(stretch) / (0.5 * math.pi)
+    parity = 1.0 - 2.0 * (_round_half_even(zero / math.pi) % 2.0)
+    cos_e, sin_e = math.cos(epsilon), math.sin(epsilon)
+    cos_a = parity * (cos_offset * cos_e - sin_offset * sin_e)
+    sin_a = parity * (sin_offset * cos_e + cos_offset * sin_e)
+    dx, dy = ax * cos_a, ay * sin_a
+    d2 = dx * dx + dy * dy
+    p = -amplitude * parity * sin_e
+    q = math.sqrt(p * p + d2)
+    q_plus_p = q + p if p > 0 else d2 / (q - p)
+    q_minus_p = d2 / (q + p) if p > 0 else q - p
+    s_h = q_plus_p / d2
+    r_h2 = q_plus_p * q_plus_p / d2
+    gap = layer * (1.0 + r_h2) / (2.0 * q * vz)
+    s_split = s_h / (1.0 + gap / s_h)
+    s_middle = s_split / (1.0 + s_split)
+    s_end = s_h
+    if beckmann:
+        s_end, s_split, s_middle = min(s_h, CAP), min(s_split, CAP), min(s_middle, CAP)
+    return dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, phi_jacobian * (multiplicity / (2.0 * math.pi))
+
+
+@njit(**_OPTIONS, inline="always")
+def piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann):  # pragma: no cover - compiled
+    """(start, length, ln(s_end/s_split)) of radial piece ``kind`` in its own coordinate, once per azimuth."""
+    start, length, log_ratio = 0.0, 0.0, 0.0
+    if kind == 0:
+        length = s_middle if beckmann else math.atan(s_middle)
+    elif kind == 1:
+        start = s_middle if beckmann else math.asinh(s_middle)
+        length = (s_split if beckmann else math.asinh(s_split)) - start
+    elif log_horizon:
+        log_ratio = math.log(s_end / s_split)
+    else:
+        length = s_end - s_split
+    return start, length, log_ratio
+
+
+@njit(**_OPTIONS, inline="always")
+def _density(s, beckmann):  # pragma: no cover - compiled
+    return 2.0 * s * math.exp(-s * s) if beckmann else 2.0 * s / (1.0 + s * s) ** 2
+
+
+@njit(**_OPTIONS, inline="always")
+def radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann):  # pragma: no cover
+    """(slope radius s, du/dt · the piece's length, s_h − s accurately) at position ``at`` ∈ [0, 1] of a piece."""
+    if kind == 0:
+        t = at * length
+        if beckmann:
+            return t, _density(t, True) * length, s_h - t
+        return math.tan(t), math.sin(2.0 * t) * length, s_h - math.tan(t)
+    if kind == 1:
+        t = start + at * length
+        if beckmann:
+            return t, _density(t, True) * length, s_h - t
+        e2 = math.exp(-2.0 * t)
+        radius = math.sinh(t)
+        return radius, 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3 * length, s_h - radius
+    if log_horizon:
+        radius = s_end * math.exp((at - 1.0) * log_ratio)
+        to_end = -s_end * math.expm1((at - 1.0) * log_ratio)
+        return radius, _density(radius, beckmann) * radius * log_ratio, (s_h - s_end) + to_end
+    radius = s_split + at * length
+    return radius, _density(radius, beckmann) * length, (s_h - s_end) + length * (1.0 - at)
+
+
+@njit(**_OPTIONS)
+def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
+                    ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
+                    out):  # pragma: no cover - compiled
+    """w = G2(L, V) F(V·H)(1 + c·x) of the microfacet lobe (H1) times du/dt and the azimuth's Jacobian on grids
+    φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial ``piece`` (R,): out (R, nφ, nv, C), C = 1
+    where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16): the packed f0, f90, η, k of
+    :func:`brdfnorm.models.native._fresnel`)."""
+    C = out.shape[3]
+    for r in range(k.size):
+        q = k[r]
+        kind = piece[r]
+        for i in range(phi.shape[1]):
+            dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+                phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
+                kappa[q], multiplicity[q], vz[q], beckmann)
+            start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+            for j in range(v.shape[1]):
+                s, weight_t, gap_h = radial_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end,
+                                                 log_horizon, beckmann)
+                one_sp = 1.0 + s * p
+                n2 = 1.0 + s * s * d2
+                Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2
+                if not Lz > 0:
+                    for c in range(C):
+                        out[r, i, j, c] = 0.0
+                    continue
+                tangent2 = max((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay[q] * ay[q])
+                if ax[q] != ay[q]:
+                    Lx = 2.0 * vz[q] * one_sp * s * dx / n2 - vx[q]
+                    tangent2 += (ax[q] * ax[q] - ay[q] * ay[q]) * Lx * Lx
+                a2 = tangent2 / (Lz * Lz)
+                lambda_l = _beckmann_lambda(a2) if beckmann else _ggx_lambda(a2)
+                if separable:
+                    G2 = 1.0 / ((1.0 + lambda_l) * (1.0 + lambda_v[q]))
+                else:
+                    G2 = 1.0 / (1.0 + lambda_l + lambda_v[q])
+                weight = G2 * one_sp * weight_t * azimuth
+                if fresnel_kind == 0:
+                    out[r, i, j, 0] = weight
+                else:
+                    cos_vh = vz[q] * one_sp / math.sqrt(n2)
+                    for c in range(C):
+                        out[r, i, j, c] = weight * _fresnel(fresnel_kind, cos_vh, fresnel[q], c)
+
+
+def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
+    """The microfacet rectangle integrand (case, φ (R, n, 1), v (R, 1, m), piece (R,)) -> (R, n, m, C) of the
+    half-vector geometry ``g`` (``halfvector._Geometry``) as the compiled kernel; ``geometry`` is
+    ``halfvector.slope_map(g)``."""
+    K = g.V.shape[0]
+    names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
+    per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
+    vx = np.ascontiguousarray(g.V[:, 0], dtype=float)
+    lambda_v = np.ascontiguousarray(np.broadcast_to(g.lambda_v, (K,)), dtype=float)
+    kind = {"none": 0, "schlick": 1, "dielectric": 2, "conductor": 3}[g.fresnel_params["fresnel"]]
+    fresnel = np.zeros((K, 16))
+    for column, name in ((4, "f0"), (7, "f90"), (10, "eta"), (13, "k")):
+        value = np.asarray(g.fresnel_params[name], dtype=float)
+        fresnel[:, column:column + 3] = np.broadcast_to(value.reshape(-1, value.shape[-1]) if value.ndim else value,
+                                                        (K, 3))
+    channels = 1 if kind == 0 else 3
+    beckmann = g.distribution.name == "beckmann"
+    separable = g.shadowing == "separable"
+
+    def integrand(case, phi, v, piece):
+        R = case.size
+        phi = np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1)
+        v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
+        out = np.empty((R, phi.shape[1], v.shape[1], channels))
+        microfacet_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v, np.ascontiguousarray(piece, dtype=np.int64),
+                        linear, log_horizon, beckmann, per_case[0], vx, *per_case[1:], lambda_v, separable, kind,
+                        fresnel, out)
+        return out
+
+    integrand.compiled = True  # the route's sums run compiled too
+    return integrand
