@@ -2,21 +2,20 @@
 
 from __future__ import annotations
 
-import atexit
 import os
-import shutil
-import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import settings
 from scipy import integrate
 
-# Compiled shaders (brdfnorm.glsl.native) are cached on disk: tests and the commands they run use a directory of
-# their own, never the user's ~/.cache/brdfnorm.
-_CACHE = tempfile.mkdtemp(prefix="brdfnorm-test-cache-")
-os.environ["BRDFNORM_CACHE_DIR"] = _CACHE
-atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)
+# Compiled kernels (brdfnorm.engine.compiled, brdfnorm.glsl.native) are cached on disk: tests and the commands they
+# run use a directory of the checkout's own (.test-cache/, ignored by git), never the user's ~/.cache/brdfnorm. It
+# is shared by the xdist workers and kept between runs, so each lobe's kernels are compiled once per checkout, not
+# once per worker and run (the cache keys cover the generated source and brdfnorm's and Numba's versions).
+_CACHE = Path(__file__).resolve().parent.parent / ".test-cache"
+os.environ["BRDFNORM_CACHE_DIR"] = str(_CACHE)
 
 # CI runs the property tests on a fixed example sequence, so a verdict there is reproducible; locally they
 # keep exploring new inputs on every run.
