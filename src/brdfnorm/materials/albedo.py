@@ -8,8 +8,8 @@ Three sources, chosen by the material's ``albedo_source``:
   bisected until the interpolant meets the exact E at the 16 points between its nodes within
   :data:`CURVE_TOLERANCE` (or 4 times the nodes' own quadrature errors where those are larger: the sheen's); its
   error estimate is twice the largest such miss plus the nodes' own errors (on the GGX lobes of the tests the true
-  error at random μ was 1e-13 to 1.3e-12 against estimates of 9e-12 to 1.8e-11). Below μ = :data:`MU_LOW` the curve holds E(MU_LOW) (the
-  integrand there carries the weight μ ≤ 1e-6).
+  error at random μ was 1e-13 to 1.3e-12 against estimates of 9e-12 to 1.8e-11). Below μ = :data:`MU_LOW` the
+  curve holds E(MU_LOW) (the integrand there carries the weight μ ≤ 1e-6).
 * **table** — an engine's table: E on an N × N grid over (μ, roughness) ∈ [0, 1]² (the μ = 0 row at μ = 1e-4, as
   renderers clamp it), read bilinearly, with E_avg the table's own 2∫E μ dμ (exact for the table read linearly in μ);
   so that a table-driven layering can be compared with the exact one.

@@ -40,8 +40,8 @@ import numpy as np
 from ..models.fresnel import Fresnel
 from ..parameters import Parameter
 from . import compose
-from .compose import Term, layer, lobe, mix
 from .components import Diffuse, Microfacet, Sheen
+from .compose import Term, layer, lobe, mix
 
 _C = "color"
 
@@ -135,6 +135,8 @@ def build(p: dict) -> list[Term]:
     metal = Microfacet("metal", r_spec, metal_fresnel(p), (float(p["specular_weight"]),) * 3)
 
     def under(spec: Microfacet, base: list[Term]) -> list[Term]:
+        if spec.fresnel.kind == "dielectric" and spec.fresnel.eta == 1.0:  # specular_weight 0: no interface
+            return base
         if p["diffuse_under"] == "filament":
             return lobe(spec) + base
         return layer(lobe(spec), base, spec, rule, source=source, size=size)
