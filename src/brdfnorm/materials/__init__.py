@@ -2,7 +2,8 @@
 
 :mod:`.components` (the lobes and their exact E(μ)), :mod:`.albedo` (E inside the integrand: exact, curves,
 engine tables), :mod:`.compose` (the rules), :mod:`.openpbr` (OpenPBR Surface's structure and parameters),
-:mod:`.model` (the ``openpbr`` model), :mod:`.route` (albedo method ``"material"``, term by term).
+:mod:`.model` (the ``openpbr`` model), :mod:`.route` (albedo method ``"material"``, term by term), :mod:`.files`
+(material files, TOML or JSON).
 Importing the package registers the model in :data:`brdfnorm.models.REGISTRY` and the method in the engine's.
 """
 
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 from ..engine.methods import Method, register_method
 from ..models import REGISTRY
-from . import route
+from . import files, route
 from .model import OpenPBR
 
 if "openpbr" not in REGISTRY:
@@ -19,4 +20,4 @@ if "openpbr" not in REGISTRY:
                            "a material term by term: its lobes' exact albedos through the layering factors"),
                     auto_priority=0)
 
-__all__ = ["OpenPBR"]
+__all__ = ["OpenPBR", "files"]

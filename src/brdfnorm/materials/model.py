@@ -73,6 +73,8 @@ def parameter_sets(parameters: tuple[Parameter, ...], params: Mapping[str, objec
 
 class OpenPBR(Model):
     name = "openpbr"
+    #: A material model: material files may name it (:mod:`brdfnorm.materials.files`).
+    material = True
     formula = ("f = F f_fuzz + lerp(1, 1−E_fuzz, F)[C f_coat + lerp(1, T(1−E_coat), C) mix(f_spec + (1−E_spec) "
                "f_diffuse, f_metal, M)]  (OpenPBR Surface, albedo-scaling layering; rules selectable)")
     energy = ("layered by albedo scaling: E ≤ 1 where every lobe's is (view-side rule); the charlie fuzz gains "
