@@ -75,4 +75,5 @@ def reference(
         document = ref.reference(m, axes, parse_range(mu, "--mu", allow_log=False))
         write_file(STDOUT if output == "-" else output, ref.to_csv(document) if csv_output else ref.to_json(document))
         if output != "-":
-            console(stderr=True).print(f"{len(document['points'])} grid points × {len(document['mu'])} views; wrote {output}")
+            console(stderr=True).print(f"{len(document['points'])} grid points × {len(document['mu'])} views; "
+                                       f"wrote {output}")
