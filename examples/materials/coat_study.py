@@ -1,7 +1,7 @@
 """The coat-layering study of docs/materials-coat.md (openpbr-bsdf PR #30): view-side, symmetric and reciprocal
 albedo scaling of a GGX coat (exact dielectric Fresnel) over white bases, across coat roughness and IOR.
 
-    PYTHONPATH=src python examples/materials/coat_study.py docs/img   # ~10 min on one core
+    PYTHONPATH=src python examples/materials/coat_study.py docs/img   # ~15 min on one core
 
 Writes coat_study.json (every number) and materials-coat.png into the folder given, and prints the markdown tables.
 """
@@ -19,12 +19,20 @@ import numpy as np  # noqa: E402
 import brdfnorm as bn  # noqa: E402
 from brdfnorm.materials.furnace import coat_study  # noqa: E402
 
+ROUGHNESS = (0.1, 0.3, 0.6)
+IOR = (1.3, 1.5, 2.0)
 THETA = np.radians([0.0, 15.0, 30.0, 45.0, 55.0, 65.0, 72.0, 78.0, 82.0, 85.0, 87.0, 89.0])
 
 
 def main(folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
-    rows = coat_study(bn.load, base="lambert", theta=THETA) + coat_study(bn.load, base="metal", theta=THETA)
+    rows = []
+    for base in ("lambert", "metal"):
+        for r in ROUGHNESS:
+            for eta in IOR:
+                rows += coat_study(bn.load, (r,), (eta,), base=base, theta=THETA)
+                print(f"# {base} r={r} ior={eta}: " + ", ".join(f"{row['layering']} min {row['E_min']:.6f}"
+                                                                for row in rows[-3:]), file=sys.stderr, flush=True)
     (folder / "coat_study.json").write_text(json.dumps({"theta_deg": list(np.degrees(THETA)), "rows": rows},
                                                        indent=1))
     for base in ("lambert", "metal"):

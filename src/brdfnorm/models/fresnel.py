@@ -206,6 +206,15 @@ def multiple_scattering_colour(f_avg, e_avg) -> np.ndarray:
     return f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg))
 
 
+def kulla_conty_dielectric_fit(eta) -> np.ndarray:
+    """Kulla & Conty 2017's fit of the dielectric F_avg as OSPRay's ``fresnelDielectricAvg`` evaluates it, written
+    for η = interior/exterior (OSPRay's argument is its reciprocal): (η − 1)/(4.08567 + 1.00071 η) for η ≥ 1, else
+    0.997118 + 0.1014 η − 0.965241 η² − 0.130607 η³."""
+    eta = np.asarray(eta, dtype=float)
+    return np.where(eta >= 1.0, (eta - 1.0) / (4.08567 + 1.00071 * eta),
+                    0.997118 + 0.1014 * eta - 0.965241 * eta**2 - 0.130607 * eta**3)
+
+
 def kulla_conty_artistic_fit(r, g) -> np.ndarray:
     """Kulla & Conty 2017's cubic fit of the artistic conductor's F_avg(r, g), as OSPRay ships it."""
     r = np.asarray(r, dtype=float)
