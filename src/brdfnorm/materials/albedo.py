@@ -165,8 +165,8 @@ class AlbedoCache:
         return self._remember(self._curves, component.key, lambda: build_curve(component))
 
     def table(self, component: Component, size: int) -> AlbedoTable:
-        key = (component.key[0],) + component.key[2:] if component.roughness is not None else component.key
-        return self._remember(self._tables, (key, size, component.roughness), lambda: build_table(component, size))
+        return self._remember(self._tables, (component.table_key, size, component.roughness),
+                              lambda: build_table(component, size))
 
     def exact(self, component: Component, mu: np.ndarray) -> np.ndarray:
         """E at each μ (…,), each distinct value integrated once and remembered: (…, 3)."""

@@ -66,6 +66,11 @@ class Component:
     def with_roughness(self, roughness: float) -> Component:
         raise NotImplementedError
 
+    @property
+    def table_key(self) -> tuple:
+        """The key without the roughness: what an engine's (μ, roughness) table of this lobe depends on."""
+        return self.with_roughness(0.0).key
+
 
 @dataclass(frozen=True, eq=False)
 class Microfacet(Component):

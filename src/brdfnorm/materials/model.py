@@ -121,8 +121,11 @@ class OpenPBR(Model):
         return np.where(L[..., 2:3] > 0, value, 0.0)
 
     def lobe(self, fixed, params, over):
-        """The mirror direction, as wide as the specular lobe (the diffuse part is broad and needs no hint)."""
+        """The mirror direction, as wide as the sharper of the specular and (present) coat lobes (the diffuse part is
+        broad and needs no hint)."""
         r = np.asarray(params["specular_roughness"], dtype=float)
+        coat = np.asarray(params["coat_roughness"], dtype=float)
+        r = np.where(np.asarray(params["coat_weight"], dtype=float) > 0, np.minimum(r, coat), r)
         shape = np.broadcast_shapes(np.shape(fixed)[:-1], r.shape)
         width = np.broadcast_to(np.clip(2.0 * r * r, 1e-3, 1.0), shape)
         return Lobe(np.broadcast_to(mirror(fixed), shape + (3,)), width, np.full(shape, np.pi))

@@ -15,7 +15,8 @@ layering eq. [non-reciprocal-albedo-scaling]):
   base*, eqs. [unmodulated_fresnel], [modulated_ior]: F_s = ((1 − η_s)/(1 + η_s))², ε = sgn(η_s − 1)√(ξ_s F_s),
   η'_s = (1 + ε)/(1 − ε), ξ_s clamped to [0, 1/F_s]), tinted by specular_color;
 * metal: GGX with F_metal = specular_weight · F82-tint(F0 = base_weight·base_color, tint = specular_color)
-  (*Metal*, [#Kutz2021]; :func:`brdfnorm.models.fresnel.f82_tint`);
+  (*Metal*, [#Kutz2021]; :func:`brdfnorm.models.fresnel.f82_tint`; specular_weight clamped to 1 there, the range
+  the Metal section's table gives it);
 * diffuse: Lambert (base_diffuse_roughness 0) or EON (Portsmouth et al. 2025, the *Glossy-diffuse* section's
   f_diffuse), ρ = base_weight·base_color;
 * coat: GGX, α = coat_roughness², exact dielectric Fresnel of coat_ior, T_coat = coat_color;
@@ -132,7 +133,8 @@ def build(p: dict) -> list[Term]:
         dielectric_f = Fresnel("dielectric", eta=eta) if np.isfinite(eta) else Fresnel("none")
     else:
         dielectric_f = Fresnel("schlick", f0=dielectric_f0(p))
-    metal = Microfacet("metal", r_spec, metal_fresnel(p), (float(p["specular_weight"]),) * 3)
+    # F_metal = specular_weight · F82 with specular_weight in [0, 1] (the Metal section's table): clamped at 1.
+    metal = Microfacet("metal", r_spec, metal_fresnel(p), (min(float(p["specular_weight"]), 1.0),) * 3)
 
     def under(spec: Microfacet, base: list[Term]) -> list[Term]:
         if spec.fresnel.kind == "dielectric" and spec.fresnel.eta == 1.0:  # specular_weight 0: no interface
