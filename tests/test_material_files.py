@@ -58,3 +58,14 @@ def test_cli_one_line_error_and_commands(tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     assert np.allclose(json.loads(out.read_text())["tables"]["E"], 1.0, atol=1e-9)
+
+
+def test_explorer_opens_materials():
+    from brdfnorm.explore import compute
+    from brdfnorm.explore.catalog import Catalog
+
+    catalog = Catalog.build([str(EXAMPLES / "white_furnace_coat.toml")], examples=None)
+    assert "builtin:openpbr" in [entry.id for entry in catalog.entries()]
+    for model_id in ("arg0", "builtin:openpbr"):
+        view = compute.evaluate_view(catalog.get(model_id), 30.0, "normal", "coarse")
+        assert view["channels"] == 3 and not view["warnings"]
