@@ -81,9 +81,10 @@ def artistic_to_complex(r, g) -> tuple[np.ndarray, np.ndarray]:
     return n, np.sqrt(np.maximum(k2, 0.0))  # k² = −0 at r = 0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Fresnel:
-    """One Fresnel factor with its inputs (per channel arrays broadcasting together)."""
+    """One Fresnel factor with its inputs (per channel arrays broadcasting together); compared by identity (its
+    inputs may be arrays)."""
 
     kind: str
     f0: np.ndarray | float = 0.04
