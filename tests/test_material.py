@@ -152,3 +152,19 @@ def test_bad_parameters():
         bn.load("openpbr", fuzz_weight=1.0, fuzz_roughness=0.01)
     with pytest.raises(ParameterError, match="layering"):
         bn.load("openpbr", layering="sideways")
+
+
+def test_metal_multiple_scattering_with_exact_f_avg():
+    theta = np.radians([0.0, 60.0, 88.0])
+    white = bn.load("openpbr", base_metalness=1, base_color=1, specular_roughness=0.6, metal_ms="kulla-conty")
+    assert np.all(np.abs(bn.albedo(white, theta).value - 1.0) <= 1e-10)  # OpenPBR's white-metal furnace
+    assert np.all(np.abs(bn.albedo(white, theta, method="quadrature").value - 1.0) <= 1e-9)
+    tinted = dict(base_metalness=1, base_color=1, specular_color=0.7, specular_roughness=0.6)
+    single = bn.albedo(bn.load("openpbr", **tinted), theta).value[:, 0]
+    multiple = bn.albedo(bn.load("openpbr", metal_ms="kulla-conty", **tinted), theta).value[:, 0]
+    # ∫ f_ms (N·L) dL = F_ms (1 − E(μo)) with F_avg of F82-tint in closed form and E_avg by the engine
+    e = bn.albedo(bn.load("ggx", alpha=0.36), theta).value[:, 0]
+    e_avg = average_albedo(GGXDistribution(), "height-correlated", 0.36, rtol=1e-12)[0][0]
+    f_avg = Fresnel("f82-tint", f0=1.0, tint=0.7).average()[0]
+    f_ms = f_avg**2 * e_avg / (1 - f_avg * (1 - e_avg))
+    assert np.all(np.abs(multiple - single - f_ms * (1 - e)) <= 1e-10)

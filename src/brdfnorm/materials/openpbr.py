@@ -27,6 +27,9 @@ Not modelled (documented in docs/materials.md): transmission, subsurface, thin f
 and its effect on the specular IOR ratio (η_s = specular_ior/coat_ior under the coat), anisotropy, emission,
 geometry_opacity and thin-walled mode.
 
+``metal_ms = "kulla-conty"`` adds Kulla & Conty's multiple-scattering lobe to the metal (the white metal then passes
+the furnace the specification's *White furnace testing* section lists).
+
 Rules beyond the specification, as parameters (:mod:`brdfnorm.materials.compose`): ``layering`` (view | symmetric
 | reciprocal), ``base_mix`` (brdf | f0-blend), ``diffuse_under`` (albedo-scaling | filament), ``metal_fresnel``
 (f82-tint | schlick | artistic | conductor with metal_eta, metal_k), ``dielectric_fresnel`` (exact | schlick),
@@ -38,9 +41,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.fresnel import Fresnel
+from ..models.fresnel import Fresnel, multiple_scattering_colour
 from ..parameters import Parameter
 from . import compose
+from .albedo import top_average
 from .components import Diffuse, Microfacet, Sheen
 from .compose import Term, layer, lobe, mix
 
@@ -73,6 +77,8 @@ PARAMETERS = (
               description="the metal's Fresnel: OpenPBR's F82-tint, Schlick(F0), Gulbrandsen (r, g), or eta + ik"),
     Parameter("metal_eta", "spectrum", (0.143, 0.374, 1.442), 1e-3, 1e3, "conductor η (metal_fresnel=conductor)"),
     Parameter("metal_k", "spectrum", (3.983, 2.385, 1.603), 0.0, 1e3, "conductor k (metal_fresnel=conductor)"),
+    Parameter("metal_ms", "choice", "none", choices=("none", "kulla-conty"),
+              description="the metal's multiple scattering: none, or Kulla-Conty's lobe with the exact F_avg"),
     Parameter("dielectric_fresnel", "choice", "exact", choices=("exact", "schlick"),
               description="the specular's Fresnel: exact dielectric of η'_s, or Schlick of its F0"),
     Parameter("coat_fresnel", "choice", "dielectric", choices=("dielectric", "none"),
@@ -119,6 +125,20 @@ def dielectric_f0(p: dict) -> float:
     return 1.0 if np.isinf(eta) else ((eta - 1.0) / (eta + 1.0)) ** 2
 
 
+def compensation(metal: Microfacet, source: str, size: int) -> list[Term]:
+    """Kulla & Conty 2017's multiple-scattering lobe of a GGX metal as one term: F_ms (1 − E(μ_i))(1 − E(μ_o)) /
+    (π(1 − E_avg)), E the white lobe's albedo (exact, or the table), F_ms = F_avg² E_avg/(1 − F_avg(1 − E_avg)) with
+    the metal's exact F_avg (:mod:`brdfnorm.models.fresnel`), times its tint."""
+    white = Microfacet("metal-white", metal.roughness)
+    e_avg = top_average(white, source, size)
+    f_avg = metal.fresnel.average()[0] * np.asarray(metal.tint, dtype=float)
+    lost = 1.0 - e_avg
+    if np.all(lost <= 0):
+        return []
+    rho = multiple_scattering_colour(f_avg, e_avg) / lost
+    return [Term(Diffuse("metal-ms", tuple(np.broadcast_to(rho, (3,)))), np.ones(3), (white,), (white,))]
+
+
 def build(p: dict) -> list[Term]:
     """The terms of one material (scalar parameter values ``p``)."""
     source, size = p["albedo_source"], int(p["albedo_table"])
@@ -145,7 +165,8 @@ def build(p: dict) -> list[Term]:
 
     if p["base_mix"] == "brdf":
         specular = Microfacet("specular", r_spec, dielectric_f, spec_tint)
-        substrate = mix(under(specular, diffuse) if metalness < 1 else [], lobe(metal) if metalness > 0 else [],
+        metal_terms = lobe(metal) + (compensation(metal, source, size) if p["metal_ms"] == "kulla-conty" else [])
+        substrate = mix(under(specular, diffuse) if metalness < 1 else [], metal_terms if metalness > 0 else [],
                         metalness)
     else:
         # One Schlick lobe, F0 = lerp(F0_dielectric · specular_color, F0_metal, M), over (1 − M) × diffuse.
