@@ -35,7 +35,8 @@ def fresnel_page():
     for r_min in (0.0, 0.05):
         a = fr.audit_artistic_fit(201, r_min=r_min)
         print(f"\nartistic fit r in [{r_min}, 0.99]: max {a.max_error:.6f} at r={a.argmax_r:.4f} g={a.argmax_g:.4f}; "
-              f"max relative {a.max_relative_error:.4f}; mean {a.mean_error:.6f}; quadrature error {a.quadrature_error:.1e}")
+              f"max relative {a.max_relative_error:.4f}; mean {a.mean_error:.6f}; "
+              f"quadrature error {a.quadrature_error:.1e}")
     for lo, hi in ((1.0 + 1e-9, 3.0), (1 / 3.0, 1.0 - 1e-9)):
         eta = np.linspace(lo, hi, 2001)
         exact, error = fr.Fresnel("dielectric", eta=eta).average()
