@@ -60,7 +60,7 @@ def test_require():
             del sys.modules["flint"]
     error = MissingExtraError("m", where="w", module="flint")
     assert isinstance(error, BrdfnormError) and isinstance(error, ImportError) and error.module == "flint"
-    assert set(EXTRA_OF.values()) <= {"explore", "exr", "certified", "dask", "gl"}
+    assert set(EXTRA_OF.values()) <= {"explore", "exr", "certified", "dask", "gl", "spectral"}
 
 
 def test_a_missing_core_module_gets_no_install_hint():

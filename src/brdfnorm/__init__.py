@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from . import materials  # noqa: F401 - registers the openpbr material and its albedo method
 from .engine.methods import AlbedoResult, albedo
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
 from .models import REGISTRY, Model
@@ -27,7 +28,8 @@ __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REG
 
 
 def load(name_or_path: str | Path, **params: object) -> Model:
-    """A built-in model by name (``brdfnorm models`` lists them), a BRDF Explorer ``.brdf`` file by path, or a
+    """A built-in model by name (``brdfnorm models`` lists them), a BRDF Explorer ``.brdf`` file by path, a
+    material file (``.toml`` or ``.json``, :mod:`brdfnorm.materials.files`), or a
     Mitsuba 3 BSDF: ``mitsuba:PLUGIN`` with its properties as keywords, or a Mitsuba ``.xml`` file
     (:mod:`brdfnorm.models.mitsuba`, the ``mitsuba`` extra)."""
     if not isinstance(name_or_path, (str, os.PathLike)):
@@ -43,6 +45,8 @@ def load(name_or_path: str | Path, **params: object) -> Model:
     if mitsuba.is_mitsuba(key):  # Mitsuba itself is imported only when such a model is asked for
         return mitsuba.load(key, **params)
     path = Path(key)
+    if materials.files.is_material_file(key):  # a material file: TOML or JSON naming a material model
+        return materials.files.load_material(key, REGISTRY, **params)
     if path.exists():
         if not path.is_file():  # a directory, FIFO (reading it would block), device or socket
             kind = "a directory" if path.is_dir() else "not a regular file (a FIFO, device or socket)"

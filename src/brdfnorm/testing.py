@@ -21,7 +21,7 @@ from pathlib import Path
 from .check import Budget, CheckReport, check
 from .models.base import Model, Over
 
-__all__ = ["assert_energy_conserving", "assert_normalized", "assert_reciprocal"]
+__all__ = ["assert_energy_conserving", "assert_material_furnace", "assert_normalized", "assert_reciprocal"]
 
 
 def _assert(report: CheckReport, name: str, claim: str) -> CheckReport:
@@ -60,3 +60,28 @@ def assert_normalized(model: Model | str | Path, sweep: Mapping[str, object] | N
     report = check(model, checks=("normalization",), sweep=sweep, fixed=fixed, tolerance=tolerance, at=at,
                    over=over, budget=budget, points=points)
     return _assert(report, "normalization", f"is not normalized (at {at})")
+
+
+def assert_material_furnace(model: Model | str | Path, tolerance: float = 1e-9, *, theta: Iterable[float] | None = None,
+                            **params: object):
+    """Assert that a material (``openpbr``, a material file, or any model) reflects 1 ± ``tolerance`` at every view
+    of its white furnace (:func:`brdfnorm.materials.furnace.furnace`; ``theta`` in radians, default 30 views to
+    89.9°), counting each albedo's error estimate against it; returns the :class:`~brdfnorm.materials.furnace.
+    Furnace`. ``params`` are bound first (e.g. ``layering="symmetric"``)."""
+    import numpy as np
+
+    from . import load
+    from .materials.furnace import furnace
+
+    if not isinstance(model, Model):
+        model = load(model, **params)
+    elif params:
+        model = model.with_params(**params)
+    result = furnace(model, None if theta is None else np.asarray(list(theta), dtype=float))
+    worst = np.abs(result.value - 1.0) + result.error
+    if worst.max() > tolerance:
+        i = int(np.unravel_index(np.argmax(worst), worst.shape)[0])
+        raise AssertionError(f"{model.source_path or model.name} fails the white furnace: E = "
+                             f"{result.value[i].max():.12g} (residual {result.max_residual:.3e}) at θ = "
+                             f"{np.degrees(result.theta[i]):g}°, tolerance {tolerance:g}")
+    return result

@@ -14,7 +14,7 @@ from .help import tidy
 
 # isort: split
 # Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
-from . import audit, check, core, explore, fit, info, lut, report, verify  # noqa: F401
+from . import audit, check, core, explore, fit, info, lut, materials, report, verify  # noqa: F401
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -49,7 +49,7 @@ def info(
         ]
         data = {
             "model": m.name,
-            "source": m.source_path if is_file else None,
+            "source": m.source_path,
             "channels": m.channels,
             "isotropic": m.isotropic,
             "parameters": parameters,
@@ -68,7 +68,7 @@ def info(
             write_file(STDOUT, to_json({"brdfnorm": __version__, **data}) + "\n")
             return
         out = console()
-        title = f"{m.name}" + (f" ({m.source_path})" if is_file else " (built-in)")
+        title = f"{m.name}" + (f" ({m.source_path})" if m.source_path else " (built-in)")
         table = Table(title=escape(title))  # a file name is text, not rich markup
         for column in ("parameter", "kind", "range", "default", "value"):
             table.add_column(column)
