@@ -10,10 +10,10 @@ import subprocess
 import numpy as np
 import pytest
 
-from brdfnorm.closed_forms import blinn_phong_albedo_normal
-from brdfnorm.codegen import emit, function_name, identifier, literal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.fit import fit
+from brdfnorm.fit.codegen import emit, function_name, identifier, literal
+from brdfnorm.models.closed_forms import blinn_phong_albedo_normal
 
 N = np.linspace(1.0, 512.0, 200)
 ALPHA = 1.0 / blinn_phong_albedo_normal(N)

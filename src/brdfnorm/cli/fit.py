@@ -17,10 +17,10 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from ..codegen import LANGUAGES, emit
 from ..errors import ArgumentError, EvaluationError, OutputError
-from ..exact_forms import EXACT, exact_form
 from ..fit import METRICS, FitResult, fit, parse_form
+from ..fit.codegen import LANGUAGES, emit
+from ..fit.exact import EXACT, exact_form
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
 from ..parallel.results import normalization_result, sweep_job

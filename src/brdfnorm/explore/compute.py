@@ -38,7 +38,6 @@ import numpy as np
 from .. import albedo, normalize
 from ..check import Budget
 from ..check import check as check_model
-from ..codegen import emit
 from ..errors import (
     ArgumentError,
     ArgumentTypeError,
@@ -48,6 +47,7 @@ from ..errors import (
     ParameterTypeError,
 )
 from ..fit import fit
+from ..fit.codegen import emit
 from ..models.base import Model
 from ..normalization import THETA_MAX
 from ..output.formats import format_with_error

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..fit import FitResult, auto_candidates, fit, parse_form, smith_candidates
-from ..forms import SmithForm
+from ..fit.families import SmithForm
 from .table import Lut
 
 

@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, load
+from ..claims.verify import verify
 from ..errors import ArgumentError
 from ..fit import fit
 from ..models.base import Model
 from ..output.directories import check_target, staged
-from ..verify import verify
 from . import microfacet, sections
 from .html import page
 from .study import StudyConfig

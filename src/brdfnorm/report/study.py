@@ -25,9 +25,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import closed_forms, load
+from .. import load
 from ..engine.methods import METHODS, albedo
 from ..errors import ArgumentError
+from ..models import closed_forms
 from ..models.base import Model
 from ..normalization import normalize
 

@@ -62,10 +62,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import validate
-from .errors import ArgumentError, ArgumentTypeError, EvaluationError
-from .forms import Form, HyperbolaForm, RationalForm, SmithForm
-from .registry import Registry
+from .. import validate
+from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
+from ..registry import Registry
+from .families import Form, HyperbolaForm, RationalForm, SmithForm
 
 METRICS = ("abs-lsq", "rel-lsq", "minimax-rel", "minimax-abs")
 #: Candidate forms of ``auto`` never exceed this many coefficients unless asked (``max_coefficients``).

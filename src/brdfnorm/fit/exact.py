@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import closed_forms
-from .forms import Form
+from ..models import closed_forms
+from .families import Form
 
 TWO_PI = 2.0 * np.pi
 EIGHT_PI = 8.0 * np.pi
