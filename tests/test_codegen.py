@@ -1,4 +1,4 @@
-"""brdfnorm.codegen: the emitted GLSL/HLSL compile (glslangValidator), the C compiles, runs and agrees with the
+"""brdfnorm.fit.codegen: the emitted GLSL/HLSL compile (glslangValidator), the C compiles, runs and agrees with the
 fit, and the Python (imported from a file) agrees with the fit."""
 
 from __future__ import annotations

@@ -112,3 +112,42 @@ def test_every_module_imports_as_a_module(module):
     imported = importlib.import_module(module)
     parent, _, leaf = module.rpartition(".")
     assert getattr(importlib.import_module(parent), leaf) is imported
+
+
+MAX_TOP_LEVEL = 12
+
+
+def _top_level_modules(package: Path) -> list[str]:
+    """The modules directly in ``package`` (``__init__`` and ``__main__`` included); a subpackage counts as one."""
+    files = [path.name for path in package.glob("*.py")]
+    packages = [path.name + "/" for path in package.iterdir() if (path / "__init__.py").is_file()]
+    return sorted(files) + sorted(packages)
+
+
+def test_src_brdfnorm_has_at_most_12_top_level_modules_besides_its_packages():
+    """Issue 40: an idea with several modules gets a package (``fit/``, ``claims/``), so the top level stays a
+    short list of foundations; the files directly in ``src/brdfnorm`` are at most 12."""
+    modules = [name for name in _top_level_modules(PACKAGE) if not name.endswith("/")]
+    assert len(modules) <= MAX_TOP_LEVEL, modules
+    assert {"fit/", "claims/", "models/"} <= set(_top_level_modules(PACKAGE))
+
+
+def test_the_top_level_counter_counts_files_and_not_package_contents(tmp_path):
+    (tmp_path / "a.py").write_text("")
+    (tmp_path / "__init__.py").write_text("")
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("")
+    (tmp_path / "pkg" / "b.py").write_text("")
+    (tmp_path / "data").mkdir()  # not a package
+    assert _top_level_modules(tmp_path) == ["__init__.py", "a.py", "pkg/"]
+
+
+def test_the_fit_package_keeps_the_public_names_of_the_former_module():
+    """``from brdfnorm.fit import fit`` (README, docs/fitting.md) works, and the package's names are the driver's."""
+    from brdfnorm import fit as package
+    from brdfnorm.fit import codegen, exact, families, fitting
+
+    assert package.fit is fitting.fit and package.FitResult is fitting.FitResult
+    assert set(package.__all__) <= set(dir(package))
+    assert families.Form is package.Form and exact.ExactForm.__mro__[1] is families.Form
+    assert codegen.emit.__module__ == "brdfnorm.fit.codegen"

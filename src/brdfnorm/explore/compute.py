@@ -420,7 +420,7 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, sampl
                language: object, scale: object = "linear", form: object = "auto",
                check: Callable[[], None] = lambda: None, params: object = None) -> dict:
     """Fit α(x) = 1/E over a float parameter's range (:func:`brdfnorm.fit.fit`, ``auto`` form by default) and
-    emit it (:func:`brdfnorm.codegen.emit`); the other parameters at the page's values ``params``."""
+    emit it (:func:`brdfnorm.fit.codegen.emit`); the other parameters at the page's values ``params``."""
     p = model.parameter(str(parameter)[:80])
     if p.kind != "float":
         raise ArgumentError(f"only float parameters can be fitted; {p.name} is {p.kind}", where="parameter")
