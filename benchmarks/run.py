@@ -47,8 +47,8 @@ from bench_glsl_native import w_glsl_native  # noqa: E402
 from bench_parallel import w_parallel  # noqa: E402
 
 import brdfnorm as bn  # noqa: E402
-from brdfnorm import closed_forms  # noqa: E402
 from brdfnorm.errors import BrdfnormError  # noqa: E402
+from brdfnorm.models import closed_forms  # noqa: E402
 from brdfnorm.output import write_file  # noqa: E402
 from brdfnorm.output.formats import jsonable  # noqa: E402
 from brdfnorm.registry import Registry  # noqa: E402

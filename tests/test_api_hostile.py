@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
-from brdfnorm.codegen import emit
+from brdfnorm.claims.verify import check_exponents, verify
 from brdfnorm.engine.routes.series import blinn_phong_albedo_series
 from brdfnorm.errors import BrdfnormError
 from brdfnorm.fit import fit, parse_form
-from brdfnorm.verify import check_exponents, verify
+from brdfnorm.fit.codegen import emit
 
 BP = bn.load("blinn-phong", n=8)
 LAMBERT = bn.load("lambert")

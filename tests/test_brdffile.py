@@ -16,11 +16,10 @@ import pytest
 from typer.testing import CliRunner
 
 import brdfnorm as bn
-from brdfnorm import closed_forms
 from brdfnorm.brdffile import BrdfModel, load_brdf, parse_brdf, random_hemisphere, read_brdf, reciprocity_check
 from brdfnorm.cli import app
 from brdfnorm.errors import BrdfFileError, ModelNotFoundError, ParameterError
-from brdfnorm.models import REGISTRY
+from brdfnorm.models import REGISTRY, closed_forms
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -214,7 +214,7 @@ def test_cli_errors_map_to_flags(capsys):
 # -- verify --certified and the report -----------------------------------------------------------------------------
 
 def test_verify_certified_checks_every_albedo_claim(capsys):
-    from brdfnorm import verify
+    from brdfnorm.claims import verify
 
     ids = list(verify.CERTIFIABLE)
     claims = verify.verify([0.5, 8.86, 512.0], only=ids, certified=True)
@@ -230,7 +230,7 @@ def test_verify_certified_checks_every_albedo_claim(capsys):
 
 
 def test_verify_certified_fails_a_closed_form_that_is_off_by_1e_minus_25(monkeypatch):
-    from brdfnorm import verify
+    from brdfnorm.claims import verify
     from brdfnorm.engine.routes import certified
 
     exact = certified.NORMAL_INCIDENCE_CLOSED_FORMS["phong"]

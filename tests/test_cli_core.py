@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conftest import run_cli as run
 
-from brdfnorm import closed_forms
+from brdfnorm.models import closed_forms
 
 
 def test_albedo_json_matches_the_closed_form(capsys):

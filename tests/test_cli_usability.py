@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from brdfnorm import closed_forms
+from brdfnorm.models import closed_forms
 from brdfnorm.output.formats import Column, Records, render
 
 COMMANDS = ["models", "info", "albedo", "normalize", "lut", "fit", "check", "audit", "explore", "verify", "report"]

@@ -1,4 +1,4 @@
-"""brdfnorm.codegen: the emitted GLSL/HLSL compile (glslangValidator), the C compiles, runs and agrees with the
+"""brdfnorm.fit.codegen: the emitted GLSL/HLSL compile (glslangValidator), the C compiles, runs and agrees with the
 fit, and the Python (imported from a file) agrees with the fit."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brdfnorm.closed_forms import blinn_phong_albedo_normal
-from brdfnorm.codegen import emit, function_name, identifier, literal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.fit import fit
+from brdfnorm.fit.codegen import emit, function_name, identifier, literal
+from brdfnorm.models.closed_forms import blinn_phong_albedo_normal
 
 N = np.linspace(1.0, 512.0, 200)
 ALPHA = 1.0 / blinn_phong_albedo_normal(N)
@@ -165,8 +165,9 @@ def test_comments_state_lobe_convention_domain_and_held_parameters():
 
 
 def test_a_brdf_file_is_named_without_the_users_path(tmp_path):
-    import brdfnorm as bn
     from brdfnorm.codegen import fit_context
+
+    import brdfnorm as bn
 
     path = tmp_path / "private" / "ggx.brdf"
     path.parent.mkdir()

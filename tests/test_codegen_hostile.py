@@ -15,8 +15,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from brdfnorm.codegen import RESERVED, comment_text, emit, function_name, identifier
 from brdfnorm.fit import fit
+from brdfnorm.fit.codegen import RESERVED, comment_text, emit, function_name, identifier
 
 GLSLANG = shutil.which("glslangValidator")
 CC = shutil.which("cc")

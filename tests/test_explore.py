@@ -273,8 +273,8 @@ def test_fit_panel_code_reproduces_the_exact_factor():
     assert "float brdfnorm_blinn_phong_gaussian_norm(float n)" in result["code"]
     exact = 1.0 / bn.albedo(model.with_params(n=57.0), 0.0).value[0]
     # The same formula through the Python emitter, evaluated away from the samples.
-    from brdfnorm.codegen import emit
     from brdfnorm.fit import fit
+    from brdfnorm.fit.codegen import emit
 
     values = np.geomspace(10.0, 200.0, 12)
     factors = 1.0 / bn.albedo(model.with_params(n=values), 0.0).value[:, 0]

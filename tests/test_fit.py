@@ -12,9 +12,9 @@ from scipy import integrate
 from scipy.optimize import linprog
 
 import brdfnorm
-from brdfnorm.closed_forms import blinn_phong_albedo_normal
 from brdfnorm.errors import ArgumentError
 from brdfnorm.fit import METRICS, fit, parse_form
+from brdfnorm.models.closed_forms import blinn_phong_albedo_normal
 from brdfnorm.normalization import normalize
 
 # -- exact recovery ------------------------------------------------------------------------------------------
@@ -184,7 +184,7 @@ VIEW_FORM = "rational-sqrt:5/2@4~tau"
 
 @pytest.mark.slow
 def test_blinn_phong_view_fit_meets_the_goal_on_a_different_denser_grid(tmp_path):
-    from brdfnorm.codegen import emit
+    from brdfnorm.fit.codegen import emit
 
     model = brdfnorm.load("blinn-phong")
     n = np.geomspace(1.0, 1e4, 49)

@@ -17,9 +17,9 @@ from conftest import run_cli
 
 import brdfnorm as bn
 from brdfnorm import lut
-from brdfnorm.codegen import emit
 from brdfnorm.fit import fit, parse_form
-from brdfnorm.forms import SmithForm, smith_variable
+from brdfnorm.fit.codegen import emit
+from brdfnorm.fit.families import SmithForm, smith_variable
 from brdfnorm.lut.fitting import fit_table
 
 GOAL = 5e-3

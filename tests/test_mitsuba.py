@@ -293,3 +293,19 @@ def test_cli_check_roughplastic_searches_the_interior_index_above_the_exterior(f
     # a coated diffuse base loses energy: its largest albedo found is about 0.71, at an interior index above air's
     assert energy["status"] == "pass" and 0.5 < energy["value"] < 0.9
     assert energy["params"]["int_ior"] > energy["params"]["ext_ior"]
+
+
+def test_a_mitsuba_model_travels_as_its_origin(mi, tmp_path):
+    """Issue 40: a table job ships what brdfnorm.load was given (``mitsuba:PLUGIN`` and its properties) or the
+    XML's <bsdf> text; the worker's model evaluates the same f, bit for bit."""
+    from brdfnorm.parallel import ModelSource
+
+    path = tmp_path / "metal.xml"
+    path.write_text('<bsdf version="3.0.0" type="roughconductor"><string name="distribution" value="ggx"/>'
+                    '<float name="alpha" value="0.2"/></bsdf>')
+    L, V = _hemisphere(np.random.default_rng(3), 16), _hemisphere(np.random.default_rng(4), 16)
+    for model in (bn.load("mitsuba:roughconductor", alpha=0.2, distribution="ggx"), bn.load(path)):
+        source = ModelSource.of(model)
+        assert source.kind == "mitsuba" and source.name == (model.name if model.xml is None else str(path))
+        clone = ModelSource.from_json(source.to_json()).load()
+        np.testing.assert_array_equal(clone.eval(L, V), model.eval(L, V))

@@ -7,8 +7,8 @@ import pytest
 from conftest import phong_like_reference
 
 import brdfnorm as bn
-from brdfnorm import closed_forms
 from brdfnorm.errors import ArgumentError, ParameterError
+from brdfnorm.models import closed_forms
 from brdfnorm.models.base import Model, normal_lobe
 
 

@@ -100,6 +100,40 @@ def test_model_source_refuses_what_has_no_source():
         ModelSource.of(Local())
 
 
+def test_a_source_is_rebuilt_by_brdfnorm_load_itself(monkeypatch):
+    """Issue 40: the job does not re-implement loading; a name goes to brdfnorm.load, a file's text to load_text."""
+    calls = []
+    load, load_text = bn.load, bn.load_text
+    monkeypatch.setattr(bn, "load", lambda key, **p: calls.append(("load", key, p)) or load(key, **p))
+    monkeypatch.setattr(bn, "load_text", lambda text, key, **p: calls.append(("text", key, p)) or
+                        load_text(text, key, **p))
+    ModelSource.of(load("phong", n=37.5)).load()
+    ModelSource.of(load(GGX, roughness=0.2)).load()
+    assert [c[:2] for c in calls] == [("load", "phong"), ("text", str(GGX))]
+    assert calls[0][2]["n"] == 37.5 and calls[1][2]["roughness"] == 0.2
+
+
+def test_one_worker_computes_with_the_loaded_model_and_never_parses_it_again(monkeypatch):
+    """Issue 40: with one worker the job's own model computes every chunk: the .brdf file is not parsed or
+    compiled again; a job rebuilt from its data (as a checkpoint or a worker holds it) compiles once, not
+    twice, and both give the table bit for bit."""
+    import brdfnorm.brdffile as brdffile
+
+    job = _ggx_job(chunk_cells=12)
+    assert job.model is not None and job.model.params["roughness"] == job.source.params["roughness"]
+    compiled = []
+    compile_brdf = brdffile.compile_brdf
+    monkeypatch.setattr(brdffile, "compile_brdf", lambda *a, **k: compiled.append(1) or compile_brdf(*a, **k))
+    direct = albedo_cells(job, workers=1)
+    assert compiled == []
+    from dataclasses import replace
+
+    rebuilt = replace(job, model=None)
+    assert rebuilt.digest == job.digest  # the model is never part of the job's definition
+    _same(albedo_cells(rebuilt, workers=1), direct)
+    assert compiled == [1]
+
+
 def test_digest_is_stable_across_processes_and_changes_with_the_job():
     job = _ggx_job()
     assert job.digest == _ggx_job().digest

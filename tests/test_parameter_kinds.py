@@ -13,7 +13,7 @@ from scipy import integrate
 
 import brdfnorm as bn
 from brdfnorm import lut
-from brdfnorm.check.space import _space
+from brdfnorm.check.space import parameter_space
 from brdfnorm.errors import ParameterError
 from brdfnorm.explore.compute import bind_parameters, check_command, describe_parameters
 
@@ -66,7 +66,7 @@ def test_explore_binds_per_channel_numbers_and_whole_sizes():
 
 
 def test_check_searches_whole_table_sizes_only():
-    space = _space(bn.load("lambert"), None, ())
+    space = parameter_space(bn.load("lambert"), None, ())
     assert not any(r.integer for r in space.ranges)
 
     from brdfnorm.check.space import _Range

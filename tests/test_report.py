@@ -211,7 +211,7 @@ def test_verify_table(default_report):
     them, the claimed relation (a claimed failure says by how much it fails), the criterion, the verdict, and each
     claim's explaining line under its statement."""
     from brdfnorm.claims import RELATIONS
-    from brdfnorm.verify import verify
+    from brdfnorm.claims.verify import verify
 
     page = Page((default_report / "index.html").read_text(encoding="utf-8"))
     rows = page.tables["verify-table"]

@@ -11,9 +11,9 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from brdfnorm.closed_forms import blinn_phong_albedo_normal
 from brdfnorm.engine.routes.series import blinn_phong_albedo_series, legendre_ratio
 from brdfnorm.errors import ArgumentError, ParameterError
+from brdfnorm.models.closed_forms import blinn_phong_albedo_normal
 
 EXPONENTS = [0.5, 1.0, 10.0, 512.0, 1e4]
 

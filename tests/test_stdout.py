@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from conftest import run_cli
 
-from brdfnorm.codegen import function_name
+from brdfnorm.fit.codegen import function_name
 
 ROOT = Path(__file__).resolve().parents[1]
 GLSLANG = shutil.which("glslangValidator")

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from brdfnorm import closed_forms
-from brdfnorm import verify as checks
 from brdfnorm.claims import seed000, seed002
+from brdfnorm.claims import verify as checks
 from brdfnorm.cli import main
 from brdfnorm.errors import ArgumentError
+from brdfnorm.models import closed_forms
 
 REQUIRED = {
     "phong-original", "phong-modified", "blinn-phong-normal", "blinn-phong-n+8-approximation",

@@ -10,8 +10,8 @@ import pytest
 from conftest import run_cli
 from scipy import optimize
 
-from brdfnorm import verify as checks
 from brdfnorm.claims import published
+from brdfnorm.claims import verify as checks
 from brdfnorm.models import fon
 
 IDS = list(published.CHECKS)

@@ -17,14 +17,14 @@ from pathlib import Path
 
 from . import materials  # noqa: F401 - registers the openpbr material and its albedo method
 from .engine.methods import AlbedoResult, albedo
-from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError
+from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError, ParameterError
 from .models import REGISTRY, Model
 from .normalization import NormalizationResult, normalize
 from .validate import short_repr
 from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
-           "normalize"]
+           "load_text", "normalize"]
 
 
 def load(name_or_path: str | Path, **params: object) -> Model:
@@ -58,3 +58,18 @@ def load(name_or_path: str | Path, **params: object) -> Model:
         raise ModelNotFoundError("no such file", where=key)
     raise ModelNotFoundError(f"unknown model {short_repr(key)}: not a built-in ({', '.join(REGISTRY)}) and no "
                              "such file", where="model")
+
+
+def load_text(text: str, path: str, **params: object) -> Model:
+    """The model :func:`load` builds from the file ``path``, built from the file's ``text`` instead: what a
+    worker receives with a table job (:class:`brdfnorm.parallel.ModelSource`), which may not see the file.
+    A Mitsuba ``.xml`` path takes the ``<bsdf>`` element's text; any other path a ``.brdf`` file's text."""
+    from .models import mitsuba
+
+    if mitsuba.is_mitsuba(path):
+        if params:
+            raise ParameterError("a Mitsuba XML file's properties are set in the file", where=path)
+        return mitsuba.load_string(text, path)
+    from .brdffile import compile_brdf, parse_brdf  # the GLSL toolchain loads only when a file is asked for
+
+    return compile_brdf(parse_brdf(text, path), **params)

@@ -45,7 +45,7 @@ import numpy as np
 from .errors import BrdfFileError, ModelNotFoundError
 from .glsl.names import ENTRY_POINT, reserved_kind
 from .inputs import parsing, read_bounded
-from .models.base import Model, NativeKernel
+from .models.base import Model, NativeKernel, Origin
 from .parameters import Parameter
 
 #: Refuse files larger than this before reading them whole (a .brdf is a few kilobytes; 16 MiB leaves room
@@ -386,6 +386,10 @@ class BrdfModel(Model):
     def source_path(self) -> str:
         """The ``.brdf`` file this model was read from."""
         return self.brdf_file.path
+
+    def origin(self) -> Origin:
+        """The file's display path and text (``brdfnorm.load_text`` compiles the same shader from them)."""
+        return Origin(self.brdf_file.path, self.brdf_file.text)
 
     @property
     def has_is_func(self) -> bool:

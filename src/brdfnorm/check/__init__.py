@@ -37,10 +37,10 @@ from .. import validate
 from ..errors import ArgumentError
 from ..models.base import Model, Over
 from .cells import SpreadAlbedo
-from .core import Budget, CheckReport, CheckResult, _Meter
-from .pointwise import _pointwise
-from .search import THETA_MAX, _energy, _normalization
-from .space import UNBOUNDED_SPAN, _points, _space
+from .core import Budget, CheckReport, CheckResult, Meter
+from .pointwise import check_pointwise
+from .search import THETA_MAX, search_energy, search_normalization
+from .space import UNBOUNDED_SPAN, parameter_space, sample_points
 
 __all__ = ["AT", "CHECKS", "DEFAULT_CHECKS", "MAX_POINTS", "THETA_MAX", "UNBOUNDED_SPAN", "Budget", "CheckReport",
            "CheckResult", "check"]
@@ -109,13 +109,13 @@ def check(
         if fixed != "all":
             raise ArgumentError(f"fixed must be parameter names or 'all', got {fixed!r}", where="fixed")
         fixed = [p.name for p in model.parameters]
-    space = _space(model, sweep, fixed)
+    space = parameter_space(model, sweep, fixed)
     planned = len(space.bools) * max(points, 2) * int(np.prod([v.size for _, v in space.discrete]))
     if planned > MAX_POINTS:
         raise ArgumentError(f"{planned} parameter points (bool combinations × swept values × points) exceed "
                             f"{MAX_POINTS}; sweep fewer values or hold parameters fixed",
                             where="sweep" if space.discrete else "points")
-    grid = _points(space, points, seed)
+    grid = sample_points(space, points, seed)
     definition = {"checks": checks, "sweep": {k: list(v) for k, v in space.discrete}, "held": sorted(space.held),
                   "tolerance": tolerance, "at": at, "over": over, "points": points, "pairs": pairs, "seed": seed,
                   "budget": {"seconds": budget.seconds, "evaluations": budget.evaluations}, "chunk_cells": chunk_cells}
@@ -123,7 +123,7 @@ def check(
                           chunk_cells=chunk_cells) \
         if (workers, scheduler, checkpoint, chunk_cells) != (1, None, None, None) else None
     with spread or contextlib.nullcontext():
-        return _run(model, checks, space, grid, tolerance, at, over, pairs, seed, _Meter(budget, spread))
+        return _run(model, checks, space, grid, tolerance, at, over, pairs, seed, Meter(budget, spread))
 
 
 #: The energy and reciprocity tolerance of a float64 model.
@@ -141,7 +141,7 @@ def default_tolerance(model: Model) -> float:
 
 
 def _run(model: Model, checks: tuple[str, ...], space, grid, tolerance: float, at: str, over: Over, pairs: int,
-         seed: int, meter: _Meter) -> CheckReport:
+         seed: int, meter: Meter) -> CheckReport:
     """The selected checks, in order, with what they covered."""
     budget = meter.budget
     isotropic = bool(model.isotropic)
@@ -150,12 +150,12 @@ def _run(model: Model, checks: tuple[str, ...], space, grid, tolerance: float, a
     coverage: dict = {"parameters": list(space.described), "parameter_points_planned": len(grid),
                       "isotropic": isotropic, "budget": budget.describe()}
     if pointwise:
-        found, coverage["pairs"] = _pointwise(model, space, grid, pointwise, tolerance, pairs, seed, meter)
+        found, coverage["pairs"] = check_pointwise(model, space, grid, pointwise, tolerance, pairs, seed, meter)
         results.update(found)
     if "normalization" in checks:  # before the energy search, which takes what is left of the budget
-        results["normalization"] = _normalization(model, space, grid, at, over, tolerance, meter, isotropic)
+        results["normalization"] = search_normalization(model, space, grid, at, over, tolerance, meter, isotropic)
     if "energy" in checks:
-        results["energy"], coverage["energy"] = _energy(model, space, grid, over, tolerance, meter, isotropic)
+        results["energy"], coverage["energy"] = search_energy(model, space, grid, over, tolerance, meter, isotropic)
     coverage.update(evaluations=meter.evaluations, elapsed_s=meter.elapsed(), budget_spent=meter.spent())
     if meter.spread is not None:
         coverage["parallel"] = meter.spread.coverage()

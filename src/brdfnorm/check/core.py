@@ -36,7 +36,7 @@ class Budget:
         return " and ".join(parts) or "unbounded"
 
 
-class _Meter:
+class Meter:
     """Time and evaluations spent against a :class:`Budget`; ``share`` reserves part of it for a stage.
     ``spread``: where the albedo integrals run when not in this process (a :class:`~.cells.SpreadAlbedo`)."""
 
@@ -124,18 +124,21 @@ class CheckReport:
         return not self.failed
 
 
-def _count(number: int, noun: str) -> str:
+def count_text(number: int, noun: str) -> str:
+    """``3 points``, ``1 point``: a count with its noun, for the reports' messages."""
     return f"{number} {noun}" + ("" if number == 1 else "s")
 
 
-def _plain(value):
+def plain(value: object) -> bool | str | float | list[float]:
+    """A parameter value as JSON data (a choice or bool as itself, numbers as floats or lists of them)."""
     if isinstance(value, (bool, np.bool_, str)):
         return value if isinstance(value, str) else bool(value)
     array = np.asarray(value, dtype=float)
     return float(array) if array.ndim == 0 else [float(v) for v in array.ravel()]
 
 
-def _text(value) -> str:
+def value_text(value: object) -> str:
+    """A parameter value as the reports print it (6 significant digits, channels joined by commas)."""
     if isinstance(value, str):  # a choice
         return value
     if isinstance(value, (bool, np.bool_)):
@@ -143,25 +146,30 @@ def _text(value) -> str:
     return ",".join(f"{v:.6g}" for v in np.atleast_1d(np.asarray(value, dtype=float)))
 
 
-def _params_text(params: dict) -> str:
-    return ", ".join(f"{k}={_text(v)}" for k, v in params.items()) or "(no parameters)"
+def params_text(params: dict) -> str:
+    """Parameter values as ``name=value, ...`` (what a failed check names)."""
+    return ", ".join(f"{k}={value_text(v)}" for k, v in params.items()) or "(no parameters)"
 
 
-def _direction_text(d: np.ndarray) -> str:
+def direction_text(d: np.ndarray) -> str:
+    """A unit direction as its polar and azimuthal angles in degrees."""
     theta = np.degrees(np.arccos(np.clip(d[2], -1.0, 1.0)))
     phi = np.degrees(np.arctan2(d[1], d[0])) % 360.0
     return f"(θ {theta:.6g}°, φ {phi:.6g}°)"
 
 
-def _values_text(values: np.ndarray) -> str:
+def values_text(values: np.ndarray) -> str:
+    """One value, or the channels' values where they differ."""
     values = np.atleast_1d(values)
     return f"{values[0]:.6g}" if np.all(values == values[0]) or np.all(np.isnan(values)) else \
         "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
 
 
-def _tuple(d: np.ndarray) -> tuple[float, float, float]:
+def direction_tuple(d: np.ndarray) -> tuple[float, float, float]:
+    """A direction as JSON data."""
     return (float(d[0]), float(d[1]), float(d[2]))
 
 
-def _fixed_name(over: Over) -> str:
+def fixed_name(over: Over) -> str:
+    """The name of the direction held fixed while the other is integrated over."""
     return "V" if over == "light" else "L"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..brdffile import random_hemisphere
-from .core import CheckResult, _count, _direction_text, _params_text, _tuple, _values_text
-from .space import _bind, _params_at, _Points
+from .core import CheckResult, count_text, direction_text, direction_tuple, params_text, values_text
+from .space import Points, bind_case, params_at
 
 
 def _pairs(count: int, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
@@ -31,7 +31,7 @@ def _pairs(count: int, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
     return L, V, count
 
 
-def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, meter) -> tuple[dict, dict]:
+def check_pointwise(model, space, points: Points, checks, tolerance, pairs, seed, meter) -> tuple[dict, dict]:
     L, V, uniform = _pairs(pairs, seed)
     M = L.shape[0]
     worst = {"reciprocity": (-1.0, None), "positivity": (0.0, None), "finiteness": (0.0, None)}
@@ -40,7 +40,7 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
     for p in range(len(points)):
         if done and meter.spent(0.15):
             break
-        bound = _bind(model, space, points, points.combo[p], np.array([p]))
+        bound = bind_case(model, space, points, points.combo[p], np.array([p]))
         with np.errstate(all="ignore"):
             forward = bound.eval(L, V)
             backward = bound.eval(V, L) if "reciprocity" in checks else forward
@@ -79,25 +79,25 @@ def _pointwise(model, space, points: _Points, checks, tolerance, pairs, seed, me
             what = {"reciprocity": "reciprocal", "positivity": "no negative value",
                     "finiteness": "every value finite"}[name]
             results[name] = CheckResult(name, "pass", max(amount, 0.0), f"{what} on {done * M} direction pairs at "
-                                        f"{_count(done, 'parameter point')}", share=share, sampled=sampled)
+                                        f"{count_text(done, 'parameter point')}", share=share, sampled=sampled)
             continue
         p, i = at[0], at[1]
-        params = _params_at(model, space, points, p)
-        where = f"at {_params_text(params)}, L={_direction_text(L[i])} V={_direction_text(V[i])}"
+        params = params_at(model, space, points, p)
+        where = f"at {params_text(params)}, L={direction_text(L[i])} V={direction_text(V[i])}"
         if name == "reciprocity":
             status = "fail" if amount > tolerance else "pass"
             message = (f"{'not reciprocal' if status == 'fail' else 'reciprocal'}: largest |f(L,V) − f(V,L)| "
                        f"{amount:.3g} of the lobe's scale (tolerance {tolerance:g}) {where}: f(L,V)="
-                       f"{_values_text(at[2])}, f(V,L)={_values_text(at[3])}")
+                       f"{values_text(at[2])}, f(V,L)={values_text(at[3])}")
         elif name == "positivity":
             status = "fail"
-            message = (f"negative: f = {_values_text(at[2])} ({amount:.3g} of the lobe's scale) {where}; "
+            message = (f"negative: f = {values_text(at[2])} ({amount:.3g} of the lobe's scale) {where}; "
                        f"{share_all} of {done * M} pairs negative, {100 * share:.3g}% of the domain")
         else:
             status = "fail"
             amount = share
-            message = (f"not finite: f = {_values_text(at[2])} {where}; {share_all} of {done * M} pairs, "
+            message = (f"not finite: f = {values_text(at[2])} {where}; {share_all} of {done * M} pairs, "
                        f"{100 * share:.3g}% of the domain")
-        results[name] = CheckResult(name, status, float(amount), message, params=params, L=_tuple(L[i]),
-                                    V=_tuple(V[i]), share=share, sampled=sampled)
+        results[name] = CheckResult(name, status, float(amount), message, params=params, L=direction_tuple(L[i]),
+                                    V=direction_tuple(V[i]), share=share, sampled=sampled)
     return results, sampled

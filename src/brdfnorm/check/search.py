@@ -14,8 +14,8 @@ import numpy as np
 
 from ..engine.methods import albedo
 from ..output.formats import format_error
-from .core import CheckResult, _fixed_name, _params_text
-from .space import _bind, _case_values, _params_at, _Points
+from .core import CheckResult, fixed_name, params_text
+from .space import Points, bind_case, case_values, params_at
 
 THETA_MAX = np.radians(89.9)  # the integrand degenerates at exactly 90°
 COARSE_RTOL = 1e-4
@@ -47,7 +47,7 @@ def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations
     for combo in np.unique(points.combo):
         cases = np.flatnonzero(points.combo == combo)
         if meter.spread is not None:  # through brdfnorm.parallel: the same values (check/cells.py)
-            bools, per_case = _case_values(space, points, combo, cases)
+            bools, per_case = case_values(space, points, combo, cases)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # a slider range is searched on purpose, never beyond it
                 bound = model.with_params(**bools)
@@ -55,7 +55,7 @@ def _albedo(model, space, points, theta, phi, over, rtol, meter, max_evaluations
                 bound, theta[cases], phi[cases], per_case, over=over, rtol=rtol, max_evaluations=max_evaluations)
             meter.evaluations += spent
             continue
-        bound = _bind(model, space, points, combo, cases)
+        bound = bind_case(model, space, points, combo, cases)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # non-convergence and zeroed NaNs are reported from the arrays
             r = albedo(bound, theta[cases], phi[cases], over=over, rtol=rtol, nonfinite="zero",
@@ -71,7 +71,7 @@ def _directions(phis: np.ndarray) -> np.ndarray:
     return np.array([(t, p) for t in THETA_GRID for p in (phis if t > 0 else [0.0])])
 
 
-def _scan(model, space, points: _Points, index: np.ndarray, directions, over, meter):
+def _scan(model, space, points: Points, index: np.ndarray, directions, over, meter):
     """Coarse albedo (largest channel) of the parameter points ``index`` × ``directions``: (len(index), D)."""
     D = directions.shape[0]
     value, _, _ = _albedo(model, space, points.take(np.repeat(index, D)), np.tile(directions[:, 0], index.size),
@@ -79,7 +79,7 @@ def _scan(model, space, points: _Points, index: np.ndarray, directions, over, me
     return value.max(axis=1).reshape(index.size, D)
 
 
-def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) -> tuple[CheckResult, dict]:
+def search_energy(model, space, points: Points, over, tolerance, meter, isotropic) -> tuple[CheckResult, dict]:
     # Anisotropic lobes are scanned along the tangent axes (φ = 0°, 90°) at every parameter point, then over
     # the whole azimuth grid at the best few: parameter space gets the coverage, the refinement moves φ.
     directions = _directions(np.zeros(1) if isotropic else AXES_PHI)
@@ -168,9 +168,9 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
         status = "fail" if E - err > limit else "pass" if E + err <= limit else "inconclusive"
         if status != "inconclusive":
             break
-    params = _params_at(model, space, final, 0)
+    params = params_at(model, space, final, 0)
     theta_deg, phi_deg = float(np.degrees(y[c, 0] * THETA_MAX)), float(np.degrees(y[c, 1] * 2 * np.pi))
-    where = f"at {_params_text(params)}, {_fixed_name(over)} θ={theta_deg:.4g}° φ={phi_deg:.4g}°"
+    where = f"at {params_text(params)}, {fixed_name(over)} θ={theta_deg:.4g}° φ={phi_deg:.4g}°"
     shown = format_error(err, 2)  # rounded up: the printed error is never below the estimate
     if status == "fail":
         message = f"gains energy: albedo {E:.10g} ± {shown} > 1 + {tolerance:g} (gained {E - 1:.4g}) {where}"
@@ -193,8 +193,8 @@ def _energy(model, space, points: _Points, over, tolerance, meter, isotropic) ->
                   channel=int(channel), sampled=sampled), coverage
 
 
-def _with_x(points: _Points, y: np.ndarray) -> _Points:
-    return _Points(points.combo, points.discrete, y[:, 2:])
+def _with_x(points: Points, y: np.ndarray) -> Points:
+    return Points(points.combo, points.discrete, y[:, 2:])
 
 
 def _y_energy(model, space, points, y, over, meter) -> np.ndarray:
@@ -205,7 +205,7 @@ def _y_energy(model, space, points, y, over, meter) -> np.ndarray:
     return (value - error).max(axis=1)
 
 
-def _normalization(model, space, points: _Points, at, over, tolerance, meter, isotropic) -> CheckResult:
+def search_normalization(model, space, points: Points, at, over, tolerance, meter, isotropic) -> CheckResult:
     directions = np.zeros((1, 2)) if at == "normal" else _directions(np.zeros(1) if isotropic else PHI_GRID)
     D = directions.shape[0]
     P = len(points)
@@ -222,10 +222,10 @@ def _normalization(model, space, points: _Points, at, over, tolerance, meter, is
     p, d, c = np.unravel_index(np.argmax(deviation), deviation.shape)
     E, err = float(value[p, d, c]), float(error[p, d, c])
     theta, phi = directions_at[p, c] if at == "max" else directions[d]
-    params = _params_at(model, space, points, int(p))
+    params = params_at(model, space, points, int(p))
     dev = abs(E - 1.0)
     status = "fail" if dev - err > tolerance else "pass" if dev + err <= tolerance else "inconclusive"
-    where = f"at {_params_text(params)}, {_fixed_name(over)} θ={np.degrees(theta):.4g}° φ={np.degrees(phi):.4g}°"
+    where = f"at {params_text(params)}, {fixed_name(over)} θ={np.degrees(theta):.4g}° φ={np.degrees(phi):.4g}°"
     verdict = {"fail": "not normalized", "pass": "normalized", "inconclusive": "inconclusive"}[status]
     message = (f"{verdict} (at {at}): largest |E − 1| {dev:.3g} ± {format_error(err, 2)} (tolerance {tolerance:g}), "
                f"E = {E:.10g} {where}")

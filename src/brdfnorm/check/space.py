@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..models.base import Model
-from .core import _plain, _text
+from .core import plain, value_text
 
 #: An open parameter range [min, ∞) is searched over [min, min + UNBOUNDED_SPAN] (exponents: README, ≤ 1e5).
 UNBOUNDED_SPAN = 1e4
@@ -55,7 +55,7 @@ class _Range:
 
 
 @dataclass(frozen=True)
-class _Space:
+class ParameterSpace:
     """How each parameter varies: continuous ranges, discrete value lists (sweeps), bool combinations."""
 
     ranges: tuple[_Range, ...]
@@ -65,7 +65,7 @@ class _Space:
     described: tuple[str, ...]
 
 
-def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str]) -> _Space:
+def parameter_space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str]) -> ParameterSpace:
     sweep = dict(sweep or {})
     fixed = set(fixed)
     for name in [*sweep, *fixed]:
@@ -87,7 +87,7 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
               or (p.name in narrowed and narrowed[p.name] is None)
               or np.ndim(bound[p.name]) > (1 if p.per_channel else 0)):
             held[p.name] = bound[p.name]
-            described.append(f"{p.name} = {_text(bound[p.name])} (held)")
+            described.append(f"{p.name} = {value_text(bound[p.name])} (held)")
         elif p.kind == "bool":
             bool_names.append(p.name)
             described.append(f"{p.name} ∈ {{0, 1}}")
@@ -97,7 +97,7 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             described.append(ranges[-1].describe() + f" (declared {p.describe_range()}; narrowed by the model)")
         elif p.minimum is None or (p.maximum is not None and p.maximum == p.minimum):
             held[p.name] = bound[p.name]
-            described.append(f"{p.name} = {_text(bound[p.name])} (no finite range declared; held)")
+            described.append(f"{p.name} = {value_text(bound[p.name])} (no finite range declared; held)")
         else:
             capped = p.maximum is None
             ranges.append(_Range(p.name, p.minimum, p.minimum + UNBOUNDED_SPAN if capped else p.maximum, capped,
@@ -105,7 +105,7 @@ def _space(model: Model, sweep: Mapping[str, object] | None, fixed: Iterable[str
             described.append(ranges[-1].describe())
     bools = tuple(dict(zip(bool_names, combo, strict=True))
                   for combo in itertools.product((False, True), repeat=len(bool_names)))
-    return _Space(tuple(ranges), tuple(discrete), bools, held, tuple(described))
+    return ParameterSpace(tuple(ranges), tuple(discrete), bools, held, tuple(described))
 
 
 def _unit_samples(dimensions: int, count: int, seed: int) -> np.ndarray:
@@ -122,7 +122,7 @@ def _unit_samples(dimensions: int, count: int, seed: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class _Points:
+class Points:
     """Parameter points: per point, a bool combination index, the discrete values and x in [0, 1]^d."""
 
     combo: np.ndarray  # (P,) int
@@ -132,11 +132,12 @@ class _Points:
     def __len__(self) -> int:
         return self.combo.size
 
-    def take(self, index) -> _Points:
-        return _Points(self.combo[index], self.discrete[index], self.x[index])
+    def take(self, index) -> Points:
+        return Points(self.combo[index], self.discrete[index], self.x[index])
 
 
-def _points(space: _Space, count: int, seed: int) -> _Points:
+def sample_points(space: ParameterSpace, count: int, seed: int) -> Points:
+    """``count`` points of the space (every bool combination and discrete value interleaved), reproducibly."""
     unit = _unit_samples(len(space.ranges), count, seed)
     lists = [values for _, values in space.discrete]
     combos = list(itertools.product(*lists))
@@ -144,10 +145,10 @@ def _points(space: _Space, count: int, seed: int) -> _Points:
     # Interleave so that a budget cut short still covers every bool combination and every discrete value.
     rows = [(c, i, j) for j in range(unit.shape[0]) for i in range(discrete.shape[0]) for c in range(len(space.bools))]
     c, i, j = (np.array(a, dtype=int) for a in zip(*rows, strict=True))
-    return _Points(c, discrete[i], unit[j])
+    return Points(c, discrete[i], unit[j])
 
 
-def _case_values(space: _Space, points: _Points, combo: int, cases: np.ndarray) -> tuple[dict, dict]:
+def case_values(space: ParameterSpace, points: Points, combo: int, cases: np.ndarray) -> tuple[dict, dict]:
     """The bool values of combination ``combo`` and the per-case float values of the cases (indices into
     ``points``) that belong to it."""
     per_case = {name: points.discrete[cases, k] for k, (name, _) in enumerate(space.discrete)}
@@ -155,16 +156,17 @@ def _case_values(space: _Space, points: _Points, combo: int, cases: np.ndarray) 
     return dict(space.bools[combo]), per_case
 
 
-def _bind(model: Model, space: _Space, points: _Points, combo: int, cases: np.ndarray) -> Model:
+def bind_case(model: Model, space: ParameterSpace, points: Points, combo: int, cases: np.ndarray) -> Model:
     """The model with per-case parameter arrays for the cases (indices into ``points``) of one bool combination."""
-    bools, per_case = _case_values(space, points, combo, cases)
+    bools, per_case = case_values(space, points, combo, cases)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # a slider range is searched on purpose, never beyond it
         return model.with_params(**bools, **per_case)
 
 
-def _params_at(model: Model, space: _Space, points: _Points, index: int) -> dict:
-    params = {name: _plain(value) for name, value in model.params.items() if name in space.held}
+def params_at(model: Model, space: ParameterSpace, points: Points, index: int) -> dict:
+    """Every parameter's value at point ``index``, as JSON data (what a failed check reports)."""
+    params = {name: plain(value) for name, value in model.params.items() if name in space.held}
     params.update(space.bools[points.combo[index]])
     for k, (name, _) in enumerate(space.discrete):
         params[name] = float(points.discrete[index, k])

@@ -1,7 +1,7 @@
 """The seed articles' numerical claims, each re-checked: formula against independent numerics.
 
 This package holds :class:`Claim` and its helpers; the claims themselves live in :mod:`.seed000`, :mod:`.seed002`
-and :mod:`.seed003`, and :mod:`brdfnorm.verify` runs them.
+and :mod:`.seed003`, and :mod:`brdfnorm.claims.verify` runs them.
 
 Seed 000 ("Phong Normalization Factor derivation"), seed 002 ("Energy-Normalizing Blinn–Phong Specular") and
 seed 003 (the Gaussian Blinn-Phong BRDF Explorer shader and its fitted factor) state formulas and say
@@ -64,7 +64,7 @@ class Claim:
     cases: list[dict] = field(default_factory=list)
     #: With ``verify(certified=True)``: the albedo enclosures the claim was checked against (see :func:`certify`).
     certified: dict | None = None
-    #: "seed claims" or "published numbers" (set by :func:`brdfnorm.verify.verify`).
+    #: "seed claims" or "published numbers" (set by :func:`brdfnorm.claims.verify.verify`).
     group: str = ""
     relation: str = "equal"
     criterion: str = ""

@@ -7,8 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .. import closed_forms
 from ..engine.routes.series import adaptive_gauss_legendre, blinn_phong_albedo_series
+from ..models import closed_forms
 from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import closed_forms
 from ..engine.routes.series import adaptive_gauss_legendre
+from ..models import closed_forms
 from . import GAUSSIAN_RANGE, SOURCES, TWO_PI, Claim, rel_error
 
 

@@ -3,7 +3,7 @@
 Samples are the normalization factor 1/E over a parameter sweep (as :func:`brdfnorm.normalization.normalize` computes
 it, spread over cores or a Dask cluster by :mod:`brdfnorm.parallel`; with ``--at view`` also over the polar angles of
 ``--theta``, fitted in the two variables (x, cos θ_o)); the fitting is
-:func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.codegen.emit`. Seed 003's check:
+:func:`brdfnorm.fit.fit`, the code :func:`brdfnorm.fit.codegen.emit`. Seed 003's check:
 ``brdfnorm fit blinn-phong-gaussian --sweep n=1:512:512 --form linear --metric abs-lsq --at normal --json``.
 """
 
@@ -18,10 +18,10 @@ from rich.markup import escape
 from rich.table import Table
 
 from .. import __version__
-from ..codegen import LANGUAGES, emit, fit_context
 from ..errors import ArgumentError, EvaluationError, OutputError
-from ..exact_forms import EXACT, exact_form
 from ..fit import METRICS, FitResult, fit, parse_form
+from ..fit.codegen import LANGUAGES, emit, fit_context
+from ..fit.exact import EXACT, exact_form
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
 from ..parallel.results import normalization_result, sweep_job

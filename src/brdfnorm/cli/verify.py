@@ -38,7 +38,7 @@ def verify(
     within their 1e-10 tolerance of it.
     """
     with guarded(debug):
-        from .. import verify as checks  # mpmath and the checks load only when asked for
+        from ..claims import verify as checks  # mpmath and the checks load only when asked for
 
         n = checks.check_exponents(checks.DEFAULT_EXPONENTS if exponents is None
                                    else parse_range(exponents, "--n", allow_log=True))

@@ -38,7 +38,6 @@ import numpy as np
 from .. import albedo, normalize
 from ..check import Budget
 from ..check import check as check_model
-from ..codegen import emit, fit_context
 from ..errors import (
     ArgumentError,
     ArgumentTypeError,
@@ -48,6 +47,7 @@ from ..errors import (
     ParameterTypeError,
 )
 from ..fit import fit
+from ..fit.codegen import emit, fit_context
 from ..models.base import Model
 from ..normalization import THETA_MAX
 from ..output.formats import format_with_error
@@ -420,7 +420,7 @@ def fit_factor(model: Model, parameter: object, low: object, high: object, sampl
                language: object, scale: object = "linear", form: object = "auto",
                check: Callable[[], None] = lambda: None, params: object = None) -> dict:
     """Fit α(x) = 1/E over a float parameter's range (:func:`brdfnorm.fit.fit`, ``auto`` form by default) and
-    emit it (:func:`brdfnorm.codegen.emit`); the other parameters at the page's values ``params``."""
+    emit it (:func:`brdfnorm.fit.codegen.emit`); the other parameters at the page's values ``params``."""
     p = model.parameter(str(parameter)[:80])
     if p.kind != "float":
         raise ArgumentError(f"only float parameters can be fitted; {p.name} is {p.kind}", where="parameter")

@@ -251,7 +251,7 @@ def _resolve_componentwise(name: str, args: Sequence[Type], reusable: Sequence[b
                 for i in range(n):
                     comps = [v[i] for v in values]
                     target = comps[k]
-                    if _owned(target, 0.0) and all(_owned(target, c) for j, c in enumerate(comps) if j != k):
+                    if in_place_ok(target, 0.0) and all(in_place_ok(target, c) for j, c in enumerate(comps) if j != k):
                         out.append(fn(*comps, out=target))
                     else:
                         out.append(fn(*comps))
@@ -261,7 +261,7 @@ def _resolve_componentwise(name: str, args: Sequence[Type], reusable: Sequence[b
     return None
 
 
-def _owned(buffer, other) -> bool:
+def in_place_ok(buffer, other) -> bool:
     """True when ``buffer`` (a temporary of ours) can receive ``buffer ∘ other`` in place."""
     return (
         isinstance(buffer, np.ndarray)
@@ -280,13 +280,13 @@ def _dot(a: Components, b: Components):
             term = np.multiply(x, y, out=buffer)
         else:
             term = buffer = x * y
-        total = np.add(total, term, out=total) if _owned(total, term) else total + term
+        total = np.add(total, term, out=total) if in_place_ok(total, term) else total + term
     return total
 
 
 def _normalize(v: Components) -> Components:
     scale = _dot(v, v)
-    if _owned(scale, 0.0):
+    if in_place_ok(scale, 0.0):
         np.sqrt(scale, out=scale)
         np.divide(1.0, scale, out=scale)
     else:
@@ -319,7 +319,7 @@ def _cross(a: Components, b: Components) -> Components:
 
 def _normalize_in_place(v: Components) -> Components:
     scale = 1.0 / np.sqrt(_dot(v, v))
-    return tuple(np.multiply(x, scale, out=x) if _owned(x, scale) else x * scale for x in v)
+    return tuple(np.multiply(x, scale, out=x) if in_place_ok(x, scale) else x * scale for x in v)
 
 
 def _resolve_geometric(name: str, args: Sequence[Type], reusable: Sequence[bool] = ()) -> Resolved | None:

@@ -48,7 +48,7 @@ import numpy as np
 
 from ..engine.routes import certified
 from ..errors import ArgumentError
-from .table import Lut, _checked_axes, _plain
+from .table import Lut, checked_axes, plain_params
 
 #: Models with certified tables: the isotropic microfacet lobes with F = 1.
 MODELS = ("ggx", "beckmann")
@@ -125,7 +125,7 @@ def compute(model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, f
     if average:
         refuse_average(model)
     clamp = dict(clamp or {})
-    _, evaluated, direction = _checked_axes(model, axes, clamp)
+    _, evaluated, direction = checked_axes(model, axes, clamp)
     names = list(evaluated)
     shape = tuple(len(evaluated[n]) for n in names)
     grids = np.meshgrid(*[evaluated[n] for n in names], indexing="ij")
@@ -138,7 +138,7 @@ def compute(model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, f
     tables, decimals, missed, bits, evaluations = cell_tables(model, theta, mu, alpha, shape, digits, report)
     tables["1-E"] = 1.0 - tables["E"]
     fixed = {k: v for k, v in model.params.items() if k not in axes}
-    meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": clamp,
+    meta = {"model": source or model.name, "parameters": plain_params(fixed), "grid": grid, "clamp": clamp,
             "method": "certified", "units": {"mu": "cos theta_o", "theta": "radians"}, "brdfnorm": __version__,
             "unconverged": missed, "evaluations": evaluations,
             "certified": {"digits": digits, "working_bits_max": bits,

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..fit import FitResult, auto_candidates, fit, parse_form, smith_candidates
-from ..forms import SmithForm
+from ..fit.families import SmithForm
 from .table import Lut
 
 
@@ -115,7 +115,7 @@ def _fit_candidates(candidates: list, x: np.ndarray, t: np.ndarray, y: np.ndarra
                     names: tuple[str, str], prune: bool) -> tuple[list[dict], list[FitResult]]:
     """Fit the candidates in order of coefficient count; ``tried`` in the candidates' order, and the fits
     without a pole. With ``prune``, a candidate whose family provably stays above ``PRUNE_MARGIN`` × the best
-    pole-free error of fewer coefficients (:meth:`brdfnorm.forms.Form.error_exceeds`) is not fitted: that best
+    pole-free error of fewer coefficients (:meth:`brdfnorm.fit.families.Form.error_exceeds`) is not fitted: that best
     error is ≥ (1 − FRONT_STEP) × the front's last, so the candidate could neither enter the front nor tie with
     a count's entry; the front and the chosen fit are those of fitting it (tested against ``prune=False``)."""
     tried: list[dict | None] = [None] * len(candidates)

@@ -167,7 +167,10 @@ def _first_mapped_to(model: Model, name: str, minimum: float, low: float = 0.0, 
     return high
 
 
-def _checked_axes(model: Model, axes: Mapping[str, Sequence[float]], clamp: Mapping[str, float]):
+def checked_axes(model: Model, axes: Mapping[str, Sequence[float]],
+                 clamp: Mapping[str, float]) -> tuple[dict, dict, str]:
+    """The table's axes checked against ``model`` (one direction axis, the others its parameters, the clamps
+    applied): the axes' values as given, as evaluated (clamped), and the direction axis's name."""
     if not axes:
         raise ArgumentError("give at least one axis", where="axes")
     names = list(axes)
@@ -435,7 +438,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     for channel in channels:
         if channel not in CHANNELS:
             raise ArgumentError(f"unknown channel set {channel!r} (known: {', '.join(CHANNELS)})", where="channels")
-    _, evaluated, direction = _checked_axes(model, axes, clamp)
+    _, evaluated, direction = checked_axes(model, axes, clamp)
     names = list(evaluated)
     shape = tuple(len(evaluated[n]) for n in names)
     validate.batch_size(shape, where="axes")  # before any array of the table's size exists
@@ -576,7 +579,7 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
         unconverged += int(np.count_nonzero(~result.avg_converged))
     aliased = {name: model.aliases[name] for name in axes if name in model.aliases}  # e.g. roughness → alpha
     fixed = {k: v for k, v in model.params.items() if k not in axes and k not in {t for t, _, _ in aliased.values()}}
-    meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": dict(clamp or {}),
+    meta = {"model": source or model.name, "parameters": plain_params(fixed), "grid": grid, "clamp": dict(clamp or {}),
             "rtol": rtol, "method": method, "units": {"mu": "cos theta_o", "theta": "radians"},
             "brdfnorm": __version__, "unconverged": unconverged, "evaluations": result.evaluations}
     if unconverged:  # which cells missed rtol, as masks over their tables' axes (absent where every cell converged)
@@ -590,7 +593,8 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     return Lut(result.tables, axes, meta, result.table_axes)
 
 
-def _plain(params: Mapping[str, object]) -> dict:
+def plain_params(params: Mapping[str, object]) -> dict:
+    """Parameter values as JSON data for a table's metadata (bools as bools, numbers as floats or lists)."""
     out = {}
     for name, value in params.items():
         if isinstance(value, (bool, np.bool_)):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import difflib
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -70,6 +70,17 @@ def normal_lobe(fixed: np.ndarray) -> Lobe:
     return Lobe(direction, np.ones(shape), np.full(shape, np.pi))
 
 
+@dataclass(frozen=True)
+class Origin:
+    """What :func:`brdfnorm.load` rebuilds a model from (:meth:`Model.origin`): the name or path it was given,
+    the file's text where the model was read from a file (another process or machine may not see the file, or
+    see it changed), and properties fixed when it was loaded that are not declared parameters."""
+
+    key: str
+    text: str | None = field(default=None, repr=False)
+    fixed: Mapping[str, object] = field(default_factory=dict)
+
+
 class Model(ABC):
     """A BRDF with declared parameters, bound to parameter values.
 
@@ -105,6 +116,11 @@ class Model(ABC):
     def params(self) -> dict:
         """The bound parameter values (defaults overridden by what was given)."""
         return dict(self._params)
+
+    def origin(self) -> Origin:
+        """What :func:`brdfnorm.load` (or, with a text, :func:`brdfnorm.load_text`) rebuilds this model from,
+        with :attr:`params` as keywords: for a built-in lobe its registry name; models read from a file say so."""
+        return Origin(self.name)
 
     def with_params(self, **values: object) -> Model:
         """A copy bound to other parameter values."""

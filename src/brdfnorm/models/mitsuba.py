@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import ArgumentError, BrdfFileError, ModelNotFoundError, ParameterError
 from ..parameters import Parameter
-from .base import Lobe, Model, mirror
+from .base import Lobe, Model, Origin, mirror
 from .dielectric import refract
 
 PREFIX = "mitsuba:"
@@ -150,6 +150,14 @@ class MitsubaModel(Model):
         self.channels = 3
         self._cache: OrderedDict = OrderedDict()
         super().__init__(**values)
+
+    def origin(self) -> Origin:
+        """``mitsuba:PLUGIN`` with the undeclared properties it was given, or an XML file's path and its
+        ``<bsdf>`` text (:func:`brdfnorm.load_text` loads the same element)."""
+        if self.xml is not None:
+            return Origin(self.source_path if self.source_path and is_mitsuba(self.source_path) else "<bsdf>.xml",
+                          self.xml)
+        return Origin(self.name, fixed=self.fixed)
 
     def _check(self) -> None:
         self.isotropic = not np.any(np.asarray(self._params.get("anisotropic", 0.0), dtype=float) != 0)
@@ -426,6 +434,11 @@ def plugin_type(xml: str) -> str:
 def is_mitsuba(key: str) -> bool:
     """True for the names and paths this module loads: ``mitsuba:PLUGIN`` or a ``.xml`` file."""
     return key.startswith(PREFIX) or Path(key).suffix.lower() == ".xml"
+
+
+def load_string(xml: str, where: str) -> MitsubaModel:
+    """The model of a ``<bsdf>`` element's text as :func:`load_xml` made it (sent to another process)."""
+    return MitsubaModel(plugin_type(xml), (), xml=xml, source_path=where)
 
 
 def load(key: str, **values: object) -> MitsubaModel:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import closed_forms
 from ..parameters import Parameter
+from . import closed_forms
 from .base import Lobe, Model, at_normal, mirror, scalar_param
 
 EXPONENT = Parameter("n", "float", 32.0, 0.0, None, "specular exponent")

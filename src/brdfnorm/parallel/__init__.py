@@ -87,7 +87,7 @@ def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = Non
             on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
     """Compute every cell of ``job`` on the open ``pool`` (see :func:`albedo_cells`)."""
     start = time.perf_counter()
-    model = job.source.load()  # refuses a bad source here, once, with its own warnings
+    model = job.loaded()  # a job rebuilt from data refuses a bad source here, once, with its own warnings
     job.settings.validate(model)
     if checkpoint is not None:
         store = Checkpoint.open(checkpoint, job, lambda: chunk_plan(job, model))
@@ -102,7 +102,7 @@ def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = Non
         on_progress(cells_done, job.size)
     spent = 0
     # closing(): stop waiting on the chunks as soon as anything here fails, not when the generator is collected
-    with sigterm_as_interrupt(), contextlib.closing(pool.run(job, plan, missing)) as results:
+    with sigterm_as_interrupt(), contextlib.closing(pool.run(job, plan, missing, model)) as results:
         for result in results:
             if store is not None:
                 store.save(result)

@@ -93,16 +93,23 @@ def _model(source_json: str) -> Model:
 
 def run_chunk(header_json: str, index: int, theta: np.ndarray, phi: np.ndarray,
               values: Mapping[str, np.ndarray]) -> ChunkResult:
-    """Compute chunk ``index`` of a job (the task every executor runs; importable by any worker)."""
+    """Compute chunk ``index`` of a job (the task every executor runs; importable by any worker), with the
+    model rebuilt from the job's source once per process."""
     from .. import __version__
-    from ..engine.methods import albedo
-    from ..normalization import normalize
 
     header = json.loads(header_json)
     if header["brdfnorm"] != __version__:
         raise ArgumentError(f"this worker runs brdfnorm {__version__}, the job needs {header['brdfnorm']}",
                             where="scheduler")
-    model = _model(canonical_json(header["source"]))
+    return compute_chunk(_model(canonical_json(header["source"])), header, index, theta, phi, values)
+
+
+def compute_chunk(model: Model, header: Mapping, index: int, theta: np.ndarray, phi: np.ndarray,
+                  values: Mapping[str, np.ndarray]) -> ChunkResult:
+    """Compute chunk ``index`` of the job ``header`` with its model (loaded here, or the caller's own)."""
+    from ..engine.methods import albedo
+    from ..normalization import normalize
+
     settings = header["settings"]
     start = time.perf_counter()
     with warnings.catch_warnings():
@@ -182,15 +189,20 @@ class Workers:
             return "in-process", 1
         return "local processes", min(self.count, chunks)
 
-    def run(self, job: CellsJob, plan: ChunkPlan, missing: list[int]) -> Iterator[ChunkResult]:
-        """Compute the ``missing`` chunks of ``job``, yielding each as it finishes (in completion order)."""
+    def run(self, job: CellsJob, plan: ChunkPlan, missing: list[int],
+            model: Model | None = None) -> Iterator[ChunkResult]:
+        """Compute the ``missing`` chunks of ``job``, yielding each as it finishes (in completion order); in this
+        process with ``model`` (the job's, already loaded) where given, never parsing it again."""
         header = canonical_json(job.header())
         tasks = [(header, k, *job.cells(plan.chunk(k))) for k in missing]
         where, count = self.placement(len(tasks))
         if self.scheduler is not None:
             return _on_dask(tasks, self._client, job.digest)
         if where == "in-process":
-            return (run_chunk(*task) for task in tasks)
+            if model is None:
+                return (run_chunk(*task) for task in tasks)
+            data = job.header()
+            return (compute_chunk(model, data, *task[1:]) for task in tasks)
         return _in_pool(self._local_pool(), tasks)
 
     def map(self, function, tasks: list[tuple]) -> list:

@@ -69,9 +69,9 @@ class ModelSource:
 
     @classmethod
     def of(cls, model: Model) -> ModelSource:
-        """The source of a built-in model or one read from a ``.brdf`` file, with its scalar parameter values."""
-        from ..brdffile import BrdfModel
-        from ..models.mitsuba import MitsubaModel
+        """The source the model declares (:meth:`~brdfnorm.models.base.Model.origin`: what :func:`brdfnorm.load`
+        was given, and a file's text), with its scalar parameter values."""
+        from ..models.mitsuba import is_mitsuba
 
         params = {}
         for p in model.parameters:
@@ -86,35 +86,24 @@ class ModelSource:
             params[p.name] = (bool(value) if p.kind == "bool" else
                               tuple(float(c) for c in array) if p.per_channel else
                               int(array) if p.kind == "int" else float(array))
-        if isinstance(model, BrdfModel):
-            if not model.brdf_file.text:
-                raise ArgumentError(f"{model.name}: the model's .brdf text is unknown (parse it with "
-                                    "brdfnorm.brdffile.parse_brdf or read_brdf)", where="model")
-            return cls("brdf", model.brdf_file.path, params, model.brdf_file.text)
-        if REGISTRY.get(model.name) is type(model):
-            return cls("builtin", model.name, params)
-        if isinstance(model, MitsubaModel):
-            if model.xml is not None:
-                return cls("mitsuba", model.source_path or model.name, params, model.xml)
-            return cls("mitsuba", model.name, {**model.fixed, **params})
-        raise ArgumentError(f"{type(model).__name__} cannot travel to other processes: only built-in lobes and "
-                            ".brdf models have a source", where="model")
+        origin = model.origin()
+        kind = "mitsuba" if is_mitsuba(origin.key) else "brdf" if origin.text is not None else "builtin"
+        if origin.text is not None and not origin.text:
+            raise ArgumentError(f"{model.name}: the model's file text is unknown (parse it with "
+                                "brdfnorm.brdffile.parse_brdf or read_brdf)", where="model")
+        if kind == "builtin" and REGISTRY.get(origin.key) is not type(model):
+            raise ArgumentError(f"{type(model).__name__} cannot travel to other processes: only built-in lobes and "
+                                "models read by brdfnorm.load have a source", where="model")
+        return cls(kind, origin.key, {**origin.fixed, **params}, origin.text)
 
     def load(self) -> Model:
-        """Rebuild the model (parsing and compiling the ``.brdf`` text where there is one)."""
-        if self.kind == "builtin":
-            if self.name not in REGISTRY:
-                raise ArgumentError(f"unknown built-in model {self.name!r}", where="model")
-            return REGISTRY[self.name](**self.params)
-        if self.kind == "mitsuba":
-            from ..models import mitsuba
+        """Rebuild the model by :func:`brdfnorm.load` (a name) or :func:`brdfnorm.load_text` (a file's text),
+        the same functions that loaded it where the job was made."""
+        from .. import load, load_text
 
-            if self.text is not None:
-                return mitsuba.MitsubaModel(mitsuba.plugin_type(self.text), (), xml=self.text, source_path=self.name)
-            return mitsuba.load(self.name, **self.params)
-        from ..brdffile import compile_brdf, parse_brdf
-
-        return compile_brdf(parse_brdf(self.text or "", self.name), **self.params)
+        if self.text is None:
+            return load(self.name, **self.params)
+        return load_text(self.text, self.name, **self.params)
 
     def to_json(self) -> dict:
         params = {k: list(v) if isinstance(v, tuple) else v for k, v in sorted(self.params.items())}
@@ -166,6 +155,9 @@ class CellsJob:
     values: Mapping[str, np.ndarray]  # per-cell float parameter values, each (N,)
     task: Task = "albedo"
     chunk_cells: int | None = None  # fixed chunk size (None: chosen by the probe)
+    #: The loaded model the job was made from (None for a job rebuilt from its data): computed with in this
+    #: process, so one worker never parses or compiles the model again. Never hashed, never shipped.
+    model: Model | None = field(default=None, repr=False)
 
     @classmethod
     def of(cls, model: Model, theta=0.0, phi=0.0, values: Mapping[str, object] | None = None, *,
@@ -200,11 +192,15 @@ class CellsJob:
             # normalize(at="max") takes rtol, method and over only; a setting it would ignore is refused
             raise ArgumentError(f"the 'max' task does not take {', '.join(ignored)}", where="settings")
         # Per-cell values replace whatever the model had bound for those parameters (a sweep's array).
-        source = ModelSource.of(model.with_params(**{name: model.parameter(name).default for name in per_cell}))
-        return cls(source, chosen, tuple(int(s) for s in shape),
+        bound = model.with_params(**{name: model.parameter(name).default for name in per_cell})
+        return cls(ModelSource.of(bound), chosen, tuple(int(s) for s in shape),
                    np.ascontiguousarray(np.broadcast_to(theta, shape), dtype="<f8").ravel(),
                    np.ascontiguousarray(np.broadcast_to(phi, shape), dtype="<f8").ravel(),
-                   flat, task, None if chunk_cells is None else int(chunk_cells))
+                   flat, task, None if chunk_cells is None else int(chunk_cells), bound)
+
+    def loaded(self) -> Model:
+        """The job's model: the one it was made from, else rebuilt from its source."""
+        return self.model if self.model is not None else self.source.load()
 
     @property
     def size(self) -> int:

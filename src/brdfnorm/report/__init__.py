@@ -4,7 +4,7 @@ With no models, the page studies the seed articles' lobes — phong, modified-ph
 blinn-phong-gaussian: normalization factors against seed 000's closed forms, albedo curves with and without
 normalization (seed 002), Blinn-Phong's α(n) against the folklore (n+8)/8π (seed 000), seed 003's linear fit
 against refits (:mod:`brdfnorm.fit`), polar plots of the lobes, and the table of the seeds' claims checked by
-:mod:`brdfnorm.verify`. Given models (built-in names or ``.brdf`` files)
+:mod:`brdfnorm.claims.verify`. Given models (built-in names or ``.brdf`` files)
 get the same study over one float parameter each.
 
 The report is a directory: ``index.html`` and PNG figures beside it. It is built in a temporary sibling
@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, load
+from ..claims.verify import verify
 from ..errors import ArgumentError
 from ..fit import fit
 from ..models.base import Model
 from ..output.directories import check_target, staged
-from ..verify import verify
 from . import microfacet, sections
 from .html import page
 from .study import StudyConfig

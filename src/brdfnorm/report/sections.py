@@ -11,7 +11,7 @@ from html import escape
 
 import numpy as np
 
-from .. import closed_forms
+from ..models import closed_forms
 from ..output.directories import Stage
 from ..output.formats import format_value
 from . import figures, study

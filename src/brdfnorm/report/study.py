@@ -3,7 +3,7 @@
 Default study (the seed lobes phong, modified-phong, blinn-phong, blinn-phong-gaussian):
 
 * :func:`factor_table` — normalization factors at L = N over n: seed 000's closed forms (2π/(n+1), 2π/(n+2),
-  8π(2^(−n/2)+n)/((n+2)(n+4)), :mod:`brdfnorm.closed_forms`) against adaptive quadrature, and where over
+  8π(2^(−n/2)+n)/((n+2)(n+4)), :mod:`brdfnorm.models.closed_forms`) against adaptive quadrature, and where over
   θ ∈ [0°, 89.9°] the albedo is largest (seeds 000 and 003 assume θ = 0 "without proof"; here it is searched).
 * :func:`albedo_curves` — E(θ_o) at several n, raw and times the L = N factor (seed 002's open problem: the
   energy a normalized lobe loses towards grazing views).
@@ -25,9 +25,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import closed_forms, load
+from .. import load
 from ..engine.methods import METHODS, albedo
 from ..errors import ArgumentError
+from ..models import closed_forms
 from ..models.base import Model
 from ..normalization import normalize
 

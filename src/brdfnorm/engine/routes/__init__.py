@@ -16,6 +16,6 @@ Exact routes of particular lobes (each registered with :mod:`brdfnorm.engine.met
   (``"dielectric"``), and their hemispherical average E_avg as one 3-D integral;
 - :mod:`.certified` — guaranteed enclosures by ball arithmetic (``"certified"``).
 
-The closed forms of the seed articles (``"closed-form"``) live in :mod:`brdfnorm.closed_forms`, below the models
+The closed forms of the seed articles (``"closed-form"``) live in :mod:`brdfnorm.models.closed_forms`, below the models
 that declare them.
 """

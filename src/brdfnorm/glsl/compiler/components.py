@@ -85,7 +85,7 @@ def in_place(ufunc: np.ufunc, side: int) -> Callable:
         out = []
         for p, q in zip(x if len(x) > 1 else x * len(y), y if len(y) > 1 else y * len(x), strict=True):
             buffer, other = (p, q) if side == 0 else (q, p)
-            if builtins._owned(buffer, other):
+            if builtins.in_place_ok(buffer, other):
                 out.append(ufunc(p, q, out=buffer))
             else:
                 out.append(ufunc(p, q))

@@ -2,7 +2,7 @@
 
 Where a lobe's factor at L = N has a closed form, a fitted rational is both costlier and less accurate than the
 formula itself. Seed 000 derives them: original Phong 1/E = (n + 1)/2π, modified Phong (n + 2)/2π, and
-Blinn-Phong α(n) = (n + 2)(n + 4)/(8π(2^(−n/2) + n)) (:mod:`brdfnorm.closed_forms`, each checked against
+Blinn-Phong α(n) = (n + 2)(n + 4)/(8π(2^(−n/2) + n)) (:mod:`brdfnorm.models.closed_forms`, each checked against
 quadrature by ``brdfnorm verify``). :class:`ExactForm` has no coefficients; its error on the samples is measured
 against the quadrature factor like any fit's, so a wrong formula would show as a large error.
 """
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import closed_forms
-from .forms import Form
+from ..models import closed_forms
+from .families import Form
 
 TWO_PI = 2.0 * np.pi
 EIGHT_PI = 8.0 * np.pi

@@ -12,10 +12,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import validate
-from .claims import DEFAULT_EXPONENTS, Claim, published, seed000, seed002, seed003
-from .errors import ArgumentError
-from .registry import Registry
+from .. import validate
+from ..errors import ArgumentError
+from ..registry import Registry
+from . import DEFAULT_EXPONENTS, Claim, published, seed000, seed002, seed003
 
 CHECKS: Registry[Callable[[np.ndarray], Claim]] = Registry("claim", "claim", {
     "phong-original": seed000.phong_original,
@@ -88,11 +88,11 @@ def certify(claim: Claim, digits: int = 30) -> Claim:
     (formulas that are float64 procedures). Claims that are not albedo values are returned unchanged."""
     if claim.id not in CERTIFIABLE:
         return claim
-    from .engine.routes import certified
-    from .extras import require
+    from ..engine.routes import certified
+    from ..extras import require
 
     flint = require("flint", "certified", where="--certified")
-    from .models import REGISTRY
+    from ..models import REGISTRY
 
     model_name, degrees, closed_form = CERTIFIABLE[claim.id]
     cases = []

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exact_forms import ExactForm
-from .fit import FitResult
-from .forms import HyperbolaForm, RationalForm, SmithForm
-from .registry import Registry
+from ..registry import Registry
+from .exact import ExactForm
+from .families import HyperbolaForm, RationalForm, SmithForm
+from .fitting import FitResult
 
 #: Words no emitted identifier may be, in any target: the keywords and reserved words of C11/C23, GLSL 4.6 and
 #: HLSL (types included — a parameter named ``vec3`` or ``float``), Python's keywords, the built-in functions

@@ -27,7 +27,7 @@ Forms (:data:`FORMS`, selected by name as colour-science selects a ``method=``)
 * ``smith:P/Q@D`` (issue 12 item 5) — the albedo E(μ, α) of a GGX lobe, x = μ and t = α:
   E = 1 − s·(N(s, α²) + ln s·L(α²)) / Q(s, α²) with s = μ/√(μ² + α²(1 − μ²)) = 1/(1 + 2Λ), N and Q of degree P
   and Q in s, N, L and Q of degree D in α² — ``smith:P/Q@D/DQ`` gives Q its own degree DQ
-  (:class:`brdfnorm.forms.SmithForm` says why: s absorbs the boundary
+  (:class:`brdfnorm.fit.families.SmithForm` says why: s absorbs the boundary
   layer μ ≲ α, the factor s gives E(0, α) = 1, ln s the α²·s·ln s of the horizon). Over μ ∈ [0, 1],
   α ∈ [0.02, 1] of height-correlated GGX (F = 1), ``smith:1/1@1`` (9 coefficients) reaches 7.5·10⁻³,
   ``smith:1/1@1/2`` (11) 4.2·10⁻³ and ``smith:1/1@2`` (14) 2.0·10⁻³ max absolute error on a dense check grid,
@@ -62,10 +62,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import validate
-from .errors import ArgumentError, ArgumentTypeError, EvaluationError
-from .forms import Form, HyperbolaForm, RationalForm, SmithForm
-from .registry import Registry
+from .. import validate
+from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
+from ..registry import Registry
+from .families import Form, HyperbolaForm, RationalForm, SmithForm
 
 METRICS = ("abs-lsq", "rel-lsq", "minimax-rel", "minimax-abs")
 #: Candidate forms of ``auto`` never exceed this many coefficients unless asked (``max_coefficients``).

@@ -2,7 +2,7 @@
 
 A :class:`Form` is one member of a family with a fixed number of coefficients (see :mod:`brdfnorm.fit` for the
 families and the metrics): it fits itself to samples, evaluates, prints its expression and counts the operations
-of its emitted code (:mod:`brdfnorm.codegen`).
+of its emitted code (:mod:`brdfnorm.fit.codegen`).
 
 Solvers: linear forms by numpy.linalg.lstsq; rational forms by the Sanathanan–Koerner linearization refined with
 scipy.optimize.least_squares; the minimax metric by Lawson's iteratively reweighted least squares (Lawson 1961;
