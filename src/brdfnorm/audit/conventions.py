@@ -336,3 +336,26 @@ def fresnel_of(c: Convention) -> dict[str, float]:
 
 def with_floors(c: Convention, mu_floor: float, alpha_floor: float) -> Convention:
     return replace(c, mu_floor=mu_floor, alpha_floor=alpha_floor)
+
+
+def stored_axis_values(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """Each axis's value at the samples ``index`` in the variable the table itself is indexed by, before any
+    clamp: μ (or θ in degrees for the θ conventions), r for the r² roughness conventions (α = r²) or α, f0, or the
+    values given outright with ``--axis``. This is what a bad cell's position is reported in."""
+    out = {}
+    for axis, role in axis_roles(c).items():
+        i = np.asarray(index[axis])
+        given = _explicit(c, role)
+        if given is not None:
+            name, values = given
+            out["theta_deg" if name == "theta" else name] = (np.degrees(values[i.astype(int)]) if name == "theta"
+                                                             else values[i.astype(int)])
+            continue
+        t = unit_positions(c, role, shape[axis], i, c.flips[axis])
+        if role == "mu" and c.direction.startswith("theta"):
+            out["theta_deg"] = 90.0 * t
+        elif role == "alpha" and c.roughness.startswith("r2"):
+            out["r"] = t
+        else:
+            out[role] = role_value(c, role, t)
+    return out

@@ -32,13 +32,15 @@ them (or from the start when ``eta=`` or the channels are pinned).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import optimize
 
 from ..errors import ArgumentError
-from .conventions import ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, fresnel_of, geometries
+from .conventions import (ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, fresnel_of, geometries,
+                          stored_axis_values)
 from .reference import Reference
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
@@ -52,6 +54,8 @@ SUBGRID_CELLS = 1024
 #: Cells of the interior subgrid those candidates are ranked on (the runners-up's statistics are on it).
 RANK_CELLS = 256
 NOISE_FACTOR = 5.0
+#: A meaning is named for a channel when more than this share of its cells lie within the tolerance.
+MAJORITY = 0.5
 #: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
 MAX_NOISE_SHARE = 0.05
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
@@ -60,6 +64,15 @@ DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
 SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
+
+
+@dataclass(frozen=True)
+class Precision:
+    """What a cell is judged against: the storage step (half a code, or half an ulp at 1) and, when given
+    (``--tolerance``), an absolute tolerance that replaces the computed one."""
+
+    step: float
+    tolerance: float | None = None
 
 
 @dataclass
@@ -80,6 +93,11 @@ class ChannelFit:
     worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
     cells: int = 0  # cells measured
     sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
+    bad: np.ndarray | None = None  # cells outside the tolerance or not finite (over the cells measured)
+    within: int = 0  # cells within the tolerance
+    #: How this channel alone is laid out when it is not laid out as the others ("transposed", "reversed along
+    #: array axis 1"): its meaning is named by that layout; every cell is measured in the table's convention.
+    layout: str = ""
 
     @property
     def too_noisy(self) -> bool:
@@ -88,13 +106,22 @@ class ChannelFit:
 
     @property
     def fits(self) -> bool:
-        return self.meaning is not None and bool(self.max <= self.tolerance) and not self.too_noisy
+        """The meaning is named: more than MAJORITY of the cells lie within the tolerance (a handful of wrong cells
+        never changes the convention found; they are listed as bad cells instead)."""
+        return (self.meaning is not None and self.cells > 0 and not self.too_noisy
+                and (self.within > MAJORITY * self.cells or bool(self.layout)))
+
+    @property
+    def clean(self) -> bool:
+        """Every cell within the tolerance (what an exit status of 0 needs)."""
+        return self.fits and self.within == self.cells
 
     def summary(self) -> dict:
-        return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "max": self.max,
+        return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "clean": self.clean,
+                "within": self.within, "cells": self.cells, "bad": self.cells - self.within, "max": self.max,
                 "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
                 "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
-                "too_noisy": self.too_noisy, "cells": self.cells, "sampled": self.sampled}
+                "too_noisy": self.too_noisy, "sampled": self.sampled, "layout": self.layout}
 
 
 @dataclass
@@ -108,17 +135,40 @@ class Hypothesis:
         return min(fitted) if fitted else float("inf")
 
     @property
-    def rank(self) -> tuple[float, float]:
-        """Hypotheses are ranked by their median residual first, then by the maximum: the true convention of a
-        table made by Monte Carlo is off by its noise at most cells but by its bias at a few (grazing cells,
-        a zeroed μ = 0 column), and those few must not decide which convention the rest is in; whether it
-        *fits* is still judged by the maximum."""
-        fitted = [c.median for c in self.channels if c.meaning is not None]
-        return (min(fitted) if fitted else float("inf"), self.score)
+    def within(self) -> int:
+        return sum(c.within for c in self.channels if c.meaning is not None)
+
+    @property
+    def cells(self) -> int:
+        return sum(c.cells for c in self.channels if c.meaning is not None)
+
+    @property
+    def share(self) -> float:
+        """The share of cells (of every channel with a meaning) within the tolerance: what ranks hypotheses."""
+        return self.within / self.cells if self.cells else 0.0
+
+    @property
+    def median(self) -> float:
+        """The median |table − exact| over every cell of every channel with a meaning (non-finite cells count as
+        infinitely wrong): what breaks ties in the share."""
+        parts = [np.where(np.isfinite(c.residual), np.abs(c.residual), np.inf).ravel()
+                 for c in self.channels if c.meaning is not None and c.residual is not None]
+        return float(np.median(np.concatenate(parts))) if parts else float("inf")
+
+    @property
+    def rank(self) -> tuple[float, float, float]:
+        """Hypotheses are ranked by the share of cells within the tolerance, then by the median residual, then by
+        the maximum: a few wrong cells (a bright block, a swapped pair, a NaN, a Monte-Carlo table's zeroed
+        column) must not decide which convention the rest is in; they are listed as bad cells instead."""
+        return (-round(self.share, 12), self.median, self.score)
 
     @property
     def fits(self) -> bool:
         return any(c.fits for c in self.channels)
+
+    @property
+    def clean(self) -> bool:
+        return bool(self.channels) and all(c.clean for c in self.channels)
 
 
 @dataclass
@@ -133,8 +183,12 @@ class Inference:
         return self.best.fits
 
     @property
+    def clean(self) -> bool:
+        return self.best.clean
+
+    @property
     def ambiguous(self) -> bool:
-        return bool(self.runners_up) and self.runners_up[0].fits and self.best.fits
+        return bool(self.runners_up) and self.best.fits and self.runners_up[0].share >= self.best.share
 
 
 def _subset(n: int, k: int) -> np.ndarray:
@@ -186,12 +240,13 @@ def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> t
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
           audit_channels: list[int] | None = None, keep_runners: int = 3,
-          explicit: dict[str, np.ndarray] | None = None) -> Inference:
+          explicit: dict[str, np.ndarray] | None = None, tolerance: float | None = None) -> Inference:
     """The best conventions for ``values`` (*grid, channels) — see the module docstring. Meanings with the exact
     dielectric Fresnel factor are searched in a second round, only when nothing fits without them (or from the
     start when ``eta`` or the channels are pinned): each of their cells costs a quadrature."""
     grid = values.shape[:-1]
     ndim = len(grid)
+    precision = Precision(step, tolerance)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1], reference)
     candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
@@ -202,11 +257,11 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, _ = _rounds(values, names, reference, pins, step, chosen, candidates, meanings)
+    best, runners, _ = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
         wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
-        second = _rounds(values, names, reference, pins, step, chosen, wider, [ms + extra for ms in meanings])
+        second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
             best, runners, _ = second
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
@@ -215,7 +270,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
 def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
     """The DIELECTRIC_GEOMETRIES geometries of a 2-D table that the exact dielectric factor at η = ETA fits best
     on the stage-1 subset, each with the index of refraction at which it fits: η solves
-    mean(table − E_dielectric(η)) = 0 on the subset (E_dielectric grows with η at every cell) by Brent's method.
+    median(table − E_dielectric(η)) = 0 on the subset (E_dielectric grows with η at every cell) by Brent's method.
 
     A wrong η shifts the whole table by a smooth amount, so the true geometry ranks among the first few at
     η = 1.5: first or second for 16×16 tables made at η = 1.2, 1.33, 1.5, 1.8, 2.4 and 3 (measured when this was
@@ -235,7 +290,7 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
             data = sample[..., channel]
             ok = np.isfinite(data)
             if ok.any():
-                ranked.append((float(np.max(np.abs(data - exact)[ok])), channel, c))
+                ranked.append((float(np.median(np.abs(data - exact)[ok])), channel, c))
     ranked.sort(key=lambda item: item[0])
     out = []
     for _, channel, c in ranked[:DIELECTRIC_GEOMETRIES]:
@@ -245,7 +300,7 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
         def gap(eta: float, c=c, coords=coords, data=data, ok=ok) -> float:
             exact, _ = reference.meaning("E_dielectric", c.shadowing, coords["mu"], coords["alpha"], eta=eta)
-            return float(np.mean(data[ok] - exact[ok]))
+            return float(np.median(data[ok] - exact[ok]))  # robust to a few wrong cells
 
         low, high = 1.0 + 1e-4, min(10.0, reference.eta_max)
         at_high = gap(high)
@@ -257,16 +312,16 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
     return list(dict.fromkeys(out)) or [replace(c, eta=ETA) for _, _, c in ranked[:DIELECTRIC_GEOMETRIES]]
 
 
-def _rounds(values, names, reference, pins, step, chosen, candidates,
+def _rounds(values, names, reference, pins, precision, chosen, candidates,
             meanings) -> tuple[Hypothesis, list[Hypothesis], list[Convention]]:
     """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
     best hypothesis, the runners-up, and the candidates in stage 1's order."""
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
-    # "loosely": a median residual within twice the storage step plus 1e-3 (a Monte-Carlo table's median residual
+    # "loosely": a median residual within twice the storage precision plus 1e-3 (a Monte-Carlo table's median residual
     # is about 0.67 σ); a split-sum scale read as E is off by a median 1e-2
-    loose = 2.0 * (step + 1e-3)
+    loose = 2.0 * (precision.step + 1e-3)
     if (not scored or scored[0][0] > loose) and any(Reference.expensive(m) for ms in meanings for m in ms):
         scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
     keep = STAGE2_F90 if any(Reference.expensive(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
@@ -280,13 +335,14 @@ def _rounds(values, names, reference, pins, step, chosen, candidates,
         per_axis = max(3, int(RANK_CELLS ** (1.0 / len(grid))))
         index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
                  else np.arange(n) for n in grid]
-        ranked = sorted(((_stage2(values, names, c, reference, step, chosen, (False, False), index), c)
+        ranked = sorted(((_stage2(values, names, c, reference, precision, chosen, (False, False), index), c)
                          for c in top), key=lambda pair: pair[0].rank)
-        finals = [_stage2(values, names, ranked[0][1], reference, step, chosen, search)] + [h for h, _ in ranked[1:]]
+        finals = [_stage2(values, names, ranked[0][1], reference, precision, chosen, search)] + [h for h, _ in ranked[1:]]
     else:
-        finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]
+        finals = [_stage2(values, names, c, reference, precision, chosen, search) for c in top]
         finals.sort(key=lambda h: h.rank)
-    finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
+    finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings)
+    finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings)
     return finals[0], finals[1:], [c for _, c in scored]
 
 
@@ -338,25 +394,30 @@ def _fit_schlick(c: Convention, reference, coords: dict, data: np.ndarray) -> Co
 
 
 def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, meaning: str,
-         step: float) -> ChannelFit:
+         precision: Precision) -> ChannelFit:
     residual = data - exact
     ok = np.isfinite(residual)
     if not ok.any():
-        return ChannelFit(name, meaning, float("inf"), float("inf"), float("inf"), (), 0.0, 0.0, residual, exact)
-    magnitude = np.where(ok, np.abs(residual), -1.0)
-    worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(magnitude)), residual.shape))
+        return ChannelFit(name, meaning, float("inf"), float("inf"), float("inf"), (), 0.0, 0.0, residual, exact,
+                          cells=int(residual.size), bad=np.ones(residual.shape, dtype=bool))
+    magnitude = np.where(ok, np.abs(residual), np.inf)  # a non-finite cell is infinitely wrong
+    # the worst finite cell (non-finite ones are listed as bad cells of their own)
+    worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(np.where(ok, magnitude, -1.0))), residual.shape))
     sigma = noise_sigma(np.where(ok, residual, 0.0))
     factor = max(NOISE_FACTOR, float(np.sqrt(2.0 * np.log(2.0 * residual.size))) + 1.0)
-    tolerance = step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok])) + factor * sigma
-    if not ok.all():  # a table with non-finite cells does not fit, whatever its other cells do
-        tolerance = -1.0
+    if precision.tolerance is not None:
+        tolerance = precision.tolerance
+    else:
+        tolerance = (precision.step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok]))
+                     + factor * sigma)
+    bad = ~(magnitude <= tolerance)
     r = residual[ok]
     return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
-                      float(np.median(np.abs(r))), worst, tolerance, sigma, residual, exact,
-                      float(np.std(exact[ok])))
+                      float(np.median(magnitude)), worst, tolerance, sigma, residual, exact,
+                      float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)))
 
 
-def _full(values, c: Convention, reference, names, step, chosen, index=None) -> Hypothesis:
+def _full(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
     """Residuals of ``c`` on every cell, or on the cells ``index`` (one index vector per axis)."""
     grid = values.shape[:-1]
     sampled = index is not None
@@ -369,16 +430,17 @@ def _full(values, c: Convention, reference, names, step, chosen, index=None) -> 
         if channel not in chosen or meaning is None:
             continue
         exact, error = _exact(reference, c, meaning, coords)
-        fit = _fit(data[..., channel], exact, error, names[channel], meaning, step)
+        fit = _fit(data[..., channel], exact, error, names[channel], meaning, precision)
         if fit.worst:
-            fit.worst_at = {k: float(np.broadcast_to(v, data.shape[:-1])[fit.worst]) for k, v in coords.items()}
+            stored = stored_axis_values(c, grid, [np.asarray([index[a][w]]) for a, w in enumerate(fit.worst)])
+            fit.worst_at = {k: float(np.ravel(v)[0]) for k, v in stored.items()}
             fit.worst = tuple(int(index[a][w]) for a, w in enumerate(fit.worst))
-        fit.cells, fit.sampled = int(np.prod(data.shape[:-1])), sampled
+        fit.sampled = sampled
         fits.append(fit)
     return Hypothesis(c, fits)
 
 
-def _stage2(values, names, c: Convention, reference, step, chosen, search=(True, True), index=None) -> Hypothesis:
+def _stage2(values, names, c: Convention, reference, precision, chosen, search=(True, True), index=None) -> Hypothesis:
     """Residuals of ``c`` (every cell, or the cells ``index``) with its endpoint clamps searched where the grid
     reaches below them."""
     grid = values.shape[:-1]
@@ -388,26 +450,28 @@ def _stage2(values, names, c: Convention, reference, step, chosen, search=(True,
         data = values[np.ix_(*index)][..., channel] if index is not None else values[..., channel]
         c = _fit_schlick(c, reference, coordinates(c, grid, mesh), data)
     raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, mesh)
-    best = _full(values, c, reference, names, step, chosen, index)
+    best = _full(values, c, reference, names, precision, chosen, index)
     if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
-        trials = [_full(values, replace(c, mu_floor=f), reference, names, step, chosen, index) for f in MU_FLOORS
+        trials = [_full(values, replace(c, mu_floor=f), reference, names, precision, chosen, index) for f in MU_FLOORS
                   if f != c.mu_floor]
         best = _clamp_choice(best, trials)
     if search[1] and float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
-        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, step, chosen, index)
+        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, precision, chosen, index)
                   for f in ALPHA_FLOORS if f != best.convention.alpha_floor]
         best = _clamp_choice(best, trials)
     return best
 
 
 def _clamp_choice(default: Hypothesis, trials: list[Hypothesis]) -> Hypothesis:
-    """Another clamp replaces the default only if it at least halves the maximum residual: a clamp changes one
-    boundary row, and noise in that row must not pick one."""
-    challenger = min(trials, key=lambda h: h.score)
-    return challenger if challenger.score < 0.5 * default.score else default
+    """Another clamp replaces the default only if it puts more cells within the tolerance, or as many and at least
+    halves the maximum residual: a clamp changes one boundary row, and noise in that row must not pick one."""
+    challenger = min(trials, key=lambda h: (-h.within, h.score))
+    if challenger.within > default.within:
+        return challenger
+    return challenger if challenger.within == default.within and challenger.score < 0.5 * default.score else default
 
 
-def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, meanings) -> Hypothesis:
+def _retry_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
     """Channels the best geometry leaves unfitted with cheap meanings try the F90 ones (an LTC table's Fresnel
     channel beside its albedo): first on the stage-1 subset, in full only where that beats the current meaning."""
     c = best.convention
@@ -429,12 +493,87 @@ def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, me
             exact, _ = _exact(reference, c, meaning, coords)
             if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
                 candidate = _full(values, replace(c, meanings=tuple(
-                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, step, [channel])
-                if (candidate.channels[0].median, candidate.channels[0].max) < (current[names[channel]].median,
-                                                                               current[names[channel]].max):
+                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision, [channel])
+                new, old = candidate.channels[0], current[names[channel]]
+                if (-new.within, new.median, new.max) < (-old.within, old.median, old.max):
                     current[names[channel]] = candidate.channels[0]
                     picks[channel] = meaning
                     changed = True
+    if not changed:
+        return best
+    return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])
+
+
+def _layouts(c: Convention, grid: tuple[int, ...]) -> list[tuple[str, Convention]]:
+    """The other layouts one channel of a table in convention ``c`` may have been stored in by mistake: reversed
+    along some array axes, or (a square 2-D table) transposed, with or without reversals."""
+    out = []
+    ndim = len(grid)
+    for flips in itertools.product((False, True), repeat=ndim):
+        toggled = [a for a in range(ndim) if flips[a]]
+        if toggled:
+            out.append((f"reversed along array axis {', '.join(map(str, toggled))}",
+                        replace(c, flips=tuple(f != g for f, g in zip(c.flips, flips, strict=True)))))
+        if ndim == 2 and grid[0] == grid[1] and c.direction_axis is not None and not c.explicit:
+            swapped = replace(c, direction_axis=c.roughness_axis, roughness_axis=c.direction_axis,
+                              flips=tuple(f != g for f, g in zip(c.flips[::-1], flips, strict=True)))
+            out.append(("transposed" + (f" and reversed along array axis {', '.join(map(str, toggled))}"
+                                        if toggled else ""), swapped))
+    return out
+
+
+def _relayout_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
+    """A channel the best convention leaves unnamed while it names another is tried in the other layouts
+    (:func:`_layouts`): ranked on the stage-1 subset by the median residual, the best one measured on every cell.
+    If that names the channel's meaning, the channel is reported as stored in that layout and measured in the
+    table's convention (every misplaced cell is then a wrong cell, and ``--fix`` rewrites it in place)."""
+    if not best.fits:
+        return best
+    c = best.convention
+    grid = values.shape[:-1]
+    index = [_subset(n, SUBSET) for n in grid]
+    mesh = _mesh(grid, index)
+    sample = values[np.ix_(*index)]
+    current = {fit.channel: fit for fit in best.channels}
+    picks = list(c.meanings)
+    changed = False
+    expensive = any(Reference.expensive(m) for m in c.meanings if m)
+    for channel in chosen:
+        fit = current.get(names[channel])
+        if fit is None or fit.fits or fit.too_noisy or not meanings[channel]:
+            continue
+        data = sample[..., channel]
+        ok = np.isfinite(data)
+        if not ok.any():
+            continue
+        trials = []
+        with reference.ranking():
+            for label, alt in _layouts(c, grid):
+                coords = coordinates(alt, grid, mesh)
+                for meaning in meanings[channel]:
+                    if meaning == "E_schlick" or Reference.expensive(meaning) and not expensive:
+                        continue  # an expensive meaning only where the table's other channels have one
+                    exact, _ = _exact(reference, alt, meaning, coords)
+                    trials.append((float(np.median(np.abs(data[ok] - exact[ok]))), label, alt, meaning))
+        if not trials:
+            continue
+        _, label, alt, meaning = min(trials, key=lambda item: item[0])
+        trial = _full(values, replace(alt, meanings=tuple(meaning if k == channel else None
+                                                          for k in range(len(picks)))),
+                      reference, names, precision, [channel]).channels[0]
+        if not trial.fits:
+            continue
+        placed = _full(values, replace(c, meanings=tuple(meaning if k == channel else None
+                                                         for k in range(len(picks)))),
+                       reference, names, precision, [channel]).channels[0]
+        # judged at the tolerance of the channel in its own layout: the misplaced residual is no noise estimate
+        magnitude = np.where(np.isfinite(placed.residual), np.abs(placed.residual), np.inf)
+        placed.tolerance, placed.noise, placed.layout = trial.tolerance, trial.noise, label
+        placed.bad = ~(magnitude <= trial.tolerance)
+        placed.within = int(np.sum(~placed.bad))
+        current[names[channel]] = placed
+        picks[channel] = meaning
+        changed = True
     if not changed:
         return best
     return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])

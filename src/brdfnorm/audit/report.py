@@ -24,14 +24,64 @@ def _g(x: float) -> str:
     return f"{x:.3g}" if np.isfinite(x) else str(x)
 
 
+def _n(n: int) -> str:
+    return f"{n:,}".replace(",", "\u2009")
+
+
 def _channel_line(c: dict) -> str:
-    verdict = "fits" if c["fits"] else ("too noisy to decide" if c.get("too_noisy") else "does not fit")
+    if c["fits"]:
+        verdict = "every cell within it" if c["clean"] else f"{_n(c['bad'])} wrong"
+    else:
+        verdict = "too noisy to decide" if c.get("too_noisy") else "meaning not named (fits too few cells)"
     at = ", ".join(f"{k}={_g(v)}" for k, v in c.get("worst_at", {}).items())
-    return (f"  channel {c['channel']}: {c['meaning']}  max {_g(c['max'])} at cell {tuple(c['worst_cell'])}"
-            f"{f' ({at})' if at else ''}, "
-            f"median {_g(c['median'])}, RMS {_g(c['rms'])}; tolerance {_g(c['tolerance'])} "
-            f"(noise σ {_g(c['noise_sigma'])}): {verdict}"
+    if c.get("layout"):
+        verdict = f"stored {c['layout']} (read so, it fits); {_n(c['bad'])} cells misplaced"
+    return (f"  channel {c['channel']}: {c['meaning']} fits {_n(c['within'])} of {_n(c['cells'])} cells "
+            f"(tolerance {_g(c['tolerance'])}, noise σ {_g(c['noise_sigma'])}): {verdict}; "
+            f"median error {_g(c['median'])}, RMS {_g(c['rms'])}, max {_g(c['max'])} at cell "
+            f"{tuple(c['worst_cell'])}{f' ({at})' if at else ''}"
             + (f" [on a subgrid of {c['cells']} cells]" if c.get("sampled") else ""))
+
+
+def _hypothesis_line(h: dict) -> str:
+    within = sum(c["within"] for c in h["channels"] if c["meaning"])
+    cells = sum(c["cells"] for c in h["channels"] if c["meaning"])
+    return f"fits {_n(within)} of {_n(cells)} cells, median error {_g(h['median'])}"
+
+
+#: Wrong cells printed per channel in the terminal text (all of them are in --json and the report).
+TEXT_CELLS = 400
+
+
+def _wrong_lines(channel: str, info: dict) -> list[str]:
+    count, regions = info["count"], info["regions"]
+    lines = [f"channel {channel} ({info['meaning']}{', stored ' + info['layout'] if info.get('layout') else ''}): "
+             f"{_n(count)} wrong cell{'s' if count != 1 else ''} in "
+             f"{len(regions)} region{'s' if len(regions) != 1 else ''} (tolerance {_g(info['tolerance'])}):"]
+    by_region: dict[int, list] = {}
+    for cell in info["cells"]:
+        by_region.setdefault(cell["region"], []).append(cell)
+    shown = 0
+    for region in regions:
+        span = ", ".join(f"{a}" if a == b else f"{a}..{b}" for a, b in zip(region["from"], region["to"], strict=True))
+        lines.append(f"  region {region['region']}: {region['cells']} cell{'s' if region['cells'] != 1 else ''} at "
+                     f"[{span}], max error {_g(region['max_error'])}")
+        for cell in by_region.get(region["region"], []):
+            if shown >= TEXT_CELLS:
+                break
+            shown += 1
+            at = " ".join(f"{k}={v:.6g}" for k, v in cell["at"].items())
+            lines.append(f"    {tuple(cell['index'])} {at}: stored {cell['stored']:.8g}, exact {cell['exact']:.8g}, "
+                         f"error {cell['error']:+.3g}")
+    if shown < count:
+        lines.append(f"  … {_n(count - shown)} more in --json")
+    return lines
+
+
+def _resolution_cell(r: dict) -> str:
+    if "max" in r:
+        return f"{r['size']}: {_g(r['max'])}"
+    return f"{r['size']}: skipped ({r.get('skipped', 'over the budget')})"
 
 
 def text(result: dict) -> str:
@@ -44,30 +94,41 @@ def text(result: dict) -> str:
     for note in result["notes"]:
         lines.append(f"note: {note}")
     best = result["best"]
+    if result["tolerance_given"] is not None:
+        lines.append(f"tolerance {_g(result['tolerance_given'])} (--tolerance)")
+    else:
+        lines.append(f"tolerance per channel: storage step × max|exact| + the reference's error + k × the "
+                     f"table's noise σ ({result['storage']} storage)")
     if result["verdict"] == "fits":
         lines.append(f"convention: {best['text']}")
+        lines.append(result["headline"])
     else:
-        lines.append("NO HYPOTHESIS FITS within the tolerance; the closest is:")
+        lines.append(result["headline"] + ":")
         lines.append(f"  {best['text']}")
     lines += [_channel_line(c) for c in best["channels"]]
     for k, other in enumerate(result["runners_up"][:2]):
         label = "runner-up" if k == 0 else "next"
-        lines.append(f"{label}{' (also fits: the table does not decide)' if k == 0 and result['ambiguous'] else ''}"
-                     f": {other['text']}")
-        lines += [_channel_line(c) for c in other["channels"]]
+        lines.append(f"{label}{' (as good: the table does not decide)' if k == 0 and result['ambiguous'] else ''}"
+                     f": {other['text']}: {_hypothesis_line(other)}")
+    for channel, info in result["wrong_cells"].items():
+        lines += _wrong_lines(channel, info)
     for channel, e in result["interpolation"].items():
         worst = ", ".join(f"{k}={_g(v)}" for k, v in e["worst"].items())
         lines.append(f"GPU interpolation error, channel {channel} ({e['points']} points of the {e['density']}× grid "
                      f"of {e['of_grid']} cells): max {_g(e['max'])} at {worst}; RMS {_g(e['rms'])}")
     for channel, rows in result["resolution"].items():
-        cells = [f"{r['size']}: {_g(r['max'])}" if "max" in r else f"{r['size']}: skipped" for r in rows]
-        lines.append(f"exact tables, channel {channel}, max interpolation error by size: {'; '.join(cells)}")
+        lines.append(f"exact tables, channel {channel}, max interpolation error by size: "
+                     f"{'; '.join(_resolution_cell(r) for r in rows)}")
     for kind, info in result["bad_cells"].items():
         if info["count"]:
             shown = ", ".join(f"{tuple(c)}={_g(v)}" for c, v in zip(info["cells"], info["values"], strict=True))
             lines.append(f"{info['count']} {kind.replace('_', ' ')} cells: {shown}"
                          + (" …" if info["count"] > len(info["cells"]) else ""))
-    lines.append(f"({result['seconds']:.2f} s)")
+    if result["unnamed_channels"]:
+        lines.append(f"channel{'s' if len(result['unnamed_channels']) > 1 else ''} "
+                     f"{', '.join(result['unnamed_channels'])}: no meaning fits most cells")
+    lines.append(("PASS: every cell of every channel is within its tolerance" if result["passes"] else
+                  "FAIL: not every cell of every channel is within its tolerance") + f" ({result['seconds']:.2f} s)")
     return "\n".join(lines)
 
 
