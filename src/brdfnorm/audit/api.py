@@ -28,6 +28,7 @@ from .conventions import parse_pins, stored_axis_values
 from .infer import Hypothesis, Inference, infer
 from .readers import DTYPES, Source, read_table
 from .reference import Reference
+from .spans import written_step
 
 
 @dataclass
@@ -46,6 +47,7 @@ class AuditResult:
     model: str = ""
     wrong_cells: dict = field(default_factory=dict)  # channel -> {"cells": [...], "regions": [...]}
     tolerance_given: float | None = None
+    step: float = 0.0  # the storage step the tolerance starts from (the format's, or a text's written precision)
 
     @property
     def best(self) -> Hypothesis:
@@ -109,7 +111,7 @@ class AuditResult:
         return {
             "file": self.source.path, "format": self.source.fmt, "array": self.source.name, "model": self.model,
             "shape": list(self.source.grid_shape), "channels": self.source.channel_names,
-            "storage": self.source.stored, "storage_step": self.source.step(),
+            "storage": self.source.stored, "storage_step": self.step,
             "verdict": "fits" if self.fits else "no hypothesis fits", "ambiguous": self.inference.ambiguous,
             "best": hyp(self.best), "runners_up": [hyp(h) for h in self.runners_up],
             "hypotheses_tested": self.inference.tested, "reference_cells": self.inference.reference_cells,
@@ -266,10 +268,20 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         else:
             raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="--channel")
         chosen = [k]
-    inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
+    step = source.step()
+    written = written_step(source)
+    if written is not None and written[1] and source.stored == "float64":
+        source.stored = "float32"  # the fix writes single-precision values back, as the file holds
+        source.notes.append("decimal text of single-precision values: float32's step is the storage step")
+        step = source.step()
+    elif written is not None and written[0] > step:  # decimal text keeps fewer digits than its float type
+        step = written[0]
+        source.notes.append(f"numbers written to about {step:.2g} (half their last digit): that is the storage "
+                            "step")
+    inference = infer(source.values, source.channel_names, reference, pins, step, chosen,
                       explicit=explicit, tolerance=tolerance)
     result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name,
-                         wrong_cells=wrong_cells(source, inference.best), tolerance_given=tolerance)
+                         wrong_cells=wrong_cells(source, inference.best), tolerance_given=tolerance, step=step)
     best = inference.best
     grid = source.grid_shape
     if dense or sweep:

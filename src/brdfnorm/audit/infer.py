@@ -39,8 +39,16 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import ArgumentError
-from .conventions import (ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, fresnel_of, geometries,
-                          stored_axis_values)
+from .conventions import (
+    ALPHA_FLOORS,
+    ETA,
+    MU_FLOORS,
+    Convention,
+    coordinates,
+    fresnel_of,
+    geometries,
+    stored_axis_values,
+)
 from .reference import Reference
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
@@ -337,7 +345,8 @@ def _rounds(values, names, reference, pins, precision, chosen, candidates,
                  else np.arange(n) for n in grid]
         ranked = sorted(((_stage2(values, names, c, reference, precision, chosen, (False, False), index), c)
                          for c in top), key=lambda pair: pair[0].rank)
-        finals = [_stage2(values, names, ranked[0][1], reference, precision, chosen, search)] + [h for h, _ in ranked[1:]]
+        finals = ([_stage2(values, names, ranked[0][1], reference, precision, chosen, search)]
+                  + [h for h, _ in ranked[1:]])
     else:
         finals = [_stage2(values, names, c, reference, precision, chosen, search) for c in top]
         finals.sort(key=lambda h: h.rank)
@@ -493,7 +502,8 @@ def _retry_channels(values, names, best: Hypothesis, reference, precision, chose
             exact, _ = _exact(reference, c, meaning, coords)
             if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
                 candidate = _full(values, replace(c, meanings=tuple(
-                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision, [channel])
+                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision,
+                    [channel])
                 new, old = candidate.channels[0], current[names[channel]]
                 if (-new.within, new.median, new.max) < (-old.within, old.median, old.max):
                     current[names[channel]] = candidate.channels[0]
