@@ -106,6 +106,10 @@ class ChannelFit:
     #: How this channel alone is laid out when it is not laid out as the others ("transposed", "reversed along
     #: array axis 1"): its meaning is named by that layout; every cell is measured in the table's convention.
     layout: str = ""
+    #: The largest median |residual| of a channel that fits: the storage step and the reference's error plus 2 σ̂
+    #: (white noise has a median |r| of 0.67 σ). A smooth misfit on a coarse grid inflates σ̂ (its curvature shows
+    #: in the second differences) and so the tolerance, but leaves most cells well above the noise level.
+    bulk: float = float("inf")
 
     @property
     def too_noisy(self) -> bool:
@@ -117,7 +121,7 @@ class ChannelFit:
         """The meaning is named: more than MAJORITY of the cells lie within the tolerance (a handful of wrong cells
         never changes the convention found; they are listed as bad cells instead)."""
         return (self.meaning is not None and self.cells > 0 and not self.too_noisy
-                and (self.within > MAJORITY * self.cells or bool(self.layout)))
+                and (bool(self.layout) or self.within > MAJORITY * self.cells and self.median <= self.bulk))
 
     @property
     def clean(self) -> bool:
@@ -414,16 +418,15 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
     worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(np.where(ok, magnitude, -1.0))), residual.shape))
     sigma = noise_sigma(np.where(ok, residual, 0.0))
     factor = max(NOISE_FACTOR, float(np.sqrt(2.0 * np.log(2.0 * residual.size))) + 1.0)
-    if precision.tolerance is not None:
-        tolerance = precision.tolerance
-    else:
-        tolerance = (precision.step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok]))
-                     + factor * sigma)
+    base = precision.step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok]))
+    tolerance = precision.tolerance if precision.tolerance is not None else base + factor * sigma
+    bulk = precision.tolerance if precision.tolerance is not None else base + 2.0 * sigma
     bad = ~(magnitude <= tolerance)
     r = residual[ok]
     return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
                       float(np.median(magnitude)), worst, tolerance, sigma, residual, exact,
-                      float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)))
+                      float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)),
+                      bulk=bulk)
 
 
 def _full(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
