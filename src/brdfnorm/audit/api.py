@@ -47,6 +47,7 @@ class AuditResult:
     model: str = ""
     wrong_cells: dict = field(default_factory=dict)  # channel -> {"cells": [...], "regions": [...]}
     tolerance_given: float | None = None
+    approximation: dict | None = None  # a fitted approximation the table is, and its error against exact values
     step: float = 0.0  # the storage step the tolerance starts from (the format's, or a text's written precision)
 
     @property
@@ -116,7 +117,8 @@ class AuditResult:
             "best": hyp(self.best), "runners_up": [hyp(h) for h in self.runners_up],
             "hypotheses_tested": self.inference.tested, "reference_cells": self.inference.reference_cells,
             "passes": self.passes, "headline": self.headline, "unnamed_channels": self.unnamed,
-            "tolerance_given": self.tolerance_given, "wrong_cells": self.wrong_cells,
+            "tolerance_given": self.tolerance_given, "approximation": self.approximation,
+            "wrong_cells": self.wrong_cells,
             "bad_cells": self.bad_cells, "interpolation": self.interpolation, "resolution": self.resolution,
             "notes": self.source.notes, "seconds": self.seconds, "brdfnorm": __version__,
         }
@@ -149,6 +151,33 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
                      "cells": [[int(i) for i in w] for w in where[:limit]],
                      "values": [float(values[tuple(w)]) for w in where[:limit]]}
     return out
+
+
+def _approximation(source: Source, reference: Reference, pins: dict, explicit: dict, step: float,
+                   model: str) -> dict | None:
+    """A fitted approximation (:mod:`.approximations`) the table is a tabulation of, with its error against the exact
+    quantities it approximates in the same geometry (the shadowing form closer to it by the median)."""
+    from dataclasses import replace
+
+    from .approximations import recognise
+    from .conventions import geometries
+    from .infer import Precision, _full
+
+    grid = source.grid_shape
+    if len(grid) != 2:
+        return None
+    found = recognise(source.values, source.channel_names, geometries(2, pins, explicit, grid, reference.shadowings),
+                      step, model)
+    if found is None:
+        return None
+    trials = [_full(source.values, replace(found["convention"], shadowing=shadowing, meanings=tuple(found["meanings"])),
+                    reference, source.channel_names, Precision(step), list(range(len(source.channel_names))))
+              for shadowing in reference.shadowings]
+    h = min(trials, key=lambda t: t.median)
+    return {"name": found["name"], "source": found["source"], "within": found["within"], "cells": found["cells"],
+            "convention": h.convention.text(), "channels": [
+                {"channel": c.channel, "approximates": c.meaning, "max": c.max, "median": c.median, "rms": c.rms,
+                 "worst_cell": list(c.worst), "worst_at": c.worst_at} for c in h.channels]}
 
 
 def _count(n: int) -> str:
@@ -284,6 +313,8 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
                          wrong_cells=wrong_cells(source, inference.best), tolerance_given=tolerance, step=step)
     best = inference.best
     grid = source.grid_shape
+    if not result.passes and "channels" not in pins:
+        result.approximation = _approximation(source, reference, pins, explicit, step, m.name)
     if dense or sweep:
         # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
         measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]

@@ -110,6 +110,14 @@ def text(result: dict) -> str:
         label = "runner-up" if k == 0 else "next"
         lines.append(f"{label}{' (as good: the table does not decide)' if k == 0 and result['ambiguous'] else ''}"
                      f": {other['text']}: {_hypothesis_line(other)}")
+    approx = result.get("approximation")
+    if approx:
+        lines.append(f"the table is {approx['name']} tabulated ({approx['source']}): it equals {_n(approx['within'])} "
+                     f"of {_n(approx['cells'])} cells; in {approx['convention']} its error against the exact values:")
+        for c in approx["channels"]:
+            at = ", ".join(f"{k}={_g(v)}" for k, v in c["worst_at"].items())
+            lines.append(f"  channel {c['channel']} approximates {c['approximates']}: max error {_g(c['max'])} at "
+                         f"cell {tuple(c['worst_cell'])} ({at}), median {_g(c['median'])}, RMS {_g(c['rms'])}")
     for channel, info in result["wrong_cells"].items():
         lines += _wrong_lines(channel, info)
     for channel, e in result["interpolation"].items():
@@ -138,44 +146,67 @@ def figures(result, directory: str) -> list[str]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
 
     files: dict[str, bytes] = {}
+    describe = result.best.convention.describe()["axes"]
     for fit in result.best.channels:
         if fit.residual is None:
             continue
-        residual = fit.residual
-        limit = float(np.nanmax(np.abs(residual))) or 1e-16
-        describe = result.best.convention.describe()["axes"]
-        figure, axes = plt.subplots(figsize=(6, 5))
-        title = f"channel {fit.channel}: max |error| {limit:.3g}"
+        residual, bad = fit.residual, fit.bad if fit.bad is not None else np.zeros(fit.residual.shape, bool)
+        finite = np.isfinite(residual)
+        magnitude = np.abs(np.where(finite, residual, 0.0))
+        top = float(np.max(magnitude)) if magnitude.size else 0.0
+        floor = max(float(np.min(magnitude[magnitude > 0])) if np.any(magnitude > 0) else 1e-17, 1e-17)
+        figure, axes = plt.subplots(figsize=(6.4, 5.2))
+        title = (f"channel {fit.channel} ({fit.meaning}): {int(np.sum(~bad))} of {bad.size} cells within "
+                 f"{fit.tolerance:.2g}\nmax |error| {top:.3g}; × wrong cells, ○ not finite")
+        offset = 0
+        if residual.ndim == 3:  # the slice through the worst cell along the first axis
+            k = fit.worst[0] if fit.worst else 0
+            residual, bad, finite, magnitude, offset = residual[k], bad[k], finite[k], magnitude[k], 1
+            title += f"; slice {describe[0]} index {k}"
         if residual.ndim == 1:
-            axes.plot(np.arange(residual.size), residual, "o-")
+            x = np.arange(residual.size)
+            axes.semilogy(x, np.maximum(magnitude, floor), "o-", ms=3)
+            axes.semilogy(x[bad & finite], np.maximum(magnitude, floor)[bad & finite], "kx", ms=8)
+            axes.axhline(fit.tolerance, color="grey", lw=0.8, ls="--", label="tolerance")
             axes.set_xlabel(f"array index ({describe[0]})")
-            axes.set_ylabel(f"table − exact {fit.meaning}")
+            axes.set_ylabel(f"|table − exact {fit.meaning}|")
         else:
-            offset = 0
-            if residual.ndim == 3:  # the slice through the worst cell along the first axis
-                residual, offset = residual[fit.worst[0]], 1
-                title += f"\nslice {describe[0]} index {fit.worst[0]}"
-            image = axes.imshow(residual, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="upper",
-                                interpolation="nearest", aspect="auto")
-            figure.colorbar(image, ax=axes, label=f"table − exact {fit.meaning}")
+            shown = np.ma.masked_where(~finite | (magnitude <= 0), magnitude)
+            image = axes.imshow(shown, cmap="viridis", norm=LogNorm(vmin=floor, vmax=max(top, floor * 10)),
+                                origin="upper", interpolation="nearest", aspect="auto")
+            figure.colorbar(image, ax=axes, label=f"|table − exact {fit.meaning}| (log scale)")
+            rows, cols = np.nonzero(bad & finite)
+            axes.scatter(cols, rows, marker="x", c="red", s=28, linewidths=1.2)
+            rows, cols = np.nonzero(~finite)
+            axes.scatter(cols, rows, marker="o", facecolors="none", edgecolors="magenta", s=40)
             axes.set_xlabel(f"array axis {offset + 1} ({describe[offset + 1]})")
             axes.set_ylabel(f"array axis {offset} ({describe[offset]})")
-        axes.set_title(title)
+        axes.set_title(title, fontsize=9)
+        figure.tight_layout()
         files[f"error_map_{fit.channel}.png"] = _png(figure)
         plt.close(figure)
     if result.resolution:
-        figure, axes = plt.subplots(figsize=(6, 4))
+        figure, axes = plt.subplots(figsize=(6.4, 4.4))
+        skipped = []
+        meanings = {f.channel: f.meaning for f in result.best.channels}
         for channel, rows in result.resolution.items():
             sizes = [r["size"] for r in rows if "max" in r]
-            axes.loglog(sizes, [r["max"] for r in rows if "max" in r], "o-", label=f"{channel} max")
-            axes.loglog(sizes, [r["rms"] for r in rows if "max" in r], "s--", label=f"{channel} RMS")
+            name = f"channel {channel} ({meanings.get(channel)})"
+            axes.loglog(sizes, [r["max"] for r in rows if "max" in r], "o-", label=f"{name}: max")
+            axes.loglog(sizes, [r["rms"] for r in rows if "max" in r], "s--", label=f"{name}: RMS")
+            skipped += [(r["size"], r["skipped"]) for r in rows if "max" not in r]
         for level in (1e-3, 1e-4):
             axes.axhline(level, color="grey", lw=0.5)
-        axes.set_xlabel("samples per axis (exact table)")
-        axes.set_ylabel("interpolation error")
-        axes.legend()
+        axes.set_xlabel("samples per axis of an exact table in this convention")
+        axes.set_ylabel("interpolation error at dense points")
+        if skipped:
+            axes.set_title("skipped sizes: " + "; ".join(f"{n} ({why})" for n, why in sorted(set(skipped))),
+                           fontsize=8)
+        axes.legend(fontsize=8)
+        figure.tight_layout()
         files["error_vs_resolution.png"] = _png(figure)
         plt.close(figure)
     return _write(directory, files)
