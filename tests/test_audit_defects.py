@@ -220,3 +220,46 @@ def test_tolerance_is_printed_and_can_be_set(capsys, tmp_path):
     assert code == 0 and "tolerance 0.001 (--tolerance)" in out and "PASS" in out
     code, out, err = run_cli(capsys, "audit", str(path), "--tolerance", "-1")
     assert code == 2 and err.startswith("error:") and "--tolerance" in err and err.count("\n") == 1
+
+
+# -- fitted approximations: named as what they approximate, their error checked against lut.compute -----------
+
+def _texel_grid(n):
+    t = (np.arange(n) + 0.5) / n
+    return t, np.meshgrid(t, t, indexing="ij")
+
+
+def test_yocto_gl_fit_is_named_and_its_error_measured():
+    from brdfnorm.audit import audit
+    from brdfnorm.audit.approximations import _yocto
+
+    t, (mu, r) = _texel_grid(8)
+    table = _yocto(mu, r)[0].astype(np.float32).astype(float)
+    result = audit(table, "ggx", read={"dtype": "float32"}, dense=False, sweep=False)
+    found = result.approximation
+    assert not result.passes and found["name"] == "yocto-gl-cosintegral" and found["within"] == 64
+    exact = lut.compute(bn.load("ggx"), {"mu": t, "alpha": t * t}, clamp={"mu": 1e-4}, rtol=1e-10,
+                        average=False)["E"]
+    channel = found["channels"][0]
+    assert channel["approximates"] == "E" and "height-correlated" in found["convention"]
+    assert channel["max"] == pytest.approx(np.max(np.abs(table - exact)), rel=1e-6)
+    assert channel["median"] == pytest.approx(np.median(np.abs(table - exact)), rel=1e-6)
+
+
+@pytest.mark.slow
+def test_karis_env_brdf_approx_is_named_and_its_error_measured(capsys, tmp_path):
+    from brdfnorm.audit.approximations import _karis
+
+    t, (r, mu) = _texel_grid(16)
+    table = np.stack(_karis(mu, r), axis=-1).astype(np.float32)
+    np.savez(tmp_path / "karis.npz", lut=table)
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "karis.npz"), "--no-interpolation", "--no-sweep",
+                             "--json")
+    assert code == 1
+    found = json.loads(out)["approximation"]
+    assert found["name"] == "karis-envbrdfapprox" and found["within"] == 512
+    dfg = lut.compute(bn.load("ggx").with_params(shadowing="separable"), {"alpha": t * t, "mu": t},
+                      channels=["dfg"], clamp={"mu": 1e-4}, rtol=1e-9, average=False)
+    for channel, name in zip(found["channels"], ("DFG_f0", "DFG_f90"), strict=True):
+        error = np.abs(table[..., ["DFG_f0", "DFG_f90"].index(name)] - dfg[name])
+        assert channel["approximates"] == name and channel["max"] == pytest.approx(np.max(error), rel=1e-4)
