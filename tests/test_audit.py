@@ -198,7 +198,6 @@ def test_npz_and_exr_fix_round_trip(capsys, tmp_path):
                              "--fix", "-o", str(tmp_path / "f.exr"))
     assert code == 1 and "nothing written" in err  # shifted by 0.01: nothing fits, so --fix refuses
     assert not (tmp_path / "f.exr").exists()
-    assert code == 0 and json.loads(out)["best"]["channels"][0]["max"] <= 2.0**-12
 
 
 # -- bad input -----------------------------------------------------------------------------------------------
