@@ -1,8 +1,10 @@
 #!/usr/bin/env python
-"""Time ``brdfnorm audit`` (issue 29) on the issue's workloads: a 64×64 E table (inference + dense interpolation
-error + resolution sweep; goal ≤ 10 s on the 2-core machine), 32³ uint16 E(f0) tables (goal ≤ 60 s) with
-Schlick's factor and with the exact dielectric one, and 16×16 and 64×64 half-float split-sum tables (the latter
-goal ≤ 10 s). The tables are made by ``brdfnorm.lut`` (or the audit's exact reference) first, untimed; each
+"""Time ``brdfnorm audit`` (issues 29 and 42) on the issues' workloads: a 64×64 E table (inference + dense
+interpolation error + resolution sweep; goal ≤ 3 s with the compiled engine), a 32×32 float32 split-sum C header
+with local defects (a 3×3 block 4 % too bright, one cell's channels swapped; goal ≤ 5 s, and every damaged cell
+must be listed), 32³ uint16 E(f0) tables (goal ≤ 60 s) with Schlick's factor and with the exact dielectric one,
+and 16×16 and 64×64 half-float split-sum tables (the latter goal ≤ 10 s). The tables are made by ``brdfnorm.lut``
+(or the audit's exact reference) first, untimed; each
 audit must name the convention it was made in, or the script says so and exits 1.
 
 Usage: ``python benchmarks/bench_audit.py [--out FILE.md]``; ``benchmarks/run.py`` runs it as the ``audit``
@@ -38,9 +40,11 @@ def w_audit(cfg=None, refs=None) -> dict:
     wall = time.perf_counter()
     r = audit(e64, "ggx", read={"dtype": "float32"})
     cases["64x64"] = _case("64×64 float32 E (mu-texel, r2-texel), inference + interpolation + sweep",
-                           time.perf_counter() - wall, 10.0,
+                           time.perf_counter() - wall, 3.0,
                            r.fits and (r.best.convention.direction, r.best.convention.roughness) == ("mu-texel",
                                                                                                    "r2-texel"), r)
+
+    cases["32x32-dfg-defects"] = _defects(ggx)
 
     t = (np.arange(32) + 0.5) / 32
     dfg = lut.compute(ggx, {"alpha": t, "mu": t}, channels=["dfg"], rtol=1e-7, average=False)
@@ -84,6 +88,32 @@ def w_audit(cfg=None, refs=None) -> dict:
     return {"title": "brdfnorm audit of tables made in known conventions (issue 29)",
             "status": "ok" if named else "a convention was not named", "cases": cases,
             "load_average": os.getloadavg()[0]}
+
+
+def _defects(ggx) -> dict:
+    """Issue 42's case: a 32×32 float2 split-sum C header of brdfnorm's own lut output (α = r², texel centres),
+    a 3×3 block 4 % too bright and one cell's two channels swapped, audited from the file (reading included)."""
+    import tempfile
+
+    t = (np.arange(32) + 0.5) / 32
+    dfg = lut.compute(ggx, {"alpha": t * t, "mu": t}, channels=["dfg"], rtol=1e-8, average=False)
+    table = np.stack([dfg["DFG_f0"], dfg["DFG_f90"]], -1).astype(np.float32)
+    table[10:13, 20:23, 0] *= np.float32(1.04)
+    table[5, 7] = table[5, 7, ::-1].copy()
+    damaged = {(i, j, 0) for i in range(10, 13) for j in range(20, 23)} | {(5, 7, 0), (5, 7, 1)}
+    body = ",\n".join(f"  float2({a:.9g}f, {b:.9g}f)" for a, b in table.reshape(-1, 2))
+    with tempfile.TemporaryDirectory() as scratch:
+        path = Path(scratch) / "dfg.h"
+        path.write_text(f"static const float2 g_dfg[32 * 32] = {{\n{body}\n}};\n")
+        wall = time.perf_counter()
+        r = audit(str(path), "ggx", read={"shape": (32, 32, 2)})
+        seconds = time.perf_counter() - wall
+    listed = {tuple(c["index"]) + (int(k),) for k, v in r.wrong_cells.items() for c in v["cells"]}
+    named = (r.fits and not r.passes and r.best.convention.meanings == ("DFG_f0", "DFG_f90")
+             and (r.best.convention.direction, r.best.convention.roughness) == ("mu-texel", "r2-texel")
+             and listed == damaged)
+    return _case("32×32 float32 split-sum C header with a 4 % block and a swapped cell, every bad cell listed, "
+                 "inference + interpolation + sweep", seconds, 5.0, named, r)
 
 
 def _case(title: str, seconds: float, goal: float | None, named: bool, r) -> dict:
