@@ -263,3 +263,25 @@ def test_karis_env_brdf_approx_is_named_and_its_error_measured(capsys, tmp_path)
     for channel, name in zip(found["channels"], ("DFG_f0", "DFG_f90"), strict=True):
         error = np.abs(table[..., ["DFG_f0", "DFG_f90"].index(name)] - dfg[name])
         assert channel["approximates"] == name and channel["max"] == pytest.approx(np.max(error), rel=1e-4)
+
+
+def test_report_lists_every_wrong_cell_and_marks_them(capsys, tmp_path):
+    path = tmp_path / "t.npz"
+    _write_npz(path, _damaged(True))
+    expected = _expected(read_table(str(path), array="lut").values, 1e-6)
+    report = tmp_path / "report"
+    code, out, err = run_cli(capsys, "audit", str(path), "--array", "lut", "--no-interpolation", "--no-sweep",
+                             "--report", str(report))
+    assert code == 1, err
+    rows = (report / "wrong_cells.csv").read_text().splitlines()
+    assert rows[0].split(",")[:5] == ["channel", "meaning", "region", "index0", "index1"]
+    listed = {}
+    for row in rows[1:]:
+        cells = row.split(",")
+        listed.setdefault(cells[0], set()).add((int(cells[3]), int(cells[4])))
+    assert listed == expected
+    for k in range(3):
+        assert (report / f"error_map_{k}.png").stat().st_size > 1000
+    # the text lists the block as one region of nine cells, with its axis values as stored
+    code, out, err = run_cli(capsys, "audit", str(path), "--array", "lut", "--no-interpolation", "--no-sweep")
+    assert "region 2: 9 cells at [2..4, 3..5]" in out and "(2, 3) mu=0.3125 alpha=0.428571" in out

@@ -343,7 +343,7 @@ def stored_axis_values(c: Convention, shape: tuple[int, ...], index: list[np.nda
     clamp: μ (or θ in degrees for the θ conventions), r for the r² roughness conventions (α = r²) or α, f0, or the
     values given outright with ``--axis``. This is what a bad cell's position is reported in."""
     out = {}
-    for axis, role in axis_roles(c).items():
+    for axis, role in sorted(axis_roles(c).items()):  # in array-axis order
         i = np.asarray(index[axis])
         given = _explicit(c, role)
         if given is not None:

@@ -1,7 +1,8 @@
-"""An audit for people: the terminal text, and ``--report DIR``'s figures (signed error maps with a colour bar,
-error against resolution), drawn with matplotlib (Agg) from :class:`.api.AuditResult`. The directory is written
-as ``brdfnorm report``'s is (:func:`brdfnorm.output.directories.staged`): created if absent, replaced whole only
-if it holds an earlier report, never half-written."""
+"""An audit for people: the terminal text, and ``--report DIR``'s figures (|error| maps on a log colour scale
+with the wrong cells marked, error against resolution) and its list of wrong cells (``wrong_cells.csv``), drawn
+with matplotlib (Agg) from :class:`.api.AuditResult`. The directory is written as ``brdfnorm report``'s is
+(:func:`brdfnorm.output.directories.staged`): created if absent, replaced whole only if it holds an earlier
+report, never half-written."""
 
 from __future__ import annotations
 
@@ -209,7 +210,24 @@ def figures(result, directory: str) -> list[str]:
         figure.tight_layout()
         files["error_vs_resolution.png"] = _png(figure)
         plt.close(figure)
+    if result.wrong_cells:
+        files["wrong_cells.csv"] = wrong_cells_csv(result.wrong_cells).encode("utf-8")
     return _write(directory, files)
+
+
+def wrong_cells_csv(wrong: dict) -> str:
+    """Every wrong cell, one line each: channel, meaning, region, the table's indices, the axis values as stored,
+    stored, exact and error (the report's list; the same as ``--json``'s ``wrong_cells``)."""
+    lines = []
+    for channel, info in wrong.items():
+        for cell in info["cells"]:
+            if not lines:
+                lines.append(",".join(["channel", "meaning", "region", *[f"index{a}" for a in range(len(
+                    cell["index"]))], *cell["at"], "stored", "exact", "error"]))
+            lines.append(",".join([channel, str(info["meaning"]), str(cell["region"]), *map(str, cell["index"]),
+                                   *(repr(v) for v in cell["at"].values()), repr(cell["stored"]),
+                                   repr(cell["exact"]), repr(cell["error"])]))
+    return "\n".join(lines) + "\n"
 
 
 def _write(directory: str, files: dict[str, bytes]) -> list[str]:
