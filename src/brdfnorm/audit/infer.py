@@ -9,21 +9,26 @@ Two stages, both against exact values (:mod:`.reference`):
    best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
-   α = 0, and ranked by their median residual, then their maximum (:attr:`Hypothesis.rank`). Where the meanings
+   α = 0, and ranked by the share of cells within the tolerance, then their median residual, then their maximum
+   (:attr:`Hypothesis.rank`): a few wrong cells never decide the convention of the rest. Where the meanings
    need F90 (or the exact Fresnel) and the table has more than SUBGRID_CELLS cells, they are ranked on a strided
    subgrid of about RANK_CELLS interior cells (no endpoint clamp reaches them) and only the best is then
    measured on every cell, its clamps searched; the runners-up's statistics say they were sampled.
 
-A hypothesis *fits* a channel when its maximum residual is within the tolerance
+Every cell is judged against the tolerance (or the one given, ``--tolerance``)
 
     tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + k σ̂,
 
 σ̂ the noise of the residual estimated from its second differences along each axis (median absolute deviation
 / 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not), and
 k = max(5, √(2 ln 2n) + 1) for n cells. A channel whose σ̂ exceeds MAX_NOISE_SHARE of the exact table's standard
-deviation never fits (data that are mostly noise would fit any hypothesis). The
-result is never a silent best guess: :class:`Inference` says whether the best fits, and whether the runner-up
-fits too (then the table does not decide between them).
+deviation never fits (data that are mostly noise would fit any hypothesis). A channel's meaning is *named*
+(:attr:`.fits.ChannelFit.fits`) when most of its cells are within the tolerance and its median residual is at
+the noise level; the table *passes* only when every cell of every channel is (:attr:`.fits.ChannelFit.clean`).
+The cells outside are listed (:func:`.api.wrong_cells`). A channel the best convention leaves unnamed is tried
+in the table's other layouts (:func:`_relayout_channels`: reversed, transposed). The result is never a silent
+best guess: :class:`Inference` says whether the best fits, and whether the runner-up is as good (then the table
+does not decide between them).
 
 Meanings with the exact dielectric Fresnel factor (E_dielectric, E_f0_dielectric) cost a quadrature per
 (μ, α, η) and are rarely what an engine ships; both stages run again with them only when nothing fits without
@@ -33,7 +38,7 @@ them (or from the start when ``eta=`` or the channels are pinned).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 from scipy import optimize
@@ -49,7 +54,11 @@ from .conventions import (
     geometries,
     stored_axis_values,
 )
+from .fits import MAJORITY, MAX_NOISE_SHARE, ChannelFit, Hypothesis, Inference, Precision
 from .reference import Reference
+
+__all__ = ["MAJORITY", "MAX_NOISE_SHARE", "ChannelFit", "Hypothesis", "Inference", "Precision", "infer",
+           "noise_sigma"]
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
 STAGE2 = 4
@@ -62,145 +71,12 @@ SUBGRID_CELLS = 1024
 #: Cells of the interior subgrid those candidates are ranked on (the runners-up's statistics are on it).
 RANK_CELLS = 256
 NOISE_FACTOR = 5.0
-#: A meaning is named for a channel when more than this share of its cells lie within the tolerance.
-MAJORITY = 0.5
-#: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
-MAX_NOISE_SHARE = 0.05
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
 #: A fitted Schlick f0 this close to 0 or 1 is DFG_f90 or E, which need no fitted number: those are preferred.
 SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
-
-
-@dataclass(frozen=True)
-class Precision:
-    """What a cell is judged against: the storage step (half a code, or half an ulp at 1) and, when given
-    (``--tolerance``), an absolute tolerance that replaces the computed one."""
-
-    step: float
-    tolerance: float | None = None
-
-
-@dataclass
-class ChannelFit:
-    """How one channel of the table matches a meaning under a convention."""
-
-    channel: str
-    meaning: str | None
-    max: float
-    rms: float
-    median: float
-    worst: tuple[int, ...]
-    tolerance: float
-    noise: float
-    residual: np.ndarray | None = None  # table − exact, over the grid
-    exact: np.ndarray | None = None
-    spread: float = 0.0  # standard deviation of the exact values over the table
-    worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
-    cells: int = 0  # cells measured
-    sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
-    bad: np.ndarray | None = None  # cells outside the tolerance or not finite (over the cells measured)
-    within: int = 0  # cells within the tolerance
-    #: How this channel alone is laid out when it is not laid out as the others ("transposed", "reversed along
-    #: array axis 1"): its meaning is named by that layout; every cell is measured in the table's convention.
-    layout: str = ""
-    #: The largest median |residual| of a channel that fits: the storage step and the reference's error plus 2 σ̂
-    #: (white noise has a median |r| of 0.67 σ). A smooth misfit on a coarse grid inflates σ̂ (its curvature shows
-    #: in the second differences) and so the tolerance, but leaves most cells well above the noise level.
-    bulk: float = float("inf")
-
-    @property
-    def too_noisy(self) -> bool:
-        """Noise above MAX_NOISE_SHARE of the table's own spread: random data would 'fit' anything."""
-        return bool(self.noise > MAX_NOISE_SHARE * self.spread)
-
-    @property
-    def fits(self) -> bool:
-        """The meaning is named: more than MAJORITY of the cells lie within the tolerance (a handful of wrong cells
-        never changes the convention found; they are listed as bad cells instead)."""
-        return (self.meaning is not None and self.cells > 0 and not self.too_noisy
-                and (bool(self.layout) or self.within > MAJORITY * self.cells and self.median <= self.bulk))
-
-    @property
-    def clean(self) -> bool:
-        """Every cell within the tolerance (what an exit status of 0 needs)."""
-        return self.fits and self.within == self.cells
-
-    def summary(self) -> dict:
-        return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "clean": self.clean,
-                "within": self.within, "cells": self.cells, "bad": self.cells - self.within, "max": self.max,
-                "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
-                "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
-                "too_noisy": self.too_noisy, "sampled": self.sampled, "layout": self.layout}
-
-
-@dataclass
-class Hypothesis:
-    convention: Convention
-    channels: list[ChannelFit]
-
-    @property
-    def score(self) -> float:
-        fitted = [c.max for c in self.channels if c.meaning is not None]
-        return min(fitted) if fitted else float("inf")
-
-    @property
-    def within(self) -> int:
-        return sum(c.within for c in self.channels if c.meaning is not None)
-
-    @property
-    def cells(self) -> int:
-        return sum(c.cells for c in self.channels if c.meaning is not None)
-
-    @property
-    def share(self) -> float:
-        """The share of cells (of every channel with a meaning) within the tolerance: what ranks hypotheses."""
-        return self.within / self.cells if self.cells else 0.0
-
-    @property
-    def median(self) -> float:
-        """The median |table − exact| over every cell of every channel with a meaning (non-finite cells count as
-        infinitely wrong): what breaks ties in the share."""
-        parts = [np.where(np.isfinite(c.residual), np.abs(c.residual), np.inf).ravel()
-                 for c in self.channels if c.meaning is not None and c.residual is not None]
-        return float(np.median(np.concatenate(parts))) if parts else float("inf")
-
-    @property
-    def rank(self) -> tuple[float, float, float]:
-        """Hypotheses are ranked by the share of cells within the tolerance, then by the median residual, then by
-        the maximum: a few wrong cells (a bright block, a swapped pair, a NaN, a Monte-Carlo table's zeroed
-        column) must not decide which convention the rest is in; they are listed as bad cells instead."""
-        return (-round(self.share, 12), self.median, self.score)
-
-    @property
-    def fits(self) -> bool:
-        return any(c.fits for c in self.channels)
-
-    @property
-    def clean(self) -> bool:
-        return bool(self.channels) and all(c.clean for c in self.channels)
-
-
-@dataclass
-class Inference:
-    best: Hypothesis
-    runners_up: list[Hypothesis]
-    tested: int
-    reference_cells: dict = field(default_factory=dict)
-
-    @property
-    def fits(self) -> bool:
-        return self.best.fits
-
-    @property
-    def clean(self) -> bool:
-        return self.best.clean
-
-    @property
-    def ambiguous(self) -> bool:
-        return bool(self.runners_up) and self.best.fits and self.runners_up[0].share >= self.best.share
 
 
 def _subset(n: int, k: int) -> np.ndarray:
