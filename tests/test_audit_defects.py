@@ -263,6 +263,12 @@ def test_karis_env_brdf_approx_is_named_and_its_error_measured(capsys, tmp_path)
     for channel, name in zip(found["channels"], ("DFG_f0", "DFG_f90"), strict=True):
         error = np.abs(table[..., ["DFG_f0", "DFG_f90"].index(name)] - dfg[name])
         assert channel["approximates"] == name and channel["max"] == pytest.approx(np.max(error), rel=1e-4)
+    # pinned to the split-sum meanings, the closest hypothesis is ranked by the median it prints: the true layout
+    code, out, err = run_cli(capsys, "audit", str(tmp_path / "karis.npz"), "--no-interpolation", "--no-sweep",
+                             "--json", "--as", "channels=DFG_f0,DFG_f90")
+    result = json.loads(out)
+    assert code == 1 and result["best"]["convention"]["axes"] == ["roughness (alpha = r^2)", "mu"]
+    assert all(result["best"]["median"] <= h["median"] for h in result["runners_up"])
 
 
 def test_report_lists_every_wrong_cell_and_marks_them(capsys, tmp_path):

@@ -47,7 +47,7 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
 #: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
 MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
-            "DFG_cloth", "E_schlick")
+            "DFG_cloth", "E_schlick", "E_conductor")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
 DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
 #: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).
@@ -75,7 +75,8 @@ class Convention:
     mu_floor: float = 1e-4
     alpha_floor: float = 1e-8
     meanings: tuple[str | None, ...] = field(default=())
-    eta: float = ETA  # the index of refraction of an E_dielectric channel
+    eta: float = ETA  # the index of refraction of an E_dielectric channel (of an E_conductor channel: η of η + ik)
+    k: float = 0.0  # the extinction coefficient of an E_conductor channel (η + ik)
     schlick_f0: float = SCHLICK_F0  # Schlick's f0 of an E_schlick channel
     free_f0: bool = True  # schlick_f0 is fitted to the table (least squares), not pinned
     #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
@@ -100,6 +101,7 @@ class Convention:
                 **({"f0": self.f0} if self.f0_axis is not None else {}),
                 "mu_floor": self.mu_floor, "alpha_floor": self.alpha_floor, "shadowing": self.shadowing,
                 "channels": list(self.meanings), **({"eta": self.eta} if "E_dielectric" in self.meanings else {}),
+                **({"eta": self.eta, "k": self.k} if "E_conductor" in self.meanings else {}),
                 **({"schlick_f0": self.schlick_f0} if "E_schlick" in self.meanings else {})}
 
     def text(self) -> str:
@@ -113,6 +115,8 @@ class Convention:
                   "channels " + "/".join(m or "?" for m in self.meanings)]
         if "E_dielectric" in self.meanings:
             parts.append(f"eta={self.eta:g}")
+        if "E_conductor" in self.meanings:
+            parts.append(f"conductor eta={self.eta:g} k={self.k:g}")
         if "E_schlick" in self.meanings:
             parts.append(f"f0={self.schlick_f0:.6g}")
         return "; ".join(p for p in parts if p)
@@ -266,7 +270,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
                                   flips=flips, shadowing=shadowing,
                                   mu_floor=float(pinned.get("mu_floor", 1e-4)),
                                   alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen,
-                                  eta=float(pinned.get("eta", ETA)),
+                                  eta=float(pinned.get("eta", ETA)), k=float(pinned.get("k", 0.0)),
                                   schlick_f0=float(pinned.get("schlick_f0", SCHLICK_F0)),
                                   free_f0="schlick_f0" not in pinned))
     if not out:
@@ -283,7 +287,7 @@ def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[st
 
 
 PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels", "eta",
-            "schlick_f0")
+            "schlick_f0", "k")
 
 
 def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
@@ -311,8 +315,19 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
             eta = float(out["eta"])
         except ValueError:
             raise ArgumentError("eta must be a number", where="--as") from None
-        if not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
+        if "k" in out:  # a conductor's η + ik
+            if not (np.isfinite(eta) and 0.0 < eta <= 1000.0):
+                raise ArgumentError("eta must lie in (0, 1000] (the real part of a conductor's η + ik)", where="--as")
+        elif not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
             raise ArgumentError("eta must lie in (1, 1000] (an E_dielectric table of an index of refraction)",
+                                where="--as")
+    if "k" in out:
+        try:
+            k = float(out["k"])
+        except ValueError:
+            raise ArgumentError("k must be a number", where="--as") from None
+        if not (np.isfinite(k) and 0.0 <= k <= 1000.0) or "eta" not in out:
+            raise ArgumentError("k (a conductor's extinction, in [0, 1000]) goes with eta: --as eta=0.2 --as k=3.9",
                                 where="--as")
     if "schlick_f0" in out:
         try:
@@ -331,7 +346,7 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
 
 def fresnel_of(c: Convention) -> dict[str, float]:
     """The Fresnel constants a convention's meanings are evaluated with (``Reference.meaning``'s keywords)."""
-    return {"eta": c.eta, "schlick_f0": c.schlick_f0}
+    return {"eta": c.eta, "schlick_f0": c.schlick_f0, "k": c.k}
 
 
 def with_floors(c: Convention, mu_floor: float, alpha_floor: float) -> Convention:

@@ -110,11 +110,16 @@ class Hypothesis:
         return float(np.median(np.concatenate(parts))) if parts else float("inf")
 
     @property
-    def rank(self) -> tuple[float, float, float]:
-        """Hypotheses are ranked by the share of cells within the tolerance, then by the median residual, then by
-        the maximum: a few wrong cells (a bright block, a swapped pair, a NaN, a Monte-Carlo table's zeroed
-        column) must not decide which convention the rest is in; they are listed as bad cells instead."""
-        return (-round(self.share, 12), self.median, self.score)
+    def rank(self) -> tuple[int, float, float, float]:
+        """Hypotheses that name a channel come first, ranked by the share of cells within the tolerance, then by
+        the median residual, then by the maximum: a few wrong cells (a bright block, a swapped pair, a NaN, a
+        Monte-Carlo table's zeroed column) must not decide which convention the rest is in; they are listed as
+        wrong cells instead. Hypotheses that name nothing (the closest, when nothing fits) are ranked by the median
+        residual alone: their tolerances come from a misfit's curvature, not from noise, so their shares mean
+        nothing."""
+        if self.fits:
+            return (0, -round(self.share, 12), self.median, self.score)
+        return (1, 0.0, self.median, self.score)
 
     @property
     def fits(self) -> bool:

@@ -104,7 +104,9 @@ def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Refer
     default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth", "E_schlick"],
                3: ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
-        if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
+        if "k" in pins and grid_ndim == 2:  # a conductor's η + ik is given: the exact conductor Fresnel
+            default = default + ["E_conductor"]
+        elif "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
             default = default + DIELECTRIC_BY_NDIM[grid_ndim]
         return [[m for m in default if reference is None or reference.supports(m)]] * channels
     given = [m.strip() for m in pins["channels"].split(",")]
@@ -112,9 +114,12 @@ def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Refer
         raise ArgumentError(f"channels={pins['channels']}: give one meaning per channel ({channels}), - to skip",
                             where="--as")
     for m in given:
+        if m == "E_conductor" and "k" not in pins:
+            raise ArgumentError("channels: E_conductor needs the conductor's η + ik: --as eta=… --as k=…",
+                                where="--as")
         if reference is not None and not reference.supports(m):
-            raise ArgumentError(f"channels: {m} needs a lobe with an exact dielectric Fresnel factor "
-                                f"(-p fresnel=dielectric); {reference.model.name} has none", where="--as")
+            raise ArgumentError(f"channels: {m} needs a lobe with an exact Fresnel factor of that kind "
+                                f"(-p fresnel=...); {reference.model.name} has none", where="--as")
     return [[] if m == "-" else [m] for m in given]
 
 
