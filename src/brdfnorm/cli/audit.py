@@ -44,8 +44,9 @@ def audit_command(
                                   "alpha-texel|r2-node|r2-texel flip=0,1 shadowing=height-correlated|separable (rough "
                                   "dielectrics also height-correlated/refraction=reflection-form|separable) "
                                   "mu_floor=1e-4 alpha_floor=1e-8 channels=DFG_f0,DFG_f90 (meanings: E 1-E DFG_f0 "
-                                  "DFG_f90 E_f0 E_avg 1-E_avg E_dielectric E_f0_dielectric DFG_cloth E_schlick) "
-                                  "eta=1.5 (of E_dielectric) schlick_f0=0.04 (of E_schlick)"),
+                                  "DFG_f90 E_f0 E_avg 1-E_avg E_dielectric E_f0_dielectric DFG_cloth E_schlick "
+                                  "E_conductor) eta=1.5 (of E_dielectric) schlick_f0=0.04 (of E_schlick) eta=0.2 "
+                                  "k=3.9 (a conductor's eta + ik: E_conductor)"),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
                                    "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:COUNT "
                                    "(spaced by --grid) or V,V,... in array order."),
