@@ -52,6 +52,20 @@ class ChannelFit:
     #: (white noise has a median |r| of 0.67 σ). A smooth misfit on a coarse grid inflates σ̂ (its curvature shows
     #: in the second differences) and so the tolerance, but leaves most cells well above the noise level.
     bulk: float = float("inf")
+    base: float = 0.0  # the tolerance before the noise term: storage step × max|exact| + the reference's error
+    factor: float = 5.0  # k of the noise term k σ̂
+
+    def judged(self, sigma: float, given: float | None = None) -> None:
+        """Judge every cell again with the table's noise ``sigma`` (the smallest σ̂ any hypothesis saw: a misfit adds
+        to the noise of the residual, never removes it), or the ``given`` tolerance."""
+        if self.residual is None or given is not None:
+            return
+        self.noise = sigma
+        self.tolerance = self.base + self.factor * sigma
+        self.bulk = self.base + 2.0 * sigma
+        magnitude = np.where(np.isfinite(self.residual), np.abs(self.residual), np.inf)
+        self.bad = ~(magnitude <= self.tolerance)
+        self.within = int(np.sum(~self.bad))
 
     @property
     def too_noisy(self) -> bool:

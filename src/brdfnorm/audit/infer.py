@@ -234,10 +234,28 @@ def _rounds(values, names, reference, pins, precision, chosen, candidates,
                   + [h for h, _ in ranked[1:]])
     else:
         finals = [_stage2(values, names, c, reference, precision, chosen, search) for c in top]
-        finals.sort(key=lambda h: h.rank)
+    _same_noise(finals, precision)
+    finals.sort(key=lambda h: h.rank)
     finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings)
     finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings)
     return finals[0], finals[1:], [c for _, c in scored]
+
+
+def _same_noise(hypotheses: list[Hypothesis], precision: Precision) -> None:
+    """Every hypothesis's channels judged with the table's noise: per channel, the smallest σ̂ any of them saw. The
+    noise is the table's, not a hypothesis's: on a coarse grid a smooth misfit's curvature survives the second
+    differences and would otherwise widen a wrong hypothesis's tolerance until it "fits" most cells."""
+    if precision.tolerance is not None:
+        return
+    sigma: dict[str, float] = {}
+    for h in hypotheses:
+        for fit in h.channels:
+            if fit.residual is not None and np.isfinite(fit.noise):
+                sigma[fit.channel] = min(sigma.get(fit.channel, np.inf), fit.noise)
+    for h in hypotheses:
+        for fit in h.channels:
+            if fit.channel in sigma:
+                fit.judged(sigma[fit.channel])
 
 
 def _stage1(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
@@ -307,7 +325,7 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
     return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
                       float(np.median(magnitude)), worst, tolerance, sigma, residual, exact,
                       float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)),
-                      bulk=bulk)
+                      bulk=bulk, base=base, factor=factor)
 
 
 def _full(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
