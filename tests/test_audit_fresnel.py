@@ -134,7 +134,8 @@ def test_three_axes_with_the_exact_factor_over_f0_and_its_fix(tmp_path):
     assert r.best.channels[0].max <= 0.5 / 65535 + 1e-6
     schlick = audit(codes, "ggx", read={"dtype": "uint16"}, sweep=False, dense=False, channels="E_f0")
     assert not schlick.fits and schlick.best.channels[0].max > 1e-3
-    assert np.max(np.abs(r.fixed[..., 0] - values)) < 1e-6
+    # the fix changes only the cells outside the tolerance: every cell ends within it of the exact table
+    assert np.max(np.abs(r.fixed[..., 0] - values)) <= r.best.channels[0].tolerance
 
 
 def _schlick_reflectance(cos: np.ndarray, f0: float) -> np.ndarray:
