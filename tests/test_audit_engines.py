@@ -193,8 +193,8 @@ def test_other_model_32_fits_nothing(made, audited):
 
 def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path):
     """A table made in the LTC convention whose grazing columns are off by up to 6e-2 (as Monte-Carlo fitted
-    albedos are): the LTC convention is named from the other cells, the off cells are listed (all at grazing
-    views), and the audit exits 1."""
+    albedos are): the bias reaches beyond float64's step at more than half the cells, so no convention is named;
+    the closest is the LTC convention, ranked by its median, with the worst cell at grazing."""
     n = 32
     t = np.linspace(0, 1, n)
     mu = np.maximum(1.0 - t * t, np.cos(1.57))
@@ -204,14 +204,10 @@ def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path)
     np.savez(tmp_path / "t.npz", E=biased)
     code, r = _cli_json(capsys, str(tmp_path / "t.npz"), "--no-sweep", "--no-interpolation", "--report",
                         str(tmp_path / "report"))
-    assert code == 1 and r["verdict"] == "fits" and not r["passes"]
+    assert code == 1 and r["verdict"] == "no hypothesis fits" and not r["passes"]
     best = r["best"]
     assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
     assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.11
-    wrong = r["wrong_cells"]["0"]["cells"]
-    off = np.abs(biased - e) > 1e-6  # the cells the bias moved (the independent route: the table as made)
-    assert {tuple(c["index"]) for c in wrong} <= {tuple(i) for i in np.argwhere(off)}
-    assert all(1.0 - (c["index"][1] / (n - 1)) ** 2 < 0.3 for c in wrong)  # all at grazing views
     assert (tmp_path / "report" / "error_map_0.png").exists()
 
 

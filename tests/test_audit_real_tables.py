@@ -70,14 +70,14 @@ def test_ltc_magnitude_table_js():
     c = best["convention"]
     # the albedo is off far beyond its storage step at grazing cells: named from the others, those cells listed
     assert code == 1 and r["verdict"] == "fits" and not r["passes"]
-    listed = r["wrong_cells"]["0"]["cells"]
-    assert all(c["at"]["mu"] < 0.4 for c in listed) and tuple(best["channels"][0]["worst_cell"]) in {
-        tuple(c["index"]) for c in listed}
+    listed = {tuple(c["index"]) for c in r["wrong_cells"]["0"]["cells"]}
+    assert {(9, a) for a in range(1, 10)} <= listed  # the grazing row (θ = 1.57), every roughness but α = 0
+    assert tuple(best["channels"][0]["worst_cell"]) in listed
     assert (c["direction"], c["roughness"], c["axes"][0], c["flipped"], c["shadowing"]) == (
         "ltc", "r2-node", "mu", [False, False], "height-correlated")
     (fit,) = best["channels"]
     assert fit["meaning"] == "E" and fit["worst_at"]["mu"] <= 1e-3  # the worst cell is at grazing
-    assert 0.05 < fit["max"] < 0.13 and fit["median"] < 1e-3
+    assert 0.04 < fit["max"] < 0.13 and fit["median"] < 1e-3
     # the clamps of the fitting code pinned: the grazing row is still off by 6.5e-2 (the issue's ~6e-2)
     code, pinned, _ = _audit(str(path), "--model", "ggx", "--shape", "10,10,4", "--channel", "0", "--no-sweep",
                              "--as", f"mu_floor={float(np.cos(1.57))!r}", "--as", "alpha_floor=1e-5")
