@@ -245,8 +245,9 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
         array = np.asarray(values, dtype=float)
         if name == "r":
             name, array = "alpha", array * array
-        if name not in ("mu", "theta", "alpha", "f0"):
-            raise ArgumentError(f"axis {name!r}: known axes are mu, theta, alpha, r (alpha = r^2), f0", where="--axis")
+        if name not in ("mu", "theta", "alpha", "f0", "eta"):
+            raise ArgumentError(f"axis {name!r}: known axes are mu, theta, alpha, r (alpha = r^2), f0, eta",
+                                where="--axis")
         if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
             raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
         steps = np.diff(array)

@@ -47,6 +47,7 @@ from ..errors import ArgumentError
 from .conventions import (
     ALPHA_FLOORS,
     ETA,
+    GLASS_MEANINGS,
     MU_FLOORS,
     Convention,
     coordinates,
@@ -102,7 +103,7 @@ def noise_sigma(residual: np.ndarray) -> float:
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
     default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth", "E_schlick"],
-               3: ["E_f0"]}[grid_ndim]
+               3: list(GLASS_MEANINGS) if reference is not None and reference.glass else ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
         if "k" in pins and grid_ndim == 2:  # a conductor's η + ik is given: the exact conductor Fresnel
             default = default + ["E_conductor"]
@@ -128,7 +129,8 @@ def _mesh(shape: tuple[int, ...], index: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> tuple[np.ndarray, np.ndarray]:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), **fresnel_of(c))
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"),
+                             axis_eta=coords.get("eta"), **fresnel_of(c))
 
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
@@ -142,7 +144,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     precision = Precision(step, tolerance)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1], reference)
-    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
+    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings, reference.third_kinds)
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
