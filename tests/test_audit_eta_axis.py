@@ -68,3 +68,33 @@ def test_exiting_reflection_and_transmission_channels_and_a_wrong_cell(capsys, t
     cell = result["wrong_cells"]["1"]["cells"][0]
     exact = albedo_part("ggx", T[1], T[2] ** 2, 1.0 / ETA[3], "T", "correlated-beta")
     assert abs(cell["exact"] - exact) < 1e-6 and cell["at"]["eta"] == pytest.approx(1.0 / ETA[3])
+
+
+def test_cycles_glass_table_excerpt_over_eta(capsys):
+    """Blender Cycles' table_ggx_glass_E (16³ over η, μ, roughness), a 4×4×4 excerpt (tests/fixtures/engines/
+    README.md): η of slices z = 1, 3, 5, 8 (η = (1 + t²)/(1 − t²), t = z/15), μ and r at y, x = 0, 5, 10, 15 of 15,
+    given with --axis. The audit names the reflection's form of the refraction's shadowing (as on the 2-D slice)
+    and the table fits to its printing and sampling noise but for two cells, checked here by the facet reference."""
+    from pathlib import Path
+
+    path = Path(__file__).parent / "fixtures" / "engines" / "cycles_ggx_glass_E_3d_excerpt.h"
+    t = np.array([1, 3, 5, 8]) / 15
+    eta = (1 + t * t) / (1 - t * t)
+    grid = ",".join(repr(float(v)) for v in np.array([0, 5, 10, 15]) / 15)
+    code, out, err = run_cli(capsys, "audit", str(path), "--model", "ggx-dielectric", "--axis",
+                             "eta=" + ",".join(repr(float(v)) for v in eta), "--axis", f"mu={grid}", "--axis",
+                             f"r={grid}", "--no-sweep", "--no-interpolation", "--json")
+    result = json.loads(out)
+    c = result["best"]["convention"]
+    assert code == 1 and result["verdict"] == "fits"
+    assert c["axes"] == ["eta", "mu", "alpha"] and c["shadowing"] == "height-correlated/refraction=reflection-form"
+    fit = result["best"]["channels"][0]
+    assert fit["within"] >= 60 and fit["median"] < 1e-6 and fit["max"] < 1e-5
+    text = path.read_text()
+    table = np.array([float(v.rstrip("f")) for v in text[text.index("= {"):].replace("{", " ").replace(
+        "}", " ").replace("=", " ").replace(";", " ").replace(",", " ").split()]).reshape(4, 4, 4)
+    for cell in result["wrong_cells"]["0"]["cells"]:
+        i, j, k = cell["index"]
+        exact = sum(albedo_part("ggx", max(j * 5 / 15, 1e-4), max((k * 5 / 15) ** 2, 1e-8), eta[i], part,
+                                "reflection-form") for part in "RT")
+        assert abs(cell["exact"] - exact) < 1e-6 and cell["stored"] == table[i, j, k]
