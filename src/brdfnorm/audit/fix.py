@@ -164,6 +164,16 @@ def _flat(source: Source, array: np.ndarray) -> np.ndarray:
     return values.reshape(-1)
 
 
+def _json_order(source: Source, array: np.ndarray) -> np.ndarray:
+    """``array`` (*grid, channels) in the reading order of the JSON document's nested lists (as the reader took
+    them: reshaped with ``--shape`` in ``--order``, or as nested)."""
+    values = _squeezed(source, array)
+    if source.layout.get("reshaped"):
+        order = source.layout.get("order", "C")
+        return values.ravel(order=order).reshape(source.layout["shape"], order=order).ravel()
+    return values.reshape(-1)
+
+
 def write(source: Source, table: np.ndarray, output: str, meta: dict) -> bytes | str:
     """The file contents of the fixed table (``table``: (*grid, channels) in table units)."""
     writer = WRITERS.get(source.fmt)
@@ -228,8 +238,8 @@ def _fix_exr(source: Source, table: np.ndarray, meta: dict) -> bytes:
 def _fix_json(source: Source, table: np.ndarray, meta: dict) -> bytes:
     text, _ = _original_text(source.path)
     spans = json_spans(text, source.layout["key"])
-    changed = _flat(source, _changed(source, table))
-    values = _flat(source, stored_values(source, table))
+    changed = _json_order(source, _changed(source, table))
+    values = _json_order(source, stored_values(source, table))
     if source.stored == "float16":
         values = np.asarray(values, dtype=np.float16).view(np.uint16)
     body = _splice(text, spans, changed, values, source.stored, False)
