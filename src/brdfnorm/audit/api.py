@@ -184,6 +184,11 @@ def _count(n: int) -> str:
     return f"{n:,}".replace(",", "\u2009")  # thin spaces: "1 015 of 1 024"
 
 
+#: Wrong cells listed one by one per channel (all of them are counted and grouped into regions; a table this
+#: wrong is named only if most of its cells are right, so only tables of over 200 000 cells reach the cap).
+MAX_LISTED = 100_000
+
+
 def wrong_cells(source: Source, hypothesis: Hypothesis) -> dict:
     """Every cell outside the tolerance (or not finite) of each channel whose meaning is named: its table indices,
     its axis values in the table's own variables (μ or θ, r or α, f0, as stored), the stored, exact and error
@@ -200,21 +205,21 @@ def wrong_cells(source: Source, hypothesis: Hypothesis) -> dict:
         k = source.channel_names.index(fit.channel)
         labels, count = ndimage.label(fit.bad, structure=np.ones((3,) * len(grid), dtype=bool))
         cells = []
-        for index in np.argwhere(fit.bad):
+        bad = np.argwhere(fit.bad)
+        for index in bad[:MAX_LISTED]:
             i = tuple(int(v) for v in index)
             stored, exact = float(source.values[i + (k,)]), float(fit.exact[i])
             cells.append({"index": list(i), "at": {name: float(v[i]) for name, v in at.items()},
                           "stored": stored, "exact": exact, "error": stored - exact, "region": int(labels[i])})
-        regions = []
-        for label in range(1, count + 1):
-            where = np.argwhere(labels == label)
-            errors = np.abs(fit.residual[labels == label])
-            regions.append({"region": label, "cells": int(len(where)),
-                            "from": [int(v) for v in where.min(axis=0)], "to": [int(v) for v in where.max(axis=0)],
-                            "max_error": float(np.max(np.where(np.isfinite(errors), errors, np.inf)))})
+        magnitude = np.where(np.isfinite(fit.residual), np.abs(fit.residual), np.inf)
+        sizes = np.bincount(labels.ravel(), minlength=count + 1)
+        largest = ndimage.maximum(magnitude, labels, index=np.arange(1, count + 1)) if count else []
+        regions = [{"region": label, "cells": int(sizes[label]), "from": [int(s.start) for s in box],
+                    "to": [int(s.stop) - 1 for s in box], "max_error": float(top)}
+                   for label, (box, top) in enumerate(zip(ndimage.find_objects(labels), np.atleast_1d(largest),
+                                                          strict=True), start=1)]
         out[fit.channel] = {"meaning": fit.meaning, "layout": fit.layout, "tolerance": fit.tolerance,
-                            "count": len(cells),
-                            "regions": regions, "cells": cells}
+                            "count": int(len(bad)), "listed": len(cells), "regions": regions, "cells": cells}
     return out
 
 

@@ -75,7 +75,9 @@ def _wrong_lines(channel: str, info: dict) -> list[str]:
             lines.append(f"    {tuple(cell['index'])} {at}: stored {cell['stored']:.8g}, exact {cell['exact']:.8g}, "
                          f"error {cell['error']:+.3g}")
     if shown < count:
-        lines.append(f"  … {_n(count - shown)} more in --json")
+        more = info.get("listed", count) - shown
+        lines.append(f"  … {_n(more)} more in --json" + (f" ({_n(count - info['listed'])} beyond its list)"
+                                                           if info.get("listed", count) < count else ""))
     return lines
 
 
