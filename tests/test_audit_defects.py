@@ -291,3 +291,53 @@ def test_report_lists_every_wrong_cell_and_marks_them(capsys, tmp_path):
     # the text lists the block as one region of nine cells, with its axis values as stored
     code, out, err = run_cli(capsys, "audit", str(path), "--array", "lut", "--no-interpolation", "--no-sweep")
     assert "region 2: 9 cells at [2..4, 3..5]" in out and "(2, 3) mu=0.3125 alpha=0.428571" in out
+
+
+# -- raw binary with a header and C size expressions (the reader core of the hostile branch) ------------------
+
+def _cli_has(option: str) -> bool:
+    import inspect
+
+    from brdfnorm.cli.audit import audit_command
+
+    return any(option in (getattr(p.default, "param_decls", None) or ())
+               for p in inspect.signature(audit_command).parameters.values())
+
+
+@pytest.mark.skipif(not _cli_has("--offset"), reason="requires reader core (hostile branch): --offset")
+def test_raw_binary_with_a_header_is_fixed_around_it(capsys, tmp_path):
+    d = _damaged(True)
+    header = b"LUT1" + bytes(range(60))  # 64 bytes the fix must keep
+    path = tmp_path / "t.bin"
+    path.write_bytes(header + d.astype("<f4").tobytes())
+    options = ["--offset", "64", "--shape", f"{N},{N},3", "--dtype", "float32"]
+    fixed = tmp_path / "fixed.bin"
+    code, out, err = run_cli(capsys, "audit", str(path), *options, "--no-interpolation", "--no-sweep", "--json",
+                             "--fix", "-o", str(fixed))
+    assert code == 1, err
+    result = json.loads(out)
+    stored = np.frombuffer(path.read_bytes()[64:], dtype="<f4").reshape(N, N, 3).astype(float)
+    expected = _expected(stored, 1e-6)
+    assert {k: {tuple(c["index"]) for c in v["cells"]} for k, v in result["wrong_cells"].items()} == expected
+    assert fixed.read_bytes()[:64] == header
+    code, out, err = run_cli(capsys, "audit", str(fixed), *options, "--no-interpolation", "--no-sweep")
+    assert code == 0, err
+
+
+def test_c_size_expression_gives_the_shape(capsys, tmp_path):
+    d = _damaged(False).astype(np.float32)
+    values = ", ".join(f"{v:.9g}f" for v in d.ravel())
+    path = tmp_path / "t.h"
+    path.write_text(f"static const float kLut[{N} * {N} * 3] = {{ {values} }};\n")
+    from brdfnorm.audit.readers import read_table
+    from brdfnorm.errors import TableFileError
+
+    try:
+        read_table(str(path))
+    except TableFileError as error:
+        if "--shape" in str(error):
+            pytest.skip("requires reader core (hostile branch): a size expression as the shape")
+        raise
+    code, out, err = run_cli(capsys, "audit", str(path), "--no-interpolation", "--no-sweep", "--json")
+    result = json.loads(out)
+    assert code == 1 and result["shape"] == [N, N] and result["best"]["convention"]["direction"] == "mu-texel"
