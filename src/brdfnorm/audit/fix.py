@@ -37,7 +37,7 @@ from .spans import csv_spans, json_spans
 
 def stored_values(source: Source, table: np.ndarray) -> np.ndarray:
     """``table`` (table units) in the storage of ``source``: integer codes or floats of its dtype."""
-    offset = source.layout.get("offset", 0.0)
+    offset = source.layout.get("offset", 0.0) if source.fmt == "png" else 0.0  # brdfnorm PNGs: lo + code·span
     if source.stored.startswith(("uint", "int")):
         info = np.iinfo(np.dtype(source.stored))
         return np.clip(np.rint((table - offset) * source.scale), info.min, info.max).astype(np.int64)
@@ -276,9 +276,14 @@ def _fix_text(source: Source, table: np.ndarray, meta: dict) -> bytes:
 
 
 def _fix_raw(source: Source, table: np.ndarray, meta: dict) -> bytes:
+    """The table's bytes in the file's byte order, with the bytes before (a header, ``offset``) and after it kept."""
     values = _squeezed(source, stored_values(source, table))
-    storage = np.dtype(source.stored).newbyteorder("<")
-    return np.asarray(values, dtype=storage).reshape(source.layout["shape"]).tobytes(order=source.layout["order"])
+    order = source.layout.get("byteorder", source.layout.get("byte_order", "<"))
+    storage = np.dtype(source.stored).newbyteorder(">" if order in (">", "big", "be") else "<")
+    body = np.asarray(values, dtype=storage).reshape(source.layout["shape"]).tobytes(order=source.layout["order"])
+    start = int(source.layout.get("offset", 0) or 0)
+    original = read_bounded(source.path, MAX_BINARY_BYTES)
+    return original[:start] + body + original[start + len(body):]
 
 
 WRITERS = {"npz": _fix_npz, "png": _fix_png, "exr": _fix_exr, "json": _fix_json, "csv": _fix_csv,
