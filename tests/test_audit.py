@@ -83,7 +83,8 @@ def test_quantized_tables_fit_at_their_storage_step(dtype, scale, level):
     e = _base()
     stored = np.rint(e * scale) / scale if scale else e.astype(np.float16).astype(float)
     r = _quick(stored, read={"dtype": dtype})
-    assert r.fits and r.best.convention.direction == "mu-texel" and not r.runners_up[0].fits
+    # at 8 bits a neighbouring convention (mu-node) is within a code of most cells; the true one of every cell
+    assert r.passes and r.best.convention.direction == "mu-texel" and not r.runners_up[0].clean
     assert r.best.channels[0].max <= level * 1.0001
     assert r.best.channels[0].tolerance < 20 * level  # the storage step sets the tolerance
 
@@ -195,10 +196,8 @@ def test_npz_and_exr_fix_round_trip(capsys, tmp_path):
         image.write(str(tmp_path / "t.exr"))
     code, out, err = run_cli(capsys, "audit", str(tmp_path / "t.exr"), "--no-interpolation", "--no-sweep",
                              "--fix", "-o", str(tmp_path / "f.exr"))
-    assert code == 1  # shifted by 0.01: nothing fits
-    code, out, err = run_cli(capsys, "audit", str(tmp_path / "f.exr"), "--no-interpolation", "--no-sweep",
-                             "--json")
-    assert code == 0 and json.loads(out)["best"]["channels"][0]["max"] <= 2.0**-12
+    assert code == 1 and "nothing written" in err  # shifted by 0.01: nothing fits, so --fix refuses
+    assert not (tmp_path / "f.exr").exists()
 
 
 # -- bad input -----------------------------------------------------------------------------------------------
@@ -240,7 +239,8 @@ def test_nan_cells_are_listed_and_do_not_fit():
     e[2, 3] = np.nan
     e[4, 4] = 1.5
     r = _quick(e)
-    assert not r.fits
+    assert r.fits and not r.passes  # the convention is still named from the other cells
+    assert {tuple(c["index"]) for c in r.wrong_cells["0"]["cells"]} == {(2, 3), (4, 4)}
     assert r.bad_cells["non_finite"]["cells"] == [[2, 3, 0]] and r.bad_cells["above_one"]["cells"] == [[4, 4, 0]]
 
 
@@ -320,7 +320,7 @@ def test_deeply_nested_json_is_one_error(capsys, tmp_path):
     assert code == 2 and "deep.json" in err and err.count("\n") == 1
 
 
-def test_random_and_zero_channels_never_fit_and_are_kept_by_the_fix(capsys, tmp_path):
+def test_random_and_zero_channels_never_fit_and_the_fix_refuses(capsys, tmp_path):
     e = _base()
     rng = np.random.default_rng(2)
     data = np.stack([e, np.zeros_like(e), rng.random(e.shape)], axis=-1)
@@ -328,7 +328,9 @@ def test_random_and_zero_channels_never_fit_and_are_kept_by_the_fix(capsys, tmp_
     fits = {c.channel: c.fits for c in r.best.channels}
     assert fits == {"0": True, "1": False, "2": False}
     assert [c.too_noisy for c in r.best.channels] == [False, False, True]
-    assert np.array_equal(r.fixed[..., 1:], data[..., 1:]) and np.max(np.abs(r.fixed[..., 0] - e)) < 1e-12
+    assert r.unnamed == ["1", "2"] and r.fixed is None and not r.passes  # never a half-fixed table
+    kept = _quick(data, channels="E,-,-")  # '-' keeps a channel as read: the rest is fixed
+    assert kept.passes and np.array_equal(kept.fixed, data)
 
 
 @pytest.mark.parametrize("ext, options", [("npz", ["--array", "E"]), ("json", ["--array", "tables.E"]),

@@ -179,7 +179,8 @@ def test_noisy_64_table_transposed_and_flipped():
     assert r.fits and (c.direction_axis, c.flips, c.direction, c.roughness) == (1, (True, False), "mu-texel",
                                                                                 "r2-texel")
     assert 0.9e-3 < r.best.channels[0].rms < 1.1e-3 and abs(r.best.channels[0].noise - 1e-3) < 2e-4
-    assert not r.runners_up[0].fits
+    # at noise 1e-3 a neighbouring convention is within the tolerance of most cells, never of as many
+    assert r.best.share > 0.99 and r.runners_up[0].share < r.best.share - 0.05
 
 
 @pytest.mark.parametrize("made, audited", [("beckmann", "ggx"), ("ggx", "beckmann")])
@@ -192,7 +193,8 @@ def test_other_model_32_fits_nothing(made, audited):
 
 def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path):
     """A table made in the LTC convention whose grazing columns are off by up to 6e-2 (as Monte-Carlo fitted
-    albedos are): no hypothesis fits, and the closest is the LTC convention with the worst cell at grazing."""
+    albedos are): the bias reaches beyond float64's step at more than half the cells, so no convention is named;
+    the closest is the LTC convention, ranked by its median, with the worst cell at grazing."""
     n = 32
     t = np.linspace(0, 1, n)
     mu = np.maximum(1.0 - t * t, np.cos(1.57))
@@ -202,10 +204,10 @@ def test_biased_grazing_cells_fit_nothing_but_show_the_closest(capsys, tmp_path)
     np.savez(tmp_path / "t.npz", E=biased)
     code, r = _cli_json(capsys, str(tmp_path / "t.npz"), "--no-sweep", "--no-interpolation", "--report",
                         str(tmp_path / "report"))
-    assert code == 1 and r["verdict"] == "no hypothesis fits"
+    assert code == 1 and r["verdict"] == "no hypothesis fits" and not r["passes"]
     best = r["best"]
     assert best["convention"]["direction"] == "ltc" and best["convention"]["roughness"] == "r2-node"
-    assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.1
+    assert best["channels"][0]["worst_at"]["mu"] < 0.05 and 0.04 < best["channels"][0]["max"] < 0.11
     assert (tmp_path / "report" / "error_map_0.png").exists()
 
 
@@ -237,8 +239,9 @@ def test_report_figures_for_one_and_three_axes(tmp_path):
 
 def test_ltc_fresnel_channel_is_found_beside_the_albedo(capsys, tmp_path):
     """The LTC magnitude table's layout (E, Fresnel moment, 0, unrelated): the albedo channel sets the convention,
-    the Fresnel channel then fits DFG_f90 (the retry of F90 meanings), the zero and random channels fit nothing
-    and --fix writes them back unchanged."""
+    the Fresnel channel then fits DFG_f90 (the retry of F90 meanings), the zero and random channels fit nothing:
+    the audit exits 1 and --fix refuses to guess them; with them skipped (channels=E,DFG_f90,-,-) it passes and
+    --fix writes them back unchanged."""
     n = 16
     t = np.linspace(0, 1, n)
     mu = np.maximum(1.0 - t * t, np.cos(1.57))
@@ -250,10 +253,14 @@ def test_ltc_fresnel_channel_is_found_beside_the_albedo(capsys, tmp_path):
     path.write_text("const g_ltc_2 = new Float32Array([" + ",".join(f"{v:.9g}" for v in data.ravel()) + "]);\n")
     fixed = tmp_path / "fixed.js"
     code, r = _cli_json(capsys, str(path), "--shape", "16,16,4", "--no-sweep", "--fix", "-o", str(fixed))
-    assert code == 0 and r["best"]["convention"]["direction"] == "ltc"
+    assert code == 1 and r["best"]["convention"]["direction"] == "ltc" and r["unnamed_channels"] == ["2", "3"]
+    assert not fixed.exists()
     channels = r["best"]["channels"]
     assert [c["meaning"] for c in channels[:2]] == ["E", "DFG_f90"] and [c["fits"] for c in channels] == [
         True, True, False, False]
+    code, r = _cli_json(capsys, str(path), "--shape", "16,16,4", "--no-sweep", "--as", "channels=E,DFG_f90,-,-",
+                        "--fix", "-o", str(fixed))
+    assert code == 0 and r["passes"] and r["best"]["convention"]["direction"] == "ltc"
     from brdfnorm.audit.readers import read_table
 
     again = read_table(fixed, shape=(16, 16, 4)).values
@@ -285,7 +292,8 @@ def test_three_channel_dfg_header_with_the_cloth_channel(capsys, tmp_path):
     from brdfnorm.lut.cloth import cloth_model
     from tests.conftest import half_vector_gauss_legendre
 
-    mu, alpha = cloth["worst_at"]["mu"], cloth["worst_at"]["alpha"]
+    at = cloth["worst_at"]  # as the table stores it: r (α = r²) or α
+    mu, alpha = at["mu"], at["alpha"] if "alpha" in at else at["r"] ** 2
     sheen = cloth_model({"alpha": np.array([alpha])})[0].with_params(alpha=max(alpha, 1e-3))
     exact = float(half_vector_gauss_legendre(sheen, np.array([np.sqrt(1 - mu * mu), 0.0, mu]), 64, 256))
     i, j = cloth["worst_cell"]
@@ -308,7 +316,8 @@ def test_sheen_table_names_its_visibility_and_keeps_its_gain():
                                                                              ("E",))
     assert r.bad_cells["above_one"]["count"] == 0 and not r.inference.ambiguous
     fit = r.best.channels[0]
-    mu, alpha = fit.worst_at["mu"], fit.worst_at["alpha"]
+    mu = fit.worst_at["mu"]
+    alpha = fit.worst_at["alpha"] if "alpha" in fit.worst_at else fit.worst_at["r"] ** 2  # as the table stores it
     exact = float(half_vector_gauss_legendre(charlie.with_params(alpha=alpha),
                                              np.array([np.sqrt(1 - mu * mu), 0.0, mu]), 64, 256))
     assert abs(table[fit.worst] - exact) <= fit.max + 1e-8

@@ -134,7 +134,8 @@ def test_three_axes_with_the_exact_factor_over_f0_and_its_fix(tmp_path):
     assert r.best.channels[0].max <= 0.5 / 65535 + 1e-6
     schlick = audit(codes, "ggx", read={"dtype": "uint16"}, sweep=False, dense=False, channels="E_f0")
     assert not schlick.fits and schlick.best.channels[0].max > 1e-3
-    assert np.max(np.abs(r.fixed[..., 0] - values)) < 1e-6
+    # the fix changes only the cells outside the tolerance: every cell ends within it of the exact table
+    assert np.max(np.abs(r.fixed[..., 0] - values)) <= r.best.channels[0].tolerance
 
 
 def _schlick_reflectance(cos: np.ndarray, f0: float) -> np.ndarray:
@@ -152,7 +153,8 @@ def test_schlick_table_at_one_f0_is_named_with_its_f0(f0):
     r = audit(table, "ggx", dense=False, sweep=False)
     c, fit = r.best.convention, r.best.channels[0]
     assert r.fits and c.meanings == ("E_schlick",) and abs(c.schlick_f0 - f0) < 1e-6 and fit.max < 1e-7
-    mu, alpha = fit.worst_at["mu"], fit.worst_at["alpha"]
+    mu = fit.worst_at["mu"]
+    alpha = fit.worst_at["alpha"] if "alpha" in fit.worst_at else fit.worst_at["r"] ** 2  # as the table stores it
 
     class Schlick(_WithReflectance):
         def eval(self, L, V):

@@ -68,12 +68,16 @@ def test_ltc_magnitude_table_js():
     code, r, _ = _audit(str(path), "--model", "ggx", "--shape", "10,10,4", "--channel", "0", "--no-sweep")
     best = r["best"]
     c = best["convention"]
-    assert code == 1 and r["verdict"] == "no hypothesis fits"  # the albedo is off far beyond its storage step
+    # the albedo is off far beyond its storage step at grazing cells: named from the others, those cells listed
+    assert code == 1 and r["verdict"] == "fits" and not r["passes"]
+    listed = {tuple(c["index"]) for c in r["wrong_cells"]["0"]["cells"]}
+    assert {(9, a) for a in range(1, 10)} <= listed  # the grazing row (θ = 1.57), every roughness but α = 0
+    assert tuple(best["channels"][0]["worst_cell"]) in listed
     assert (c["direction"], c["roughness"], c["axes"][0], c["flipped"], c["shadowing"]) == (
         "ltc", "r2-node", "mu", [False, False], "height-correlated")
     (fit,) = best["channels"]
     assert fit["meaning"] == "E" and fit["worst_at"]["mu"] <= 1e-3  # the worst cell is at grazing
-    assert 0.05 < fit["max"] < 0.13 and fit["median"] < 1e-3
+    assert 0.04 < fit["max"] < 0.13 and fit["median"] < 1e-3
     # the clamps of the fitting code pinned: the grazing row is still off by 6.5e-2 (the issue's ~6e-2)
     code, pinned, _ = _audit(str(path), "--model", "ggx", "--shape", "10,10,4", "--channel", "0", "--no-sweep",
                              "--as", f"mu_floor={float(np.cos(1.57))!r}", "--as", "alpha_floor=1e-5")
@@ -84,7 +88,8 @@ def test_ltc_magnitude_table_js():
     t, a = fit["worst_cell"]
     table = _numbers(path.read_text()).reshape(10, 10, 4)
     mu, alpha = max(1.0 - (t / 9) ** 2, np.cos(1.57)), max((a / 9) ** 2, 1e-5)
-    assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(alpha)
+    # the position as the table stores it: cos θ = 1 − (t/9)² (before the θ ≤ 1.57 clamp) and r = a/9
+    assert fit["worst_at"]["mu"] == pytest.approx(1.0 - (t / 9) ** 2) and fit["worst_at"]["r"] == pytest.approx(a / 9)
     exact, error = _exact(GGX.with_params(alpha=alpha), mu)
     assert abs(table[t, a, 0] - exact) == pytest.approx(fit["max"], abs=error + 1e-6)
 
@@ -97,19 +102,20 @@ def test_three_dfg_lut_16_half_js():
     path = ENGINES / "three_dfg_lut.js"
     code, r, _ = _audit(str(path), "--model", "ggx", "--dtype", "float16", "--shape", "16,16,2", "--no-sweep")
     c = r["best"]["convention"]
-    assert code == 1 and r["verdict"] == "no hypothesis fits"
+    assert code == 1 and r["verdict"] == "fits" and not r["passes"]  # named; its grazing cells listed
     assert (c["axes"][0], c["direction"], c["roughness"], c["flipped"], c["shadowing"], c["channels"]) == (
         "mu", "mu-texel", "r2-texel", [False, False], "height-correlated", ["DFG_f0", "DFG_f90"])
+    assert tuple(r["best"]["channels"][0]["worst_cell"]) in {tuple(x["index"]) for x in r["wrong_cells"]["0"]["cells"]}
     scale, bias = r["best"]["channels"]
     assert 0.01 < scale["max"] < 0.02 and scale["worst_at"]["mu"] < 0.05
     assert 3e-4 < bias["max"] < 1e-3 and bias["median"] < 2e-5
-    assert r["interpolation"] and r["runners_up"] and not r["runners_up"][0]["fits"]
+    assert r["interpolation"] and r["runners_up"] and r["runners_up"][0]["within"] < r["best"]["within"]
     table = _numbers(path.read_text()).reshape(16, 16, 2)
     models = split_sum_models(GGX)[0]
     for k, (fit, meaning) in enumerate(((scale, "DFG_f0"), (bias, "DFG_f90"))):
         i, j = fit["worst_cell"]
         mu, alpha = (i + 0.5) / 16, ((j + 0.5) / 16) ** 2
-        assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(alpha)
+        assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["r"] ** 2 == pytest.approx(alpha)
         exact, error = _exact(models[meaning].with_params(alpha=alpha), mu)
         assert abs(table[i, j, k] - exact) == pytest.approx(fit["max"], abs=error + 2e-6)
 
@@ -179,7 +185,7 @@ def test_cycles_ggx_albedo_c_header_32():
     table = np.array([float(t.rstrip("f")) for t in re.split(r"[\s,]+", body) if t]).reshape(32, 32)
     i, j = fit["worst_cell"]
     mu, alpha = max(i / 31, 1e-4), max((j / 31) ** 2, 1e-8)
-    assert fit["worst_at"]["mu"] == pytest.approx(mu) and fit["worst_at"]["alpha"] == pytest.approx(alpha)
+    assert fit["worst_at"]["mu"] == pytest.approx(i / 31) and fit["worst_at"]["r"] == pytest.approx(j / 31)
     exact, error = _exact(GGX.with_params(alpha=alpha), mu)
     assert abs(table[i, j] - exact) == pytest.approx(fit["max"], abs=error + 1e-8)
     assert abs(table[i, j] - exact) <= 5e-7 + 5e-7  # the printing's half digit and the reference's share
@@ -214,8 +220,9 @@ def test_cycles_glass_slice_names_the_reflection_form_of_refraction_shadowing():
     table = np.array([float(t.rstrip("f")) for t in re.split(r"[\s,]+", body) if t]).reshape(16, 16)
     worst = beta["best"]["channels"][0]
     y, x = worst["worst_cell"]  # array indices; worst_at: where the Beta form's best geometry puts that cell
-    exact = sum(albedo_part("ggx", worst["worst_at"]["mu"], worst["worst_at"]["alpha"], CYCLES_ETA, part)
-                for part in "RT")
+    at = worst["worst_at"]  # as the table stores it: r (α = r²) or α
+    alpha = at["alpha"] if "alpha" in at else max(at["r"] ** 2, 1e-8)
+    exact = sum(albedo_part("ggx", max(at["mu"], 1e-4), alpha, CYCLES_ETA, part) for part in "RT")
     assert abs(table[y, x] - exact) == pytest.approx(worst["max"], abs=1e-6)
     # and at the reflection form's worst cell (rows μ = y/15, columns α = (x/15)², floors 1e-4 and 1e-8)
     y, x = fit["worst_cell"]

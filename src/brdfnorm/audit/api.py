@@ -27,10 +27,11 @@ from ..inputs import shorten
 from ..inputs.limits import MAX_AUDIT_GRID_AXES, MAX_AUDIT_VALUES, MAX_CHANNELS
 from ..models.base import Model
 from . import quality
-from .conventions import parse_pins
+from .conventions import parse_pins, stored_axis_values
 from .infer import Hypothesis, Inference, infer
 from .readers import DTYPES, Source, read_table
 from .reference import Reference
+from .spans import written_step
 
 
 @dataclass
@@ -47,6 +48,10 @@ class AuditResult:
     fixed: np.ndarray | None = None
     seconds: float = 0.0
     model: str = ""
+    wrong_cells: dict = field(default_factory=dict)  # channel -> {"cells": [...], "regions": [...]}
+    tolerance_given: float | None = None
+    approximation: dict | None = None  # a fitted approximation the table is, and its error against exact values
+    step: float = 0.0  # the storage step the tolerance starts from (the format's, or a text's written precision)
 
     @property
     def best(self) -> Hypothesis:
@@ -58,7 +63,40 @@ class AuditResult:
 
     @property
     def fits(self) -> bool:
+        """A convention is named: it fits most cells of at least one channel."""
         return self.inference.fits
+
+    @property
+    def passes(self) -> bool:
+        """Every cell of every audited channel within the tolerance of the named convention (exit status 0)."""
+        return self.inference.clean
+
+    @property
+    def unnamed(self) -> list[str]:
+        """Audited channels whose meaning the audit cannot name (``--fix`` refuses to guess them)."""
+        return [c.channel for c in self.best.channels if not c.fits]
+
+    @property
+    def headline(self) -> str:
+        """One sentence: the convention and how many cells it fits, or that none fits most cells."""
+        h = self.best
+        if not h.fits:
+            return (f"NO HYPOTHESIS FITS most cells; the closest fits {_count(h.within)} of {_count(h.cells)} cells "
+                    f"(median error {h.median:.3g})")
+        bad = h.cells - h.within
+        residuals = [c.residual[c.bad] for c in h.channels if c.meaning is not None and c.bad is not None]
+        wrong = np.concatenate([r.ravel() for r in residuals]) if residuals else np.zeros(0)
+        finite = wrong[np.isfinite(wrong)]
+        tolerance = max(c.tolerance for c in h.channels if c.meaning is not None)
+        text = f"convention fits {_count(h.within)} of {_count(h.cells)} cells to {tolerance:.2g}"
+        if not bad:
+            return text
+        text += f"; {_count(bad)} cell{'s' if bad != 1 else ''} {'are' if bad != 1 else 'is'} wrong"
+        if finite.size:
+            text += f" by up to {float(np.max(np.abs(finite))):.2g}"
+        if finite.size < wrong.size:
+            text += f" ({wrong.size - finite.size} not finite)"
+        return text
 
     @property
     def stats(self) -> list[dict]:
@@ -71,15 +109,19 @@ class AuditResult:
     def to_json(self) -> dict:
         def hyp(h: Hypothesis) -> dict:
             return {"convention": h.convention.describe(), "text": h.convention.text(), "fits": h.fits,
+                    "within": h.within, "cells": h.cells, "share": h.share, "median": h.median,
                     "channels": [c.summary() for c in h.channels]}
 
         return {
             "file": self.source.path, "format": self.source.fmt, "array": self.source.name, "model": self.model,
             "shape": list(self.source.grid_shape), "channels": self.source.channel_names,
-            "storage": self.source.stored, "storage_step": self.source.step(),
+            "storage": self.source.stored, "storage_step": self.step,
             "verdict": "fits" if self.fits else "no hypothesis fits", "ambiguous": self.inference.ambiguous,
             "best": hyp(self.best), "runners_up": [hyp(h) for h in self.runners_up],
             "hypotheses_tested": self.inference.tested, "reference_cells": self.inference.reference_cells,
+            "passes": self.passes, "headline": self.headline, "unnamed_channels": self.unnamed,
+            "tolerance_given": self.tolerance_given, "approximation": self.approximation,
+            "wrong_cells": self.wrong_cells,
             "bad_cells": self.bad_cells, "interpolation": self.interpolation, "resolution": self.resolution,
             "notes": self.source.notes, "seconds": self.seconds, "brdfnorm": __version__,
         }
@@ -111,6 +153,76 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
         out[name] = {"count": int(len(where)),
                      "cells": [[int(i) for i in w] for w in where[:limit]],
                      "values": [float(values[tuple(w)]) for w in where[:limit]]}
+    return out
+
+
+def _approximation(source: Source, reference: Reference, pins: dict, explicit: dict, step: float,
+                   model: str) -> dict | None:
+    """A fitted approximation (:mod:`.approximations`) the table is a tabulation of, with its error against the exact
+    quantities it approximates in the same geometry (the shadowing form closer to it by the median)."""
+    from dataclasses import replace
+
+    from .approximations import recognise
+    from .conventions import geometries
+    from .infer import Precision, _full
+
+    grid = source.grid_shape
+    if len(grid) != 2:
+        return None
+    found = recognise(source.values, source.channel_names, geometries(2, pins, explicit, grid, reference.shadowings),
+                      step, model)
+    if found is None:
+        return None
+    trials = [_full(source.values, replace(found["convention"], shadowing=shadowing, meanings=tuple(found["meanings"])),
+                    reference, source.channel_names, Precision(step), list(range(len(source.channel_names))))
+              for shadowing in reference.shadowings]
+    h = min(trials, key=lambda t: t.median)
+    return {"name": found["name"], "source": found["source"], "within": found["within"], "cells": found["cells"],
+            "convention": h.convention.text(), "channels": [
+                {"channel": c.channel, "approximates": c.meaning, "max": c.max, "median": c.median, "rms": c.rms,
+                 "worst_cell": list(c.worst), "worst_at": c.worst_at} for c in h.channels]}
+
+
+def _count(n: int) -> str:
+    return f"{n:,}".replace(",", "\u2009")  # thin spaces: "1 015 of 1 024"
+
+
+#: Wrong cells listed one by one per channel (all of them are counted and grouped into regions; a table this
+#: wrong is named only if most of its cells are right, so only tables of over 200 000 cells reach the cap).
+MAX_LISTED = 100_000
+
+
+def wrong_cells(source: Source, hypothesis: Hypothesis) -> dict:
+    """Every cell outside the tolerance (or not finite) of each channel whose meaning is named: its table indices,
+    its axis values in the table's own variables (μ or θ, r or α, f0, as stored), the stored, exact and error
+    values; and the cells grouped into connected regions (cells touching by a side or a corner)."""
+    from scipy import ndimage
+
+    grid = source.grid_shape
+    mesh = list(np.meshgrid(*[np.arange(n) for n in grid], indexing="ij"))
+    at = stored_axis_values(hypothesis.convention, grid, mesh)
+    out = {}
+    for fit in hypothesis.channels:
+        if not fit.fits or fit.bad is None or fit.sampled or not fit.bad.any():
+            continue
+        k = source.channel_names.index(fit.channel)
+        labels, count = ndimage.label(fit.bad, structure=np.ones((3,) * len(grid), dtype=bool))
+        cells = []
+        bad = np.argwhere(fit.bad)
+        for index in bad[:MAX_LISTED]:
+            i = tuple(int(v) for v in index)
+            stored, exact = float(source.values[i + (k,)]), float(fit.exact[i])
+            cells.append({"index": list(i), "at": {name: float(v[i]) for name, v in at.items()},
+                          "stored": stored, "exact": exact, "error": stored - exact, "region": int(labels[i])})
+        magnitude = np.where(np.isfinite(fit.residual), np.abs(fit.residual), np.inf)
+        sizes = np.bincount(labels.ravel(), minlength=count + 1)
+        largest = ndimage.maximum(magnitude, labels, index=np.arange(1, count + 1)) if count else []
+        regions = [{"region": label, "cells": int(sizes[label]), "from": [int(s.start) for s in box],
+                    "to": [int(s.stop) - 1 for s in box], "max_error": float(top)}
+                   for label, (box, top) in enumerate(zip(ndimage.find_objects(labels), np.atleast_1d(largest),
+                                                          strict=True), start=1)]
+        out[fit.channel] = {"meaning": fit.meaning, "layout": fit.layout, "tolerance": fit.tolerance,
+                            "count": int(len(bad)), "listed": len(cells), "regions": regions, "cells": cells}
     return out
 
 
@@ -161,9 +273,9 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
         array = np.asarray(values, dtype=float)
         if name == "r":
             name, array = "alpha", array * array
-        if name not in ("mu", "theta", "alpha", "f0"):
+        if name not in ("mu", "theta", "alpha", "f0", "eta"):
             raise ArgumentError(f"axis {shorten(repr(name), 40)}: known axes are mu, theta, alpha, r (alpha = r^2), "
-                                "f0", where="--axis")
+                                "f0, eta", where="--axis")
         if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
             raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
         low, high, text = AXIS_DOMAINS[name]
@@ -182,14 +294,20 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
 def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None, dense: bool = True,
           sweep: bool = True, fix: bool = True, params: dict | None = None, read: dict | None = None,
           axes: dict[str, np.ndarray] | None = None, pins: dict[str, str] | None = None,
-          **convention: str) -> AuditResult:
+          tolerance: float | None = None, **convention: str) -> AuditResult:
     """Audit ``table`` (an array (*grid[, channels]) or a path, read with ``read`` options: fmt, array, shape,
     dtype, order, scale) as a table of ``model`` (a name or a Model, with ``params``). ``pins`` and keywords
     (``convention``) pin parts of the convention (axes, direction, roughness, f0, flip, shadowing, mu_floor,
     alpha_floor, channels, eta; see :mod:`.conventions`); the pin ``axes=mu,alpha`` (the roles of the array axes)
     goes in ``pins``, as the keyword ``axes`` gives the values of an axis outright (``mu``, ``theta`` in radians,
     ``alpha``, ``r`` with α = r², ``f0``: values in array order, monotonic). ``dense`` measures the interpolation error,
-    ``sweep`` the error against resolution."""
+    ``sweep`` the error against resolution. ``tolerance`` (absolute, in table units) replaces the tolerance computed
+    from the storage precision, the reference's error and the table's noise.
+
+    ``fixed`` is the table with every wrong cell of every channel replaced by its exact value in the convention
+    found (cells within the tolerance are kept as read); it is None when a channel's meaning cannot be named."""
+    if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
+        raise ArgumentError("tolerance must be a positive number", where="tolerance")
     explicit = _explicit_axes(axes)
     from .. import load
 
@@ -230,10 +348,24 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         else:
             raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="--channel")
         chosen = [k]
-    inference = infer(source.values, source.channel_names, reference, pins, source.step(), chosen,
-                      explicit=explicit)
-    result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name)
+    step = source.step()
+    written = written_step(source)
+    if written is not None and written[1] and source.stored == "float64":
+        source.stored = "float32"  # the fix writes single-precision values back, as the file holds
+        source.notes.append("decimal text of single-precision values: float32's step is the storage step")
+        step = source.step()
+    elif written is not None and written[0] > step:  # decimal text keeps fewer digits than its float type
+        step = written[0]
+        source.notes.append(f"numbers written to about {step:.2g} (half their last digit): that is the storage "
+                            "step")
+    inference = infer(source.values, source.channel_names, reference, pins, step, chosen,
+                      explicit=explicit, tolerance=tolerance)
+    result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name,
+                         wrong_cells=wrong_cells(source, inference.best), tolerance_given=tolerance, step=step)
     best = inference.best
+    grid = source.grid_shape
+    if not result.passes and "channels" not in pins:
+        result.approximation = _approximation(source, reference, pins, explicit, step, m.name)
     if dense or sweep:
         # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
         measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
@@ -250,13 +382,12 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
             if sweep:
                 result.resolution[fit.channel] = quality.sweep(best.convention, fit.meaning, reference, points,
                                                                len(grid))
-    if fix:
+    if fix and not result.unnamed:
         fixed = np.array(source.values, dtype=float)
-        # channels that fit are replaced (the closest one when none fits); the others are written back as read
-        replaced = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
-        for fit in replaced:
-            if fit.meaning is not None and fit.exact is not None:
-                fixed[..., source.channel_names.index(fit.channel)] = fit.exact
+        # only the wrong cells change: a cell within the tolerance is kept as read (a minimal diff)
+        for fit in best.channels:
+            k = source.channel_names.index(fit.channel)
+            fixed[..., k] = np.where(fit.bad, fit.exact, fixed[..., k])
         result.fixed = fixed
     result.seconds = time.perf_counter() - started
     return result

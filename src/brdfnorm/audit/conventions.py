@@ -33,6 +33,10 @@ from ..errors import ArgumentError
 DIRECTIONS = ("mu-node", "mu-texel", "theta-node", "theta-texel", "ltc")
 ROUGHNESS = ("alpha-node", "alpha-texel", "r2-node", "r2-texel")
 F0_POSITIONS = ("f0-node", "f0-texel")
+#: The third axis of a rough-glass table is η (``ETA_AXES``): Cycles' precompute (``eta-cycles``: nodes z/(n − 1),
+#: F0 = clamp(t, 1e-4, 0.99)⁴, η = (1 + √F0)/(1 − √F0), light entering the denser medium), the same seen from inside
+#: (``eta-cycles-exiting``: 1/η), or values given with ``--axis eta=…`` (``eta-explicit``).
+ETA_AXES = ("eta-cycles", "eta-cycles-exiting")
 SHADOWING = ("height-correlated", "separable")
 #: For rough dielectrics (a model with ``refraction_shadowing``) the refraction's G2 is searched too: Heitz's Beta
 #: form (``height-correlated``, brdfnorm's default), G1·G1 for both (``separable``: OpenPBR, Mitsuba), and
@@ -47,7 +51,9 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
 #: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
 MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
-            "DFG_cloth", "E_schlick")
+            "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass")
+#: Meanings of a rough-glass table over an η axis: R + T, R and T of the lobe at each cell's η.
+GLASS_MEANINGS = ("E_glass", "R_glass", "T_glass")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
 DIELECTRIC_MEANINGS = ("E_dielectric", "E_f0_dielectric")
 #: The index of refraction of an E_dielectric table unless ``eta=`` pins another (f0 = 0.04, the usual default).
@@ -75,7 +81,8 @@ class Convention:
     mu_floor: float = 1e-4
     alpha_floor: float = 1e-8
     meanings: tuple[str | None, ...] = field(default=())
-    eta: float = ETA  # the index of refraction of an E_dielectric channel
+    eta: float = ETA  # the index of refraction of an E_dielectric channel (of an E_conductor channel: η of η + ik)
+    k: float = 0.0  # the extinction coefficient of an E_conductor channel (η + ik)
     schlick_f0: float = SCHLICK_F0  # Schlick's f0 of an E_schlick channel
     free_f0: bool = True  # schlick_f0 is fitted to the table (least squares), not pinned
     #: Axis values given by the user (``--axis``), role -> values in array order: ('mu' | 'theta' | 'alpha' |
@@ -94,12 +101,13 @@ class Convention:
             axes[self.direction_axis] = "theta" if theta else "mu"
         axes[self.roughness_axis] = ("roughness (alpha = r^2)" if self.roughness.startswith("r2") else "alpha")
         if self.f0_axis is not None:
-            axes[self.f0_axis] = "f0"
+            axes[self.f0_axis] = "eta" if self.f0.startswith("eta") else "f0"
         return {"axes": [axes[i] for i in sorted(axes)], "flipped": [bool(f) for f in self.flips],
                 "direction": self.direction, "roughness": self.roughness,
                 **({"f0": self.f0} if self.f0_axis is not None else {}),
                 "mu_floor": self.mu_floor, "alpha_floor": self.alpha_floor, "shadowing": self.shadowing,
                 "channels": list(self.meanings), **({"eta": self.eta} if "E_dielectric" in self.meanings else {}),
+                **({"eta": self.eta, "k": self.k} if "E_conductor" in self.meanings else {}),
                 **({"schlick_f0": self.schlick_f0} if "E_schlick" in self.meanings else {})}
 
     def text(self) -> str:
@@ -113,6 +121,8 @@ class Convention:
                   "channels " + "/".join(m or "?" for m in self.meanings)]
         if "E_dielectric" in self.meanings:
             parts.append(f"eta={self.eta:g}")
+        if "E_conductor" in self.meanings:
+            parts.append(f"conductor eta={self.eta:g} k={self.k:g}")
         if "E_schlick" in self.meanings:
             parts.append(f"f0={self.schlick_f0:.6g}")
         return "; ".join(p for p in parts if p)
@@ -155,7 +165,7 @@ def _explicit(c: Convention, role: str) -> tuple[str, np.ndarray] | None:
 
 
 def _kind(c: Convention, role: str) -> str:
-    return {"mu": c.direction, "alpha": c.roughness, "f0": c.f0}[role]
+    return {"mu": c.direction, "alpha": c.roughness, "f0": c.f0, "eta": c.f0}[role]
 
 
 def unit_positions(c: Convention, role: str, n: int, index: np.ndarray, flip: bool) -> np.ndarray:
@@ -181,6 +191,11 @@ def role_value(c: Convention, role: str, t: np.ndarray) -> np.ndarray:
         return mu_of(c.direction, t)
     if role == "alpha":
         return alpha_of(c.roughness, t)
+    if role == "eta":
+        f0 = np.clip(t, 1e-4, 0.99) ** 4
+        # an index-matched interface does not scatter: η is kept 2e-6 from 1 (R there is ~1e-13, T ~1)
+        eta = np.maximum((1.0 + np.sqrt(f0)) / (1.0 - np.sqrt(f0)), 1.0 + 2e-6)
+        return 1.0 / eta if c.f0.endswith("exiting") else eta
     return t
 
 
@@ -189,7 +204,7 @@ def axis_roles(c: Convention) -> dict[int, str]:
     if c.direction_axis is not None:
         roles[c.direction_axis] = "mu"
     if c.f0_axis is not None:
-        roles[c.f0_axis] = "f0"
+        roles[c.f0_axis] = "eta" if c.f0.startswith("eta") else "f0"
     return roles
 
 
@@ -198,13 +213,14 @@ def coordinates(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) 
     out = {}
     for axis, role in axis_roles(c).items():
         value = role_value(c, role, unit_positions(c, role, shape[axis], index[axis], c.flips[axis]))
-        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor, "f0": -np.inf}[role]
+        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor}.get(role, -np.inf)
         out[role] = np.maximum(value, floor)
     return out
 
 
 def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.ndarray] | None = None,
-               shape: tuple[int, ...] | None = None, shadowings: tuple[str, ...] = SHADOWING) -> list[Convention]:
+               shape: tuple[int, ...] | None = None, shadowings: tuple[str, ...] = SHADOWING,
+               third: tuple[str, ...] = F0_POSITIONS) -> list[Convention]:
     """Every geometry (axis roles, flips, positions, shadowing) of a grid of ``grid_ndim`` axes, with pinned
     parts fixed (``pinned``: direction=..., roughness=..., shadowing=..., axes=mu,alpha, flip=0/1 per axis)."""
     out = []
@@ -216,12 +232,12 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
         roles = [perm for perm in itertools.permutations(range(3))]
     else:
         raise ArgumentError(f"tables of 1, 2 or 3 axes are audited; this one has {grid_ndim}", where="--shape")
-    names = {"mu": 0, "theta": 0, "alpha": 1, "roughness": 1, "r": 1, "f0": 2}
+    names = {"mu": 0, "theta": 0, "alpha": 1, "roughness": 1, "r": 1, "f0": 2, "eta": 2}
     if "axes" in pinned:
         wanted = [names.get(a.strip()) for a in pinned["axes"].split(",")]
         if None in wanted or len(wanted) != grid_ndim:
             raise ArgumentError(f"axes={pinned['axes']}: name each of the {grid_ndim} array axes mu, theta, alpha, "
-                                "roughness or f0", where="--as")
+                                "roughness, f0 or eta", where="--as")
         if grid_ndim == 1:
             wanted = [1]
     for role in roles:
@@ -239,7 +255,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
             first = pinned["axes"].split(",")[d].strip()
             directions = [x for x in directions if x.startswith("theta") == (first == "theta")]
         roughness = _pinned(pinned, "roughness", ROUGHNESS)
-        f0s = [None] if f is None else _pinned(pinned, "f0", F0_POSITIONS)
+        f0s = [None] if f is None else _pinned(pinned, "f0", third)
         flip_sets = list(itertools.product((False, True), repeat=grid_ndim))
         if "flip" in pinned:
             flip_sets = [tuple(bool(int(x)) for x in pinned["flip"].split(","))]
@@ -253,7 +269,9 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
             roughness, fixed_axes = ["explicit"], fixed_axes + [r]
         if f is not None and "f0" in given:
             f0s, fixed_axes = ["explicit"], fixed_axes + [f]
-        roles = {d: ("theta" if "theta" in given else "mu"), r: "alpha", f: "f0"}
+        if f is not None and "eta" in given:
+            f0s, fixed_axes = ["eta-explicit"], fixed_axes + [f]
+        roles = {d: ("theta" if "theta" in given else "mu"), r: "alpha", f: "eta" if "eta" in given else "f0"}
         if shape is not None and any(len(given[roles[a]]) != shape[a] for a in fixed_axes):
             continue  # the given values do not fit this axis
         chosen = tuple(sorted((roles[a], tuple(float(v) for v in given[roles[a]])) for a in fixed_axes))
@@ -266,7 +284,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
                                   flips=flips, shadowing=shadowing,
                                   mu_floor=float(pinned.get("mu_floor", 1e-4)),
                                   alpha_floor=float(pinned.get("alpha_floor", 1e-8)), explicit=chosen,
-                                  eta=float(pinned.get("eta", ETA)),
+                                  eta=float(pinned.get("eta", ETA)), k=float(pinned.get("k", 0.0)),
                                   schlick_f0=float(pinned.get("schlick_f0", SCHLICK_F0)),
                                   free_f0="schlick_f0" not in pinned))
     if not out:
@@ -283,7 +301,7 @@ def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[st
 
 
 PIN_KEYS = ("axes", "direction", "roughness", "f0", "flip", "shadowing", "mu_floor", "alpha_floor", "channels", "eta",
-            "schlick_f0")
+            "schlick_f0", "k")
 
 
 def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
@@ -311,8 +329,19 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
             eta = float(out["eta"])
         except ValueError:
             raise ArgumentError("eta must be a number", where="--as") from None
-        if not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
+        if "k" in out:  # a conductor's η + ik
+            if not (np.isfinite(eta) and 0.0 < eta <= 1000.0):
+                raise ArgumentError("eta must lie in (0, 1000] (the real part of a conductor's η + ik)", where="--as")
+        elif not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
             raise ArgumentError("eta must lie in (1, 1000] (an E_dielectric table of an index of refraction)",
+                                where="--as")
+    if "k" in out:
+        try:
+            k = float(out["k"])
+        except ValueError:
+            raise ArgumentError("k must be a number", where="--as") from None
+        if not (np.isfinite(k) and 0.0 <= k <= 1000.0) or "eta" not in out:
+            raise ArgumentError("k (a conductor's extinction, in [0, 1000]) goes with eta: --as eta=0.2 --as k=3.9",
                                 where="--as")
     if "schlick_f0" in out:
         try:
@@ -331,8 +360,31 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
 
 def fresnel_of(c: Convention) -> dict[str, float]:
     """The Fresnel constants a convention's meanings are evaluated with (``Reference.meaning``'s keywords)."""
-    return {"eta": c.eta, "schlick_f0": c.schlick_f0}
+    return {"eta": c.eta, "schlick_f0": c.schlick_f0, "k": c.k}
 
 
 def with_floors(c: Convention, mu_floor: float, alpha_floor: float) -> Convention:
     return replace(c, mu_floor=mu_floor, alpha_floor=alpha_floor)
+
+
+def stored_axis_values(c: Convention, shape: tuple[int, ...], index: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """Each axis's value at the samples ``index`` in the variable the table itself is indexed by, before any
+    clamp: μ (or θ in degrees for the θ conventions), r for the r² roughness conventions (α = r²) or α, f0, or the
+    values given outright with ``--axis``. This is what a bad cell's position is reported in."""
+    out = {}
+    for axis, role in sorted(axis_roles(c).items()):  # in array-axis order
+        i = np.asarray(index[axis])
+        given = _explicit(c, role)
+        if given is not None:
+            name, values = given
+            out["theta_deg" if name == "theta" else name] = (np.degrees(values[i.astype(int)]) if name == "theta"
+                                                             else values[i.astype(int)])
+            continue
+        t = unit_positions(c, role, shape[axis], i, c.flips[axis])
+        if role == "mu" and c.direction.startswith("theta"):
+            out["theta_deg"] = 90.0 * t
+        elif role == "alpha" and c.roughness.startswith("r2"):
+            out["r"] = t
+        else:
+            out[role] = role_value(c, role, t)
+    return out

@@ -9,21 +9,26 @@ Two stages, both against exact values (:mod:`.reference`):
    best-fitting channel. Meanings that need the split-sum bias F90 (slow: a generic quadrature) are scored only
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
-   α = 0, and ranked by their median residual, then their maximum (:attr:`Hypothesis.rank`). Where the meanings
+   α = 0, and ranked by the share of cells within the tolerance, then their median residual, then their maximum
+   (:attr:`Hypothesis.rank`): a few wrong cells never decide the convention of the rest. Where the meanings
    need F90 (or the exact Fresnel) and the table has more than SUBGRID_CELLS cells, they are ranked on a strided
    subgrid of about RANK_CELLS interior cells (no endpoint clamp reaches them) and only the best is then
    measured on every cell, its clamps searched; the runners-up's statistics say they were sampled.
 
-A hypothesis *fits* a channel when its maximum residual is within the tolerance
+Every cell is judged against the tolerance (or the one given, ``--tolerance``)
 
     tol = storage step (half a code, or half an ulp at 1) + the reference's own error estimate + k σ̂,
 
 σ̂ the noise of the residual estimated from its second differences along each axis (median absolute deviation
 / 0.6745 / √6: white noise survives second differences with variance 6σ², a smooth misfit does not), and
 k = max(5, √(2 ln 2n) + 1) for n cells. A channel whose σ̂ exceeds MAX_NOISE_SHARE of the exact table's standard
-deviation never fits (data that are mostly noise would fit any hypothesis). The
-result is never a silent best guess: :class:`Inference` says whether the best fits, and whether the runner-up
-fits too (then the table does not decide between them).
+deviation never fits (data that are mostly noise would fit any hypothesis). A channel's meaning is *named*
+(:attr:`.fits.ChannelFit.fits`) when most of its cells are within the tolerance and its median residual is at
+the noise level; the table *passes* only when every cell of every channel is (:attr:`.fits.ChannelFit.clean`).
+The cells outside are listed (:func:`.api.wrong_cells`). A channel the best convention leaves unnamed is tried
+in the table's other layouts (:func:`_relayout_channels`: reversed, transposed). The result is never a silent
+best guess: :class:`Inference` says whether the best fits, and whether the runner-up is as good (then the table
+does not decide between them).
 
 Meanings with the exact dielectric Fresnel factor (E_dielectric, E_f0_dielectric) cost a quadrature per
 (μ, α, η) and are rarely what an engine ships; both stages run again with them only when nothing fits without
@@ -32,14 +37,29 @@ them (or from the start when ``eta=`` or the channels are pinned).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+import itertools
+from dataclasses import replace
 
 import numpy as np
 from scipy import optimize
 
 from ..errors import ArgumentError
-from .conventions import ALPHA_FLOORS, ETA, MU_FLOORS, Convention, coordinates, fresnel_of, geometries
+from .conventions import (
+    ALPHA_FLOORS,
+    ETA,
+    GLASS_MEANINGS,
+    MU_FLOORS,
+    Convention,
+    coordinates,
+    fresnel_of,
+    geometries,
+    stored_axis_values,
+)
+from .fits import MAJORITY, MAX_NOISE_SHARE, ChannelFit, Hypothesis, Inference, Precision
 from .reference import Reference
+
+__all__ = ["MAJORITY", "MAX_NOISE_SHARE", "ChannelFit", "Hypothesis", "Inference", "Precision", "infer",
+           "noise_sigma"]
 
 #: Geometries carried from stage 1 to the full table (fewer when a meaning needs F90, ~3 ms a cell).
 STAGE2 = 4
@@ -52,89 +72,12 @@ SUBGRID_CELLS = 1024
 #: Cells of the interior subgrid those candidates are ranked on (the runners-up's statistics are on it).
 RANK_CELLS = 256
 NOISE_FACTOR = 5.0
-#: Largest noise σ̂, as a share of the standard deviation of the exact table, a fit may have.
-MAX_NOISE_SHARE = 0.05
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
 #: A fitted Schlick f0 this close to 0 or 1 is DFG_f90 or E, which need no fitted number: those are preferred.
 SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
-
-
-@dataclass
-class ChannelFit:
-    """How one channel of the table matches a meaning under a convention."""
-
-    channel: str
-    meaning: str | None
-    max: float
-    rms: float
-    median: float
-    worst: tuple[int, ...]
-    tolerance: float
-    noise: float
-    residual: np.ndarray | None = None  # table − exact, over the grid
-    exact: np.ndarray | None = None
-    spread: float = 0.0  # standard deviation of the exact values over the table
-    worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
-    cells: int = 0  # cells measured
-    sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
-
-    @property
-    def too_noisy(self) -> bool:
-        """Noise above MAX_NOISE_SHARE of the table's own spread: random data would 'fit' anything."""
-        return bool(self.noise > MAX_NOISE_SHARE * self.spread)
-
-    @property
-    def fits(self) -> bool:
-        return self.meaning is not None and bool(self.max <= self.tolerance) and not self.too_noisy
-
-    def summary(self) -> dict:
-        return {"channel": self.channel, "meaning": self.meaning, "fits": self.fits, "max": self.max,
-                "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
-                "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
-                "too_noisy": self.too_noisy, "cells": self.cells, "sampled": self.sampled}
-
-
-@dataclass
-class Hypothesis:
-    convention: Convention
-    channels: list[ChannelFit]
-
-    @property
-    def score(self) -> float:
-        fitted = [c.max for c in self.channels if c.meaning is not None]
-        return min(fitted) if fitted else float("inf")
-
-    @property
-    def rank(self) -> tuple[float, float]:
-        """Hypotheses are ranked by their median residual first, then by the maximum: the true convention of a
-        table made by Monte Carlo is off by its noise at most cells but by its bias at a few (grazing cells,
-        a zeroed μ = 0 column), and those few must not decide which convention the rest is in; whether it
-        *fits* is still judged by the maximum."""
-        fitted = [c.median for c in self.channels if c.meaning is not None]
-        return (min(fitted) if fitted else float("inf"), self.score)
-
-    @property
-    def fits(self) -> bool:
-        return any(c.fits for c in self.channels)
-
-
-@dataclass
-class Inference:
-    best: Hypothesis
-    runners_up: list[Hypothesis]
-    tested: int
-    reference_cells: dict = field(default_factory=dict)
-
-    @property
-    def fits(self) -> bool:
-        return self.best.fits
-
-    @property
-    def ambiguous(self) -> bool:
-        return bool(self.runners_up) and self.runners_up[0].fits and self.best.fits
 
 
 def _subset(n: int, k: int) -> np.ndarray:
@@ -160,9 +103,11 @@ def noise_sigma(residual: np.ndarray) -> float:
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
     default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth", "E_schlick"],
-               3: ["E_f0"]}[grid_ndim]
+               3: list(GLASS_MEANINGS) if reference is not None and reference.glass else ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
-        if "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
+        if "k" in pins and grid_ndim == 2:  # a conductor's η + ik is given: the exact conductor Fresnel
+            default = default + ["E_conductor"]
+        elif "eta" in pins:  # an index of refraction is given: the table is meant to carry the exact Fresnel
             default = default + DIELECTRIC_BY_NDIM[grid_ndim]
         return [[m for m in default if reference is None or reference.supports(m)]] * channels
     given = [m.strip() for m in pins["channels"].split(",")]
@@ -170,9 +115,12 @@ def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Refer
         raise ArgumentError(f"channels={pins['channels']}: give one meaning per channel ({channels}), - to skip",
                             where="--as")
     for m in given:
+        if m == "E_conductor" and "k" not in pins:
+            raise ArgumentError("channels: E_conductor needs the conductor's η + ik: --as eta=… --as k=…",
+                                where="--as")
         if reference is not None and not reference.supports(m):
-            raise ArgumentError(f"channels: {m} needs a lobe with an exact dielectric Fresnel factor "
-                                f"(-p fresnel=dielectric); {reference.model.name} has none", where="--as")
+            raise ArgumentError(f"channels: {m} needs a lobe with an exact Fresnel factor of that kind "
+                                f"(-p fresnel=...); {reference.model.name} has none", where="--as")
     return [[] if m == "-" else [m] for m in given]
 
 
@@ -181,20 +129,22 @@ def _mesh(shape: tuple[int, ...], index: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _exact(reference: Reference, c: Convention, meaning: str, coords: dict) -> tuple[np.ndarray, np.ndarray]:
-    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"), **fresnel_of(c))
+    return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"),
+                             axis_eta=coords.get("eta"), **fresnel_of(c))
 
 
 def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict, step: float,
           audit_channels: list[int] | None = None, keep_runners: int = 3,
-          explicit: dict[str, np.ndarray] | None = None) -> Inference:
+          explicit: dict[str, np.ndarray] | None = None, tolerance: float | None = None) -> Inference:
     """The best conventions for ``values`` (*grid, channels) — see the module docstring. Meanings with the exact
     dielectric Fresnel factor are searched in a second round, only when nothing fits without them (or from the
     start when ``eta`` or the channels are pinned): each of their cells costs a quadrature."""
     grid = values.shape[:-1]
     ndim = len(grid)
+    precision = Precision(step, tolerance)
     chosen = list(range(values.shape[-1])) if audit_channels is None else audit_channels
     meanings = allowed_meanings(ndim, pins, values.shape[-1], reference)
-    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings)
+    candidates = geometries(ndim, pins, explicit, grid, reference.shadowings, reference.third_kinds)
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
@@ -202,11 +152,11 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, _ = _rounds(values, names, reference, pins, step, chosen, candidates, meanings)
+    best, runners, _ = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
         wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
-        second = _rounds(values, names, reference, pins, step, chosen, wider, [ms + extra for ms in meanings])
+        second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
             best, runners, _ = second
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
@@ -257,16 +207,16 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
     return list(dict.fromkeys(out)) or [replace(c, eta=ETA) for _, _, c in ranked[:DIELECTRIC_GEOMETRIES]]
 
 
-def _rounds(values, names, reference, pins, step, chosen, candidates,
+def _rounds(values, names, reference, pins, precision, chosen, candidates,
             meanings) -> tuple[Hypothesis, list[Hypothesis], list[Convention]]:
     """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
     best hypothesis, the runners-up, and the candidates in stage 1's order."""
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
-    # "loosely": a median residual within twice the storage step plus 1e-3 (a Monte-Carlo table's median residual
+    # "loosely": a median residual within twice the storage precision plus 1e-3 (a Monte-Carlo table's median residual
     # is about 0.67 σ); a split-sum scale read as E is off by a median 1e-2
-    loose = 2.0 * (step + 1e-3)
+    loose = 2.0 * (precision.step + 1e-3)
     if (not scored or scored[0][0] > loose) and any(Reference.expensive(m) for ms in meanings for m in ms):
         scored = _stage1(values, candidates, reference, meanings, chosen, SUBSET_F90)
     keep = STAGE2_F90 if any(Reference.expensive(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
@@ -280,14 +230,34 @@ def _rounds(values, names, reference, pins, step, chosen, candidates,
         per_axis = max(3, int(RANK_CELLS ** (1.0 / len(grid))))
         index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
                  else np.arange(n) for n in grid]
-        ranked = sorted(((_stage2(values, names, c, reference, step, chosen, (False, False), index), c)
+        ranked = sorted(((_stage2(values, names, c, reference, precision, chosen, (False, False), index), c)
                          for c in top), key=lambda pair: pair[0].rank)
-        finals = [_stage2(values, names, ranked[0][1], reference, step, chosen, search)] + [h for h, _ in ranked[1:]]
+        finals = ([_stage2(values, names, ranked[0][1], reference, precision, chosen, search)]
+                  + [h for h, _ in ranked[1:]])
     else:
-        finals = [_stage2(values, names, c, reference, step, chosen, search) for c in top]
-        finals.sort(key=lambda h: h.rank)
-    finals[0] = _retry_channels(values, names, finals[0], reference, step, chosen, meanings)
+        finals = [_stage2(values, names, c, reference, precision, chosen, search) for c in top]
+    _same_noise(finals, precision)
+    finals.sort(key=lambda h: h.rank)
+    finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings)
+    finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings)
     return finals[0], finals[1:], [c for _, c in scored]
+
+
+def _same_noise(hypotheses: list[Hypothesis], precision: Precision) -> None:
+    """Every hypothesis's channels judged with the table's noise: per channel, the smallest σ̂ any of them saw. The
+    noise is the table's, not a hypothesis's: on a coarse grid a smooth misfit's curvature survives the second
+    differences and would otherwise widen a wrong hypothesis's tolerance until it "fits" most cells."""
+    if precision.tolerance is not None:
+        return
+    sigma: dict[str, float] = {}
+    for h in hypotheses:
+        for fit in h.channels:
+            if fit.residual is not None and np.isfinite(fit.noise):
+                sigma[fit.channel] = min(sigma.get(fit.channel, np.inf), fit.noise)
+    for h in hypotheses:
+        for fit in h.channels:
+            if fit.channel in sigma:
+                fit.judged(sigma[fit.channel])
 
 
 def _stage1(values, candidates, reference, meanings, chosen, k) -> list[tuple[float, Convention]]:
@@ -338,25 +308,29 @@ def _fit_schlick(c: Convention, reference, coords: dict, data: np.ndarray) -> Co
 
 
 def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, meaning: str,
-         step: float) -> ChannelFit:
+         precision: Precision) -> ChannelFit:
     residual = data - exact
     ok = np.isfinite(residual)
     if not ok.any():
-        return ChannelFit(name, meaning, float("inf"), float("inf"), float("inf"), (), 0.0, 0.0, residual, exact)
-    magnitude = np.where(ok, np.abs(residual), -1.0)
-    worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(magnitude)), residual.shape))
+        return ChannelFit(name, meaning, float("inf"), float("inf"), float("inf"), (), 0.0, 0.0, residual, exact,
+                          cells=int(residual.size), bad=np.ones(residual.shape, dtype=bool))
+    magnitude = np.where(ok, np.abs(residual), np.inf)  # a non-finite cell is infinitely wrong
+    # the worst finite cell (non-finite ones are listed as bad cells of their own)
+    worst = tuple(int(i) for i in np.unravel_index(int(np.argmax(np.where(ok, magnitude, -1.0))), residual.shape))
     sigma = noise_sigma(np.where(ok, residual, 0.0))
     factor = max(NOISE_FACTOR, float(np.sqrt(2.0 * np.log(2.0 * residual.size))) + 1.0)
-    tolerance = step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok])) + factor * sigma
-    if not ok.all():  # a table with non-finite cells does not fit, whatever its other cells do
-        tolerance = -1.0
+    base = precision.step * max(1.0, float(np.max(np.abs(exact[ok])))) + float(np.max(error[ok]))
+    tolerance = precision.tolerance if precision.tolerance is not None else base + factor * sigma
+    bulk = precision.tolerance if precision.tolerance is not None else base + 2.0 * sigma
+    bad = ~(magnitude <= tolerance)
     r = residual[ok]
     return ChannelFit(name, meaning, float(np.max(np.abs(r))), float(np.sqrt(np.mean(r * r))),
-                      float(np.median(np.abs(r))), worst, tolerance, sigma, residual, exact,
-                      float(np.std(exact[ok])))
+                      float(np.median(magnitude)), worst, tolerance, sigma, residual, exact,
+                      float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)),
+                      bulk=bulk, base=base, factor=factor)
 
 
-def _full(values, c: Convention, reference, names, step, chosen, index=None) -> Hypothesis:
+def _full(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
     """Residuals of ``c`` on every cell, or on the cells ``index`` (one index vector per axis)."""
     grid = values.shape[:-1]
     sampled = index is not None
@@ -369,16 +343,17 @@ def _full(values, c: Convention, reference, names, step, chosen, index=None) -> 
         if channel not in chosen or meaning is None:
             continue
         exact, error = _exact(reference, c, meaning, coords)
-        fit = _fit(data[..., channel], exact, error, names[channel], meaning, step)
+        fit = _fit(data[..., channel], exact, error, names[channel], meaning, precision)
         if fit.worst:
-            fit.worst_at = {k: float(np.broadcast_to(v, data.shape[:-1])[fit.worst]) for k, v in coords.items()}
+            stored = stored_axis_values(c, grid, [np.asarray([index[a][w]]) for a, w in enumerate(fit.worst)])
+            fit.worst_at = {k: float(np.ravel(v)[0]) for k, v in stored.items()}
             fit.worst = tuple(int(index[a][w]) for a, w in enumerate(fit.worst))
-        fit.cells, fit.sampled = int(np.prod(data.shape[:-1])), sampled
+        fit.sampled = sampled
         fits.append(fit)
     return Hypothesis(c, fits)
 
 
-def _stage2(values, names, c: Convention, reference, step, chosen, search=(True, True), index=None) -> Hypothesis:
+def _stage2(values, names, c: Convention, reference, precision, chosen, search=(True, True), index=None) -> Hypothesis:
     """Residuals of ``c`` (every cell, or the cells ``index``) with its endpoint clamps searched where the grid
     reaches below them."""
     grid = values.shape[:-1]
@@ -388,26 +363,28 @@ def _stage2(values, names, c: Convention, reference, step, chosen, search=(True,
         data = values[np.ix_(*index)][..., channel] if index is not None else values[..., channel]
         c = _fit_schlick(c, reference, coordinates(c, grid, mesh), data)
     raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, mesh)
-    best = _full(values, c, reference, names, step, chosen, index)
+    best = _full(values, c, reference, names, precision, chosen, index)
     if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
-        trials = [_full(values, replace(c, mu_floor=f), reference, names, step, chosen, index) for f in MU_FLOORS
+        trials = [_full(values, replace(c, mu_floor=f), reference, names, precision, chosen, index) for f in MU_FLOORS
                   if f != c.mu_floor]
         best = _clamp_choice(best, trials)
     if search[1] and float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
-        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, step, chosen, index)
+        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, precision, chosen, index)
                   for f in ALPHA_FLOORS if f != best.convention.alpha_floor]
         best = _clamp_choice(best, trials)
     return best
 
 
 def _clamp_choice(default: Hypothesis, trials: list[Hypothesis]) -> Hypothesis:
-    """Another clamp replaces the default only if it at least halves the maximum residual: a clamp changes one
-    boundary row, and noise in that row must not pick one."""
-    challenger = min(trials, key=lambda h: h.score)
-    return challenger if challenger.score < 0.5 * default.score else default
+    """Another clamp replaces the default only if it puts more cells within the tolerance, or as many and at least
+    halves the maximum residual: a clamp changes one boundary row, and noise in that row must not pick one."""
+    challenger = min(trials, key=lambda h: (-h.within, h.score))
+    if challenger.within > default.within:
+        return challenger
+    return challenger if challenger.within == default.within and challenger.score < 0.5 * default.score else default
 
 
-def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, meanings) -> Hypothesis:
+def _retry_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
     """Channels the best geometry leaves unfitted with cheap meanings try the F90 ones (an LTC table's Fresnel
     channel beside its albedo): first on the stage-1 subset, in full only where that beats the current meaning."""
     c = best.convention
@@ -429,12 +406,88 @@ def _retry_channels(values, names, best: Hypothesis, reference, step, chosen, me
             exact, _ = _exact(reference, c, meaning, coords)
             if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
                 candidate = _full(values, replace(c, meanings=tuple(
-                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, step, [channel])
-                if (candidate.channels[0].median, candidate.channels[0].max) < (current[names[channel]].median,
-                                                                               current[names[channel]].max):
+                    meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision,
+                    [channel])
+                new, old = candidate.channels[0], current[names[channel]]
+                if (-new.within, new.median, new.max) < (-old.within, old.median, old.max):
                     current[names[channel]] = candidate.channels[0]
                     picks[channel] = meaning
                     changed = True
+    if not changed:
+        return best
+    return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])
+
+
+def _layouts(c: Convention, grid: tuple[int, ...]) -> list[tuple[str, Convention]]:
+    """The other layouts one channel of a table in convention ``c`` may have been stored in by mistake: reversed
+    along some array axes, or (a square 2-D table) transposed, with or without reversals."""
+    out = []
+    ndim = len(grid)
+    for flips in itertools.product((False, True), repeat=ndim):
+        toggled = [a for a in range(ndim) if flips[a]]
+        if toggled:
+            out.append((f"reversed along array axis {', '.join(map(str, toggled))}",
+                        replace(c, flips=tuple(f != g for f, g in zip(c.flips, flips, strict=True)))))
+        if ndim == 2 and grid[0] == grid[1] and c.direction_axis is not None and not c.explicit:
+            swapped = replace(c, direction_axis=c.roughness_axis, roughness_axis=c.direction_axis,
+                              flips=tuple(f != g for f, g in zip(c.flips[::-1], flips, strict=True)))
+            out.append(("transposed" + (f" and reversed along array axis {', '.join(map(str, toggled))}"
+                                        if toggled else ""), swapped))
+    return out
+
+
+def _relayout_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
+    """A channel the best convention leaves unnamed while it names another is tried in the other layouts
+    (:func:`_layouts`): ranked on the stage-1 subset by the median residual, the best one measured on every cell.
+    If that names the channel's meaning, the channel is reported as stored in that layout and measured in the
+    table's convention (every misplaced cell is then a wrong cell, and ``--fix`` rewrites it in place)."""
+    if not best.fits:
+        return best
+    c = best.convention
+    grid = values.shape[:-1]
+    index = [_subset(n, SUBSET) for n in grid]
+    mesh = _mesh(grid, index)
+    sample = values[np.ix_(*index)]
+    current = {fit.channel: fit for fit in best.channels}
+    picks = list(c.meanings)
+    changed = False
+    expensive = any(Reference.expensive(m) for m in c.meanings if m)
+    for channel in chosen:
+        fit = current.get(names[channel])
+        if fit is None or fit.fits or fit.too_noisy or not meanings[channel]:
+            continue
+        data = sample[..., channel]
+        ok = np.isfinite(data)
+        if not ok.any():
+            continue
+        trials = []
+        with reference.ranking():
+            for label, alt in _layouts(c, grid):
+                coords = coordinates(alt, grid, mesh)
+                for meaning in meanings[channel]:
+                    if meaning == "E_schlick" or Reference.expensive(meaning) and not expensive:
+                        continue  # an expensive meaning only where the table's other channels have one
+                    exact, _ = _exact(reference, alt, meaning, coords)
+                    trials.append((float(np.median(np.abs(data[ok] - exact[ok]))), label, alt, meaning))
+        if not trials:
+            continue
+        _, label, alt, meaning = min(trials, key=lambda item: item[0])
+        trial = _full(values, replace(alt, meanings=tuple(meaning if k == channel else None
+                                                          for k in range(len(picks)))),
+                      reference, names, precision, [channel]).channels[0]
+        if not trial.fits:
+            continue
+        placed = _full(values, replace(c, meanings=tuple(meaning if k == channel else None
+                                                         for k in range(len(picks)))),
+                       reference, names, precision, [channel]).channels[0]
+        # judged at the tolerance of the channel in its own layout: the misplaced residual is no noise estimate
+        magnitude = np.where(np.isfinite(placed.residual), np.abs(placed.residual), np.inf)
+        placed.tolerance, placed.noise, placed.layout = trial.tolerance, trial.noise, label
+        placed.bad = ~(magnitude <= trial.tolerance)
+        placed.within = int(np.sum(~placed.bad))
+        current[names[channel]] = placed
+        picks[channel] = meaning
+        changed = True
     if not changed:
         return best
     return Hypothesis(replace(c, meanings=tuple(picks)), [current[f.channel] for f in best.channels])

@@ -55,7 +55,7 @@ def physical(c: Convention, t: list[np.ndarray]) -> dict[str, np.ndarray]:
     """μ, α, f0 at unit coordinates ``t`` (floors applied)."""
     out = {}
     for axis, role in axis_roles(c).items():
-        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor, "f0": -np.inf}[role]
+        floor = {"mu": c.mu_floor, "alpha": c.alpha_floor}.get(role, -np.inf)
         out[role] = np.maximum(role_value(c, role, t[axis]), floor)
     return out
 
@@ -90,6 +90,7 @@ def interpolate(table: np.ndarray, c: Convention, t: list[np.ndarray]) -> np.nda
 
 def _exact_at(reference: Reference, c: Convention, meaning: str, coords: dict) -> np.ndarray:
     return reference.meaning(meaning, c.shadowing, coords.get("mu"), coords["alpha"], coords.get("f0"),
+                             axis_eta=coords.get("eta"),
                              **fresnel_of(c))[0]
 
 
@@ -120,7 +121,8 @@ def sweep(c: Convention, meaning: str, reference: Reference, points: tuple[list[
     plain = replace(c, flips=(False,) * ndim)
     budget = MAX_SWEEP_CELLS["f90" if Reference.expensive(meaning) else "cheap"]
     out = []
-    pairs_axes = ndim - (c.f0_axis is not None)  # an f0 axis adds no new reference cells (E_f0 is linear in f0)
+    # an f0 axis adds no new reference cells (E_f0 is linear in f0); an η axis does
+    pairs_axes = ndim - (c.f0_axis is not None and not c.f0.startswith("eta"))
     for size in sizes:
         if size ** pairs_axes > budget:
             out.append({"size": size, "skipped": f"more than {budget} exact cells"})

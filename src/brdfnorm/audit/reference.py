@@ -31,11 +31,21 @@ from ..lut.cloth import cloth_model
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
 from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
-from .conventions import DIELECTRIC_MEANINGS, DIELECTRIC_SHADOWING, ETA, SCHLICK_F0, SHADOWING
+from .conventions import (
+    DIELECTRIC_MEANINGS,
+    DIELECTRIC_SHADOWING,
+    ETA,
+    ETA_AXES,
+    F0_POSITIONS,
+    GLASS_MEANINGS,
+    SCHLICK_F0,
+    SHADOWING,
+)
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
 #: quadrature (~3 ms a cell), so it is computed looser; both error estimates are carried.
-RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6, "DFG_cloth": 1e-7}
+RTOL = {"E": 1e-9, "F90": 1e-6, "E_avg": 1e-8, "E_dielectric": 1e-6, "DFG_cloth": 1e-7, "E_conductor": 1e-6,
+        "E_glass": 1e-7, "R_glass": 1e-7, "T_glass": 1e-7}
 #: The tolerance of values that only rank hypotheses (:meth:`Reference.ranking`): E of a lobe without a fast route
 #: (the sheen: 36 ms a cell at 1e-9, 9 ms at 1e-6) is computed finely only for the few hypotheses kept.
 RANK_RTOL = 1e-6
@@ -63,9 +73,14 @@ class Reference:
         self.shadowings = DIELECTRIC_SHADOWING if self.refraction else (own or SHADOWING)
         self.store: dict[tuple, dict[tuple[float, float, float], tuple[float, float, float]]] = {}
         self.rank_rtol = 0.0
-        self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0, "DFG_cloth": 0}
+        self.computed = {"E": 0, "F90": 0, "E_avg": 0, "E_dielectric": 0, "DFG_cloth": 0, "E_conductor": 0,
+                         "E_glass": 0}
         self.dielectric = "fresnel" in names and "dielectric" in model.parameter("fresnel").choices
         self.eta_max = float(model.parameter("eta").maximum) if self.dielectric else np.inf
+        self.conductor = "fresnel" in names and "conductor" in model.parameter("fresnel").choices
+        # a rough dielectric (reflection and transmission): a third table axis is its η, the channels R + T, R, T
+        self.glass = "refraction_shadowing" in names
+        self.third_kinds = ETA_AXES if self.glass else F0_POSITIONS
         # A model whose α is declared on a narrower range (a Mitsuba plugin: α ≥ 1e-3) is evaluated at the range's
         # end where a convention's grid or clamp reaches beyond it; for such a model the clamps below its minimum
         # give the same reference values, and the audit cannot tell them apart.
@@ -87,38 +102,68 @@ class Reference:
             return split_sum_models(base)[0]["DFG_f90"]
         if quantity == "E_dielectric":
             return base.with_params(fresnel="dielectric")
+        if quantity == "E_conductor":
+            return base.with_params(fresnel="conductor")
         return base
 
     def values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
-               eta: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+               eta: np.ndarray | float = 0.0, k: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) — triples with ``eta`` for
-        E_dielectric — broadcast together."""
+        E_dielectric and E_conductor (with the extinction ``k``) — broadcast together."""
         mu, alpha, eta = np.broadcast_arrays(np.asarray(mu, dtype=float),
                                              np.clip(np.asarray(alpha, dtype=float), *self.alpha_range),
                                              np.asarray(eta, dtype=float))
-        table = self.store.setdefault((quantity, shadowing), {})
+        if quantity in GLASS_MEANINGS:
+            return self._glass(quantity, shadowing, mu, alpha, eta)
+        table = self.store.setdefault((quantity, shadowing, float(k)), {})
         keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), eta.ravel().tolist(), strict=True))
         rtol = max(RTOL[quantity], self.rank_rtol)
-        missing = sorted({k for k in keys if k not in table or table[k][2] > rtol})
+        missing = sorted({key for key in keys if key not in table or table[key][2] > rtol})
         if missing:
-            m = np.array([k[0] for k in missing])
-            a = np.array([k[1] for k in missing])
+            m = np.array([key[0] for key in missing])
+            a = np.array([key[1] for key in missing])
             if quantity == "E_avg":
                 value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol)
             else:
                 cell_params = {"alpha": a}
-                if quantity == "E_dielectric":
-                    cell_params["eta"] = np.array([k[2] for k in missing])
+                if quantity in ("E_dielectric", "E_conductor"):
+                    cell_params["eta"] = np.array([key[2] for key in missing])
+                if quantity == "E_conductor":
+                    cell_params["k"] = np.full(len(missing), float(k))
                 cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
                                       cell_params, rtol=rtol)
                 value, error = cells.value[:, 0], cells.error[:, 0]
             self.computed[quantity] += len(missing)
-            for k, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
-                table[k] = (v, e, rtol)
-        pairs = [table[k] for k in keys]
+            for key, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
+                table[key] = (v, e, rtol)
+        pairs = [table[key] for key in keys]
         value = np.array([p[0] for p in pairs]).reshape(mu.shape)
         error = np.array([p[1] for p in pairs]).reshape(mu.shape)
         return value, error
+
+    def _glass(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
+               eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """R + T, R or T of a rough dielectric at each cell's (μ, α, η): one quadrature gives the three (the
+        error estimate is the total's, carried by each part)."""
+        tables = {q: self.store.setdefault((q, shadowing, 0.0), {}) for q in GLASS_MEANINGS}
+        keys = list(zip(mu.ravel().tolist(), alpha.ravel().tolist(), eta.ravel().tolist(), strict=True))
+        rtol = max(RTOL["E_glass"], self.rank_rtol)
+        table = tables[quantity]
+        missing = sorted({key for key in keys if key not in table or table[key][2] > rtol})
+        if missing:
+            m, a, e = (np.array([key[i] for key in missing]) for i in range(3))
+            cells = compute_cells(self._model("E", shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
+                                  {"alpha": a, "eta": e}, rtol=rtol)
+            error = cells.error.reshape(len(missing), -1)[:, 0].tolist()
+            parts = {"E_glass": cells.value.reshape(len(missing), -1)[:, 0],
+                     "R_glass": cells.reflected.reshape(len(missing), -1)[:, 0],
+                     "T_glass": cells.transmitted.reshape(len(missing), -1)[:, 0]}
+            self.computed["E_glass"] += len(missing)
+            for q, values in parts.items():
+                for key, v, err in zip(missing, values.tolist(), error, strict=True):
+                    tables[q][key] = (v, err, rtol)
+        pairs = [table[key] for key in keys]
+        return (np.array([p[0] for p in pairs]).reshape(mu.shape), np.array([p[1] for p in pairs]).reshape(mu.shape))
 
     @contextmanager
     def ranking(self) -> Iterator[None]:
@@ -132,7 +177,8 @@ class Reference:
 
     def meaning(self, meaning: str, shadowing: str, mu: np.ndarray | None, alpha: np.ndarray,
                 f0: np.ndarray | None = None, eta: float = ETA,
-                schlick_f0: float = SCHLICK_F0) -> tuple[np.ndarray, np.ndarray]:
+                schlick_f0: float = SCHLICK_F0, k: float = 0.0,
+                axis_eta: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(value, error estimate) of a channel meaning (conventions.MEANINGS) at the given coordinates; ``eta``
         is the index of refraction of an E_dielectric channel, ``schlick_f0`` the f0 of an E_schlick one."""
         if meaning in ("E_avg", "1-E_avg"):
@@ -140,6 +186,10 @@ class Reference:
             return (value if meaning == "E_avg" else 1.0 - value), error
         if meaning == "E_dielectric":
             return self.values("E_dielectric", shadowing, mu, alpha, eta)
+        if meaning in GLASS_MEANINGS:  # a rough dielectric over an η axis
+            return self.values(meaning, shadowing, mu, alpha, axis_eta)
+        if meaning == "E_conductor":  # the exact conductor Fresnel factor at η + ik
+            return self.values("E_conductor", shadowing, mu, alpha, eta, k)
         if meaning == "E_f0_dielectric":
             return self._f0_dielectric(shadowing, mu, alpha, f0)
         if meaning == "DFG_cloth":  # another lobe, whatever this one's shadowing: one cache for all
@@ -184,13 +234,18 @@ class Reference:
 
     def supports(self, meaning: str) -> bool:
         """Whether this lobe can be audited for ``meaning`` (the dielectric Fresnel needs its ``fresnel``)."""
+        if meaning == "E_conductor":
+            return self.conductor
+        if meaning in GLASS_MEANINGS:
+            return self.glass
         return meaning not in DIELECTRIC_MEANINGS or self.dielectric
 
     @staticmethod
     def expensive(meaning: str) -> bool:
         """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90, the
         exact dielectric Fresnel and the cloth channel."""
-        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "E_schlick", "DFG_cloth") + DIELECTRIC_MEANINGS
+        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "E_schlick", "DFG_cloth", "E_conductor") + DIELECTRIC_MEANINGS \
+            + GLASS_MEANINGS
 
 
 def raise_unsupported(model: Model) -> None:

@@ -5,7 +5,8 @@ exact replacement (:mod:`brdfnorm.audit`).
 ``brdfnorm audit dfg.js --model ggx --dtype float16 --shape 16,16,2 --fix -o dfg_fixed.js``
 ``brdfnorm audit --formula "0.806495*exp(-1.98712*r*r)+0.199531" --quantity E_avg --model ggx``
 
-Exit status: 0 when a convention fits, 1 when no hypothesis fits (the closest is shown), 2 for bad input.
+Exit status: 0 only when every cell of every audited channel is within the tolerance of the convention named; 1
+otherwise (wrong cells, a channel whose meaning cannot be named, no convention fitting most cells); 2 for bad input.
 """
 
 from __future__ import annotations
@@ -51,12 +52,16 @@ def audit_command(
         "reflection-form or separable)",
         "mu_floor=1e-4, alpha_floor=1e-8",
         "channels=DFG_f0,DFG_f90, each a meaning: E, 1-E, DFG_f0, DFG_f90, E_f0, E_avg, 1-E_avg, E_dielectric, "
-        "E_f0_dielectric, DFG_cloth or E_schlick",
-        "eta=1.5 (of E_dielectric), schlick_f0=0.04 (of E_schlick)"])),
+        "E_f0_dielectric, DFG_cloth, E_schlick or E_conductor",
+        "eta=1.5 (of E_dielectric), schlick_f0=0.04 (of E_schlick)",
+        "eta=0.2 and k=3.9 (a conductor's eta + ik, of E_conductor)"])),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "
                                    "lut: mu, theta (degrees), alpha, r (alpha = r^2) or f0 = START:STOP:n=COUNT "
                                    "(spaced by --grid) or V,V,... in array order."),
     grid: str = typer.Option("node", "--grid", help="node or texel: how --axis START:STOP:n=COUNT is spaced."),
+    tolerance: float = typer.Option(None, "--tolerance", metavar="TOL", help="Absolute tolerance a cell must be "
+                                    "within (default: from the storage precision, the reference's error and the "
+                                    "table's noise; printed)."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable result on stdout."),
     report: str = typer.Option(None, "--report", metavar="DIR", help="Write error maps and plots (PNG) there."),
     fix: bool = typer.Option(False, "--fix", help="Write the exact table in the input's format and layout (-o)."),
@@ -101,31 +106,38 @@ def audit_command(
 
             name, values = parse_axis(spec, grid)
             axes[name] = np.radians(values) if name == "theta" else values
+        if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
+            raise ArgumentError("must be a positive number", where="--tolerance")
         result = audit(file, m, channel=channel, dense=not no_dense, sweep=not no_sweep, fix=fix, read=read,
-                       axes=axes, pins=pins)
+                       axes=axes, pins=pins, tolerance=tolerance)
         payload = result.to_json()
         if report is not None:
             from ..audit.report import figures
 
             payload["figures"] = figures(result, report)
+        refused = None
         if fix:
-            from ..audit.fix import write
+            if result.unnamed or result.fixed is None:  # never a half-fixed file
+                refused = (f"--fix: nothing written: the meaning of channel{'s' if len(result.unnamed) > 1 else ''} "
+                           f"{', '.join(result.unnamed)} cannot be named (pin it with --as channels=..., '-' "
+                           "keeps a channel as read)")
+            else:
+                from ..audit.fix import write
 
-            write_file(output, write(result.source, result.fixed, output, result.fix_meta()))
-            payload["fixed"] = output
-            if not result.fits:  # never a silent guess: the replacement follows the closest convention only
-                typer.echo(f"warning: no hypothesis fits; {output} follows the closest convention "
-                           f"({result.best.convention.text()}) — check it, or pin the convention with --as/--axis",
-                           err=True)
+                write_file(output, write(result.source, result.fixed, output, result.fix_meta()))
+                payload["fixed"] = output
         if json_out:
             typer.echo(json.dumps(payload, default=float))
         else:
             from ..audit.report import text
 
             typer.echo(text(payload))
-            if fix:
-                typer.echo(f"wrote {output}", err=True)
-        if not result.fits:
+            if fix and refused is None:
+                changed = sum(info["count"] for info in result.wrong_cells.values())
+                typer.echo(f"wrote {output} ({changed} cell{'s' if changed != 1 else ''} replaced)", err=True)
+        if refused is not None:
+            typer.echo(f"error: {refused}", err=True)
+        if not result.passes or refused is not None:
             raise typer.Exit(1)
 
 
