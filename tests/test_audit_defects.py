@@ -81,7 +81,7 @@ def _write_exr(path, d):
 
 
 def _write_png(path, d):
-    from brdfnorm.lut.pngio import encode
+    from brdfnorm.inputs.png import encode
 
     path.write_bytes(encode(np.rint(np.clip(d, 0, 1) * 65535).astype(int), 16))
 

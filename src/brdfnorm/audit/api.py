@@ -164,7 +164,7 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
 
     from .approximations import recognise
     from .conventions import geometries
-    from .infer import Precision, _full
+    from .infer import Precision, full_hypothesis
 
     grid = source.grid_shape
     if len(grid) != 2:
@@ -173,8 +173,10 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
                       step, model)
     if found is None:
         return None
-    trials = [_full(source.values, replace(found["convention"], shadowing=shadowing, meanings=tuple(found["meanings"])),
-                    reference, source.channel_names, Precision(step), list(range(len(source.channel_names))))
+    channels = list(range(len(source.channel_names)))
+    trials = [full_hypothesis(source.values, replace(found["convention"], shadowing=shadowing,
+                                                     meanings=tuple(found["meanings"])),
+                              reference, source.channel_names, Precision(step), channels)
               for shadowing in reference.shadowings]
     h = min(trials, key=lambda t: t.median)
     return {"name": found["name"], "source": found["source"], "within": found["within"], "cells": found["cells"],

@@ -330,7 +330,7 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
                       bulk=bulk, base=base, factor=factor)
 
 
-def _full(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
+def full_hypothesis(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
     """Residuals of ``c`` on every cell, or on the cells ``index`` (one index vector per axis)."""
     grid = values.shape[:-1]
     sampled = index is not None
@@ -363,13 +363,14 @@ def _stage2(values, names, c: Convention, reference, precision, chosen, search=(
         data = values[np.ix_(*index)][..., channel] if index is not None else values[..., channel]
         c = _fit_schlick(c, reference, coordinates(c, grid, mesh), data)
     raw = coordinates(replace(c, mu_floor=0.0, alpha_floor=0.0), grid, mesh)
-    best = _full(values, c, reference, names, precision, chosen, index)
+    best = full_hypothesis(values, c, reference, names, precision, chosen, index)
     if search[0] and "mu" in raw and float(np.min(raw["mu"])) < max(MU_FLOORS):
-        trials = [_full(values, replace(c, mu_floor=f), reference, names, precision, chosen, index) for f in MU_FLOORS
-                  if f != c.mu_floor]
+        trials = [full_hypothesis(values, replace(c, mu_floor=f), reference, names, precision, chosen, index)
+                  for f in MU_FLOORS if f != c.mu_floor]
         best = _clamp_choice(best, trials)
     if search[1] and float(np.min(raw["alpha"])) < max(ALPHA_FLOORS):
-        trials = [_full(values, replace(best.convention, alpha_floor=f), reference, names, precision, chosen, index)
+        trials = [full_hypothesis(values, replace(best.convention, alpha_floor=f), reference, names, precision, chosen,
+                                  index)
                   for f in ALPHA_FLOORS if f != best.convention.alpha_floor]
         best = _clamp_choice(best, trials)
     return best
@@ -405,7 +406,7 @@ def _retry_channels(values, names, best: Hypothesis, reference, precision, chose
         for meaning in extra:
             exact, _ = _exact(reference, c, meaning, coords)
             if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
-                candidate = _full(values, replace(c, meanings=tuple(
+                candidate = full_hypothesis(values, replace(c, meanings=tuple(
                     meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision,
                     [channel])
                 new, old = candidate.channels[0], current[names[channel]]
@@ -472,12 +473,12 @@ def _relayout_channels(values, names, best: Hypothesis, reference, precision, ch
         if not trials:
             continue
         _, label, alt, meaning = min(trials, key=lambda item: item[0])
-        trial = _full(values, replace(alt, meanings=tuple(meaning if k == channel else None
+        trial = full_hypothesis(values, replace(alt, meanings=tuple(meaning if k == channel else None
                                                           for k in range(len(picks)))),
                       reference, names, precision, [channel]).channels[0]
         if not trial.fits:
             continue
-        placed = _full(values, replace(c, meanings=tuple(meaning if k == channel else None
+        placed = full_hypothesis(values, replace(c, meanings=tuple(meaning if k == channel else None
                                                          for k in range(len(picks)))),
                        reference, names, precision, [channel]).channels[0]
         # judged at the tolerance of the channel in its own layout: the misplaced residual is no noise estimate

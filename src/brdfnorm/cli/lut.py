@@ -15,7 +15,8 @@ from .. import validate
 from ..errors import ArgumentError, OutputError
 from ..lut import certified as certified_tables
 from ..lut import formats
-from ..lut.table import DIRECTION_AXES, GRIDS, Lut, axis_parameter, compute, grid_values
+from ..lut.axes import DIRECTION_AXES, axis_parameter
+from ..lut.table import GRIDS, Lut, compute, grid_values
 from ..output import write_file
 from ..output.formats import format_error
 from .application import app

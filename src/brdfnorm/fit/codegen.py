@@ -263,7 +263,7 @@ def emit(result: FitResult, language: str, model_name: str, *, variable: str | N
     """Source text of one self-contained function evaluating ``result`` in ``language`` (``quantity`` names
     what was fitted in the comment, ``suffix`` ends the function's name, ``context`` adds comment lines after
     the first: :func:`fit_context`'s lobe, convention and held parameters)."""
-    from .version import __version__
+    from ..version import __version__
 
     syn = LANGUAGES[LANGUAGES.validate(language)]
     x = identifier(variable or result.variables[0])

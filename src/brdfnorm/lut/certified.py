@@ -48,7 +48,8 @@ import numpy as np
 
 from ..engine.routes import certified
 from ..errors import ArgumentError
-from .table import Lut, checked_axes, plain_params
+from .axes import checked_axes
+from .table import Lut, plain_params
 
 #: Models with certified tables: the isotropic microfacet lobes with F = 1.
 MODELS = ("ggx", "beckmann")

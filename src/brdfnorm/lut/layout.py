@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, TableFileError
-from .table import DIRECTION_AXES, Lut
+from .axes import DIRECTION_AXES
+from .table import Lut
 
 #: Formats an engine loads as an image or as code: written in the engine layout unless told otherwise.
 ENGINE_FORMATS = ("exr", "png", "h", "glsl", "hlsl")

@@ -129,8 +129,8 @@ class Microfacet(Component):
         K = fixed.shape[0]
         params = {"alpha": np.full(K, self.alpha), "alpha_x": 0.0, "alpha_y": 0.0, "shadowing": "height-correlated",
                   "fresnel": "none", "f0": 0.0, "f90": 1.0, "eta": 1.0, "k": 0.0}
-        g = halfvector._geometry(_GGX, fixed, params)
-        white = halfvector._microfacet_weight(g)
+        g = halfvector.slope_geometry(_GGX, fixed, params)
+        white = halfvector.microfacet_weight(g)
 
         def weight(nodes):
             return white(nodes) * self._fresnel(g.V[nodes.k, 2] * nodes.one_sp / np.sqrt(nodes.n2))

@@ -202,12 +202,12 @@ def _pack_charlie(params: Mapping[str, object]) -> np.ndarray:
 # -- microfacet lobes: u = (α_x, α_y, separable, fresnel kind, f0[3], f90[3], η[3], k[3]) -----------------------
 
 @njit(**_OPTIONS)
-def _ggx_lambda(a2):  # pragma: no cover - compiled
+def ggx_lambda(a2):  # pragma: no cover - compiled
     return 0.5 * a2 / (1.0 + math.sqrt(1.0 + a2))
 
 
 @njit(**_OPTIONS)
-def _beckmann_lambda(a2):  # pragma: no cover - compiled
+def beckmann_lambda(a2):  # pragma: no cover - compiled
     if a2 == 0.0:
         return 0.0
     if math.isinf(a2):
@@ -218,7 +218,7 @@ def _beckmann_lambda(a2):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _fresnel(kind, c, u, i):  # pragma: no cover - compiled
+def fresnel_factor(kind, c, u, i):  # pragma: no cover - compiled
     if kind == 1:  # schlick
         f0, f90 = u[4 + i], u[7 + i]
         return f0 + (f90 - f0) * (1.0 - c) ** 5
@@ -256,9 +256,9 @@ def _microfacet(lx, ly, lz, vx, vy, vz, u, beckmann):  # pragma: no cover - comp
     a2l = ((ax * lx) ** 2 + (ay * ly) ** 2) / (lz * lz)
     a2v = ((ax * vx) ** 2 + (ay * vy) ** 2) / (vz * vz)
     if beckmann:
-        ll, lv = _beckmann_lambda(a2l), _beckmann_lambda(a2v)
+        ll, lv = beckmann_lambda(a2l), beckmann_lambda(a2v)
     else:
-        ll, lv = _ggx_lambda(a2l), _ggx_lambda(a2v)
+        ll, lv = ggx_lambda(a2l), ggx_lambda(a2v)
     G2 = 1.0 / ((1.0 + ll) * (1.0 + lv)) if u[2] == 1.0 else 1.0 / (1.0 + ll + lv)
     cos_vh = (vx * sx + vy * sy + vz * sz) / math.sqrt(ss)
     cos_vh = min(max(cos_vh, 0.0), 1.0) if cos_vh == cos_vh else cos_vh
@@ -281,14 +281,14 @@ def beckmann(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
 def ggx_fresnel(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     f, c = _microfacet(lx, ly, lz, vx, vy, vz, u, False)
     kind = int(u[3])
-    return (f * _fresnel(kind, c, u, 0), f * _fresnel(kind, c, u, 1), f * _fresnel(kind, c, u, 2))
+    return (f * fresnel_factor(kind, c, u, 0), f * fresnel_factor(kind, c, u, 1), f * fresnel_factor(kind, c, u, 2))
 
 
 @njit(**_OPTIONS)
 def beckmann_fresnel(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     f, c = _microfacet(lx, ly, lz, vx, vy, vz, u, True)
     kind = int(u[3])
-    return (f * _fresnel(kind, c, u, 0), f * _fresnel(kind, c, u, 1), f * _fresnel(kind, c, u, 2))
+    return (f * fresnel_factor(kind, c, u, 0), f * fresnel_factor(kind, c, u, 1), f * fresnel_factor(kind, c, u, 2))
 
 
 # -- packing -------------------------------------------------------------------------------------------------------

@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
-from .. import closed_forms
+from ..models import closed_forms
 from ..version import __version__
 from .study import AlbedoCurves, Folklore, ModelStudy, PolarPanel, Seed003Fits
 

@@ -36,7 +36,7 @@ class Context:
     findings: list[str] = field(default_factory=list)
     results: dict = field(default_factory=dict)
     #: Progress within the running section (study.Tick); build_report points it at its on_step.
-    tick: study.Tick = study._quiet
+    tick: study.Tick = study.quiet_progress
 
     def image(self, image: Image) -> Image:
         self.stage.write(image.name, image.png)

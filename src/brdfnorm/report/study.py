@@ -80,7 +80,7 @@ class StudyConfig:
 Tick = Callable[[str, float], None]
 
 
-def _quiet(detail: str, fraction: float) -> None:
+def quiet_progress(detail: str, fraction: float) -> None:
     """The default :data:`Tick`: report nothing."""
 
 
@@ -132,7 +132,7 @@ def certified_factors(n: np.ndarray, quadrature: dict, error: dict, digits: int 
     return CertifiedFactors(digits, radius, inside, covered)
 
 
-def factor_table(config: StudyConfig, tick: Tick = _quiet) -> FactorTable:
+def factor_table(config: StudyConfig, tick: Tick = quiet_progress) -> FactorTable:
     n = np.asarray(config.table_n, dtype=float)
     closed, quad, error, theta_max, excess = {}, {}, {}, {}, {}
     parts = 2 * len(SEED_LOBES) + 1
@@ -167,7 +167,7 @@ class AlbedoCurves:
             return curves / curves[:, :1, :]
 
 
-def albedo_curves(config: StudyConfig, tick: Tick = _quiet) -> AlbedoCurves:
+def albedo_curves(config: StudyConfig, tick: Tick = quiet_progress) -> AlbedoCurves:
     n = np.asarray(config.curve_n, dtype=float)
     theta = config.theta
     curves = {}
@@ -217,7 +217,7 @@ class Seed003Fits:
         return fit.prediction / self.factor - 1.0
 
 
-def seed003_fits(config: StudyConfig, fit: Callable, tick: Tick = _quiet) -> Seed003Fits:
+def seed003_fits(config: StudyConfig, fit: Callable, tick: Tick = quiet_progress) -> Seed003Fits:
     """Seed 003's line against refits by :func:`brdfnorm.fit.fit` (passed in: the fit module is optional).
 
     The factor is computed on seed 003's grid (n = 1, 2, …, 512); the least-squares line uses all of it, as
@@ -268,7 +268,7 @@ def polar_panel(model: Model, title: str, views_deg, points: int, factor: np.nda
     return PolarPanel(title, t, views, value)
 
 
-def polar_lobes(config: StudyConfig, tick: Tick = _quiet) -> list[PolarPanel]:
+def polar_lobes(config: StudyConfig, tick: Tick = quiet_progress) -> list[PolarPanel]:
     panels = []
     for index, lobe in enumerate(SEED_LOBES):
         tick(lobe, index / len(SEED_LOBES))
@@ -319,7 +319,7 @@ def first_float(model: Model) -> str | None:
 
 
 def model_study(model: Model, label: str, sweep: tuple[str, np.ndarray] | None, config: StudyConfig,
-                tick: Tick = _quiet) -> ModelStudy:
+                tick: Tick = quiet_progress) -> ModelStudy:
     if sweep is not None:
         name, values = sweep
         parameter = model.parameter(name)

@@ -1,6 +1,6 @@
 """The half-vector route's slope map (:func:`brdfnorm.engine.routes.halfvector.slope_integrand`, equation (H1) of
 :mod:`brdfnorm.engine.routes.halfvector`) for one azimuth and one radial node, compiled; and the microfacet lobes'
-rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector._microfacet_weight``), which needs no
+rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector.microfacet_weight``), which needs no
 shader and so is one cached kernel for every ggx/beckmann lobe.
 
 The shader kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) use the same two helpers. Term for term the
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...models.native import _beckmann_lambda, _fresnel, _ggx_lambda
+from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``BeckmannDistribution.CAP``).
@@ -114,7 +114,7 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
     """w = G2(L, V) F(V·H)(1 + c·x) of the microfacet lobe (H1) times du/dt and the azimuth's Jacobian on grids
     φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial ``piece`` (R,): out (R, nφ, nv, C), C = 1
     where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16): the packed f0, f90, η, k of
-    :func:`brdfnorm.models.native._fresnel`)."""
+    :func:`brdfnorm.models.native.fresnel_factor`)."""
     C = out.shape[3]
     for r in range(k.size):
         q = k[r]
@@ -139,7 +139,7 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
                     Lx = 2.0 * vz[q] * one_sp * s * dx / n2 - vx[q]
                     tangent2 += (ax[q] * ax[q] - ay[q] * ay[q]) * Lx * Lx
                 a2 = tangent2 / (Lz * Lz)
-                lambda_l = _beckmann_lambda(a2) if beckmann else _ggx_lambda(a2)
+                lambda_l = beckmann_lambda(a2) if beckmann else ggx_lambda(a2)
                 if separable:
                     G2 = 1.0 / ((1.0 + lambda_l) * (1.0 + lambda_v[q]))
                 else:
@@ -150,7 +150,7 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
                 else:
                     cos_vh = vz[q] * one_sp / math.sqrt(n2)
                     for c in range(C):
-                        out[r, i, j, c] = weight * _fresnel(fresnel_kind, cos_vh, fresnel[q], c)
+                        out[r, i, j, c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel[q], c)
 
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):

@@ -304,7 +304,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             finite = np.isfinite(F).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 F = np.where(finite[:, None, None, None], F, 0.0)
-                q, e_b, e_u, magnitude = (_compiled_sums if hasattr(integrand, "kernels") else _sums)(
+                q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else _sums)(
                     F, group.level_u)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
@@ -463,7 +463,7 @@ def _sums(F: np.ndarray, level_u: int):
     return q, _margin(np.abs(q - q_b), np.abs(q_b - q_bb)), _margin(np.abs(q - q_u), np.abs(q_u - q_uu)), magnitude
 
 
-def _compiled_sums(F: np.ndarray, level_u: int):
+def compiled_sums(F: np.ndarray, level_u: int):
     """:func:`_sums` by one compiled pass (:mod:`brdfnorm.engine.compiled.rules`), for the compiled backend."""
     from ..compiled.rules import tensor_sums
 

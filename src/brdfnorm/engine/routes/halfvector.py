@@ -256,7 +256,7 @@ class _Geometry:
     multiplicity: np.ndarray | None = None  # (K,) 2 where only half of a symmetric azimuth range is integrated
 
 
-def _geometry(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object]) -> _Geometry:
+def slope_geometry(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object]) -> _Geometry:
     K = fixed.shape[0]
     ax, ay = roughness(params)
     ax = np.maximum(np.broadcast_to(ax, (K,)), _ALPHA_FLOOR)
@@ -315,7 +315,7 @@ class SlopeNodes:
 SlopeWeight = Callable[[SlopeNodes], np.ndarray]
 
 
-def _microfacet_weight(g: _Geometry) -> SlopeWeight:
+def microfacet_weight(g: _Geometry) -> SlopeWeight:
     """w = G2(L, V) F(V·H) (1 + c·x) of the microfacet lobe (H1)."""
     dist = g.distribution
 
@@ -469,14 +469,14 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     # Per case (K, 1): both rules compare each case's estimate with max(atol, rtol·|E|) elementwise.
     rtol = np.where(fixed[:, 2] < GRAZING_MU, min(rtol, GRAZING_RTOL), rtol)[:, None]
-    g = _geometry(distribution, fixed, params)
+    g = slope_geometry(distribution, fixed, params)
     rectangle = None
     if compiled:
         from ..compiled.slopes import microfacet_rectangle
 
         def rectangle(linear: bool) -> RectangleIntegrand:
             return microfacet_rectangle(g, linear, linear and distribution.name in global_rule.GRADED, slope_map(g))
-    result = integrate_slopes(g, _microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
+    result = integrate_slopes(g, microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
                               max_evaluations=max_evaluations, use_global=use_global, rectangle=rectangle)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
     mass, moment = distribution.truncated_moments()

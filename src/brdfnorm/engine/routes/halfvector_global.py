@@ -56,11 +56,11 @@ from ..machinery.tensor_rule import (
     _FLOOR,
     MAX_LEVEL_B,
     START_LEVELS,
-    _compiled_sums,
     _doublings,
     _normalized,
     _sums,
     beta_map,
+    compiled_sums,
     fejer,
     schedule_doublings,
 )
@@ -191,7 +191,7 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
             finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
-                rule_sums = _compiled_sums if getattr(integrand, "compiled", False) else _sums
+                rule_sums = compiled_sums if getattr(integrand, "compiled", False) else _sums
                 grid = np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = rule_sums(grid, group.level_u)
             latest[group.case, group.piece] = q
