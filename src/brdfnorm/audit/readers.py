@@ -238,7 +238,7 @@ def _read_csv(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
 
 
 def _read_json(data, where, *, array, shape, dtype, order, scale, **_) -> Source:
-    document = load_json(data, where, "the file")
+    document = load_json(data, where, "the file", finite=False)
     names = numeric_arrays(document)
     name = _pick(list(names), array, where)
     raw = to_array(at_path(document, names[name]), name, where)

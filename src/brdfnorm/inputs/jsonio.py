@@ -1,4 +1,5 @@
-"""JSON documents of tables: strict JSON (no NaN or Infinity), bounded before :func:`json.loads` builds a Python
+"""JSON documents of tables: strict JSON (no NaN or Infinity, unless the caller reads a table whose non-finite
+cells are findings, as the audit does), bounded before :func:`json.loads` builds a Python
 object per value — the values counted from the commas (a value after the first needs one) against
 :data:`~.limits.MAX_TEXT_NUMBERS` — and nested at most :data:`~.limits.MAX_JSON_DEPTH` deep where a table is
 looked for (deeper nesting inside ``json.loads`` ends as :func:`~.guard.parsing`'s "nested too deeply"). Names
@@ -20,15 +21,17 @@ def _no_constant(name: str) -> float:
     raise ValueError(f"{name} is not a finite number")
 
 
-def load_json(text: str | bytes, path: str, what: str = "metadata", line: int | None = None) -> object:
+def load_json(text: str | bytes, path: str, what: str = "metadata", line: int | None = None, *,
+              finite: bool = True) -> object:
     """The JSON document ``text``, refused (naming ``path``, ``what`` and the place) if it is not strict JSON or
-    holds more values than a table file may."""
+    holds more values than a table file may. ``finite=False`` accepts the NaN and ±Infinity that JavaScript's and
+    Python's JSON writers emit (a shipped table's non-finite cells are what an audit reports, not bad input)."""
     values = (text.count(b",") if isinstance(text, bytes) else text.count(",")) + 1
     if values > MAX_TEXT_NUMBERS:
         raise TableFileError(f"{what}: up to {values} values, more than the {MAX_TEXT_NUMBERS} a table file may hold",
                              path, line)
     try:
-        return json.loads(text, parse_constant=_no_constant)
+        return json.loads(text, parse_constant=_no_constant) if finite else json.loads(text)
     except json.JSONDecodeError as error:
         raise TableFileError(f"{what} is not JSON: {error.msg} (line {error.lineno}, column {error.colno})",
                              path, line) from None
