@@ -327,3 +327,20 @@ def test_shaders_numba_would_compile_for_long_stay_with_numpy(tmp_path, body):
     model = load_brdf(brdf_file(tmp_path, f"vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) {{\n{body}\n}}"))
     assert model.native_kernel() is None
     assert np.isfinite(model.eval([0.0, 0.6, 0.8], [0.0, 0.0, 1.0])).all()
+
+
+def test_a_table_over_a_shader_parameter_runs_compiled_within_the_numpy_tables_estimates():
+    """A table's per-case parameter values reach ``pack`` as shape (1,) arrays (a roughness axis of ``lut``):
+    under the compiled backend they are packed, not refused, and the table equals the numpy backend's within the
+    cells' estimates."""
+    from brdfnorm import lut
+
+    model = load_brdf(ROOT / "examples" / "ggx.brdf", f0=1.0)
+    axes = {"mu": np.array([0.3, 0.9]), "roughness": np.array([0.4, 0.8])}
+    tables = {b: lut.compute(model, axes, rtol=1e-8, backend=b) for b in ("numpy", "compiled")}
+    kernel = model.native_kernel()
+    one_case = {name: np.asarray(value)[None] if np.ndim(value) == 0 else value for name, value in model.params.items()}
+    np.testing.assert_array_equal(kernel.pack(one_case), kernel.pack(model.params))
+    a, b = tables["numpy"], tables["compiled"]
+    assert not a.meta["unconverged"] and not b.meta["unconverged"]
+    assert np.all(np.abs(a["E"] - b["E"]) <= a["E_error"] + b["E_error"])

@@ -145,7 +145,7 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
             values = values * (dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None])
             if out is None:
                 out = np.empty((case.size, index.size, u.size, values.shape[-1]))
-            out[r] = values[:, back]
+            out[r] = values[:, back] if mirrored else values  # (index is sorted: back is the identity)
     return out
 
 
@@ -192,7 +192,7 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
             with np.errstate(invalid="ignore", over="ignore"):
                 # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
                 rule_sums = compiled_sums if getattr(integrand, "compiled", False) else _sums
-                grid = np.where(finite[:, None, None, None], group.grid, 0.0)
+                grid = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = rule_sums(grid, group.level_u)
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
@@ -226,7 +226,8 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
                                lambda g, pick, b, u: _refine(g, pick, b, u, integrand, lam, width, symmetric,
                                                              scale, evaluations))
         groups = [_merge(parts) for parts in refined.values()]
-        groups = [g.__class__(*(x[keep] if isinstance(x, np.ndarray) else x for x in vars(g).values()))
+        groups = [g if keep.all() else g.__class__(*(x[keep] if isinstance(x, np.ndarray) else x
+                                                     for x in vars(g).values()))
                   for g in groups if (keep := ~failed[g.case]).any()]
     # A case is settled when all its pieces are and their summed estimate meets the final tolerance.
     value, error = value.sum(axis=1), error.sum(axis=1)
@@ -243,7 +244,10 @@ def _count(mirrored: np.ndarray, index: np.ndarray, M: int) -> np.ndarray:
 
 
 def _refine(group, pick, along_b, along_u, integrand, lam, width, symmetric, scale, evaluations) -> _Group:
-    case, piece, F = group.case[pick], group.piece[pick], group.grid[pick]
+    # (all picked: the group's arrays as they are, no copy of its grid)
+    every = pick.all()
+    case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
+    F = group.grid if every else group.grid[pick]
     level_b, level_u = group.level_b, group.level_u
     if along_b:
         M = 2**level_b

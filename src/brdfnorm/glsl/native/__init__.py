@@ -31,10 +31,10 @@ def _pack_function(layout: tuple, size: int):
         u = np.empty(size)
         for name, kind, offset in layout:
             value = params[name]
-            if kind == "bool":
-                u[offset] = 1.0 if bool(np.asarray(value)) else 0.0
+            if kind == "bool":  # (a case's own value arrives as shape (1,) from a table's per-case parameters)
+                u[offset] = 1.0 if bool(np.asarray(value).reshape(())) else 0.0
             elif kind == "float":
-                u[offset] = float(np.asarray(value, dtype=float))
+                u[offset] = float(np.asarray(value, dtype=float).reshape(()))
             else:
                 u[offset : offset + 3] = np.asarray(value, dtype=float).reshape(3)
         return u
