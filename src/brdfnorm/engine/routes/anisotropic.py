@@ -415,7 +415,7 @@ def _codes(distribution: str, shadowing: str) -> tuple[int, int]:
 
 def _checked(mu, alpha_x, alpha_y, phi_v=None):
     arrays = np.broadcast_arrays(mu, alpha_x, alpha_y, 0.0 if phi_v is None else phi_v)
-    mu, ax, ay, phi = (np.ascontiguousarray(np.ravel(a), dtype=float) for a in arrays)
+    mu, ax, ay, phi = (np.array(a, dtype=float).ravel() for a in arrays)  # writable copies
     if np.any(~(mu > 0)) or np.any(mu > 1):
         raise ArgumentError("mu must lie in (0, 1]", where="mu")
     for name, a in (("alpha_x", ax), ("alpha_y", ay)):
