@@ -190,8 +190,9 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
     phi = along(VIEW_AZIMUTH_AXIS, evaluated[VIEW_AZIMUTH_AXIS], names) if VIEW_AZIMUTH_AXIS in names else 0.0
     full = [np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()
             for a in (along(direction[0], mu, names), phi, ax, ay)]
-    value, error, evaluations, converged = _spread(_cells_task, (distribution, shadowing, VIEW_AZIMUTH_AXIS not in names,
-                                                                 float(rtol)), full, workers, scheduler)
+    averaged = VIEW_AZIMUTH_AXIS not in names
+    value, error, evaluations, converged = _spread(_cells_task, (distribution, shadowing, averaged, float(rtol)),
+                                                   full, workers, scheduler)
     tables = {"E": value.reshape(shape), "E_error": error.reshape(shape)}
     table_axes = {"E": tuple(names), "E_error": tuple(names)}
     unconverged = int(np.count_nonzero(~converged))
