@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_anisotropy import w_anisotropy  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
 from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
@@ -1047,7 +1048,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "work-precision": lambda c, r, _: w_work_precision(c, r), "memory": lambda c, r, _: w_memory(c, r),
     "profile": w_profile, "parallel": lambda c, r, _: w_parallel(c, r), "lut": lambda c, r, _: w_lut(c, r),
     "engine": lambda c, r, _: w_engine(c, r), "audit": lambda c, r, _: w_audit(c, r),
-    "certified": lambda c, r, _: w_certified(c, r),
+    "certified": lambda c, r, _: w_certified(c, r), "anisotropy": lambda c, r, _: w_anisotropy(c, r),
 })
 
 
