@@ -26,8 +26,9 @@ def table(distribution: str, shadowing: str) -> str:
     for a in ASPECTS:
         for g in ALPHAS:
             one, half = cell[(a, g, 1.0)], cell[(a, g, 0.5)]
-            lines.append(f"| {a:.3g} | {g:g} | " + " | ".join(f"{cell[(a, g, m)].error:+.3f}" for m in MU)
-                         + f" | {one.turquin:.3f} | {one.kulla_conty:.3f} | {half.spread[0]:.3f}–{half.spread[1]:.3f} |")
+            errors = " | ".join(f"{cell[(a, g, m)].error:+.3f}" for m in MU)
+            spread = f"{half.spread[0]:.3f}–{half.spread[1]:.3f}"
+            lines.append(f"| {a:.3g} | {g:g} | {errors} | {one.turquin:.3f} | {one.kulla_conty:.3f} | {spread} |")
     return "\n".join(lines)
 
 
