@@ -108,7 +108,7 @@ def lut_command(
     fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
     anisotropy: str = typer.Option(None, "--anisotropy", metavar="PARAMETERIZATION", help="ggx, beckmann: a table "
                                    "over an anisotropy axis (--axis anisotropy=0:1:16; aspect: --axis aspect=…) "
-                                   "mapped to (alpha_x, alpha_y) as aspect, burley (Burley/OSPRay/Blender), "
+                                   "mapped to (alpha_x, alpha_y) as aspect, burley (Burley, OSPRay, Blender), "
                                    "materialx or openpbr do; E averaged over the view azimuth unless --axis "
                                    "phi_v=DEGREES is given (docs/anisotropy.md)."),
     half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
