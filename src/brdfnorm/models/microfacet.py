@@ -427,9 +427,11 @@ class MicrofacetModel(Model):
         if _ANISOTROPIC_COMPENSATION is None:
             raise EvaluationError(f"ms={params['ms']} needs the anisotropic integrator (import brdfnorm)",
                                   where=self.name)
-        ax, ay = roughness(params)
+        ax, ay = (np.unique(np.ravel(a)) for a in roughness(params))  # one lobe, however broadcast
+        if ax.size != 1 or ay.size != 1:
+            raise ParameterError(f"ms={params['ms']} with alpha_x/alpha_y takes one lobe", where="parameter ms")
         return _ANISOTROPIC_COMPENSATION(self.distribution.name, params["shadowing"],
-                                         int(np.asarray(params["ms_table"])), float(ax), float(ay))
+                                         int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
 
     def _anisotropic(self, params: Mapping[str, object]) -> bool:
         return bool(np.any(np.asarray(params["alpha_x"]) > 0) or np.any(np.asarray(params["alpha_y"]) > 0))
