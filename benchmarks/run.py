@@ -39,6 +39,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 
 import peers as P  # noqa: E402
+from bench_anisotropy import w_anisotropy  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
 from bench_backends import w_backends  # noqa: E402
 from bench_certified import w_certified  # noqa: E402
@@ -1064,6 +1065,7 @@ WORKLOADS: Registry[Callable[[Config, References, Path], dict]] = Registry("work
     "engine": lambda c, r, _: w_engine(c, r), "audit": lambda c, r, _: w_audit(c, r),
     "certified": lambda c, r, _: w_certified(c, r), "glsl-native": lambda c, r, _: w_glsl_native(c, r),
     "backends": lambda c, r, _: w_backends(c, r),
+    "anisotropy": lambda c, r, _: w_anisotropy(c, r),
 })
 
 

@@ -149,6 +149,11 @@ def fit_command(
                                         help="With --lut: write the code even when the fit's relative error "
                                              "exceeds 100 % (refused otherwise: the table is then rarely the "
                                              "one meant)."),
+    anisotropic_fix: bool = typer.Option(False, "--anisotropic-fix", help="ggx, beckmann: fit the effective "
+                                         "roughness alpha_eff(mu, alpha_x, alpha_y) at which an isotropic E table "
+                                         "gives the anisotropic lobe's albedo averaged over the view azimuth "
+                                         "(instead of sqrt(alpha_x alpha_y)); its max error in E over the domain "
+                                         "is printed and in the code (docs/anisotropy.md)."),
     spread: Spread = None,
     debug: bool = DEBUG_OPTION,
 ) -> None:
@@ -160,6 +165,9 @@ def fit_command(
             raise ArgumentError("--json prints to stdout: '-o -' would put the code before it", where="--output")
         if output is not None and emit_language is None:
             raise ArgumentError("-o/--output writes the emitted code: give --emit LANG too", where="--output")
+        if anisotropic_fix:
+            _fit_anisotropic(model, param, emit_language, output, json_output)
+            return
         if lut is not None:
             if model is not None or sweep is not None or at is not At.normal or theta is not None:
                 raise ArgumentError("--lut fits a table file: give no MODEL, --sweep, --at or --theta", where="--lut")
@@ -229,6 +237,38 @@ def fit_command(
             write_file(STDOUT, code)  # the code alone on stdout, so `> f.glsl` compiles; the summary on stderr
         _summary(fitted, m.name, at.value, output, to_stderr=code is not None and output in (None, STDOUT),
                  verbose=verbose)
+
+
+def _fit_anisotropic(model: str | None, param: list[str], emit_language: str | None, output: str | None,
+                     json_output: bool) -> None:
+    """``fit ggx|beckmann --anisotropic-fix``: :func:`brdfnorm.lut.anisotropy_fix.fit_alpha_fix`."""
+    from ..lut.anisotropy import lobe_of
+    from ..lut.anisotropy_fix import fit_alpha_fix
+
+    if model is None:
+        raise ArgumentError("give the lobe: ggx or beckmann", where="MODEL")
+    if emit_language is not None and emit_language not in ("glsl", "hlsl", "c", "python"):
+        raise ArgumentError(f"unknown language {emit_language!r} (known: glsl, hlsl, c, python)", where="--emit")
+    if output is not None and output != STDOUT and not Path(output).parent.is_dir():
+        raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
+    distribution, shadowing = lobe_of(load_model(model, param))
+    fix = fit_alpha_fix(distribution, shadowing)
+    code = fix.emit(emit_language) if emit_language else None
+    if output is not None:
+        write_file(output, code)
+    if json_output:
+        data = {"model": distribution, "shadowing": shadowing, "degree": fix.degree,
+                "coefficients": [float(c) for c in fix.coefficients], "domain": fix.domain,
+                "max_error": fix.max_error, "geometric_mean_error": fix.geometric_mean_error, **fix.validation}
+        if code is not None:
+            data["language"], data["code"] = emit_language, code
+        write_file(STDOUT, to_json(data) + "\n")
+        return
+    if code is not None and output is None:
+        write_file(STDOUT, code)
+    typer.echo(f"{distribution} alpha_eff: {fix.coefficients.size} coefficients, max |E_iso(alpha_eff) - E| "
+               f"{fix.max_error:.2g} over the domain (the geometric mean: {fix.geometric_mean_error:.2g})"
+               + ("" if output in (None, STDOUT) else f"; wrote {output}"), err=True)
 
 
 #: ``fit --lut`` refuses a fit whose relative error exceeds this (unless --allow-poor-fit): a fit that far off

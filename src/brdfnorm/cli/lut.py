@@ -13,6 +13,7 @@ import typer
 
 from .. import validate
 from ..errors import ArgumentError, OutputError
+from ..lut import anisotropy as anisotropic_tables
 from ..lut import certified as certified_tables
 from ..lut import formats
 from ..lut.axes import DIRECTION_AXES, axis_parameter
@@ -133,7 +134,8 @@ def lut_command(
                                            "image (an EXR part; in PNG its own file, --tables E_avg)."),
     prefix: str = typer.Option("lut_", "--prefix", help="Start of every identifier in .h, .glsl, .hlsl."),
     no_average: bool = typer.Option(False, "--no-average", help="Skip E_avg = 2∫ E(μ) μ dμ."),
-    rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of every cell (and of E_avg)."),
+    rtol: float = typer.Option(None, "--rtol", help="Relative tolerance of every cell (and of E_avg); default 1e-10 "
+                               "(1e-6 with --anisotropy)."),
     method: str = typer.Option("auto", "--method", help="Albedo method (auto picks the model's best)."),
     digits: int = typer.Option(None, "--digits", min=1, help="With --method certified: every cell's enclosure has a "
                                "relative radius ≤ 10^-DIGITS (default 12)."),
@@ -145,6 +147,11 @@ def lut_command(
                                help=f"The table file; the extension picks the format (.{', .'.join(formats.FORMATS)})"
                                     "; - writes a text format to stdout (with --format)."),
     fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
+    anisotropy: str = typer.Option(None, "--anisotropy", metavar="PARAMETERIZATION", help="ggx, beckmann: a table "
+                                   "over an anisotropy axis (--axis anisotropy=0:1:16; aspect: --axis aspect=…) "
+                                   "mapped to (alpha_x, alpha_y) as aspect, burley (Burley, OSPRay, Blender), "
+                                   "materialx or openpbr do; E averaged over the view azimuth unless --axis "
+                                   "phi_v=DEGREES is given (docs/anisotropy.md)."),
     half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
     spread: Spread = None,
     debug: bool = DEBUG_OPTION,
@@ -172,6 +179,11 @@ def lut_command(
             from ..parallel.checkpoint import check_root
 
             check_root(spread.checkpoint)
+        if anisotropy is None and anisotropic_tables.VIEW_AZIMUTH_AXIS in axes:
+            raise ArgumentError("a phi_v axis needs --anisotropy", where="--axis phi_v")
+        azimuth_degrees = axes.get(anisotropic_tables.VIEW_AZIMUTH_AXIS)
+        if azimuth_degrees is not None:
+            axes[anisotropic_tables.VIEW_AZIMUTH_AXIS] = np.radians(azimuth_degrees)
         if "theta" in axes:
             if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
                 raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")
@@ -185,7 +197,13 @@ def lut_command(
             if c not in ("dfg",):
                 raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="--channels")
         m = load_model(model, param)
-        for axis_name in axes:
+        if anisotropy is not None:
+            if method != "auto" or channels or digits is not None:
+                raise ArgumentError("anisotropic tables are computed by their own route (no --method, --channels, "
+                                    "--digits)", where="--anisotropy")
+            anisotropic_tables.lobe_of(m)
+            anisotropic_tables.PARAMETERIZATIONS.validate(anisotropy)
+        for axis_name in axes if anisotropy is None else ():
             if axis_name not in DIRECTION_AXES:
                 m.parameter(axis_parameter(m, axis_name, np.array([0.5]))[0])  # unknown: one line, before any work
         if not to_stdout and not Path(output).parent.is_dir():  # fail before the work, not after it
@@ -194,9 +212,17 @@ def lut_command(
         spec = formats.layouts.parse(layout)
         if digits is not None and method != "certified":
             raise ArgumentError("--digits applies to --method certified only", where="--digits")
+        if rtol is None:
+            rtol = 1e-10 if anisotropy is None else 1e-6
         with progress_bar(f"{m.name}: table cells") as bar:
             progress = bar or stage_lines(m.name, axes, channels, not no_average)
-            if method == "certified":
+            if anisotropy is not None:
+                if spread.checkpoint is not None:
+                    raise ArgumentError("anisotropic tables are not checkpointed", where="--checkpoint")
+                result = anisotropic_tables.compute(m, axes, anisotropy=anisotropy, clamp=clamps, rtol=rtol,
+                                                    average=not no_average, grid=grid, source=model,
+                                                    workers=spread.workers, scheduler=spread.scheduler)
+            elif method == "certified":
                 if spread.given():
                     raise ArgumentError("certified tables are computed in this process", where="--workers")
                 result = certified_tables.compute(m, axes, clamp=clamps, digits=12 if digits is None else digits,
@@ -208,6 +234,12 @@ def lut_command(
                                  workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint)
         if "theta" in axes:  # the file's θ axis in the degrees it was given in (the API's is in radians)
             result = in_degrees(result, degrees, clamp_degrees)
+        if azimuth_degrees is not None:
+            result = Lut(dict(result), {n: azimuth_degrees if n == anisotropic_tables.VIEW_AZIMUTH_AXIS else v
+                                        for n, v in result.axes.items()},
+                         {**result.meta, "units": {**result.meta["units"],
+                                                   anisotropic_tables.VIEW_AZIMUTH_AXIS: "degrees"}},
+                         result.table_axes)
         data = formats.dumps(result, name, tables=table_names, half=half, layout=spec, prefix=prefix,
                              channel_names=channel_names, broadcast_average=broadcast_average)
         unconverged = result.meta["unconverged"]

@@ -31,8 +31,10 @@ per channel — not reciprocal (it depends on the view only), so its albedo over
 E and E_avg come from :mod:`brdfnorm.engine.routes.microfacet`. With ``ms_table=N`` the renderer's way —
 E on an N × N node grid over (μ, α) ∈ [0, 1]², interpolated bilinearly, E_avg on N nodes in α, linearly (the
 μ = 0 row is evaluated at μ = 1e-4); with ``ms_table=0`` exact values at every evaluation (slow: an albedo
-integral per direction — meant for checks). Both need isotropic α ≤ 1 (the tables' range). The table size is at
-most :data:`MAX_MS_TABLE` (issue 41: N = 1024, inside the range once declared, allocated 880 MiB at once and
+integral per direction — meant for checks). Both need isotropic α ≤ 1 (the tables' range), or one anisotropic lobe
+(α_x, α_y ≤ 10, aspect ≥ 0.01), whose compensation uses its own E(μ, φ) and E_avg
+(:mod:`brdfnorm.engine.routes.anisotropic_compensation`) — not the isotropic table at √(α_x α_y). The table size is
+at most :data:`MAX_MS_TABLE` (issue 41: N = 1024, inside the range once declared, allocated 880 MiB at once and
 peaked at 3.6 GB; N = 256 takes about 0.4 GB and 8 s, N = 512 1.3 GB).
 """
 
@@ -205,6 +207,20 @@ def register_compensation(provider: Callable) -> None:
     _COMPENSATION = provider
 
 
+#: The anisotropic lobes' compensation (brdfnorm.engine.routes.anisotropic_compensation registers it):
+#: ``provider(distribution_name, shadowing, size, alpha_x, alpha_y)`` -> an object with ``albedo(mu, phi)``,
+#: ``average`` (E_avg) and ``missing`` ((1/π)∫(1 − E) cos dω of E as read).
+_ANISOTROPIC_COMPENSATION: Callable | None = None
+#: Anisotropic compensation tables cover lobes up to this width and down to this aspect α_y/α_x.
+ANISOTROPIC_ALPHA_MAX = 10.0
+ANISOTROPIC_ASPECT_MIN = 0.01
+
+
+def register_anisotropic_compensation(provider: Callable) -> None:
+    global _ANISOTROPIC_COMPENSATION
+    _ANISOTROPIC_COMPENSATION = provider
+
+
 SHADOWING = ("height-correlated", "separable")
 FRESNEL = ("none", "schlick", "dielectric", "conductor")
 MULTIPLE_SCATTERING = ("none", "kulla-conty", "turquin")
@@ -335,7 +351,17 @@ class MicrofacetModel(Model):
         table = float(np.asarray(p["ms_table"]).max())
         if np.ndim(p["ms_table"]) or (table != 0 and (table < 2 or table != int(table))):
             raise ParameterError("must be 0 (exact) or one whole number ≥ 2", where="parameter ms_table")
-        if not self.isotropic or np.any(np.asarray(p["alpha"]) > 1.0):
+        if not self.isotropic:
+            ax, ay = roughness(p)
+            if np.ndim(ax) or np.ndim(ay):
+                raise ParameterError(f"ms={p['ms']} with alpha_x/alpha_y takes one lobe (numbers, not arrays)",
+                                     where="parameter ms")
+            if max(ax, ay) > ANISOTROPIC_ALPHA_MAX or min(ax, ay) < ANISOTROPIC_ASPECT_MIN * max(ax, ay):
+                raise ParameterError(f"ms={p['ms']} covers anisotropic lobes with alpha_x, alpha_y ≤ "
+                                     f"{ANISOTROPIC_ALPHA_MAX:g} and aspect alpha_y/alpha_x in "
+                                     f"[{ANISOTROPIC_ASPECT_MIN:g}, {1 / ANISOTROPIC_ASPECT_MIN:g}]",
+                                     where="parameter ms")
+        elif np.any(np.asarray(p["alpha"]) > 1.0):
             raise ParameterError(f"ms={p['ms']} tables cover isotropic alpha ≤ 1 only", where="parameter ms")
 
     def search_space(self) -> dict[str, tuple[float, float] | None]:
@@ -347,8 +373,10 @@ class MicrofacetModel(Model):
             space["eta"] = None
         if p["fresnel"] != "conductor":
             space["k"] = None
-        if p["ms"] != "none":
+        if p["ms"] != "none" and self.isotropic:
             space.update(alpha=(ALPHA_MIN, 1.0), alpha_x=None, alpha_y=None)
+        elif p["ms"] != "none":  # one anisotropic lobe: its table is built for these widths
+            space.update(alpha=None, alpha_x=None, alpha_y=None)
         return space
 
     @property
@@ -404,12 +432,34 @@ class MicrofacetModel(Model):
                                   where=self.name)
         return _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
 
+    def anisotropic_table(self, params: Mapping[str, object]):
+        """The compensation of this anisotropic lobe: E(μ, φ), E_avg (engine.routes.anisotropic_compensation)."""
+        if _ANISOTROPIC_COMPENSATION is None:
+            raise EvaluationError(f"ms={params['ms']} needs the anisotropic integrator (import brdfnorm)",
+                                  where=self.name)
+        ax, ay = (np.unique(np.ravel(a)) for a in roughness(params))  # one lobe, however broadcast
+        if ax.size != 1 or ay.size != 1:
+            raise ParameterError(f"ms={params['ms']} with alpha_x/alpha_y takes one lobe", where="parameter ms")
+        return _ANISOTROPIC_COMPENSATION(self.distribution.name, params["shadowing"],
+                                         int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
+
+    def _anisotropic(self, params: Mapping[str, object]) -> bool:
+        return bool(np.any(np.asarray(params["alpha_x"]) > 0) or np.any(np.asarray(params["alpha_y"]) > 0))
+
+    def _view_albedo(self, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
+        """E at the directions V (...) as the compensation reads it (μ clamped at 0)."""
+        mu_v = np.maximum(V[..., 2], 0.0)
+        if self._anisotropic(params):
+            return self.anisotropic_table(params).albedo(mu_v, np.arctan2(V[..., 1], V[..., 0]))
+        alpha = np.asarray(params["alpha"], dtype=float)
+        shape = np.broadcast_shapes(mu_v.shape, alpha.shape)
+        return self._table(params).albedo(np.broadcast_to(mu_v, shape), np.broadcast_to(alpha, shape))
+
     def turquin_factor(self, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
         """Turquin's 1 + F0 (1/E(μ_V) − 1), (..., C); 1 where μ_V ≤ 0."""
         mu_v = V[..., 2]
-        alpha = np.asarray(params["alpha"], dtype=float)
-        shape = np.broadcast_shapes(mu_v.shape, alpha.shape)
-        e_v = self._table(params).albedo(np.broadcast_to(np.maximum(mu_v, 0.0), shape), np.broadcast_to(alpha, shape))
+        e_v = self._view_albedo(V, params)
+        shape = e_v.shape
         f0 = fresnel_normal(params)
         with np.errstate(divide="ignore", invalid="ignore"):
             factor = 1.0 + f0 * (1.0 / e_v[..., None] - 1.0)
@@ -418,6 +468,13 @@ class MicrofacetModel(Model):
     def multiple_scattering(self, L: np.ndarray, V: np.ndarray, params: Mapping[str, object]) -> np.ndarray:
         """Kulla & Conty's f_ms = F_ms (1 − E(μ_L))(1 − E(μ_V)) / (π(1 − E_avg)), (..., C); 0 at α = 0 (a mirror
         loses no energy: E = E_avg = 1)."""
+        if self._anisotropic(params):
+            table = self.anisotropic_table(params)
+            e_l, e_v = self._view_albedo(L, params), self._view_albedo(V, params)
+            lossy = (L[..., 2] > 0) & (V[..., 2] > 0) & (table.missing > 0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                value = (1.0 - e_l) * (1.0 - e_v) / (np.pi * table.missing)
+            return np.where(lossy, value, 0.0)[..., None] * fresnel_multiple_scattering(params, table.average)
         shape = np.broadcast_shapes(L.shape[:-1], V.shape[:-1], np.shape(params["alpha"]))
         alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), shape)
         mu_l = np.broadcast_to(L[..., 2], shape)

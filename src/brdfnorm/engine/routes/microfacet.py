@@ -28,6 +28,7 @@ from ...models.microfacet import (
     register_compensation,
 )
 from ..compiled import backend as compiled_backend
+from . import anisotropic_compensation  # noqa: F401 — registers the anisotropic lobes' compensation
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
 from .series import adaptive_gauss_legendre
@@ -75,6 +76,8 @@ def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping
     times 1 + F0 (1/E(μ_V) − 1) (the factor depends on the fixed view only; over the light this is exact)."""
     if params["ms"] == "none":
         return value, error
+    if model._anisotropic(params):
+        return _anisotropic_compensation(model, fixed, params, value, error)
     K = fixed.shape[0]
     table = compensation(model.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
     alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
@@ -94,6 +97,25 @@ def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping
         # The table entries' own quadrature errors, through a ratio of sums of at most a few of them.
         propagated = np.where(lost > 0, 4.0 * table.error / lost, 0.0)
     return value + compensated[:, None] * colour, error + propagated[:, None] * np.abs(colour)
+
+
+def _anisotropic_compensation(model, fixed, params, value, error):
+    """:func:`with_compensation` for one anisotropic lobe: E at the view's (μ, φ) from its own table; the
+    compensation lobe's albedo is (1 − E(V))·F_ms exactly, its denominator being the table's own missing energy
+    (:mod:`brdfnorm.engine.routes.anisotropic_compensation`)."""
+    table = model.anisotropic_table(params)
+    e_v = table.albedo(fixed[:, 2], np.arctan2(fixed[:, 1], fixed[:, 0]))
+    if params["ms"] == "turquin":
+        f0 = np.broadcast_to(fresnel_normal(params), value.shape)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = 1.0 + f0 * (1.0 / e_v[:, None] - 1.0)
+            propagated = np.abs(value) * f0 * 4.0 * table.error / (e_v[:, None] ** 2)
+        return value * factor, error * np.abs(factor) + propagated
+    colour = np.broadcast_to(fresnel_multiple_scattering(params, table.average), value.shape)
+    compensated = np.where(table.missing > 0, 1.0 - e_v, 0.0)
+    # A bilinear read mixes four entries, and the missing energy is a weighted mean of entries: errors through both.
+    propagated = np.where(table.missing > 0, 4.0 * table.error * (1.0 + 1.0 / max(table.missing, 1e-300)), 0.0)
+    return value + compensated[:, None] * colour, error + propagated * np.abs(colour)
 
 
 # -- Kulla & Conty's compensation tables -------------------------------------------------------------------

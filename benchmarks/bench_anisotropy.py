@@ -1,0 +1,110 @@
+#!/usr/bin/env python
+"""Time the anisotropic energy table of issue 45: GGX E over 32 μ × 32 α × 16 aspect, averaged over the view
+azimuth, with E_avg over 32 α × 16 aspect (rtol 1e-5), on local processes; and the same smaller table on 1 and 2
+local workers and on a 2-worker Dask cluster, compared bit for bit.
+
+Usage: ``python benchmarks/bench_anisotropy.py [--size 32] [--workers 2] [--rtol 1e-5]`` or
+``benchmarks/run.py --only anisotropy``. Goal (this 2-core machine): the 32 × 32 × 16 table within 60 s. The wall
+time and the CPU time (this process and its workers) are both reported: on a shared machine the wall time is what
+the neighbours left.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import resource
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "src"))
+
+import brdfnorm as bn  # noqa: E402
+from brdfnorm import lut  # noqa: E402
+from brdfnorm.lut import anisotropy  # noqa: E402
+
+GOAL_S = 60.0
+
+
+def _axes(mu: int, alpha: int, aspect: int) -> dict[str, np.ndarray]:
+    return {"mu": lut.grid_values(0.0, 1.0, mu, "texel"), "alpha": lut.grid_values(0.0, 1.0, alpha, "texel"),
+            "aspect": np.linspace(np.sqrt(0.1), 1.0, aspect)}
+
+
+def _cpu() -> float:
+    """CPU seconds of this process. A pool's workers are stopped, not waited for, so RUSAGE_CHILDREN does not count
+    them: runs on several workers report their CPU time as None, and ``--workers 1`` measures it."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    return own.ru_utime + own.ru_stime
+
+
+def timed(axes, rtol, **spread):
+    anisotropy.compute(bn.load("ggx"), {"mu": [0.5], "alpha": [0.5], "aspect": [0.5]}, anisotropy="aspect",
+                       rtol=rtol)  # compile (or load the cached machine code) before the clock starts
+    wall, cpu = time.perf_counter(), _cpu()
+    table = anisotropy.compute(bn.load("ggx"), axes, anisotropy="aspect", rtol=rtol, **spread)
+    in_process = spread.get("workers") == 1 and spread.get("scheduler") is None
+    return table, time.perf_counter() - wall, (_cpu() - cpu) if in_process else None
+
+
+def w_anisotropy(cfg, refs=None, size: int = 32, workers: int = 2, rtol: float = 1e-5) -> dict:
+    """The workload as benchmarks/run.py reports it (``cfg.quick`` shrinks the tables)."""
+    warnings.simplefilter("ignore")
+    n = 4 if cfg.quick else size
+    axes = _axes(n, n, max(2, n // 2))
+    table, wall, cpu = timed(axes, rtol, workers=workers)
+    cells = int(np.prod([len(v) for v in axes.values()]))
+    cpu_text = "(workers: not measured here)" if cpu is None else f"{cpu:.1f} s"
+    methods = {f"{n}×{n}×{max(2, n // 2)}, {workers} workers": {
+        "time_s": wall, "cpu_s": cpu, "timing": "measured, once", "runs": 1, "points": cells,
+        "warnings": int(table.meta["unconverged"]),
+        "note": f"CPU {cpu_text}; max E error estimate {table['E_error'].max():.2g}, E_avg "
+                f"{table['E_avg_error'].max():.2g}; {table.meta['evaluations']:.3g} evaluations; goal {GOAL_S:g} s"}}
+    small = _axes(6, 4, 3) if not cfg.quick else _axes(3, 2, 2)
+    runs = {name: timed(small, rtol, **kw) for name, kw in (("1 worker", {"workers": 1}),
+                                                             ("2 local workers", {"workers": 2}))}
+    try:
+        from distributed import LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=":0", silence_logs=logging.CRITICAL) as cluster:
+            runs["dask, 2 workers"] = timed(small, rtol, workers=None, scheduler=cluster.scheduler_address)
+    except ImportError:
+        pass
+    base = runs["1 worker"][0]
+    for name, (result, seconds, cpu_s) in runs.items():
+        identical = all(np.array_equal(result[t], base[t]) for t in base)
+        methods[f"small table, {name}"] = {"time_s": seconds, "cpu_s": cpu_s, "timing": "measured, once", "runs": 1,
+                                           "points": int(base["E"].size), "bit_identical": identical,
+                                           "note": f"bit-identical to 1 worker: {'yes' if identical else 'NO'}"}
+    return {"title": f"anisotropic GGX table (μ, α, aspect), view-azimuth average, rtol {rtol:g}", "status": "ok",
+            "reference": "error estimates of the compiled cubature (tests/test_anisotropy.py checks them)",
+            "methods": methods}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=32)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--rtol", type=float, default=1e-5)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(argv)
+
+    class _Config:
+        quick = args.quick
+
+    result = w_anisotropy(_Config(), size=args.size, workers=args.workers, rtol=args.rtol)
+    print(result["title"])
+    for method, line in result["methods"].items():
+        cpu = "-" if line["cpu_s"] is None else f"{line['cpu_s']:.2f}"
+        print(f"{method:34s} {line['time_s']:8.2f} s wall  {cpu:>8s} s CPU  {line['note']}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
