@@ -165,9 +165,8 @@ def test_comments_state_lobe_convention_domain_and_held_parameters():
 
 
 def test_a_brdf_file_is_named_without_the_users_path(tmp_path):
-    from brdfnorm.codegen import fit_context
-
     import brdfnorm as bn
+    from brdfnorm.fit.codegen import fit_context
 
     path = tmp_path / "private" / "ggx.brdf"
     path.parent.mkdir()

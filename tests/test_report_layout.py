@@ -130,8 +130,8 @@ def test_report_prints_one_line_per_section_when_not_a_terminal(capsys, monkeypa
 def test_one_folklore_argmax_quoted_everywhere(tmp_path, monkeypatch):
     import mpmath as mp
 
-    from brdfnorm import closed_forms
     from brdfnorm.claims.seed000 import blinn_phong_folklore
+    from brdfnorm.models import closed_forms
 
     with mp.workdps(30):  # the root of d/dn of (n+8)(2^(−n/2)+n)/((n+2)(n+4)) − 1: an independent argmax
         g = lambda n: (n + 8) * (2 ** (-n / 2) + n) / ((n + 2) * (n + 4)) - 1  # noqa: E731

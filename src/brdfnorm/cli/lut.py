@@ -210,6 +210,10 @@ def lut_command(
             raise OutputError(f"directory {str(Path(output).parent)!r} does not exist", where=output)
         table_names = formats.layouts.split_tables(table)
         spec = formats.layouts.parse(layout)
+        for key in ("x", "y"):  # an axis the layout names must be one of the table's: fail before the work
+            if spec and spec.get(key) is not None and spec[key] not in axes:
+                raise ArgumentError(f"{key}={spec[key]}: no axis of that name (axes: {', '.join(axes)})",
+                                    where="--layout")
         if digits is not None and method != "certified":
             raise ArgumentError("--digits applies to --method certified only", where="--digits")
         if rtol is None:

@@ -1,6 +1,6 @@
 """``brdfnorm verify``: every numerical claim of the three seed articles, formula against independent numerics.
 
-The checks live in :mod:`brdfnorm.verify`; this module parses the options and prints the table (or JSON).
+The checks live in :mod:`brdfnorm.claims.verify`; this module parses the options and prints the table (or JSON).
 Exit status 0 when every verdict is ok, 1 when some claim is not (each verdict is computed, so a failing
 claim is a finding, not a crash), 2 for bad options.
 """

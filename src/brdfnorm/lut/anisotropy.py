@@ -34,7 +34,8 @@ from ..engine.routes import anisotropic as kernel
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..registry import Registry
-from .table import DIRECTION_AXES, Lut, _plain
+from .axes import DIRECTION_AXES
+from .table import Lut, plain_params
 
 #: Cells per task sent to a worker (fixed, so that the chunks — and the results — do not depend on the workers).
 CHUNK_CELLS = 64
@@ -212,7 +213,8 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
     tables["1-E"] = 1.0 - tables["E"]
     table_axes["1-E"] = tuple(names)
     fixed = {k: v for k, v in model.params.items() if k not in ("alpha", "alpha_x", "alpha_y")}
-    meta = {"model": source or model.name, "parameters": _plain(fixed), "grid": grid, "clamp": clamp, "rtol": rtol,
+    meta = {"model": source or model.name, "parameters": plain_params(fixed), "grid": grid, "clamp": clamp,
+            "rtol": rtol,
             "method": "anisotropic", "units": {"mu": "cos theta_o", "theta": "radians", VIEW_AZIMUTH_AXIS: "radians"},
             "brdfnorm": __version__, "unconverged": unconverged, "evaluations": count,
             "anisotropy": {"parameterization": parameterization.name, "axis": parameterization.axis,

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..codegen import identifier
 from ..engine.routes import anisotropic as kernel
 from ..errors import ArgumentError
+from ..fit.codegen import identifier
 
 #: The default domain: μ, α_g and ℓ = ln(α_x/α_y) up to ln 10 (Burley's, OSPRay's aspect √(1 − 0.9) at anisotropy 1).
 DOMAIN = {"mu": (0.05, 1.0), "alpha": (0.05, 1.0), "log_aspect": (0.0, float(np.log(10.0)))}

@@ -238,7 +238,7 @@ def polar_section(ctx: Context) -> Section:
 def verify_section(verify: Callable) -> Callable[[Context], Section]:
     def build(ctx: Context) -> Section:
         from ..claims import RELATIONS
-        from ..verify import CHECKS
+        from ..claims.verify import CHECKS
 
         claims = []
         for index, claim_id in enumerate(CHECKS):  # one claim at a time, so that the progress moves
