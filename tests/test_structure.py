@@ -225,3 +225,42 @@ def test_the_private_name_finder_sees_imports_and_attributes(tmp_path):
     path.write_text("from .a import _x, y\nfrom . import a\nfrom .a import z as _z\na._w\na.__name__\n")
     known = {"p": tmp_path / "__init__.py", "p.a": tmp_path / "a.py", "p.b": path}
     assert _private_crossings("p.b", path, known) == {("p.b", "p.a._x"), ("p.b", "p.a._w")}
+
+
+def _flag_wheres(path: Path) -> list[tuple[int, str]]:
+    """(line, text) of each ``where=`` keyword or ``where`` parameter default that spells a command-line flag (a
+    string or f-string starting with ``-``): the library names API arguments; only ``cli/`` maps them to flags."""
+    def flag(node) -> str | None:
+        if isinstance(node, ast.JoinedStr) and node.values:
+            node = node.values[0]
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.lstrip().startswith("-"):
+            return node.value
+        return None
+
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        pairs = []
+        if isinstance(node, ast.Call):
+            pairs = [(k.arg, k.value) for k in node.keywords]
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            positional = node.args.posonlyargs + node.args.args
+            pairs = list(zip([a.arg for a in positional[len(positional) - len(node.args.defaults):]],
+                             node.args.defaults, strict=True))
+            pairs += [(a.arg, d) for a, d in zip(node.args.kwonlyargs, node.args.kw_defaults, strict=True) if d]
+        found += [(value.lineno, text) for name, value in pairs if name == "where" and (text := flag(value))]
+    return found
+
+
+def test_library_errors_name_api_arguments_not_command_line_flags():
+    cli = PACKAGE / "cli"
+    bad = {f"{path.relative_to(SRC)}:{line}: where={text!r}" for path in PACKAGE.rglob("*.py")
+           if cli not in path.parents for line, text in _flag_wheres(path)}
+    assert bad == set()
+
+
+def test_the_flag_finder_sees_keywords_f_strings_and_defaults(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text('E(1, where="--axis")\nE(where=f"--{x}")\nE(where="axes")\nE(where=name)\n'
+                    'def f(a, where="-p"): pass\ndef g(*, where="--as"): pass\ndef h(where="table"): pass\n')
+    assert sorted(_flag_wheres(path)) == [(1, "--axis"), (2, "--"), (5, "-p"), (6, "--as")]
+

@@ -231,7 +231,7 @@ def wrong_cells(source: Source, hypothesis: Hypothesis) -> dict:
 def _as_source(table, options: dict) -> Source:
     scale = options.get("scale")
     if scale is not None and not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
-        raise ArgumentError(f"{shorten(scale, 40)}: the scale must be a finite number > 0", where="--scale")
+        raise ArgumentError(f"{shorten(scale, 40)}: the scale must be a finite number > 0", where="scale")
     if isinstance(table, (str, os.PathLike)):
         return read_table(table, **options)
     try:
@@ -277,19 +277,19 @@ def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:
             name, array = "alpha", array * array
         if name not in ("mu", "theta", "alpha", "f0", "eta"):
             raise ArgumentError(f"axis {shorten(repr(name), 40)}: known axes are mu, theta, alpha, r (alpha = r^2), "
-                                "f0, eta", where="--axis")
+                                "f0, eta", where="axes")
         if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
-            raise ArgumentError(f"axis {name}: at least two finite values", where="--axis")
+            raise ArgumentError(f"axis {name}: at least two finite values", where="axes")
         low, high, text = AXIS_DOMAINS[name]
         if array.min() < low or array.max() > high:
             raise ArgumentError(f"axis {name}: values from {array.min():.6g} to {array.max():.6g} leave its domain "
-                                f"{text}", where="--axis")
+                                f"{text}", where="axes")
         steps = np.diff(array)
         if not (np.all(steps > 0) or np.all(steps < 0)):
-            raise ArgumentError(f"axis {name}: values must increase or decrease monotonically", where="--axis")
+            raise ArgumentError(f"axis {name}: values must increase or decrease monotonically", where="axes")
         out[name] = array
     if "mu" in out and "theta" in out:
-        raise ArgumentError("give mu or theta, not both", where="--axis")
+        raise ArgumentError("give mu or theta, not both", where="axes")
     return out
 
 
@@ -332,11 +332,11 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
     except BrdfnormError:
         raise
     except (ValueError, TypeError) as error:
-        raise ArgumentError(shorten(error, 200), where="--as") from None
+        raise ArgumentError(shorten(error, 200), where="pins") from None
     flip = pins.get("flip")
     if flip is not None and not all(part.strip() in ("0", "1") for part in str(flip).split(",")):
         raise ArgumentError(f"flip={shorten(flip, 40)}: 0 or 1 per array axis, comma-separated (e.g. flip=0,1)",
-                            where="--as")
+                            where="pins")
     reference = Reference(m)
     chosen = None
     if channel is not None:
@@ -344,11 +344,11 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         if isinstance(channel, int) or str(channel).isascii() and str(channel).isdigit():
             k = int(channel)
             if not 0 <= k < len(names):
-                raise ArgumentError(f"channel index {k} outside 0..{len(names) - 1}", where="--channel")
+                raise ArgumentError(f"channel index {k} outside 0..{len(names) - 1}", where="channel")
         elif channel in names:
             k = names.index(channel)
         else:
-            raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="--channel")
+            raise ArgumentError(f"no channel {channel!r} (channels: {', '.join(names)})", where="channel")
         chosen = [k]
     step = source.step()
     written = written_step(source)

@@ -146,7 +146,7 @@ def mu_of(kind: str, t: np.ndarray) -> np.ndarray:
         return np.cos(np.clip(t, 0.0, 1.0) * (np.pi / 2))
     if kind == "ltc":
         return 1.0 - t * t
-    raise ArgumentError(f"unknown direction convention {kind!r} (known: {', '.join(DIRECTIONS)})", where="--as")
+    raise ArgumentError(f"unknown direction convention {kind!r} (known: {', '.join(DIRECTIONS)})", where="pins")
 
 
 def alpha_of(kind: str, t: np.ndarray) -> np.ndarray:
@@ -154,7 +154,7 @@ def alpha_of(kind: str, t: np.ndarray) -> np.ndarray:
         return t
     if kind.startswith("r2"):
         return t * t
-    raise ArgumentError(f"unknown roughness convention {kind!r} (known: {', '.join(ROUGHNESS)})", where="--as")
+    raise ArgumentError(f"unknown roughness convention {kind!r} (known: {', '.join(ROUGHNESS)})", where="pins")
 
 
 def _explicit(c: Convention, role: str) -> tuple[str, np.ndarray] | None:
@@ -231,13 +231,13 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
     elif grid_ndim == 3:
         roles = [perm for perm in itertools.permutations(range(3))]
     else:
-        raise ArgumentError(f"tables of 1, 2 or 3 axes are audited; this one has {grid_ndim}", where="--shape")
+        raise ArgumentError(f"tables of 1, 2 or 3 axes are audited; this one has {grid_ndim}", where="shape")
     names = {"mu": 0, "theta": 0, "alpha": 1, "roughness": 1, "r": 1, "f0": 2, "eta": 2}
     if "axes" in pinned:
         wanted = [names.get(a.strip()) for a in pinned["axes"].split(",")]
         if None in wanted or len(wanted) != grid_ndim:
             raise ArgumentError(f"axes={pinned['axes']}: name each of the {grid_ndim} array axes mu, theta, alpha, "
-                                "roughness, f0 or eta", where="--as")
+                                "roughness, f0 or eta", where="pins")
         if grid_ndim == 1:
             wanted = [1]
     for role in roles:
@@ -260,7 +260,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
         if "flip" in pinned:
             flip_sets = [tuple(bool(int(x)) for x in pinned["flip"].split(","))]
             if len(flip_sets[0]) != grid_ndim:
-                raise ArgumentError(f"flip=: one 0/1 per array axis ({grid_ndim})", where="--as")
+                raise ArgumentError(f"flip=: one 0/1 per array axis ({grid_ndim})", where="pins")
         given = explicit or {}
         fixed_axes = []
         if d is not None and ("mu" in given or "theta" in given):
@@ -288,7 +288,7 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
                                   schlick_f0=float(pinned.get("schlick_f0", SCHLICK_F0)),
                                   free_f0="schlick_f0" not in pinned))
     if not out:
-        raise ArgumentError("the pinned parts leave no convention to test", where="--as")
+        raise ArgumentError("the pinned parts leave no convention to test", where="pins")
     return out
 
 
@@ -296,7 +296,7 @@ def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[st
     if key not in pinned:
         return list(known)
     if pinned[key] not in known:
-        raise ArgumentError(f"{key}={pinned[key]}: known values are {', '.join(known)}", where="--as")
+        raise ArgumentError(f"{key}={pinned[key]}: known values are {', '.join(known)}", where="pins")
     return [pinned[key]]
 
 
@@ -314,47 +314,47 @@ def parse_pins(items: list[str] | dict | None) -> dict[str, str]:
         key = str(key).strip()
         if key not in PIN_KEYS or value in ("", None):
             raise ArgumentError(f"expected KEY=VALUE with KEY one of {', '.join(PIN_KEYS)}; got {key!r}",
-                                where="--as")
+                                where="pins")
         out[key] = str(value).strip()
     for key in ("mu_floor", "alpha_floor"):
         if key in out:
             try:
                 value = float(out[key])
             except ValueError:
-                raise ArgumentError(f"{key} must be a number", where="--as") from None
+                raise ArgumentError(f"{key} must be a number", where="pins") from None
             if not 0 <= value < 1:
-                raise ArgumentError(f"{key} must lie in [0, 1)", where="--as")
+                raise ArgumentError(f"{key} must lie in [0, 1)", where="pins")
     if "eta" in out:
         try:
             eta = float(out["eta"])
         except ValueError:
-            raise ArgumentError("eta must be a number", where="--as") from None
+            raise ArgumentError("eta must be a number", where="pins") from None
         if "k" in out:  # a conductor's η + ik
             if not (np.isfinite(eta) and 0.0 < eta <= 1000.0):
-                raise ArgumentError("eta must lie in (0, 1000] (the real part of a conductor's η + ik)", where="--as")
+                raise ArgumentError("eta must lie in (0, 1000] (the real part of a conductor's η + ik)", where="pins")
         elif not (np.isfinite(eta) and 1.0 < eta <= 1000.0):
             raise ArgumentError("eta must lie in (1, 1000] (an E_dielectric table of an index of refraction)",
-                                where="--as")
+                                where="pins")
     if "k" in out:
         try:
             k = float(out["k"])
         except ValueError:
-            raise ArgumentError("k must be a number", where="--as") from None
+            raise ArgumentError("k must be a number", where="pins") from None
         if not (np.isfinite(k) and 0.0 <= k <= 1000.0) or "eta" not in out:
             raise ArgumentError("k (a conductor's extinction, in [0, 1000]) goes with eta: --as eta=0.2 --as k=3.9",
-                                where="--as")
+                                where="pins")
     if "schlick_f0" in out:
         try:
             value = float(out["schlick_f0"])
         except ValueError:
-            raise ArgumentError("schlick_f0 must be a number", where="--as") from None
+            raise ArgumentError("schlick_f0 must be a number", where="pins") from None
         if not 0.0 <= value <= 1.0:
-            raise ArgumentError("schlick_f0 must lie in [0, 1]", where="--as")
+            raise ArgumentError("schlick_f0 must lie in [0, 1]", where="pins")
     if "channels" in out:
         for meaning in out["channels"].split(","):
             if meaning.strip() not in MEANINGS and meaning.strip() != "-":
                 raise ArgumentError(f"channels: unknown meaning {meaning!r} (known: {', '.join(MEANINGS)}, - to "
-                                    "skip a channel)", where="--as")
+                                    "skip a channel)", where="pins")
     return out
 
 

@@ -132,7 +132,7 @@ def _original_text(path: str, decoded: str | None = None,
     if shift >= 0 and (raw.endswith(decoded) or all(raw[s + shift:e + shift] == decoded[s:e]
                                                       for s, e in spans or [])):
         return raw, shift
-    raise ArgumentError("cannot map the table's numbers back onto the file's bytes", where="--fix")
+    raise ArgumentError("cannot map the table's numbers back onto the file's bytes", where="fix")
 
 
 def _splice(text: str, spans: list[tuple[int, int]], changed: np.ndarray, values: np.ndarray, stored: str,
@@ -178,7 +178,7 @@ def write(source: Source, table: np.ndarray, output: str, meta: dict) -> bytes |
     """The file contents of the fixed table (``table``: (*grid, channels) in table units)."""
     writer = WRITERS.get(source.fmt)
     if writer is None:
-        raise ArgumentError(f"--fix cannot write {source.fmt}", where="--fix")
+        raise ArgumentError(f"--fix cannot write {source.fmt}", where="fix")
     return writer(source, table, meta)
 
 

@@ -115,7 +115,7 @@ def _exponent_bounded(exponent: ast.expr) -> None:
         exponent = exponent.operand
     if isinstance(exponent, ast.Constant) and abs(float(exponent.value)) > MAX_EXPONENT:
         raise ArgumentError(f"exponent {shorten(exponent.value, 40)} larger than {MAX_EXPONENT:g} in magnitude",
-                            where="--formula")
+                            where="formula")
 
 
 def _glsl_signature(text: str, name: str, where: str) -> tuple[str, list[tuple[str, str]]]:
@@ -149,20 +149,20 @@ def compile_glsl(path: str, function: str, bindings: dict[str, str | float]):
     for kind, pname in params:
         if pname not in bindings:
             raise ArgumentError(f"argument {pname} of {function} is not bound (give --args {pname}=mu|r|alpha|NUMBER)",
-                                where="--args")
+                                where="bindings")
         value = bindings[pname]
         if isinstance(value, float):
             call.append(f"{kind}({value!r})")
         else:
             if kind != "float" or len(carried) == len(slots):
                 raise ArgumentError(f"argument {pname} ({kind}) can take a number; only float arguments take "
-                                    "mu, r, alpha or theta", where="--args")
+                                    "mu, r, alpha or theta", where="bindings")
             call.append(slots[len(carried)])
             carried.append(value)
     result = {"float": "vec3({0}, 0.0, 0.0)", "vec2": "vec3({0}, 0.0)", "vec3": "{0}",
               "vec4": "({0}).xyz"}.get(returns)
     if result is None:
-        raise ArgumentError(f"{function} returns {returns}; float, vec2, vec3 or vec4 expected", where="--function")
+        raise ArgumentError(f"{function} returns {returns}; float, vec2, vec3 or vec4 expected", where="function")
     shim = ("\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y) { return "
             + result.format(f"{function}({', '.join(call)})") + "; }\n")
     program = compile_shader(text + shim, path=path)
@@ -190,7 +190,7 @@ def parse_args(text: str | None) -> dict[str, str | float]:
         name, sep, value = item.partition("=")
         value = value.strip()
         if not sep:
-            raise ArgumentError(f"expected NAME=VALUE, got {item!r}", where="--args")
+            raise ArgumentError(f"expected NAME=VALUE, got {item!r}", where="args")
         if value in ARGUMENTS:
             out[name.strip()] = value
         else:
@@ -198,9 +198,9 @@ def parse_args(text: str | None) -> dict[str, str | float]:
                 number = float(value)
             except ValueError:
                 raise ArgumentError(f"{name}: {value!r} is none of {', '.join(ARGUMENTS)} nor a number",
-                                    where="--args") from None
+                                    where="args") from None
             if not math.isfinite(number):
-                raise ArgumentError(f"{name}: not finite", where="--args")
+                raise ArgumentError(f"{name}: not finite", where="args")
             out[name.strip()] = number
     return out
 
@@ -229,7 +229,7 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
     receives quantity -> (signed error, μ grid or None, α grid) for the figures."""
     for q in quantities:
         if q not in QUANTITIES:
-            raise ArgumentError(f"unknown quantity {q!r} (known: {', '.join(QUANTITIES)})", where="--quantity")
+            raise ArgumentError(f"unknown quantity {q!r} (known: {', '.join(QUANTITIES)})", where="quantities")
     if size is None:  # nodes per axis: dense where the reference is cheap (E: ~25 µs a cell, F90: ~3 ms)
         size = 33 if any(Reference.expensive(q) for q in quantities) else (129 if uses & {"mu", "theta"} else 257)
     env = domain(uses, size)
@@ -240,7 +240,7 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
         values = [np.broadcast_to(values, alpha.shape)]
     if len(values) < len(quantities):
         raise ArgumentError(f"the formula gives {len(values)} components; {len(quantities)} quantities asked",
-                            where="--quantity")
+                            where="quantities")
     for value in values[:len(quantities)]:
         bad = ~np.isfinite(np.broadcast_to(value, alpha.shape))
         if bad.any():
@@ -250,7 +250,7 @@ def audit_formula(evaluate, uses: set[str], quantities: list[str], reference: Re
             shown = float(np.broadcast_to(value, alpha.shape)[k])
             raise ArgumentError(f"the formula is not finite at {int(bad.sum())} of {bad.size} points ({shown} at "
                                 f"{at}): an overflow, a division by zero or a function outside its domain",
-                                where="--formula")
+                                where="formula")
     out = []
     for q, value in zip(quantities, values, strict=False):
         exact, error = reference.meaning(q, shadowing, env.get("mu"), alpha)

@@ -113,14 +113,14 @@ def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Refer
     given = [m.strip() for m in pins["channels"].split(",")]
     if len(given) != channels:
         raise ArgumentError(f"channels={pins['channels']}: give one meaning per channel ({channels}), - to skip",
-                            where="--as")
+                            where="pins")
     for m in given:
         if m == "E_conductor" and "k" not in pins:
             raise ArgumentError("channels: E_conductor needs the conductor's η + ik: --as eta=… --as k=…",
-                                where="--as")
+                                where="pins")
         if reference is not None and not reference.supports(m):
             raise ArgumentError(f"channels: {m} needs a lobe with an exact Fresnel factor of that kind "
-                                f"(-p fresnel=...); {reference.model.name} has none", where="--as")
+                                f"(-p fresnel=...); {reference.model.name} has none", where="pins")
     return [[] if m == "-" else [m] for m in given]
 
 
@@ -148,7 +148,7 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     if not candidates:
         sizes = ", ".join(f"{k}: {len(v)}" for k, v in (explicit or {}).items())
         raise ArgumentError(f"no array axis has as many samples as the --axis values ({sizes}; shape {grid})",
-                            where="--axis")
+                            where="axes")
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)

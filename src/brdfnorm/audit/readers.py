@@ -72,7 +72,7 @@ def format_of(path: str, fmt: str | None) -> str:
     if fmt is not None:
         if fmt not in FORMATS and fmt not in FORMATS.values():
             raise ArgumentError(f"unknown format {fmt!r} (known: {', '.join(sorted(set(FORMATS.values())))})",
-                                where="--format")
+                                where="fmt")
         return FORMATS.get(fmt, fmt)
     extension = Path(path).suffix.lower().lstrip(".")
     if extension not in FORMATS:
@@ -126,14 +126,14 @@ def read_table(path: str | os.PathLike, *, fmt: str | None = None, array: str | 
     regular_file(where)  # a missing file or a directory is said so before its extension is judged
     kind = format_of(where, fmt)
     if dtype is not None and dtype not in DTYPES:
-        raise ArgumentError(f"unknown dtype {shorten(repr(dtype))} (known: {', '.join(DTYPES)})", where="--dtype")
+        raise ArgumentError(f"unknown dtype {shorten(repr(dtype))} (known: {', '.join(DTYPES)})", where="dtype")
     if order not in ("C", "F"):
-        raise ArgumentError("--order is C (last index fastest) or F (first index fastest)", where="--order")
+        raise ArgumentError("--order is C (last index fastest) or F (first index fastest)", where="order")
     if shape is not None:
-        element_count(shape, MAX_ELEMENTS, where="--shape", error=ArgumentError, what="--shape")
+        element_count(shape, MAX_ELEMENTS, where="shape", error=ArgumentError, what="--shape")
     if (offset or byteorder not in ("<", "little")) and kind != "raw":
         raise ArgumentError("--offset and --byte-order place a raw binary file's values (format raw)",
-                            where="--offset")
+                            where="offset")
     byteorder = raw_binary.byte_order(byteorder)
     data = read_bounded(where, MAX_FILE_BYTES[kind])
     with parsing(where):
@@ -316,9 +316,9 @@ def parse_shape(text: str | None) -> tuple[int, ...] | None:
         return None
     parts = [part.strip() for part in text.replace("x", ",").split(",")]
     if any(not part.isascii() or not part.isdigit() or len(part) > 18 for part in parts):
-        raise ArgumentError(f"expected sizes like 64,64,4, got {shorten(repr(text))}", where="--shape")
+        raise ArgumentError(f"expected sizes like 64,64,4, got {shorten(repr(text))}", where="shape")
     shape = tuple(int(part) for part in parts)
-    element_count(shape, MAX_ELEMENTS, where="--shape", error=ArgumentError, what="--shape")
+    element_count(shape, MAX_ELEMENTS, where="shape", error=ArgumentError, what="--shape")
     return shape
 
 

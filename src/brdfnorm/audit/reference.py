@@ -62,7 +62,7 @@ class Reference:
             from ..errors import ArgumentError
 
             raise ArgumentError("audits tabulate the lobe with its Fresnel off (Fresnel enters as the split-sum "
-                                "channels and E_f0's Schlick axis); drop -p fresnel=...", where="--model")
+                                "channels and E_f0's Schlick axis); drop -p fresnel=...", where="model")
         self.model = model.with_params(fresnel="none") if "fresnel" in names else model
         # a rough dielectric whose refraction's shadowing is not given: that form is searched too
         self.refraction = ("refraction_shadowing" in names
@@ -252,4 +252,4 @@ def raise_unsupported(model: Model) -> None:
     from ..errors import ArgumentError
 
     raise ArgumentError(f"{model.name} has no 'alpha' parameter; audits cover microfacet lobes over (μ, α) "
-                        "(ggx, beckmann, ...)", where="--model")
+                        "(ggx, beckmann, ...)", where="model")

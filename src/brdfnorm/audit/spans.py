@@ -29,7 +29,7 @@ class _Json:
         self.i = _SPACE.match(self.text, self.i).end()
 
     def fail(self) -> None:
-        raise ArgumentError(f"--fix: the JSON file does not parse at offset {self.i}", where="--fix")
+        raise ArgumentError(f"--fix: the JSON file does not parse at offset {self.i}", where="fix")
 
     def value(self, path: list, collect: list | None, depth: int) -> None:
         if depth > 64:
@@ -114,7 +114,7 @@ def json_spans(text: str, key: list) -> list[tuple[int, int]]:
     scanner = _Json(text, key)
     scanner.value([], None, 0)
     if scanner.spans is None:
-        raise ArgumentError(f"--fix: no array at {'.'.join(map(str, key)) or '(root)'}", where="--fix")
+        raise ArgumentError(f"--fix: no array at {'.'.join(map(str, key)) or '(root)'}", where="fix")
     return scanner.spans
 
 

@@ -91,7 +91,7 @@ def certify(claim: Claim, digits: int = 30) -> Claim:
     from ..engine.routes import certified
     from ..extras import require
 
-    flint = require("flint", "certified", where="--certified")
+    flint = require("flint", "certified", where="certified")
     from ..models import REGISTRY
 
     model_name, degrees, closed_form = CERTIFIABLE[claim.id]

@@ -77,7 +77,7 @@ def audit_command(
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Audit a table or a fitted formula against exact values; name its convention; optionally fix it."""
-    with guarded(debug):
+    with guarded(debug, names={"model": "--model"}):
         m = load_model(model, param)
         if report is not None:  # before the work: a directory that cannot be written is refused now
             from ..output.directories import check_target

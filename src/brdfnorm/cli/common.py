@@ -190,7 +190,13 @@ CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--
              "scheduler": "--scheduler", "connect_timeout": "--connect-timeout", "checkpoint": "--checkpoint",
              "chunk_cells": "--chunk-cells", "backend": "--backend",
              "axes": "--axis", "clamp": "--clamp", "channels": "--channels", "tables": "--table", "half": "--half",
-             "grid": "--grid", "format": "--format"}
+             "grid": "--grid", "format": "--format",
+             # the audit and lut libraries' arguments (audit(), read_table(), fit_table(), layout.parse())
+             "pins": "--as", "channel": "--channel", "scale": "--scale", "shape": "--shape",
+             "fmt": "--format", "dtype": "--dtype", "order": "--order", "offset": "--offset", "fix": "--fix",
+             "formula": "--formula", "function": "--function", "args": "--args", "bindings": "--args",
+             "quantities": "--quantity", "table": "--table", "lut": "--lut", "layout": "--layout",
+             "certified": "--certified"}
 
 
 class _Console(Console):
@@ -217,8 +223,12 @@ def fail(message: str, code: int = 2) -> typer.Exit:
 
 
 @contextlib.contextmanager
-def guarded(debug: bool = False) -> Iterator[None]:
-    """Run a command body: project errors become one line + exit 2, anything else one line + exit 1."""
+def guarded(debug: bool = False, names: dict[str, str] | None = None) -> Iterator[None]:
+    """Run a command body: project errors become one line + exit 2, anything else one line + exit 1.
+
+    An error's ``where`` (an API argument name) is shown as the command's flag: ``names`` (this command's own
+    spellings, e.g. audit's ``--model``), else :data:`CLI_NAMES`."""
+    flags = {**CLI_NAMES, **(names or {})}
 
     def one_line_warning(message, category, filename, lineno, file=None, line=None):
         typer.echo(f"warning: {str(message).splitlines()[0]}", err=True)
@@ -234,8 +244,8 @@ def guarded(debug: bool = False) -> Iterator[None]:
     except BrdfnormError as error:
         if debug:
             raise
-        if error.where in CLI_NAMES:
-            error.where = CLI_NAMES[error.where]
+        if error.where in flags:
+            error.where = flags[error.where]
         raise fail(str(error).replace("\n", " ")) from None
     except ModuleNotFoundError as error:  # an optional package imported deeper down: the install hint, exit 2
         from ..extras import missing_extra

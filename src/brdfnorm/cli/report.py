@@ -31,7 +31,7 @@ def report(
     debug: bool = DEBUG_OPTION,
 ) -> None:
     """Write an HTML report (index.html + PNG figures) studying the normalization of the seed lobes or models."""
-    with guarded(debug):
+    with guarded(debug, names={"audit": "--audit"}):
         from ..report import build_report  # matplotlib loads only when a report is asked for
 
         loaded = [(name, load_model(name, param)) for name in models or []]

@@ -49,11 +49,11 @@ TIE = 1e-9
 def table_samples(lut: Lut, table: str = "E") -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, str]]:
     """(x, t, y) over the cells of a two-axis table: x the direction axis as μ, t the other axis."""
     if table not in lut:
-        raise ArgumentError(f"no table {table!r} in the lut (tables: {', '.join(lut)})", where="--table")
+        raise ArgumentError(f"no table {table!r} in the lut (tables: {', '.join(lut)})", where="table")
     axes = lut.table_axes[table]
     if len(axes) != 2:
         raise ArgumentError(f"table {table} has {len(axes)} axes ({', '.join(axes) or 'none'}); a fit takes two",
-                            where="--lut")
+                            where="lut")
     values = np.asarray(lut[table], dtype=float)  # a .h/.exr table is float32; the fit runs in float64
     first, second = axes
     if second in ("mu", "theta") and first not in ("mu", "theta"):
@@ -72,7 +72,7 @@ def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "
     (with ``prune``, those proved unable to enter the front are listed in ``tried`` unfitted: :data:`PRUNE_MARGIN`)."""
     x, t, y, names = table_samples(lut, table)
     if np.any(x < 0):
-        raise ArgumentError("the direction axis must be μ ≥ 0 (rationals in √μ)", where="--lut")
+        raise ArgumentError("the direction axis must be μ ≥ 0 (rationals in √μ)", where="lut")
     limit = min(max_coefficients, x.size)
     if form.strip() != "auto":
         candidates = [parse_form(form, two_d=True)]
@@ -82,10 +82,10 @@ def fit_table(lut: Lut, *, table: str = "E", form: str = "auto", metric: str = "
             candidates = smith_candidates(limit) + candidates
     if any(isinstance(c, SmithForm) for c in candidates) and (names[1] != "alpha" or np.any(x > 1)):
         raise ArgumentError(f"form {form!r} fits E(μ, α): the table's axes must be mu (or theta) and alpha, "
-                            f"not {names[0]} and {names[1]}", where="--form")
+                            f"not {names[0]} and {names[1]}", where="form")
     tried, results = _fit_candidates(candidates, x, t, y, metric, names, prune=prune and form.strip() == "auto")
     if not results:
-        raise ArgumentError("every candidate form has a pole over the table", where="--form")
+        raise ArgumentError("every candidate form has a pole over the table", where="form")
     front, best_so_far = [], np.inf
     for count in sorted({len(r.coefficients) for r in results}):
         at_count = [r for r in results if len(r.coefficients) == count]  # in candidate order (TIE)

@@ -42,13 +42,13 @@ def parse(text: str | None) -> dict | None:
         key, sep, value = part.partition("=")
         key, value = key.strip(), value.strip()
         if not sep or key not in ("x", "y", "v", "u") or not value:
-            raise ArgumentError(f"expected x=AXIS,y=AXIS,v=down|up or 'axes', got {part!r}", where="--layout")
+            raise ArgumentError(f"expected x=AXIS,y=AXIS,v=down|up or 'axes', got {part!r}", where="layout")
         key = {"u": "x"}.get(key, key)
         if key in spec:
-            raise ArgumentError(f"{key} given twice", where="--layout")
+            raise ArgumentError(f"{key} given twice", where="layout")
         if key == "v" and value not in V_DIRECTIONS:
             raise ArgumentError(f"v is down (row 0, the image's top, holds the first y value) or up, got {value!r}",
-                                where="--layout")
+                                where="layout")
         spec[key] = value
     return spec
 
@@ -67,11 +67,11 @@ def resolve(lut: Lut, spec: Mapping[str, str] | None, fmt: str) -> dict | None:
     y = spec.get("y", preferred[0] if preferred else None)
     for key, name in (("x", x), ("y", y)):
         if name is not None and name not in names:
-            raise ArgumentError(f"{key}={name}: no axis of that name (axes: {', '.join(names)})", where="--layout")
+            raise ArgumentError(f"{key}={name}: no axis of that name (axes: {', '.join(names)})", where="layout")
     if x is not None and x == y:
-        raise ArgumentError(f"x and y are both {x}", where="--layout")
+        raise ArgumentError(f"x and y are both {x}", where="layout")
     if "y" in spec and y is None:
-        raise ArgumentError("a y axis needs a second axis", where="--layout")
+        raise ArgumentError("a y axis needs a second axis", where="layout")
     v = spec.get("v", "down")
     file_axes = [n for n in names if n not in (x, y)] + [n for n in (y, x) if n is not None]
     text = f"x (u, columns): {x}"

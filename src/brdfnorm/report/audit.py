@@ -26,12 +26,12 @@ def audit_files(paths: Sequence[str | Path]) -> list[Path]:
         if path.is_dir():
             found = sorted(path.glob("*.brdf"))
             if not found:
-                raise ArgumentError(f"no .brdf files in directory {str(path)!r}", where="--audit")
+                raise ArgumentError(f"no .brdf files in directory {str(path)!r}", where="audit")
             files.extend(found)
         elif path.is_file():
             files.append(path)
         else:
-            raise ArgumentError(f"no such file or directory: {str(path)!r}", where="--audit")
+            raise ArgumentError(f"no such file or directory: {str(path)!r}", where="audit")
     return files
 
 
