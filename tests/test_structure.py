@@ -264,3 +264,38 @@ def test_the_flag_finder_sees_keywords_f_strings_and_defaults(tmp_path):
                     'def f(a, where="-p"): pass\ndef g(*, where="--as"): pass\ndef h(where="table"): pass\n')
     assert sorted(_flag_wheres(path)) == [(1, "--axis"), (2, "--"), (5, "-p"), (6, "--as")]
 
+
+
+def _literal_defaults(path: Path, names: dict[str, float]) -> list[tuple[int, str]]:
+    """(line, parameter) of each parameter in ``names`` whose default is written as the literal value its named
+    default constant holds (it should name the constant)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            positional = node.args.posonlyargs + node.args.args
+            pairs = list(zip(positional[len(positional) - len(node.args.defaults):], node.args.defaults, strict=True))
+            pairs += [(a, d) for a, d in zip(node.args.kwonlyargs, node.args.kw_defaults, strict=True) if d]
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.value is not None:
+            pairs = [(ast.arg(arg=node.target.id), node.value)]  # a dataclass field
+        else:
+            continue
+        found += [(value.lineno, a.arg) for a, value in pairs if a.arg in names and isinstance(value, ast.Constant)
+                  and value.value == names[a.arg]]
+    return found
+
+
+def test_the_default_tolerance_and_budget_have_one_home():
+    from brdfnorm.validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
+
+    names = {"rtol": DEFAULT_RTOL, "max_evaluations": DEFAULT_MAX_EVALUATIONS}
+    bad = {f"{path.relative_to(SRC)}:{line}: {name}" for path in PACKAGE.rglob("*.py")
+           for line, name in _literal_defaults(path, names)}
+    assert bad == set()
+
+
+def test_the_literal_default_finder_sees_parameters_and_fields(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text("def f(rtol=1e-10, *, max_evaluations=20_000_000): pass\nclass J:\n    rtol: float = 1e-10\n"
+                    "def g(rtol=1e-8, max_evaluations=RTOL): pass\n")
+    assert sorted(_literal_defaults(path, {"rtol": 1e-10, "max_evaluations": 20_000_000})) == [
+        (1, "max_evaluations"), (1, "rtol"), (3, "rtol")]

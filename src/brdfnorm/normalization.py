@@ -25,6 +25,7 @@ from .engine.methods import albedo, sweep_model
 from .errors import ArgumentError
 from .models.base import Model, Over
 from .output.formats import Column, Records, channel_value, degrees
+from .validate import DEFAULT_RTOL
 
 AT = ("normal", "max", "view")
 #: Batches a sweep is split into when progress is reported (``on_progress``).
@@ -92,7 +93,7 @@ def normalize(
     phi=0.0,
     *,
     over: Over = "light",
-    rtol: float = 1e-10,
+    rtol: float = DEFAULT_RTOL,
     method: str = "auto",
     search_points: int = 46,
     on_progress: Callable[[int, int], None] | None = None,

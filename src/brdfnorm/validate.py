@@ -24,6 +24,10 @@ MAX_INTEGRALS = 10_000_000
 MAX_ARRAY_VALUES = 64 * 1024**2
 #: Finest relative tolerance float64 quadrature can honour.
 RTOL_FLOOR = 1e-14
+#: The relative tolerance an albedo integral gets when none is asked for (the API's and the CLI's ``rtol``).
+DEFAULT_RTOL = 1e-10
+#: The integrand evaluations one albedo integral may spend before it stops unconverged (``max_evaluations``).
+DEFAULT_MAX_EVALUATIONS = 20_000_000
 HALF_PI = np.pi / 2
 
 

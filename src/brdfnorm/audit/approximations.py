@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..lut.splitsum import DFG_F0, DFG_F90
 from .conventions import Convention, coordinates
 
 
@@ -55,7 +56,7 @@ class Approximation:
 
 APPROXIMATIONS = (
     Approximation("karis-envbrdfapprox", "Karis 2014, Physically Based Shading on Mobile (Unreal's EnvBRDFApprox)",
-                  ("DFG_f0", "DFG_f90"), "ggx", _karis),
+                  (DFG_F0, DFG_F90), "ggx", _karis),
     Approximation("yocto-gl-cosintegral", "yocto-gl microfacet_cosintegral, after Kulla & Conty 2017",
                   ("E",), "ggx", _yocto),
 )

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ArgumentError
+from ..lut.splitsum import DFG_F0, DFG_F90
+from ..models.microfacet import SHADOWING  # the lobe's own choices: the audit searches what the model offers
 
 DIRECTIONS = ("mu-node", "mu-texel", "theta-node", "theta-texel", "ltc")
 ROUGHNESS = ("alpha-node", "alpha-texel", "r2-node", "r2-texel")
@@ -37,7 +39,6 @@ F0_POSITIONS = ("f0-node", "f0-texel")
 #: F0 = clamp(t, 1e-4, 0.99)⁴, η = (1 + √F0)/(1 − √F0), light entering the denser medium), the same seen from inside
 #: (``eta-cycles-exiting``: 1/η), or values given with ``--axis eta=…`` (``eta-explicit``).
 ETA_AXES = ("eta-cycles", "eta-cycles-exiting")
-SHADOWING = ("height-correlated", "separable")
 #: For rough dielectrics (a model with ``refraction_shadowing``) the refraction's G2 is searched too: Heitz's Beta
 #: form (``height-correlated``, brdfnorm's default), G1·G1 for both (``separable``: OpenPBR, Mitsuba), and
 #: height-correlated reflection with the refraction's G2 as the reflection's 1/(1 + Λ_V + Λ_L) (Blender Cycles'
@@ -50,7 +51,7 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
 #: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
-MEANINGS = ("E", "1-E", "DFG_f0", "DFG_f90", "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
+MEANINGS = ("E", "1-E", DFG_F0, DFG_F90, "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
             "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass")
 #: Meanings of a rough-glass table over an η axis: R + T, R and T of the lobe at each cell's η.
 GLASS_MEANINGS = ("E_glass", "R_glass", "T_glass")

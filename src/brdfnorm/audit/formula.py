@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import ArgumentError
 from ..inputs import read_bounded, shorten
 from ..inputs.literals import Scanner
+from ..lut.splitsum import DFG_F0, DFG_F90
 from .reference import Reference
 
 FUNCTIONS = {
@@ -40,7 +41,7 @@ MAX_EXPONENT = 64.0
 MAX_TEXT = 4000
 MAX_NODES = 2000
 ARGUMENTS = ("mu", "r", "alpha", "theta")
-QUANTITIES = ("E", "1-E", "DFG_f0", "DFG_f90", "E_avg")
+QUANTITIES = ("E", "1-E", DFG_F0, DFG_F90, "E_avg")
 
 
 def compile_expression(text: str, names: tuple[str, ...]):

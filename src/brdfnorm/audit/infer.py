@@ -44,6 +44,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import ArgumentError
+from ..lut.splitsum import DFG_F0, DFG_F90
 from .conventions import (
     ALPHA_FLOORS,
     ETA,
@@ -102,7 +103,7 @@ def noise_sigma(residual: np.ndarray) -> float:
 
 def allowed_meanings(grid_ndim: int, pins: dict, channels: int, reference: Reference | None = None) -> list[list[str]]:
     """Candidate meanings per channel (the exact dielectric ones only where pinned: see :func:`infer`)."""
-    default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", "DFG_f0", "DFG_f90", "DFG_cloth", "E_schlick"],
+    default = {1: ["E_avg", "1-E_avg"], 2: ["E", "1-E", DFG_F0, DFG_F90, "DFG_cloth", "E_schlick"],
                3: list(GLASS_MEANINGS) if reference is not None and reference.glass else ["E_f0"]}[grid_ndim]
     if "channels" not in pins:
         if "k" in pins and grid_ndim == 2:  # a conductor's η + ik is given: the exact conductor Fresnel
@@ -300,7 +301,7 @@ def _fit_schlick(c: Convention, reference, coords: dict, data: np.ndarray) -> Co
     """``c`` with the f0 at which Schlick's factor fits ``data`` best in least squares: ∫ f cos F_Schlick =
     f0·(E − F90) + F90 is linear in f0, so f0 = ⟨d − F90, E − F90⟩ / ⟨E − F90, E − F90⟩, clipped to [0, 1]."""
     E, _ = _exact(reference, c, "E", coords)
-    bias, _ = _exact(reference, c, "DFG_f90", coords)
+    bias, _ = _exact(reference, c, DFG_F90, coords)
     ok = np.isfinite(data)
     scale = (E - bias)[ok]
     f0 = float(np.sum((data[ok] - bias[ok]) * scale) / max(float(np.sum(scale * scale)), 1e-300)) if ok.any() else 0.0

@@ -28,9 +28,11 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..lut.cloth import cloth_model
+from ..lut.splitsum import DFG_F0, DFG_F90
 from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
 from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
+from ..models.microfacet import SHADOWING
 from .conventions import (
     DIELECTRIC_MEANINGS,
     DIELECTRIC_SHADOWING,
@@ -39,7 +41,6 @@ from .conventions import (
     F0_POSITIONS,
     GLASS_MEANINGS,
     SCHLICK_F0,
-    SHADOWING,
 )
 
 #: Tolerances of the reference cells: E is cheap (closed-form-like routes) and F90 goes through a generic
@@ -99,7 +100,7 @@ class Reference:
         if refraction and self.refraction:
             base = base.with_params(refraction_shadowing=refraction)
         if quantity == "F90":
-            return split_sum_models(base)[0]["DFG_f90"]
+            return split_sum_models(base)[0][DFG_F90]
         if quantity == "E_dielectric":
             return base.with_params(fresnel="dielectric")
         if quantity == "E_conductor":
@@ -200,9 +201,9 @@ class Reference:
         if meaning == "1-E":
             return 1.0 - E, e_err
         F, f_err = self.values("F90", shadowing, mu, alpha)
-        if meaning == "DFG_f90":
+        if meaning == DFG_F90:
             return F, f_err
-        if meaning == "DFG_f0":
+        if meaning == DFG_F0:
             return E - F, e_err + f_err
         if meaning in ("E_f0", "E_schlick"):  # Schlick's F = f0 + (1 − f0)(1 − V·H)⁵, per cell or one f0
             f0 = np.broadcast_to(schlick_f0 if meaning == "E_schlick" else f0, E.shape)
@@ -244,7 +245,7 @@ class Reference:
     def expensive(meaning: str) -> bool:
         """Meanings computed by a generic quadrature per cell (~1–3 ms a cell): the split-sum bias F90, the
         exact dielectric Fresnel and the cloth channel."""
-        return meaning in ("DFG_f0", "DFG_f90", "E_f0", "E_schlick", "DFG_cloth", "E_conductor") + DIELECTRIC_MEANINGS \
+        return meaning in (DFG_F0, DFG_F90, "E_f0", "E_schlick", "DFG_cloth", "E_conductor") + DIELECTRIC_MEANINGS \
             + GLASS_MEANINGS
 
 

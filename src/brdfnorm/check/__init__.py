@@ -36,6 +36,7 @@ import numpy as np
 from .. import validate
 from ..errors import ArgumentError
 from ..models.base import Model, Over
+from ..normalization import AT
 from .cells import SpreadAlbedo
 from .core import Budget, CheckReport, CheckResult, Meter
 from .pointwise import check_pointwise
@@ -48,7 +49,6 @@ __all__ = ["AT", "CHECKS", "DEFAULT_CHECKS", "MAX_POINTS", "THETA_MAX", "UNBOUND
 CHECKS = ("energy", "reciprocity", "positivity", "finiteness", "normalization")
 #: What :func:`check` runs when ``checks`` is not given (normalization only for lobes meant to be normalized).
 DEFAULT_CHECKS = CHECKS[:4]
-AT = ("normal", "max", "view")
 #: Most parameter points one check plans (memory and time stay bounded whatever the arguments).
 MAX_POINTS = 100_000
 

@@ -26,6 +26,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from .. import validate
 from ..errors import ArgumentError, BrdfnormError
 from ..models.base import Model
+from ..normalization import AT
 from ..output import STDOUT, write_file
 from ..output.formats import render
 
@@ -44,12 +45,8 @@ OUTPUT_OPTION = typer.Option(None, "--output", "-o", metavar="FILE",
                              rich_help_panel=OUTPUT_PANEL)
 
 
-class At(str, Enum):
-    """Normalization conventions (brdfnorm.normalization), as ``--at`` choices."""
-
-    normal = "normal"
-    max = "max"
-    view = "view"
+#: Normalization conventions, as ``--at`` choices: the words of :data:`brdfnorm.normalization.AT`.
+At = Enum("At", [(name, name) for name in AT], type=str)
 
 
 class Over(str, Enum):

@@ -14,6 +14,7 @@ from ..models import REGISTRY, Model
 from ..normalization import normalize as compute_normalize
 from ..parallel import CellsJob
 from ..parallel.results import albedo_result, normalization_result, sweep_job
+from ..validate import DEFAULT_RTOL
 from .application import app
 from .common import (
     DEBUG_OPTION,
@@ -46,7 +47,7 @@ METHOD_OPTION = typer.Option("auto", "--method",
                              help=" | ".join(("auto", *METHODS)) + " (where it applies; auto takes the first that "
                                   "does, never certified; azimuthal: isotropic ggx and beckmann without Fresnel, "
                                   "a 1-D integral; microfacet: ggx and beckmann over the half vector).")
-RTOL_OPTION = typer.Option(1e-10, "--rtol",
+RTOL_OPTION = typer.Option(DEFAULT_RTOL, "--rtol",
                            help="Relative tolerance of each albedo integral (at least 1e-14, below 1).")
 OVER_OPTION = typer.Option(Over.light, "--over", help="Integrate over the light (view fixed, default) or the view.")
 

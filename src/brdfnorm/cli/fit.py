@@ -25,6 +25,7 @@ from ..fit.exact import EXACT, exact_form
 from ..output import STDOUT, write_file
 from ..output.formats import to_json
 from ..parallel.results import normalization_result, sweep_job
+from ..validate import DEFAULT_RTOL
 from .application import app
 from .common import (
     DEBUG_OPTION,
@@ -139,7 +140,7 @@ def fit_command(
     max_coefficients: int = typer.Option(None, "--max-coefficients",
                                          help="Largest coefficient count --form auto tries (default 10; 40 "
                                               "in two variables)."),
-    rtol: float = typer.Option(1e-10, "--rtol", help="Relative tolerance of each albedo integral."),
+    rtol: float = typer.Option(DEFAULT_RTOL, "--rtol", help="Relative tolerance of each albedo integral."),
     emit_language: str = typer.Option(None, "--emit", metavar="LANG", help="glsl | hlsl | c | python."),
     output: str = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the emitted code here."),
     plot: str = typer.Option(None, "--plot", metavar="FILE.png", help="Plot α, the fit and its error."),

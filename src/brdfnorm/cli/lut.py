@@ -20,6 +20,7 @@ from ..lut.axes import DIRECTION_AXES, axis_parameter
 from ..lut.table import GRIDS, Lut, compute, grid_values
 from ..output import write_file
 from ..output.formats import format_error
+from ..validate import DEFAULT_RTOL
 from .application import app
 from .common import (
     DEBUG_OPTION,
@@ -217,7 +218,7 @@ def lut_command(
         if digits is not None and method != "certified":
             raise ArgumentError("--digits applies to --method certified only", where="--digits")
         if rtol is None:
-            rtol = 1e-10 if anisotropy is None else 1e-6
+            rtol = DEFAULT_RTOL if anisotropy is None else 1e-6
         with progress_bar(f"{m.name}: table cells") as bar:
             progress = bar or stage_lines(m.name, axes, channels, not no_average)
             if anisotropy is not None:

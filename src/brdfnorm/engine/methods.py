@@ -35,6 +35,7 @@ from ..models.dielectric import MicrofacetDielectric
 from ..models.microfacet import MicrofacetModel
 from ..output.formats import Column, Records, channel_value, degrees, format_value
 from ..registry import Registry
+from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from .compiled import backend as compiled_backend
 from .routes import azimuthal, certified, halfvector_generic
 from .routes.dielectric import albedo_method as _dielectric
@@ -499,11 +500,11 @@ def albedo(
     phi=0.0,
     *,
     over: Over = "light",
-    rtol: float = 1e-10,
+    rtol: float = DEFAULT_RTOL,
     atol: float = 0.0,
     method: str = "auto",
     nonfinite: NonFinitePolicy = "raise",
-    max_evaluations: int = 20_000_000,
+    max_evaluations: int = DEFAULT_MAX_EVALUATIONS,
     digits: int | None = None,
     backend: str | None = None,
 ) -> AlbedoResult:

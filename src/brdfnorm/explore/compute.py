@@ -51,7 +51,7 @@ from ..fit.codegen import emit, fit_context
 from ..models.base import Model
 from ..normalization import THETA_MAX
 from ..output.formats import format_with_error
-from ..validate import choice, count, real_array, real_number, short_repr
+from ..validate import DEFAULT_MAX_EVALUATIONS, choice, count, real_array, real_number, short_repr
 from .catalog import control_of
 from .lobes import finite as _finite
 from .lobes import plane_lobe, surface_lobe
@@ -67,7 +67,7 @@ UNBOUNDED_SLIDER_MAX = 1e4
 #: by the rate measured so far, so its verdict would vary with the machine's load; this one is reproducible —
 #: the page shows what ``brdfnorm check MODEL --only energy -p … --budget 2e7evals`` prints. The built-ins and
 #: examples/ take at most 3.5e6 at their defaults (measured), so it rarely binds; a stale check is cancelled.
-ENERGY_EVALUATIONS = 20_000_000
+ENERGY_EVALUATIONS = DEFAULT_MAX_EVALUATIONS
 #: Energy gained beyond which a lobe fails (the check's, and the command line's, default ``--tolerance``).
 ENERGY_TOLERANCE = 1e-6
 #: A view angle of 90° is the horizon, where the albedo integral degenerates (as in ``normalize``).

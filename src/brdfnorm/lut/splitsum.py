@@ -41,12 +41,16 @@ class SchlickWeighted(Model):
         return self.base.lobe(fixed, params, over)
 
 
+#: The split-sum tables' names: the DFG term that multiplies f0, and the one that multiplies f90.
+DFG_F0, DFG_F90 = "DFG_f0", "DFG_f90"
+
+
 def split_sum_models(model: Model) -> tuple[dict[str, Model], str]:
     """The two DFG models (coefficient of f0, of f90) and how they were made (recorded in the table's meta)."""
     names = {p.name for p in model.parameters}
     if {"fresnel", "f0", "f90"} <= names:
-        return ({"DFG_f0": model.with_params(fresnel="schlick", f0=1.0, f90=0.0),
-                 "DFG_f90": model.with_params(fresnel="schlick", f0=0.0, f90=1.0)},
+        return ({DFG_F0: model.with_params(fresnel="schlick", f0=1.0, f90=0.0),
+                 DFG_F90: model.with_params(fresnel="schlick", f0=0.0, f90=1.0)},
                 "the model's own fresnel=schlick with (f0, f90) = (1, 0) and (0, 1)")
-    return ({"DFG_f0": SchlickWeighted(model, "f0"), "DFG_f90": SchlickWeighted(model, "f90")},
+    return ({DFG_F0: SchlickWeighted(model, "f0"), DFG_F90: SchlickWeighted(model, "f90")},
             "the model as given times 1 - (1 - V.H)^5 and (1 - V.H)^5; its own Fresnel must be off")

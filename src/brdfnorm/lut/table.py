@@ -39,6 +39,7 @@ from ..engine.machinery.kronrod import NODES as KRONROD_NODES
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
+from ..validate import DEFAULT_RTOL
 from .adaptive import adaptive_unit_interval
 from .axes import axis_parameter, checked_axes, per_cell
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
@@ -326,7 +327,7 @@ class Computed:
 
 
 def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
-                   rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (),
+                   rtol: float = DEFAULT_RTOL, method: str = "auto", channels: Sequence[str] = (),
                    average: bool = True, progress: ProgressCallback | None = None,
                    spread: Mapping[str, object] | None = None) -> Computed:
     """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors)."""
@@ -442,7 +443,7 @@ class Lut(Mapping):
 
 
 def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
-            rtol: float = 1e-10, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
+            rtol: float = DEFAULT_RTOL, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
             grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None,
             workers: int | None = 1, scheduler: str | None = None, checkpoint: str | None = None,
             backend: str | None = None) -> Lut:

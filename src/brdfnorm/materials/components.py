@@ -27,6 +27,7 @@ from ..models.charlie import Charlie
 from ..models.eon import EnergyPreservingOrenNayar
 from ..models.fresnel import Fresnel
 from ..models.microfacet import GGXDistribution, shadowing_masking, smith_a2
+from ..validate import DEFAULT_MAX_EVALUATIONS
 
 #: Tolerance of every exact component albedo (the layering's E(μ) inside the integrand).
 ALBEDO_RTOL = 1e-12
@@ -137,7 +138,7 @@ class Microfacet(Component):
 
         rtol = np.full((K, 1), ALBEDO_RTOL)
         result = halfvector.integrate_slopes(g, weight, g.ax == g.ay, rtol=rtol, atol=0.0,
-                                             max_evaluations=20_000_000)
+                                             max_evaluations=DEFAULT_MAX_EVALUATIONS)
         return np.broadcast_to(result.value, (K, 3)).copy(), np.broadcast_to(result.error, (K, 3)).copy()
 
 

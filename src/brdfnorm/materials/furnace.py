@@ -16,6 +16,7 @@ import numpy as np
 from ..brdffile import random_hemisphere
 from ..engine.methods import albedo
 from ..models.base import Model
+from ..validate import DEFAULT_RTOL
 
 #: The views of a furnace: μ from 1 down to cos 89.9° (30 points, denser towards grazing).
 DEFAULT_THETA = np.radians(np.concatenate([np.linspace(0.0, 80.0, 17), np.linspace(82.0, 89.9, 13)]))
@@ -44,7 +45,7 @@ class Furnace:
                 for t, v, e in zip(self.theta, self.value, self.error, strict=True)]
 
 
-def average_albedo(model: Model, *, rtol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+def average_albedo(model: Model, *, rtol: float = DEFAULT_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """E_avg = 2∫₀¹ E(μ) μ dμ by 16-point Gauss–Legendre on the panels μ ∈ [0, 0.05, 0.3, 1]; the error is the
     difference from the 8-point rule on the same nodes' panels plus the albedos' own estimates."""
     mus, weights, weights8, mus8 = [], [], [], []
@@ -72,7 +73,7 @@ def reciprocity(model: Model, pairs: int = 4096, seed: int = 7) -> tuple[float, 
     return float(gap[i] / scale), (L[i], V[i])
 
 
-def furnace(model: Model, theta=None, *, rtol: float = 1e-10, pairs: int = 4096) -> Furnace:
+def furnace(model: Model, theta=None, *, rtol: float = DEFAULT_RTOL, pairs: int = 4096) -> Furnace:
     """The furnace of ``model`` at the views ``theta`` (radians; default :data:`DEFAULT_THETA`)."""
     theta = DEFAULT_THETA if theta is None else np.atleast_1d(np.asarray(theta, dtype=float))
     result = albedo(model, theta, rtol=rtol)
@@ -94,7 +95,7 @@ WHITE_BASES = {
 
 
 def coat_study(load, roughness=(0.1, 0.3, 0.5, 0.8), ior=(1.3, 1.5, 1.6, 2.0), *, base: str = "lambert",
-               theta=None, rtol: float = 1e-10) -> list[dict]:
+               theta=None, rtol: float = DEFAULT_RTOL) -> list[dict]:
     """Per coat (roughness, IOR) and rule: min and max E over the views, the largest loss against the view-side
     rule (E_view − E_rule) and its view. ``load`` is :func:`brdfnorm.load` (the model registry lives above)."""
     theta = np.radians([0.0, 30.0, 50.0, 65.0, 75.0, 82.0, 86.0, 89.0]) if theta is None else np.asarray(theta)

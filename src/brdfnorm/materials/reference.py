@@ -21,6 +21,7 @@ from .. import __version__
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
+from ..validate import DEFAULT_RTOL
 from .furnace import average_albedo
 
 FORMAT = "brdfnorm-material-reference"
@@ -35,7 +36,7 @@ CONVENTIONS = {
 
 
 def reference(model: Model, grid: Mapping[str, Sequence[float]], mu: Sequence[float], *,
-              rtol: float = 1e-10) -> dict:
+              rtol: float = DEFAULT_RTOL) -> dict:
     """The reference document of ``model`` over the product of the ``grid`` values at the view cosines ``mu``."""
     mu = np.asarray(mu, dtype=float).ravel()
     if mu.size == 0 or np.any((mu <= 0) | (mu > 1)) or not np.all(np.isfinite(mu)):

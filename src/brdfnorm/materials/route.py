@@ -19,6 +19,7 @@ import numpy as np
 from ..engine.methods import albedo as engine_albedo
 from ..models.base import Lobe, Model, mirror, normal_lobe
 from ..models.fresnel import average_quadrature
+from ..validate import DEFAULT_RTOL
 from .albedo import CACHE, top_albedo
 from .components import Component, Diffuse, Microfacet
 from .compose import Term, evaluate_terms
@@ -98,7 +99,7 @@ def _term(term: Term, mu: np.ndarray, source: str, size: int, rtol: float):
     return value, error
 
 
-def material_albedo(model: OpenPBR, mu: np.ndarray, params: dict, *, rtol: float = 1e-10):
+def material_albedo(model: OpenPBR, mu: np.ndarray, params: dict, *, rtol: float = DEFAULT_RTOL):
     """(value, error) (K, 3) of the material's albedo over the light at view cosines μ (K,)."""
     K = mu.shape[0]
     value, error = np.zeros((K, 3)), np.zeros((K, 3))

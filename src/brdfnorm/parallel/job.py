@@ -39,6 +39,7 @@ from ..engine.methods import albedo as compute_albedo
 from ..engine.methods import resolve_method
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
+from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 
 Task = Literal["albedo", "max"]
 TASKS = ("albedo", "max")
@@ -119,12 +120,12 @@ class ModelSource:
 class AlbedoSettings:
     """The arguments of :func:`brdfnorm.albedo` a job fixes for all its cells."""
 
-    rtol: float = 1e-10
+    rtol: float = DEFAULT_RTOL
     atol: float = 0.0
     method: str = "auto"
     over: str = "light"
     nonfinite: str = "raise"
-    max_evaluations: int = 20_000_000
+    max_evaluations: int = DEFAULT_MAX_EVALUATIONS
     digits: int | None = None  # method "certified" only
 
     def to_json(self) -> dict:

@@ -18,12 +18,13 @@ from ..engine.methods import AlbedoResult
 from ..errors import ArgumentError
 from ..models import Model
 from ..normalization import AT, NormalizationResult
+from ..validate import DEFAULT_RTOL
 from . import CellsResult, albedo_cells
 from .job import CellsJob
 
 
 def normalize_sweep(model: Model, at: str, name: str, values, theta=None, phi=0.0, *, over: str = "light",
-                    rtol: float = 1e-10, method: str = "auto", workers: int | None = None,
+                    rtol: float = DEFAULT_RTOL, method: str = "auto", workers: int | None = None,
                     scheduler: str | None = None, checkpoint: str | Path | None = None,
                     on_progress: Callable[[int, int], None] | None = None,
                     ) -> tuple[NormalizationResult, CellsResult]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..lut import compute, grid_values
+from ..lut.splitsum import DFG_F0, DFG_F90
 from ..models import REGISTRY
 from . import figures
 from .html import Section, figure, number, relative, table
@@ -129,7 +130,7 @@ def section(ctx) -> Section:
     energy = ctx.image(_image_panels("microfacet-e.png", "E(μ, α) and 1 − E(μ, α) of GGX", mu, alpha,
                                      [("E(μ, α)", lut["E"]), ("1 − E(μ, α)", lut["1-E"])]))
     dfg = ctx.image(_image_panels("microfacet-dfg.png", "the split-sum DFG pair of GGX", mu, alpha,
-                                  [("DFG f0 term", lut["DFG_f0"]), ("DFG f90 term", lut["DFG_f90"])]))
+                                  [("DFG f0 term", lut[DFG_F0]), ("DFG f90 term", lut[DFG_F90])]))
     avg = ctx.image(_avg_figure(alpha, lut["E_avg"]))
     glass_size = QUICK_GLASS_GRID if quick else GLASS_GRID
     g_mu, g_alpha = grid_values(0.0, 1.0, glass_size, "texel"), grid_values(0.0, 1.0, glass_size, "texel")

@@ -93,6 +93,7 @@ import numpy as np
 from scipy.special import hyp1f1
 
 from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
+from ...validate import DEFAULT_MAX_EVALUATIONS
 from .halfvector import CubatureResult, single_scattering_albedo
 from .series import adaptive_gauss_legendre
 
@@ -140,7 +141,7 @@ def applies(model, over) -> bool:
 
 
 def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
-                 atol: float | np.ndarray = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
+                 atol: float | np.ndarray = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
     """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
     by this module's 1-D integral where it has the distribution, else by the half-vector cubature (H1), which
     also takes any case the 1-D route does not settle (none is known). ``atol`` scalar or (K,)."""

@@ -32,6 +32,7 @@ import numpy as np
 
 from ...models.dielectric import MicrofacetDielectric, refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
+from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.grazing_panels import ladder
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, fill_pieces, single_scattering_albedo
@@ -354,7 +355,8 @@ def _kinks(distribution: Distribution, fixed: np.ndarray, alpha, eta, part: str,
 
 
 def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shadowing: str, part: str, *,
-                rtol: float = 1e-10, atol: float = 0.0, max_evaluations: int = 20_000_000) -> CubatureResult:
+                rtol: float = DEFAULT_RTOL, atol: float = 0.0,
+                max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
     """One part (:data:`PARTS`) of E(V) for fixed directions (K, 3) (upper hemisphere) and per-case α, η."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     K = fixed.shape[0]
@@ -384,7 +386,7 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
 
 def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.ndarray, eta: np.ndarray,
                       shadowing: str, *, rtol: float, atol: float | np.ndarray = 0.0,
-                      max_evaluations: int = 20_000_000) -> CubatureResult:
+                      max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
     """R(V) per case (``atol`` scalar or (K,)). From the rarer side (η > 1) F is analytic over every facet, so R is
     the microfacet BRDF's albedo with the exact dielectric Fresnel, by the half-vector route of
     :mod:`brdfnorm.engine.routes.halfvector` (GGX, 16 μ × 16 α at η = 1.5, rtol 1e-9: 1.56 M evaluations against 4.67 M
@@ -415,7 +417,8 @@ def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.n
     return CubatureResult(value, error, evaluations, converged)
 
 
-def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS,
+                  **_: object):
     """``brdfnorm.albedo`` method ``"dielectric"``: R (:func:`reflection_albedo`) and T, each integral to ``rtol``
     of itself, and then to rtol·E/2 absolute where their estimates add up to more than rtol·E: from inside R is the
     F = 1 albedo less the loss, both larger than R (13 of the 4096 cells of a 16³ glass table were over, up to

@@ -40,6 +40,7 @@ import numpy as np
 
 from ...models.dielectric import refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
+from ...validate import DEFAULT_RTOL
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
 ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)
@@ -171,7 +172,7 @@ def _quadrature(distribution: Distribution, alpha: float, eta: float, shadowing:
 
 
 def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "height-correlated",
-                   refraction: str = "auto", *, rtol: float = 1e-10, atol: float = 0.0) -> AverageResult:
+                   refraction: str = "auto", *, rtol: float = DEFAULT_RTOL, atol: float = 0.0) -> AverageResult:
     """E_avg = R̄ + T̄ of the rough dielectric for each (α, η) (arrays broadcast to (M,)); ``refraction`` the
     refraction's G2 (the model's ``refraction_shadowing``)."""
     alpha, eta = (np.atleast_1d(np.asarray(q, dtype=float)) for q in (alpha, eta))

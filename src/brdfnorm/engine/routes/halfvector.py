@@ -59,6 +59,7 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
+from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
 from . import halfvector_global as global_rule
@@ -455,8 +456,8 @@ def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
 
 
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
-                             rtol: float = 1e-10, atol: float | np.ndarray = 0.0,
-                             max_evaluations: int = 20_000_000, use_global: bool = True,
+                             rtol: float = DEFAULT_RTOL, atol: float | np.ndarray = 0.0,
+                             max_evaluations: int = DEFAULT_MAX_EVALUATIONS, use_global: bool = True,
                              compiled: bool = False) -> CubatureResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 

@@ -68,6 +68,7 @@ from typing import Literal
 
 import numpy as np
 
+from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
 from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
@@ -204,9 +205,9 @@ def integrate_hemisphere(
     widths: np.ndarray,
     supports: np.ndarray,
     *,
-    rtol: float = 1e-10,
+    rtol: float = DEFAULT_RTOL,
     atol: float = 0.0,
-    max_evaluations: int = 20_000_000,
+    max_evaluations: int = DEFAULT_MAX_EVALUATIONS,
     nonfinite: NonFinitePolicy = "raise",
     initial_panels: tuple[int, int] = (4, 2),
     max_nodes_per_call: int = 1_500_000,

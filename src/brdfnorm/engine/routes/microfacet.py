@@ -27,6 +27,7 @@ from ...models.microfacet import (
     fresnel_normal,
     register_compensation,
 )
+from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
 from . import anisotropic_compensation  # noqa: F401 — registers the anisotropic lobes' compensation
 from .azimuthal import white_albedo
@@ -48,7 +49,7 @@ def _albedo_method(single_scattering, compiles: bool = False):
     lobe (:func:`with_compensation`). The lobe is reciprocal (f(L, V) = f(V, L), also f_ms), so the integral
     over the view with the light fixed is the same integral at the fixed direction. With ``compiles``,
     ``single_scattering`` takes ``compiled=`` (the compiled backend asked for, and Numba there)."""
-    def run(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = 20_000_000, **_: object):
+    def run(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS, **_: object):
         model: MicrofacetModel = problem.model
         require_mu_min(problem.fixed[:, 2])
         params = problem.case_params(np.arange(problem.fixed.shape[0]))
@@ -132,7 +133,7 @@ def _albedo_grid(distribution: Distribution, shadowing: str, mu: np.ndarray, alp
 _AVERAGE_MU_MIN = 1e-6
 
 
-def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: float = 1e-10):
+def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: float = DEFAULT_RTOL):
     """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
 
     In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
