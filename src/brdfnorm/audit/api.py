@@ -266,7 +266,8 @@ def _as_source(table, options: dict) -> Source:
 
 #: The domain of each axis an audit can be given: (lowest, highest, as said in an error).
 AXIS_DOMAINS = {"mu": (0.0, 1.0, "[0, 1]"), "theta": (0.0, np.pi / 2, "[0, π/2] radians ([0°, 90°])"),
-                "alpha": (0.0, np.inf, "α ≥ 0"), "f0": (0.0, 1.0, "[0, 1]")}
+                "alpha": (0.0, np.inf, "α ≥ 0"), "f0": (0.0, 1.0, "[0, 1]"),
+                "eta": (np.finfo(float).tiny, np.inf, "η > 0 (η < 1 where the light exits)")}
 
 
 def _explicit_axes(axes: dict | None) -> dict[str, np.ndarray]:

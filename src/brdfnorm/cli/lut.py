@@ -13,6 +13,7 @@ import typer
 
 from .. import validate
 from ..errors import ArgumentError, OutputError
+from ..extras import require
 from ..lut import anisotropy as anisotropic_tables
 from ..lut import certified as certified_tables
 from ..lut import formats
@@ -119,20 +120,17 @@ def lut_command(
     channels: list[str] = typer.Option([], "--channels", help="dfg: add the split-sum pair DFG_f0 = ∫ f cos "
                                        "(1 − (1 − V·H)⁵), DFG_f90 = ∫ f cos (1 − V·H)⁵, Fresnel off."),
     table: list[str] = typer.Option([], "--tables", "--table", metavar="NAMES", help="Write only these tables "
-                                    "(comma list, repeatable). Default: all in .npz, .json, .csv; in .exr, .png, "
-                                    ".h, .glsl, .hlsl the values (E, E_avg, DFG_f0, DFG_f90), no errors or 1-E."),
-    layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS, y=AXIS, v=down|up: the axis "
-                               "along the image's columns (x, u) and rows (y, v), and whether row 0 (the top) "
-                               "holds the first y value (v=down) or the last (v=up). Default in .exr, .png, .h, .glsl, "
-                               ".hlsl: x = mu or theta, y = roughness or alpha (else the next axis), v=down; 'axes' "
-                               "keeps the --axis order (the default in .npz, .json, .csv). Written in the metadata; "
-                               "brdfnorm.lut.load undoes it."),
+                                    "(comma list, repeatable). Default: all in .npz, .json, .csv; the values (E, "
+                                    "E_avg, DFG_*) in images and headers."),
+    layout: str = typer.Option(None, "--layout", metavar="SPEC", help="x=AXIS, y=AXIS, v=down|up: the axes along "
+                               "an image's columns and rows; row 0 holds the first y (down) or the last (up). "
+                               "Default: x = mu or theta, y = roughness or alpha, v=down in images and headers; "
+                               "'axes' (the --axis order) in .npz, .json, .csv."),
     channel_names: str = typer.Option("rgba", "--channel-names", metavar="NAMING", help="rgba: image channels R, "
                                       "G, B, A in the order of the tables (mapping in the metadata); brdfnorm: "
                                       "the table names (.exr)."),
-    broadcast_average: bool = typer.Option(False, "--broadcast-average", help="Repeat E_avg along μ inside the "
-                                           "grid's image (.exr, .png) instead of writing it as its own one-row "
-                                           "image (an EXR part; in PNG its own file, --tables E_avg)."),
+    broadcast_average: bool = typer.Option(False, "--broadcast-average", help="Repeat E_avg along μ in the "
+                                           "grid's image (.exr, .png), not as its own one-row image."),
     prefix: str = typer.Option("lut_", "--prefix", help="Start of every identifier in .h, .glsl, .hlsl."),
     no_average: bool = typer.Option(False, "--no-average", help="Skip E_avg = 2∫ E(μ) μ dμ."),
     rtol: float = typer.Option(None, "--rtol", help="Relative tolerance of every cell (and of E_avg); default 1e-10 "
@@ -141,18 +139,16 @@ def lut_command(
     digits: int = typer.Option(None, "--digits", min=1, help="With --method certified: every cell's enclosure has a "
                                "relative radius ≤ 10^-DIGITS (default 12)."),
     allow_unconverged: bool = typer.Option(False, "--allow-unconverged",
-                                           help="Exit 0 even if some cells miss --rtol (they are written with "
-                                           "their error estimates either way; exit 3 without this)."),
+                                           help="Exit 0, not 3, if some cells miss --rtol (written either way)."),
     strict: bool = typer.Option(False, "--strict", help="Write nothing (exit 1) if any cell misses --rtol."),
     output: str = typer.Option(..., "--output", "-o", metavar="FILE",
                                help=f"The table file; the extension picks the format (.{', .'.join(formats.FORMATS)})"
                                     "; - writes a text format to stdout (with --format)."),
     fmt: str = typer.Option(None, "--format", help="Format when it is not the extension's (needed for -o -)."),
-    anisotropy: str = typer.Option(None, "--anisotropy", metavar="PARAMETERIZATION", help="ggx, beckmann: a table "
-                                   "over an anisotropy axis (--axis anisotropy=0:1:16; aspect: --axis aspect=…) "
-                                   "mapped to (alpha_x, alpha_y) as aspect, burley (Burley, OSPRay, Blender), "
-                                   "materialx or openpbr do; E averaged over the view azimuth unless --axis "
-                                   "phi_v=DEGREES is given (docs/anisotropy.md)."),
+    anisotropy: str = typer.Option(None, "--anisotropy", metavar="PARAMETERIZATION", help="ggx, beckmann: an "
+                                   "anisotropy axis (--axis anisotropy=0:1:16) mapped to (alpha_x, alpha_y) as aspect, "
+                                   "burley, materialx or openpbr do; E averaged over the view azimuth unless --axis "
+                                   "phi_v=DEGREES (docs/anisotropy.md)."),
     half: bool = typer.Option(False, "--half", help="float16 channels in .exr."),
     spread: Spread = None,
     debug: bool = DEBUG_OPTION,
@@ -169,6 +165,8 @@ def lut_command(
             raise ArgumentError(f"{name} is binary; stdout takes {', '.join(formats.TEXT_FORMATS)}", where="--format")
         if half and name != "exr":
             raise ArgumentError("--half applies to .exr only", where="--half")
+        if name == "exr":  # the optional extra the writer needs: one line before the work, not after it
+            require("OpenEXR", "exr", where=".exr format")
         axes: dict[str, np.ndarray] = {}
         for spec in axis:
             axis_name, values = parse_axis(spec, grid)

@@ -403,7 +403,8 @@ def _nonfinite_message(problem: Problem, bad: NonFiniteIntegrand) -> str:
     if not np.all(np.isfinite(bad.direction)):
         return f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow)"
     L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
-    value = np.array2string(bad.value, precision=6)
+    # Python's formatting, not numpy's: numpy pads a NaN whose sign bit is set ("[ nan]"), as compiled code makes it.
+    value = "[" + " ".join(f"{v:.6g}" for v in np.ravel(bad.value)) + "]"
     return f"BRDF is not finite (value {value}) at L={_fmt(L)}, V={_fmt(V)}; {hint}"
 
 

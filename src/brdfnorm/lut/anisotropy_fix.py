@@ -110,7 +110,7 @@ def fit_alpha_fix(distribution: str = "ggx", shadowing: str = "height-correlated
                   domain: dict | None = None, counts=(8, 8, 5), validation_counts=(13, 13, 7),
                   rtol: float = 1e-7, iterations: int = 12) -> AlphaFix:
     """Fit α_eff over ``domain`` (module docstring) on a ``counts`` grid, validated on ``validation_counts``."""
-    kernel._codes(distribution, shadowing)  # unknown names: one error naming the argument, before any work
+    kernel.kernel_codes(distribution, shadowing)  # unknown names: one error naming the argument, before any work
     if not 1 <= degree <= 4:
         raise ArgumentError(f"degree must be 1 … 4, got {degree}", where="degree")
     domain = {**DOMAIN, **(domain or {})}

@@ -1,9 +1,9 @@
 """Figures of ``brdfnorm report``, drawn with Matplotlib's Agg canvas into PNG bytes.
 
 Reproducibility: every figure is drawn under Matplotlib's built-in default style (a user's matplotlibrc cannot
-change the page), at a fixed size and resolution, and saved without the PNG "Software" text chunk; Agg draws
-deterministically, so a rerun writes byte-identical files. No pyplot: figures are plain ``Figure`` objects,
-never registered with a GUI backend or kept alive by a global figure manager.
+change the page), at a fixed size and resolution, and saved with the PNG "Software" text chunk naming brdfnorm's
+version (not Matplotlib's); Agg draws deterministically, so a rerun writes byte-identical files. No pyplot:
+figures are plain ``Figure`` objects, never registered with a GUI backend or kept alive by a global figure manager.
 """
 
 from __future__ import annotations

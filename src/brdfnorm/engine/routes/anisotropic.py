@@ -404,7 +404,7 @@ def _averages(ax, ay, dist, sep, rtol, x, wk, wg):
     return value, error, evaluations, converged
 
 
-def _codes(distribution: str, shadowing: str) -> tuple[int, int]:
+def kernel_codes(distribution: str, shadowing: str) -> tuple[int, int]:
     if distribution not in DISTRIBUTIONS:
         raise ArgumentError(f"unknown distribution {distribution!r} (known: {', '.join(DISTRIBUTIONS)})",
                             where="distribution")
@@ -430,7 +430,7 @@ def albedo(distribution: str, shadowing: str, mu, alpha_x, alpha_y, phi_v=None, 
     """White single-scattering albedo of anisotropic GGX/Beckmann (arrays broadcast together, flattened):
     at the view (μ, φ_v) — φ_v measured from the X axis (α_x's) — or, with ``phi_v=None``, averaged over φ_v.
     Returns (value, error, evaluations, converged), each (K,)."""
-    d, s = _codes(distribution, shadowing)
+    d, s = kernel_codes(distribution, shadowing)
     mu, ax, ay, phi = _checked(mu, alpha_x, alpha_y, phi_v)
     return _cells(mu, phi, ax, ay, d, s, float(rtol), phi_v is None, _X, _WK, _WG)
 
@@ -438,6 +438,6 @@ def albedo(distribution: str, shadowing: str, mu, alpha_x, alpha_y, phi_v=None, 
 def average_albedo(distribution: str, shadowing: str, alpha_x, alpha_y, *, rtol: float = 1e-8):
     """E_avg = 2∫₀¹ Ē(μ) μ dμ = (1/π)∫ E cos θ dω of anisotropic GGX/Beckmann, (value, error, evaluations,
     converged), each (K,) over the broadcast (α_x, α_y)."""
-    d, s = _codes(distribution, shadowing)
+    d, s = kernel_codes(distribution, shadowing)
     _, ax, ay, _ = _checked(1.0, alpha_x, alpha_y)
     return _averages(ax, ay, d, s, float(rtol), _X, _WK, _WG)
