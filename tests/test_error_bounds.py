@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from seed_reference import seed_form
 
 import brdfnorm
 from brdfnorm.engine.methods import FINAL_ROUNDING_ULPS, with_final_rounding
@@ -32,22 +33,6 @@ def blinn_phong_normal(n: float) -> mp.mpf:
     with mp.workdps(DPS):
         n = mp.mpf(n)
         return 8 * mp.pi * (2 ** (-n / 2) + n) / ((n + 2) * (n + 4))
-
-
-def blinn_phong_seed_form(n: float, theta: float) -> mp.mpf:
-    """Seed 002's (S1): 2π 2^(−n/2) ∫ ((c_o+c_i)/√(c_o c_i+1))^n c_i s_i ₂F₁(n/4, n/4+½; 1; z) dφ_i."""
-    with mp.workdps(DPS):
-        n, th = mp.mpf(n), mp.mpf(theta)
-        co, so = mp.cos(th), mp.sin(th)
-
-        def f(p):
-            ci, si = mp.cos(p), mp.sin(p)
-            z = (so * si / (co * ci + 1)) ** 2
-            return ((co + ci) / mp.sqrt(co * ci + 1)) ** n * ci * si * mp.hyp2f1(n / 4, n / 4 + mp.mpf(1) / 2, 1, z)
-
-        width = 2 * mp.sqrt(2) / mp.sqrt(n + 1)
-        points = sorted({mp.mpf(0), mp.pi / 2, *(min(max(th + k * width, 0), mp.pi / 2) for k in (-3, -1, 0, 1, 3))})
-        return 2 * mp.pi * 2 ** (-n / 2) * mp.quad(f, points)
 
 
 def assert_bounds(result, reference: mp.mpf, what: str) -> None:
@@ -66,7 +51,7 @@ def test_issue_cases_at_max(n):
     # `normalize blinn-phong --sweep n=1:1e4:9:log --at max`: the maximum is at normal incidence.
     result = brdfnorm.normalize(BlinnPhong(), at="max", sweep={"n": [n]})
     theta = float(result.theta.ravel()[0])
-    reference = blinn_phong_normal(n) if theta == 0.0 else blinn_phong_seed_form(n, theta)
+    reference = blinn_phong_normal(n) if theta == 0.0 else seed_form(n, theta, dps=DPS)
     assert_bounds((result.albedo, result.error), reference, f"normalize at max, n={n!r}, theta={theta!r}")
 
 
@@ -107,14 +92,14 @@ EXPONENTS = st.floats(0.0, 2.0).map(lambda e: 10.0**e)  # n in [1, 100]: mpmath'
 def test_series_at_views_within_float64_of_the_normal():
     # found by the property test below: at theta = 3.9e-157 the Legendre kernel underflowed and E was inf
     for theta in (3.922492407662235e-157, 1e-300, 1e-12):
-        assert_bounds(brdfnorm.albedo(BlinnPhong(n=1.0), theta, method="series"), blinn_phong_seed_form(1.0, theta),
+        assert_bounds(brdfnorm.albedo(BlinnPhong(n=1.0), theta, method="series"), seed_form(1.0, theta, dps=DPS),
                       f"series theta={theta!r}")
 
 
 @settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(n=EXPONENTS, theta=VIEWS)
 def test_series_bounds_its_error(n, theta):
-    assert_bounds(brdfnorm.albedo(BlinnPhong(n=n), theta, method="series"), blinn_phong_seed_form(n, theta),
+    assert_bounds(brdfnorm.albedo(BlinnPhong(n=n), theta, method="series"), seed_form(n, theta, dps=DPS),
                   f"series n={n!r} theta={theta!r}")
 
 
@@ -122,7 +107,7 @@ def test_series_bounds_its_error(n, theta):
 @given(n=EXPONENTS, theta=VIEWS, phi=st.floats(0.0, 2 * np.pi))
 def test_quadrature_bounds_its_error(n, theta, phi):
     result = brdfnorm.albedo(BlinnPhong(n=n), theta, phi, method="quadrature", rtol=1e-12)
-    assert_bounds(result, blinn_phong_seed_form(n, theta), f"quadrature n={n!r} theta={theta!r} phi={phi!r}")
+    assert_bounds(result, seed_form(n, theta, dps=DPS), f"quadrature n={n!r} theta={theta!r} phi={phi!r}")
 
 
 def test_floor_is_units_in_the_last_place():
