@@ -84,12 +84,7 @@ def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping
     alpha = np.broadcast_to(np.asarray(params["alpha"], dtype=float), (K,))
     e_v = table.albedo(fixed[:, 2], alpha)
     if params["ms"] == "turquin":
-        f0 = np.broadcast_to(fresnel_normal(params), value.shape)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            factor = 1.0 + f0 * (1.0 / e_v[:, None] - 1.0)
-            # d(factor)/dE = −F0/E²: the table entries' errors (a bilinear read mixes four of them) through it.
-            propagated = np.abs(value) * f0 * 4.0 * table.error / (e_v[:, None] ** 2)
-        return value * factor, error * np.abs(factor) + propagated
+        return _turquin(params, value, error, e_v, table.error)
     e_avg = table.average_albedo(alpha)
     lost = 1.0 - e_avg
     colour = np.broadcast_to(fresnel_multiple_scattering(params, e_avg), value.shape)
@@ -100,6 +95,17 @@ def with_compensation(model: MicrofacetModel, fixed: np.ndarray, params: Mapping
     return value + compensated[:, None] * colour, error + propagated[:, None] * np.abs(colour)
 
 
+def _turquin(params, value, error, e_v, table_error):
+    """Turquin's scaling f·(1 + F0(1/E(V) − 1)) of the single-scattering albedo ``value`` and its ``error``, E(V)
+    read from a table (isotropic or anisotropic) whose entries carry ``table_error``."""
+    f0 = np.broadcast_to(fresnel_normal(params), value.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        factor = 1.0 + f0 * (1.0 / e_v[:, None] - 1.0)
+        # d(factor)/dE = −F0/E²: the table entries' errors (a bilinear read mixes four of them) through it.
+        propagated = np.abs(value) * f0 * 4.0 * table_error / (e_v[:, None] ** 2)
+    return value * factor, error * np.abs(factor) + propagated
+
+
 def _anisotropic_compensation(model, fixed, params, value, error):
     """:func:`with_compensation` for one anisotropic lobe: E at the view's (μ, φ) from its own table; the
     compensation lobe's albedo is (1 − E(V))·F_ms exactly, its denominator being the table's own missing energy
@@ -107,11 +113,7 @@ def _anisotropic_compensation(model, fixed, params, value, error):
     table = model.anisotropic_table(params)
     e_v = table.albedo(fixed[:, 2], np.arctan2(fixed[:, 1], fixed[:, 0]))
     if params["ms"] == "turquin":
-        f0 = np.broadcast_to(fresnel_normal(params), value.shape)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            factor = 1.0 + f0 * (1.0 / e_v[:, None] - 1.0)
-            propagated = np.abs(value) * f0 * 4.0 * table.error / (e_v[:, None] ** 2)
-        return value * factor, error * np.abs(factor) + propagated
+        return _turquin(params, value, error, e_v, table.error)
     colour = np.broadcast_to(fresnel_multiple_scattering(params, table.average), value.shape)
     compensated = np.where(table.missing > 0, 1.0 - e_v, 0.0)
     # A bilinear read mixes four entries, and the missing energy is a weighted mean of entries: errors through both.
