@@ -26,6 +26,15 @@ def _modules() -> dict[str, Path]:
     return {_module_name(path): path for path in PACKAGE.rglob("*.py")}
 
 
+def _from_module(name: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute module a ``from … import`` in module ``name`` reads from (relative levels resolved)."""
+    if not node.level:
+        return node.module or ""
+    base = name.split(".") if is_package else name.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def _imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
     """The package modules ``name`` imports, anywhere in its body; ``from P import N`` counts as P.N where
     P.N is a module (a submodule), else as P."""
@@ -35,12 +44,7 @@ def _imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = name.split(".") if is_package else name.split(".")[:-1]
-                base = base[: len(base) - (node.level - 1)]
-                prefix = ".".join(base + ([node.module] if node.module else []))
-            else:
-                prefix = node.module or ""
+            prefix = _from_module(name, is_package, node)
             targets = [f"{prefix}.{alias.name}" if f"{prefix}.{alias.name}" in known else prefix
                        for alias in node.names]
         else:
@@ -194,12 +198,7 @@ def _private_crossings(name: str, path: Path, known: dict[str, Path]) -> set[tup
     tree = ast.parse(path.read_text(encoding="utf-8"))
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = name.split(".") if is_package else name.split(".")[:-1]
-                base = base[: len(base) - (node.level - 1)]
-                prefix = ".".join(base + ([node.module] if node.module else []))
-            else:
-                prefix = node.module or ""
+            prefix = _from_module(name, is_package, node)
             for alias in node.names:
                 if f"{prefix}.{alias.name}" in known:
                     modules[alias.asname or alias.name] = f"{prefix}.{alias.name}"
