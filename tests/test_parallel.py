@@ -24,7 +24,7 @@ import brdfnorm as bn
 from brdfnorm.check import Budget, check
 from brdfnorm.errors import ArgumentError, EvaluationError
 from brdfnorm.normalization import normalize
-from brdfnorm.parallel import CellsJob, ModelSource, albedo_cells, chunk_plan
+from brdfnorm.parallel import CellsJob, ModelSource, Scheduler, albedo_cells, chunk_plan
 from brdfnorm.parallel.checkpoint import Checkpoint
 from brdfnorm.parallel.results import albedo_result
 
@@ -481,13 +481,12 @@ def test_certified_bounds_travel_through_a_pool_and_a_checkpoint(tmp_path):
         albedo_cells(CellsJob.of(model, theta, digits=20), workers=1)
 
 
-def test_a_scheduler_without_workers_is_refused_not_waited_on(monkeypatch):
+def test_a_scheduler_without_workers_is_refused_not_waited_on():
     distributed = pytest.importorskip("distributed")
-    monkeypatch.setattr("brdfnorm.parallel.executors.DASK_CONNECT_TIMEOUT", 1)
     with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
                                   dashboard_address=":0") as empty:
         with pytest.raises(ArgumentError, match="no workers"):
-            albedo_cells(_ggx_job(), scheduler=empty.scheduler_address)
+            albedo_cells(_ggx_job(), scheduler=Scheduler(empty.scheduler_address, connect_timeout=1))
         with pytest.raises(ArgumentError, match="no workers"):  # a check too, before any work
             check("lambert", workers=None, scheduler=empty.scheduler_address)
     with pytest.raises(ArgumentError, match="cannot reach the Dask scheduler"):

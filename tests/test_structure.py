@@ -298,3 +298,40 @@ def test_the_literal_default_finder_sees_parameters_and_fields(tmp_path):
                     "def g(rtol=1e-8, max_evaluations=RTOL): pass\n")
     assert sorted(_literal_defaults(path, {"rtol": 1e-10, "max_evaluations": 20_000_000})) == [
         (1, "max_evaluations"), (1, "rtol"), (3, "rtol")]
+
+
+def _word_lists(path: Path, words: set[str]) -> list[tuple[int, tuple[str, ...]]]:
+    """(line, words) of each literal tuple, list or set — or dict's keys — of two or more strings, all in
+    ``words``: a second home of a word list."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            elements = node.elts
+        elif isinstance(node, ast.Dict):
+            elements = node.keys
+        else:
+            continue
+        texts = tuple(e.value for e in elements if isinstance(e, ast.Constant) and isinstance(e.value, str))
+        if len(texts) >= 2 and len(texts) == len(elements) and set(texts) <= words:
+            found.append((node.lineno, texts))
+    return found
+
+
+def test_the_fresnel_word_list_has_one_home():
+    """Issue 40, item 3: the Fresnel factors' names (and the codes the compiled kernels take) are spelled out in
+    ``models/fresnel.py`` only; every other module names its constants."""
+    from brdfnorm.models import fresnel
+
+    home = PACKAGE / "models" / "fresnel.py"
+    bad = {f"{path.relative_to(SRC)}:{line}: {texts}" for path in PACKAGE.rglob("*.py") if path != home
+           for line, texts in _word_lists(path, set(fresnel.KINDS))}
+    assert bad == set()
+    assert [fresnel.KERNEL_CODES[kind] for kind in fresnel.MICROFACET_KINDS] == [0, 1, 2, 3]
+
+
+def test_the_word_list_finder_sees_tuples_lists_sets_and_dict_keys(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text('a = ("none", "schlick")\nb = ["schlick", x]\nc = {"none": 0, "conductor": 3}\n'
+                    'd = {"dielectric", "exact"}\ne = ("schlick",)\nf = {"none", "dielectric"}\n')
+    assert _word_lists(path, {"none", "schlick", "conductor", "dielectric"}) == [
+        (1, ("none", "schlick")), (3, ("none", "conductor")), (6, ("none", "dielectric"))]

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.fresnel import Fresnel, multiple_scattering_colour
+from ..models.fresnel import COAT_KINDS, METAL_KINDS, Fresnel, multiple_scattering_colour
 from ..parameters import Parameter
 from . import compose
 from .albedo import top_average
@@ -73,7 +73,7 @@ PARAMETERS = (
               description="metalness: mix the dielectric and metal BRDFs, or blend F0 into one Schlick lobe"),
     Parameter("diffuse_under", "choice", "albedo-scaling", choices=("albedo-scaling", "filament"),
               description="diffuse under the specular: scaled by 1 − E_spec (OpenPBR) or added as is (Filament)"),
-    Parameter("metal_fresnel", "choice", "f82-tint", choices=("f82-tint", "schlick", "artistic", "conductor"),
+    Parameter("metal_fresnel", "choice", "f82-tint", choices=METAL_KINDS,
               description="the metal's Fresnel: OpenPBR's F82-tint, Schlick(F0), Gulbrandsen (r, g), or eta + ik"),
     Parameter("metal_eta", "spectrum", (0.143, 0.374, 1.442), 1e-3, 1e3, "conductor η (metal_fresnel=conductor)"),
     Parameter("metal_k", "spectrum", (3.983, 2.385, 1.603), 0.0, 1e3, "conductor k (metal_fresnel=conductor)"),
@@ -81,7 +81,7 @@ PARAMETERS = (
               description="the metal's multiple scattering: none, or Kulla-Conty's lobe with the exact F_avg"),
     Parameter("dielectric_fresnel", "choice", "exact", choices=("exact", "schlick"),
               description="the specular's Fresnel: exact dielectric of η'_s, or Schlick of its F0"),
-    Parameter("coat_fresnel", "choice", "dielectric", choices=("dielectric", "none"),
+    Parameter("coat_fresnel", "choice", "dielectric", choices=COAT_KINDS,
               description="the coat's Fresnel: exact dielectric of coat_ior, or none (F = 1)"),
     Parameter("fuzz_shadowing", "choice", "kulla", choices=("kulla", "neubelt"),
               description="the charlie sheen's shadowing"),

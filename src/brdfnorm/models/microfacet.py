@@ -48,6 +48,7 @@ from scipy.special import erfcx
 from ..errors import EvaluationError, ParameterError
 from ..parameters import Parameter
 from .base import Lobe, Model, mirror
+from .fresnel import MICROFACET_KINDS, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 
 #: The largest Kulla–Conty table ``ms_table`` may ask for: what is computed within 1 GB and ~10 s.
 MAX_MS_TABLE = 256
@@ -164,35 +165,6 @@ class BeckmannDistribution(Distribution):
         return mass, (self.CAP + 1.0) * mass
 
 
-# -- Fresnel -----------------------------------------------------------------------------------------------
-
-def fresnel_schlick(cos: np.ndarray, f0: np.ndarray, f90: np.ndarray) -> np.ndarray:
-    return f0 + (f90 - f0) * (1.0 - cos) ** 5
-
-
-def fresnel_dielectric(cos: np.ndarray, eta: np.ndarray) -> np.ndarray:
-    """Exact unpolarized reflectance of a dielectric interface (Walter et al. 2007 eq. 22); 1 under TIR."""
-    g2 = eta * eta - 1.0 + cos * cos
-    g = np.sqrt(np.maximum(g2, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = (g - cos) / (g + cos)
-        b = (cos * (g + cos) - 1.0) / (cos * (g - cos) + 1.0)
-        value = 0.5 * a * a * (1.0 + b * b)
-    return np.where(g2 <= 0.0, 1.0, value)
-
-
-def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Exact unpolarized reflectance for the complex index η + ik: (R_s + R_p)/2 with a² + b² = |n̂² − sin²θ|."""
-    c2 = cos * cos
-    s2 = 1.0 - c2
-    t = eta * eta - k * k - s2
-    a2b2 = np.sqrt(t * t + 4.0 * eta * eta * k * k)
-    a = np.sqrt(np.maximum(0.5 * (a2b2 + t), 0.0))
-    rs = (a2b2 - 2.0 * a * cos + c2) / (a2b2 + 2.0 * a * cos + c2)
-    rp = rs * (c2 * a2b2 - 2.0 * a * cos * s2 + s2 * s2) / (c2 * a2b2 + 2.0 * a * cos * s2 + s2 * s2)
-    return 0.5 * (rs + rp)
-
-
 # -- the model ---------------------------------------------------------------------------------------------
 
 #: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer
@@ -222,7 +194,6 @@ def register_anisotropic_compensation(provider: Callable) -> None:
 
 
 SHADOWING = ("height-correlated", "separable")
-FRESNEL = ("none", "schlick", "dielectric", "conductor")
 MULTIPLE_SCATTERING = ("none", "kulla-conty", "turquin")
 
 
@@ -233,7 +204,7 @@ def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
         Parameter("alpha_y", "float", 0.0, 0.0, 100.0, "roughness along Y (0: alpha)"),
         Parameter("shadowing", "choice", "height-correlated", choices=SHADOWING,
                   description="Smith G2: 1/(1+Λ(L)+Λ(V)) or G1(L)G1(V)"),
-        Parameter("fresnel", "choice", "none", choices=FRESNEL, description="F(V·H); none is F = 1"),
+        Parameter("fresnel", "choice", "none", choices=MICROFACET_KINDS, description="F(V·H); none is F = 1"),
         Parameter("f0", "spectrum", (0.04, 0.04, 0.04), 0.0, 1.0, "Schlick reflectance at normal incidence"),
         Parameter("f90", "spectrum", (1.0, 1.0, 1.0), 0.0, 1.0, "Schlick reflectance at grazing incidence"),
         Parameter("eta", "spectrum", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
