@@ -67,10 +67,10 @@ def test_ggx_at_normal_view_and_unit_alpha_encloses_one_minus_ln_2(shadowing):
 def test_any_view_route_agrees_with_the_normal_incidence_cdf_route(distribution, alpha):
     """Two independent reductions at μ = 1: the azimuthal one (any view) and the distribution's CDF (V = N)."""
     e = _enclose(distribution, 1.0, alpha, digits=15)
-    work = certified._Integrator(20)
+    work = certified.Integrator(20)
     old, flint.ctx.prec = flint.ctx.prec, work.bits
     try:
-        other = certified._microfacet(work, arb(alpha), distribution, lambda c, analytic, beyond: 1)
+        other = certified.microfacet_normal_albedo(work, arb(alpha), distribution, lambda c, analytic, beyond: 1)
         assert other.overlaps(_ball(e)) and float(other.rad()) < 1e-18
     finally:
         flint.ctx.prec = old

@@ -93,7 +93,7 @@ def test_model_figures_over_a_wide_sweep(drawn, tmp_path):
 def test_log_axis_spans(low, high):
     """Short spans (no decade inside) keep a few labels; long ones are thinned to at most LOG_TICKS decades."""
     def draw():
-        figure = figures._new(3.0, 2.0)  # a narrow panel, as in the report's side-by-side figures
+        figure = figures.new_figure(3.0, 2.0)  # a narrow panel, as in the report's side-by-side figures
         axes = figure.subplots()
         x = np.geomspace(low, high, 50)
         axes.loglog(x, x)
@@ -114,7 +114,7 @@ def test_user_names_are_not_mathtext():
     name = r"a$\foo{$b"
 
     def draw():
-        figure = figures._new(3.0, 2.0)
+        figure = figures.new_figure(3.0, 2.0)
         axes = figure.subplots()
         axes.semilogx([1, 10, 100], [1, 2, 3], label=name)
         axes.set_title(name)

@@ -59,14 +59,9 @@ ALPHA_MIN = 1e-12
 
 
 class Distribution:
-    """A slope distribution P22 with its Smith Λ and the radial coordinates the half-vector integral uses.
-
-    The half-vector integral (:mod:`brdfnorm.engine.routes.halfvector`) runs over the distribution's radial CDF u(s) of
-    the
-    standardized slope radius s in three pieces, each in its own coordinate t: ``pole(t)`` and ``tail(t)``
-    return (s, du/dt), ``pole_coordinate(s)`` and ``tail_coordinate(s)`` invert them; the piece next to the
-    horizon is linear in s with du/ds = ``slope_density(s)``.
-    """
+    """A slope distribution: its standardized slope density P22, its Smith Λ and the radial density du/ds of the
+    standardized slope radius s. The coordinates an integrator runs in over it are the engine's
+    (:mod:`brdfnorm.engine.machinery.slope_coordinates`)."""
 
     name = ""
 
@@ -78,38 +73,12 @@ class Distribution:
         raise NotImplementedError
 
     def slope_density(self, s: np.ndarray) -> np.ndarray:
+        """du/ds of the radial CDF u(s) of the standardized slope radius."""
         raise NotImplementedError
-
-    def pole_coordinate(self, s: np.ndarray) -> np.ndarray:
-        return s
-
-    def pole(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return t, self.slope_density(t)
-
-    def tail_coordinate(self, s: np.ndarray) -> np.ndarray:
-        return s
-
-    def tail(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return t, self.slope_density(t)
-
-    def cap(self, s: np.ndarray) -> np.ndarray:
-        """Slope radii beyond which the mass is dropped (bounded by ``truncated_moments``); none by default."""
-        return s
-
-    def truncated_moments(self) -> tuple[float, float]:
-        """(∫ dP, ∫ s dP) over the slope radii dropped by ``cap``: what bounds the dropped part of the integral."""
-        return 0.0, 0.0
 
 
 class GGXDistribution(Distribution):
-    """Trowbridge-Reitz: u(s) = s²/(1 + s²).
-
-    Pole piece (s ≤ 1): t = atan s, u = sin²t, du/dt = sin 2t — flat, and analytic at the pole (in u itself
-    the slope would be √u). Tail piece: t = asinh s, u = tanh²t, du/dt = 2 tanh t/cosh²t — the heavy tail
-    decays like e^{−2t}, and the integrand, analytic in the real slope α s within a radius R ~ 1, stays
-    analytic in a strip of half-width ~π/2 about the whole half-line (α sinh t = ±iR at t ≈ ln(2R/α) ± iπ/2),
-    so the region where the reflected direction changes is an O(1)-wide bump in t whatever α is.
-    """
+    """Trowbridge-Reitz: u(s) = s²/(1 + s²)."""
 
     name = "ggx"
 
@@ -122,26 +91,11 @@ class GGXDistribution(Distribution):
     def slope_density(self, s):
         return 2.0 * s / (1.0 + s * s) ** 2
 
-    def pole_coordinate(self, s):
-        return np.arctan(s)
-
-    def pole(self, t):
-        return np.tan(t), np.sin(2.0 * t)
-
-    def tail_coordinate(self, s):
-        return np.arcsinh(s)
-
-    def tail(self, t):
-        e2 = np.exp(-2.0 * t)  # 2 tanh t / cosh²t = 8e^{−2t}(1 − e^{−2t})/(1 + e^{−2t})³, without overflow
-        return np.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
-
 
 class BeckmannDistribution(Distribution):
-    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²) — linear s in every piece (the Gaussian has no
-    heavy tail), truncated at s = 8 (dropped mass e⁻⁶⁴ ≈ 1.6e-28, bounded in the error estimate)."""
+    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²)."""
 
     name = "beckmann"
-    CAP = 8.0
 
     def density(self, r2):
         return np.exp(-r2) / np.pi
@@ -155,14 +109,6 @@ class BeckmannDistribution(Distribution):
 
     def slope_density(self, s):
         return 2.0 * s * np.exp(-s * s)
-
-    def cap(self, s):
-        return np.minimum(s, self.CAP)
-
-    def truncated_moments(self):
-        # ∫_S^∞ 2s e^{−s²} ds = e^{−S²};  ∫_S^∞ 2s² e^{−s²} ds = S e^{−S²} + (√π/2) erfc S ≤ (S + 1) e^{−S²}.
-        mass = float(np.exp(-self.CAP**2))
-        return mass, (self.CAP + 1.0) * mass
 
 
 # -- the model ---------------------------------------------------------------------------------------------

@@ -19,7 +19,7 @@ from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
 
 _OPTIONS = dict(cache=True, error_model="numpy")
-#: Beckmann's slope radius cap (``BeckmannDistribution.CAP``).
+#: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
 CAP = 8.0
 
 

@@ -41,6 +41,7 @@ import numpy as np
 from ...models.dielectric import refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ...validate import DEFAULT_RTOL
+from ..machinery.slope_coordinates import slope_coordinates
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
 ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)
@@ -77,15 +78,16 @@ def _slope_nodes(distribution: Distribution, alpha: float, n: int, cuts: list[fl
     """Slope radii s and weights du over panels between ``cuts`` (0, 1, 1/α, the cap and any kink): the pole
     coordinate on [0, min(1, 1/α)], log s up to 1/α, c = 1/(αs) beyond."""
     x, w = _legendre(n)
-    cap = float(distribution.cap(np.array(np.inf)))
+    coords = slope_coordinates(distribution)
+    cap = float(coords.cap(np.array(np.inf)))
     knee, far = min(1.0, 1.0 / alpha), 1.0 / alpha
     edges = sorted({0.0, knee, far, cap, *(c for c in cuts if 0.0 < c < cap)})
     edges = [e for e in edges if e <= cap]
     radii, weights = [], []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
         if hi <= knee:
-            t0, t1 = distribution.pole_coordinate(np.array(lo)), distribution.pole_coordinate(np.array(hi))
-            s, density = distribution.pole(t0 + (t1 - t0) * x)
+            t0, t1 = coords.pole_coordinate(np.array(lo)), coords.pole_coordinate(np.array(hi))
+            s, density = coords.pole(t0 + (t1 - t0) * x)
             weights.append(w * (t1 - t0) * density)
         elif hi <= far:
             l0, l1 = np.log(lo), np.log(hi)
@@ -183,7 +185,7 @@ def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "hei
     converged = np.zeros(M, dtype=bool)
     # Beckmann's truncation: the dropped facets carry ≤ ∫ du/m_z = ∫ √(1 + α²s²) dP ≤ mass + α·moment (the inner
     # integral of (A1) is at most π).
-    mass, moment = distribution.truncated_moments()
+    mass, moment = slope_coordinates(distribution).truncated_moments()
     for k in range(M):
         history = []
         for n in ORDERS:

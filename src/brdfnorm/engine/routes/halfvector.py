@@ -62,6 +62,7 @@ from ...models.microfacet import Distribution, fresnel, roughness, shadowing_mas
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
+from ..machinery.slope_coordinates import slope_coordinates
 from . import halfvector_global as global_rule
 
 _EPS = np.finfo(float).eps
@@ -367,6 +368,7 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
     cos_offset, sin_offset = np.cos(offset), np.sin(offset)
     layer = _LAYER * np.maximum(g.ax, g.ay)
     dist = g.distribution
+    coords = slope_coordinates(dist)
     delta = _grading_width(g)
     kappa = np.arcsinh(0.5 * np.pi / delta)
     log_horizon = linear and dist.name in global_rule.GRADED
@@ -403,18 +405,18 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
         gap = layer[k] * (1.0 + r_h2) / (2.0 * q * vz)
         s_split = s_h / (1.0 + gap / s_h)
         s_middle = s_split / (1.0 + s_split)  # ≈ min(1, s_split), smooth in φ
-        s_end, s_split, s_middle = dist.cap(s_h), dist.cap(s_split), dist.cap(s_middle)
+        s_end, s_split, s_middle = coords.cap(s_h), coords.cap(s_split), coords.cap(s_middle)
         local = v - piece[:, None, None]  # position in the piece, [0, 1], (R, 1, n)
         # Pole piece [0, s_middle] in the pole coordinate, tail piece [s_middle, s_split] in the tail
         # coordinate, horizon piece [s_split, s_h] linear in s; each computed on its own panels only.
         def piece_nodes(kind, rows, at):
             if kind == 0:
-                length = dist.pole_coordinate(s_middle[rows])
-                radius, density = dist.pole(at * length)
+                length = coords.pole_coordinate(s_middle[rows])
+                radius, density = coords.pole(at * length)
             elif kind == 1:
-                start = dist.tail_coordinate(s_middle[rows])
-                length = dist.tail_coordinate(s_split[rows]) - start
-                radius, density = dist.tail(start + at * length)
+                start = coords.tail_coordinate(s_middle[rows])
+                length = coords.tail_coordinate(s_split[rows]) - start
+                radius, density = coords.tail(start + at * length)
             elif log_horizon:  # ln s linear: a layer wider than the horizon radius spans decades (global rule)
                 log_ratio = np.log(s_end[rows] / s_split[rows])
                 radius = s_end[rows] * np.exp((at - 1.0) * log_ratio)
@@ -480,7 +482,7 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     result = integrate_slopes(g, microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
                               max_evaluations=max_evaluations, use_global=use_global, rectangle=rectangle)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
-    mass, moment = distribution.truncated_moments()
+    mass, moment = slope_coordinates(distribution).truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
     return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
 
