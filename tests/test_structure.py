@@ -297,14 +297,16 @@ def _word_lists(path: Path, words: set[str]) -> list[tuple[int, tuple[str, ...]]
     return found
 
 
-def test_the_fresnel_word_list_has_one_home():
+@pytest.mark.parametrize("home, name", [("models/fresnel.py", "KINDS"), ("models/microfacet.py", "SHADOWING")])
+def test_each_word_list_has_one_home(home, name):
     """Issue 40, item 3: the Fresnel factors' names (and the codes the compiled kernels take) are spelled out in
-    ``models/fresnel.py`` only; every other module names its constants."""
+    ``models/fresnel.py`` only, the Smith shadowing choices in ``models/microfacet.py`` only; every other module
+    names their constants."""
     from brdfnorm.models import fresnel
 
-    home = PACKAGE / "models" / "fresnel.py"
-    bad = {f"{path.relative_to(SRC)}:{line}: {texts}" for path in PACKAGE.rglob("*.py") if path != home
-           for line, texts in _word_lists(path, set(fresnel.KINDS))}
+    module = importlib.import_module("brdfnorm." + home.removesuffix(".py").replace("/", "."))
+    bad = {f"{path.relative_to(SRC)}:{line}: {texts}" for path in PACKAGE.rglob("*.py") if path != PACKAGE / home
+           for line, texts in _word_lists(path, set(getattr(module, name)))}
     assert bad == set()
     assert [fresnel.KERNEL_CODES[kind] for kind in fresnel.MICROFACET_KINDS] == [0, 1, 2, 3]
 
