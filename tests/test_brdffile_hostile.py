@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.mesa import MesaBrdf, MesaCompileError, MesaUnavailable
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from mesa import MesaBrdf, MesaCompileError, MesaUnavailable
 
 import brdfnorm as bn
 from brdfnorm.brdffile import load_brdf, random_hemisphere, read_brdf
