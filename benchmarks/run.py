@@ -422,7 +422,7 @@ def w_microfacet_table(cfg: Config, refs: References) -> dict:
     sizes = (8,) if cfg.quick else (32, 128)
     out = {"title": "ggx E(μ, α) tables, rtol 1e-10 (half-vector method)", "status": "ok", "methods": {},
            "reference": "μ = 1 row: method='certified' (Arb ball arithmetic, 1-D reduction), where python-flint is "
-                        "installed; the other rows are checked in tests/test_microfacet.py"}
+                        "installed; the other rows are checked in tests/engine/test_microfacet.py"}
     for size in sizes:
         mu = np.maximum(np.linspace(0.0, 1.0, size), 1e-4)
         alpha = np.maximum(np.linspace(0.0, 1.0, size), 1e-8)

@@ -477,7 +477,7 @@ def test_random_directions_are_strictly_in_the_upper_hemisphere():
     ids=["unknown-identifier", "argument-count", "user-function-arguments"],
 )
 def test_error_lines_agree_with_mesa(tmp_path, body):
-    # The real compiler, fed the same file with its lines kept (tests/mesa.py), names the same line.
+    # The real compiler, fed the same file with its lines kept (tests/helpers/mesa.py), names the same line.
     path = write(tmp_path, brdf_text(body))
     with pytest.raises(BrdfFileError) as info:
         load_brdf(path)

@@ -4,7 +4,7 @@ refraction's shadowing and the η parametrization searched, with the other axes 
 quadrature of ~10 ms, so a search over every 3-D geometry would take hours on two cores).
 
 Tables are made by ``lut.compute`` over an ``eta`` axis; each finding is checked at its worst cell by the facet
-reference of tests/dielectric_reference.py (nested scipy quadrature, sharing no code with brdfnorm's
+reference of tests/helpers/dielectric_reference.py (nested scipy quadrature, sharing no code with brdfnorm's
 integrators)."""
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """brdfnorm audit (issue 29) of rough-glass tables (``ggx-dielectric``): the refraction's shadowing is part of the
 searched convention — Heitz's Beta form, the reflection's form (Blender Cycles' glass), G1·G1 for refraction, or
 separable for both. Tables are made by ``brdfnorm lut`` with each form (the model's ``refraction_shadowing``, itself
-tested against nested quadrature in tests/test_refraction_shadowing.py) and audited with the form left open."""
+tested against nested quadrature in tests/models/test_dielectric.py) and audited with the form left open."""
 
 from __future__ import annotations
 

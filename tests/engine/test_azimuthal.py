@@ -4,7 +4,7 @@ in closed form.
 
 Checked against routes that share nothing with it but the lobe: the closed form 1 − ln 2 (GGX, α = 1, μ = 1), the
 half-vector cubature (``method="microfacet"``, rtol 1e-13, a 2-D integral over the half vector), the fixed-order
-Gauss–Legendre reference of tests/microfacet_reference.py, and mpmath (the mirror limit; Beckmann's von Mises
+Gauss–Legendre reference of tests/helpers/microfacet_reference.py, and mpmath (the mirror limit; Beckmann's von Mises
 moments from ``besseli``, its normal view). Its estimates are ~1e-14 (its initial panels already resolve the
 lobe), so "true error ≤ estimate + the reference's own" is a strict check: a wrong angle at the pole (sin θ_L
 taken as cos(π/2 − θ_L)) failed it by 10× at α = 6e-6, one wide tail panel by 12×, G2's pole at grazing views

@@ -72,7 +72,7 @@ def test_transmitted_albedo_at_normal_incidence_against_mpmath(alpha, eta):
     assert abs(r.transmitted[0] - reference) <= 1e-10
 
 
-#: The facet reference (tests/dielectric_reference.py) is good to ~1e-13 of the value.
+#: The facet reference (tests/helpers/dielectric_reference.py) is good to ~1e-13 of the value.
 REFERENCE_ERROR = 1e-13
 
 

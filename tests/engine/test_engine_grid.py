@@ -1,8 +1,8 @@
-"""The engine's results are those recorded before it moved into :mod:`brdfnorm.engine` (issue 32), bit for bit:
-values, error estimates, evaluation counts, convergence, reasons and methods over every route (tests/engine_grid.py
-says which cases and how the fixture was made) — under the numpy backend, the reference. Under the compiled
-backend (issue 39) the sums run in another order: every value must then lie within the recorded and the new error
-estimates of the recorded one, with the same methods and convergence."""
+"""The engine's results are those recorded before it moved into :mod:`brdfnorm.engine` (issue 32), bit for bit: values,
+error estimates, evaluation counts, convergence, reasons and methods over every route (tests/helpers/engine_grid.py says
+which cases and how the fixture was made) — under the numpy backend, the reference. Under the compiled backend (issue
+39) the sums run in another order: every value must then lie within the recorded and the new error estimates of the
+recorded one, with the same methods and convergence."""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ shadowings, anisotropic lobes and every Fresnel.
 
 At loose tolerances (1e-3 … 1e-7) the true error is large enough to measure against the references, so these
 checks can fail; at 1e-9 they check the estimate against the references' own accuracy. References, independent
-of brdfnorm's cubature: fixed-order Gauss–Legendre in CDF coordinates (tests/microfacet_reference.py, its own
+of brdfnorm's cubature: fixed-order Gauss–Legendre in CDF coordinates (tests/helpers/microfacet_reference.py, its own
 error the change from order 14 to 20) for isotropic F = 1 lobes; the generic hemisphere engine
 (``method="quadrature"``, over the light direction, not the half vector) at rtol 1e-11 for anisotropic lobes
 with Fresnel.

@@ -3,8 +3,8 @@ panels
 switched off: every case it settles has an error estimate no smaller than its true error, over α from 1e-8 to 1,
 μ from 1e-4 (grazing) to 1, GGX and Beckmann, both shadowings, anisotropic lobes and every Fresnel.
 
-References as in tests/test_halfvector_honesty.py: fixed-order Gauss–Legendre in CDF coordinates
-(tests/microfacet_reference.py, its own error the change from order 14 to 20) for isotropic F = 1 lobes, the
+References as in tests/engine/test_halfvector.py: fixed-order Gauss–Legendre in CDF coordinates
+(tests/helpers/microfacet_reference.py, its own error the change from order 14 to 20) for isotropic F = 1 lobes, the
 generic hemisphere engine (``method="quadrature"``, over the light direction) at rtol 1e-11 with Fresnel and
 anisotropy. The panels' stand-in marks every case it is handed as unconverged, so only the global rule's own
 results are checked; each sweep also requires the rule to have settled a good share of its cases (the check

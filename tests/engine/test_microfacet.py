@@ -1,6 +1,6 @@
 """The ggx and beckmann lobes and their half-vector albedo (brdfnorm.engine.routes.halfvector), against independent
 routes:
-a fixed Gauss–Legendre reference in CDF coordinates (tests/microfacet_reference.py), closed forms (1 − ln 2,
+a fixed Gauss–Legendre reference in CDF coordinates (tests/helpers/microfacet_reference.py), closed forms (1 − ln 2,
 the mirror limit with mpmath), the generic hemisphere engine, the `.brdf` files of the same lobes, and a
 complex-number Fresnel."""
 

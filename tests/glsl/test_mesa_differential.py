@@ -1,6 +1,6 @@
 """Differential test: every ``examples/*.brdf`` evaluated by brdfnorm (float64 numpy) and by Mesa (llvmpipe).
 
-Mesa compiles the file's own GLSL (see ``tests/mesa.py``) and runs it in float32 over random direction pairs
+Mesa compiles the file's own GLSL (see ``tests/helpers/mesa.py``) and runs it in float32 over random direction pairs
 (L, V) in the open upper hemisphere; brdfnorm evaluates the same float32-representable pairs in float64. The
 two must agree to float32 precision. Per pair and channel the tolerance is
 

@@ -1,12 +1,12 @@
 """A grid of albedo results across every route of the engine, recorded bit for bit (issue 32).
 
-The albedo engine was moved into one package (:mod:`brdfnorm.engine`); ``tests/fixtures/engine_grid.json`` was
-written by ``python tests/engine_grid.py`` *before* the move, and ``test_engine_grid.py`` recomputes it and
-compares every value, error estimate, evaluation count, convergence flag, reason and method exactly (floats as
-``float.hex``). Each route is reached at least once: the hemisphere quadrature (lobe-aligned and half-vector
-routes of the generic engine, a BSDF's two hemispheres), the series, the azimuthal, microfacet and dielectric
-routes, the certified enclosures, the closed forms, and E_avg's μ-average (Clenshaw–Curtis and adaptive stages,
-the glass 3-D route).
+The albedo engine was moved into one package (:mod:`brdfnorm.engine`); ``tests/fixtures/engine_grid.json`` was written
+by this module (then ``python tests/engine_grid.py``; now ``cd tests && python -m helpers.engine_grid``) *before* the
+move, and ``tests/engine/test_engine_grid.py`` recomputes it and compares every value, error estimate, evaluation count,
+convergence flag, reason and method exactly (floats as ``float.hex``). Each route is reached at least once: the
+hemisphere quadrature (lobe-aligned and half-vector routes of the generic engine, a BSDF's two hemispheres), the series,
+the azimuthal, microfacet and dielectric routes, the certified enclosures, the closed forms, and E_avg's μ-average
+(Clenshaw–Curtis and adaptive stages, the glass 3-D route).
 """
 
 from __future__ import annotations

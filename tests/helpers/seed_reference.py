@@ -1,5 +1,6 @@
 """Seed 002's last one-dimensional form of the Blinn-Phong albedo, in mpmath: the independent reference of the
-series route's tests (tests/test_series.py) and of the error-bound property tests (tests/test_error_bounds.py)."""
+series route's tests (tests/engine/test_series.py) and of the error-bound property tests
+(tests/engine/test_error_bounds.py)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The issue's tables of the built-in GGX against the tests' own Gauss–Legendre reference in half-vector CDF
-coordinates (tests/ggx_reference.py): every cell of the Done-when table, E_avg, the DFG pair."""
+coordinates (tests/helpers/ggx_reference.py): every cell of the Done-when table, E_avg, the DFG pair."""
 
 from __future__ import annotations
 
@@ -160,7 +160,7 @@ def test_e_avg_estimate_covers_its_error(adaptive_e_avg, rtol, method):
 @pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.02, 0.3])
 def test_e_avg_loose_against_gauss_legendre_over_the_reference(alpha):
-    """At rtol 1e-3 (albedos as loose as 1e-4) against Gauss–Legendre in μ over tests/ggx_reference.py."""
+    """At rtol 1e-3 (albedos as loose as 1e-4) against Gauss–Legendre in μ over tests/helpers/ggx_reference.py."""
     from brdfnorm.lut.table import average_over_mu
 
     value, error, _, _ = average_over_mu(bn.load("ggx"), {"alpha": np.array([alpha])}, rtol=1e-3)

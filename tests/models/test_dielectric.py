@@ -1,7 +1,7 @@
 """The rough dielectrics' ``refraction_shadowing`` (issue 29): the refraction's G2 as Heitz's B(1 + Λ_V, 1 + Λ_L)
 (``correlated-beta``; what ``auto`` gives with height-correlated shadowing), the reflection's 1/(1 + Λ_V + Λ_L)
 (``reflection-form``, Blender Cycles' glass) or G1·G1 (``separable``, OpenPBR/Mitsuba). R and T by brdfnorm's
-dielectric route against nested scipy quadrature over the facet normal (tests/dielectric_reference.py), which
+dielectric route against nested scipy quadrature over the facet normal (tests/helpers/dielectric_reference.py), which
 shares no code with it."""
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 The quick test renders the two widest tables of the default study — the factor table (12 columns of numbers)
 and the claims table — through the report's own section code with every number at full length (17 significant
 digits in, the widest the page can show), so it needs no integration; the slow tier checks the real default
-report in tests/test_report.py's fixture the same way.
+report in tests/report/test_study.py's fixture the same way.
 """
 
 from __future__ import annotations

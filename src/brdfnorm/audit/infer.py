@@ -170,7 +170,7 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
     A wrong η shifts the whole table by a smooth amount, so the true geometry ranks among the first few at
     η = 1.5: first or second for 16×16 tables made at η = 1.2, 1.33, 1.5, 1.8, 2.4 and 3 (measured when this was
-    written; tests/test_audit_fresnel.py keeps η = 1.33 and 1.5). Schlick's factor with a free f0, or an
+    written; tests/audit/test_fresnel_tables.py keeps η = 1.33 and 1.5). Schlick's factor with a free f0, or an
     interpolation in f0 between two exact η, ranked it 5th to 60th: they are several per cent off at grazing cells,
     as much as a wrong sample position."""
     grid = values.shape[:-1]

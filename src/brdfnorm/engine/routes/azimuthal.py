@@ -7,7 +7,7 @@ E(V) = ∫ f(L, V)(N·L) dL for f = D(H) G2(L, V) / (4 N·L N·V) — the single
 D(H) = α² / (π (1 + (α² − 1) cos²θ_H)²), and isotropic Beckmann (eq. 25): D(H) = e^{−tan²θ_H/α²}/(π α²
 cos⁴θ_H). The same integral as :mod:`brdfnorm.engine.routes.halfvector`, by another route; the tests compare the two,
 and
-both with the reference of ``tests/microfacet_reference.py``.
+both with the reference of ``tests/helpers/microfacet_reference.py``.
 
 The reduction (GGX)
 -------------------

@@ -27,8 +27,8 @@ and the first Q_n within tolerance is kept. Combinations not settled by the last
 then fall back to the μ-average of albedos, :mod:`brdfnorm.lut.glass`).
 
 Measured against that μ-average (rtol 1e-10): GGX α = 0.3, η = 1/1.5 to 1.4e-14 in 0.5 s where the μ-average took
-454 albedos and 23.5 s (tests/test_glass_average.py); the 256 (α, η) of a 16³ glass table at rtol 1e-9 in 20 s on two
-cores (benchmarks/results/glass.md).
+454 albedos and 23.5 s (tests/engine/test_dielectric_average.py); the 256 (α, η) of a 16³ glass table at rtol
+1e-9 in 20 s on two cores (benchmarks/results/glass.md).
 """
 
 from __future__ import annotations

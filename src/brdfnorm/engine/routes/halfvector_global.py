@@ -26,7 +26,7 @@ azimuthal features next to the zeros of p are ~μ wide, with structure out to O(
 + gap)) over which the slope density falls as a power: linear in s, Fejér's rule needed > 1000 radial nodes (μ ≲
 3e-3) or never converged (μ ≲ 3e-4). So for these lobes the horizon piece runs linear in ln s at every view (see
 ``slope_integrand``; linear in s where its ends are close; analytic in a wide strip for a power-law tail, not
-for Beckmann's e^{−s²}, where the sweep of ``tests/test_halfvector_global.py`` found estimates 10³× too small,
+for Beckmann's e^{−s²}, where the sweep of ``tests/engine/test_halfvector_global.py`` found estimates 10³× too small,
 hence GGX only), and below μ = :data:`GRADED_BELOW` the azimuth takes a periodic analogue of the panels' sinh
 grading: tan φ = δ sinh(κ sin t)/cos t, δ = μ, κ = arsinh(1/δ) — dφ/dt = δκ at the zeros, distances δ … 1 spread
 log-evenly over sin t, period π and the mirror symmetry kept (κ → 0 with δκ = λ is the Möbius map). The map

@@ -83,9 +83,9 @@ _OUTER_CUT = 60.0
 #: Panels are evaluated in blocks of this many, to bound the size of temporaries (panels × 30 × 24 floats).
 _BLOCK = 4096
 _MAX_ROUNDS = 60
-#: Rounding in the estimate, relative to E: G_m by (S4) is good to 5e-15 (tests/test_series.py checks it against
+#: Rounding in the estimate, relative to E: G_m by (S4) is good to 5e-15 (tests/engine/test_series.py checks it against
 #: mpmath's 2F1 at 30 digits), and the sums of nodes and panels and the cos^n factor round a few ulps each.
-#: Measured against mpmath at 25 digits (tests/test_error_bounds.py): errors up to 1.7e-15 relative; at n = 270,
+#: Measured against mpmath at 25 digits (tests/engine/test_error_bounds.py): errors up to 1.7e-15 relative; at n = 270,
 #: theta = 36 degrees an error of 8.3e-17 where the difference of the two rules alone said 1.2e-17.
 _G_RTOL = 5e-15
 _SUM_ULPS = 8.0
@@ -160,7 +160,7 @@ def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarra
         # A row sum, not a matrix-vector product: BLAS's gemv rounds a row differently with the number of rows
         # (measured: 524 of 1 003 rows differ from the same rows one at a time), which made a cell's value depend
         # on which other cells shared its call, and tables differ in the last bits between one process and
-        # several (tests/test_lut_parallel.py).
+        # several (tests/lut/test_parallel_tables.py).
         out[sl] = half * (func(case[sl], x) * _P_WEIGHTS).sum(axis=1)
     return out
 
