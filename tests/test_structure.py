@@ -317,3 +317,31 @@ def test_the_word_list_finder_sees_tuples_lists_sets_and_dict_keys(tmp_path):
                     'd = {"dielectric", "exact"}\ne = ("schlick",)\nf = {"none", "dielectric"}\n')
     assert _word_lists(path, {"none", "schlick", "conductor", "dielectric"}) == [
         (1, ("none", "schlick")), (3, ("none", "conductor")), (6, ("none", "dielectric"))]
+
+
+TESTS = Path(__file__).resolve().parent
+#: Test folders that are not a package of src/brdfnorm: the pages of docs/, the cross-package hostile-input suite,
+#: the shared reference mathematics.
+TEST_FOLDERS_BESIDES_PACKAGES = {"docs", "hostile", "helpers"}
+
+
+def test_the_tests_mirror_the_packages_and_share_by_fixture_or_helper():
+    """Issue 40, item 6 (docs/architecture.md, "Where tests go"): each folder of tests/ is a package of
+    src/brdfnorm (or docs/, hostile/, helpers/) with an ``__init__.py``; nothing imports from ``conftest`` (shared
+    code is a fixture or a ``helpers`` function), and below tests/ no path is built from ``__file__`` but in
+    ``helpers/paths.py``."""
+    packages = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    folders = {path.parent for path in TESTS.rglob("*.py") if path.parent != TESTS}
+    assert {f.relative_to(TESTS).parts[0] for f in folders} <= packages | TEST_FOLDERS_BESIDES_PACKAGES
+    assert [str(f) for f in folders if not (f / "__init__.py").is_file()] == []
+    bad = []
+    for path in TESTS.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1] == "conftest" or \
+                    isinstance(node, ast.Import) and any(a.name.split(".")[-1] == "conftest" for a in node.names):
+                bad.append(f"{path.relative_to(TESTS)}:{node.lineno}: imports conftest")
+            if (isinstance(node, ast.Name) and node.id == "__file__" and path.parent != TESTS
+                    and path != TESTS / "helpers" / "paths.py"):
+                bad.append(f"{path.relative_to(TESTS)}:{node.lineno}: a path from __file__ (use helpers.paths)")
+    assert bad == []
