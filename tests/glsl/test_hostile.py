@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import paths
+from helpers.brdf_files import DIRECTIONS, brdf_text, hang_guard, where, write
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_brdffile_hostile import DIRECTIONS, brdf_text, hang_guard, where, write
 
 from brdfnorm.brdffile import load_brdf, read_brdf
 from brdfnorm.errors import BrdfFileError, BrdfnormError

@@ -17,8 +17,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers.brdf_files import brdf_text
 from helpers.paths import SRC
-from test_brdffile_hostile import brdf_text
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs Linux (/proc, RLIMIT_AS)")
 
