@@ -50,9 +50,10 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: 1-E_avg (the form Kulla–Conty's compensation divides by);
 #: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
-#: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
+#: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`);
+#: F_avg = 2∫ F μ dμ of a Fresnel factor over its own axes, no lobe (:mod:`.fresnel_average`).
 MEANINGS = ("E", "1-E", DFG_F0, DFG_F90, "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
-            "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass")
+            "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass", "F_avg")
 #: Meanings of a rough-glass table over an η axis: R + T, R and T of the lobe at each cell's η.
 GLASS_MEANINGS = ("E_glass", "R_glass", "T_glass")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
@@ -372,6 +373,8 @@ def stored_axis_values(c: Convention, shape: tuple[int, ...], index: list[np.nda
     """Each axis's value at the samples ``index`` in the variable the table itself is indexed by, before any
     clamp: μ (or θ in degrees for the θ conventions), r for the r² roughness conventions (α = r²) or α, f0, or the
     values given outright with ``--axis``. This is what a bad cell's position is reported in."""
+    if not isinstance(c, Convention):  # an F_avg table's convention (:mod:`.fresnel_average`) knows its axes
+        return c.stored_values(shape, index)
     out = {}
     for axis, role in sorted(axis_roles(c).items()):  # in array-axis order
         i = np.asarray(index[axis])
