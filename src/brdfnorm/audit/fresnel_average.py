@@ -37,14 +37,14 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..models.fresnel import OSPRAY_R_MAX, Fresnel, kulla_conty_artistic_fit, kulla_conty_dielectric_fit
-from .conventions import Convention, role_value
+from .conventions import ETA_AXES, PINNED_ETA_AXES, Convention, role_value
 from .fits import Hypothesis, Inference, Precision
 from .infer import fit_channel
 
 F_AVG = "F_avg"
 POSITIONS = ("node", "texel")
 #: Layouts of an η axis: Cycles' (F0 = t⁴), MoonRay's (η = 1.05 + 2t), each entering or exiting (1/η).
-ETA_LAYOUTS = ("eta-cycles", "eta-cycles-exiting", "eta-moonray", "eta-moonray-exiting")
+ETA_LAYOUTS = ETA_AXES + PINNED_ETA_AXES
 #: The Fresnel factor an F_avg table averages, by its axis roles.
 KIND_OF_ROLES = {("g", "r"): "artistic", ("f0",): "schlick", ("eta",): "dielectric"}
 
@@ -103,10 +103,7 @@ class AverageConvention:
                 continue
             t = self.unit(axis, shape[axis], i)
             if role == "eta":
-                layout = self.positions[axis]
-                eta = (role_value(_CYCLES[layout], "eta", t) if layout.startswith("eta-cycles")
-                       else 1.05 + 2.0 * t)
-                out[role] = 1.0 / eta if layout.endswith("exiting") and layout.startswith("eta-moonray") else eta
+                out[role] = role_value(_LAYOUTS[self.positions[axis]], "eta", t)
             else:
                 out[role] = t
         return out
@@ -123,8 +120,8 @@ FRESNEL_NAMES = {"artistic": "artistic conductor (Gulbrandsen 2014, r and g)",
                  "schlick": "Schlick factor (f0 + (1 - f0)/21)", "dielectric": "exact dielectric Fresnel factor"}
 
 
-#: Cycles' η layouts as :func:`.conventions.role_value` evaluates them.
-_CYCLES = {layout: Convention(f0=layout) for layout in ("eta-cycles", "eta-cycles-exiting")}
+#: The η layouts as :func:`.conventions.role_value` evaluates them.
+_LAYOUTS = {layout: Convention(f0=layout) for layout in ETA_LAYOUTS}
 
 
 def exact_average(kind: str, coords: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
