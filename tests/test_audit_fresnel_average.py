@@ -190,5 +190,21 @@ def test_bad_pins_are_refused_naming_the_argument():
     with pytest.raises(ArgumentError, match="r and g axes are node or texel"):
         audit(np.zeros((4, 4)) + 0.5, "ggx", dense=False, sweep=False, pins={"channels": "F_avg"},
               axes={"alpha": np.linspace(0, 1, 4)})
+    with pytest.raises(ArgumentError, match="name no axis of an F_avg table of 2 axes"):
+        audit(np.zeros((4, 4)) + 0.5, "ggx", dense=False, sweep=False, pins={"channels": "F_avg"},
+              axes={"eta": np.linspace(1.1, 2, 4)})
     with pytest.raises(ArgumentError, match="axes=f0,g"):
         audit(np.zeros((4, 4)) + 0.5, "ggx", dense=False, sweep=False, pins={"channels": "F_avg", "axes": "f0,g"})
+
+
+def test_a_bad_f_avg_pin_is_one_line_exit_2(tmp_path, capsys):
+    from brdfnorm.cli import main
+
+    path = tmp_path / "favg.csv"
+    path.write_text("0.1,0.2,0.3\n0.2,0.3,0.4\n0.3,0.4,0.5\n")
+    with pytest.raises(SystemExit) as done:  # in-process: the same entry point as the console script
+        main(["audit", str(path), "--as", "channels=F_avg", "--as", "axes=f0,eta"])
+    out, err = capsys.readouterr()
+    assert done.value.code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and "axes=f0,eta" in lines[0], err

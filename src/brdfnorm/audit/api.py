@@ -198,7 +198,10 @@ def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen
     if (inference.fits or len(source.grid_shape) > 2 or set(pins) - {"flip"}
             or set(explicit) - {"eta", "f0"}):
         return inference, None
-    other, fit = infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
+    try:
+        other, fit = infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
+    except ArgumentError:  # the table's axes are none of an F_avg table's: the microfacet result stands
+        return inference, None
     return (other, fit) if other.fits or fit is not None else (inference, None)
 
 

@@ -195,6 +195,9 @@ def conventions(grid: tuple[int, ...], channels: int, pins: dict,
             reaches = r_axis is not None and _unit_max(positions[r_axis], grid[r_axis]) > OSPRAY_R_MAX
             for r_max in ((1.0, OSPRAY_R_MAX) if reaches else (1.0,)):
                 out.append(AverageConvention(roles, positions, flips, r_max, meanings))
+    if not out:
+        raise ArgumentError(f"the --axis values ({', '.join(sorted(given))}) name no axis of an F_avg table of "
+                            f"{ndim} axes (r, g over two; f0 or eta over one)", where="axes")
     return out
 
 
