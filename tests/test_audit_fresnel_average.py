@@ -174,14 +174,21 @@ def test_dielectric_average_over_an_eta_axis_in_its_layout(layout):
     assert result.passes and result.best.convention.positions == (layout,)
 
 
-def test_the_ospray_dielectric_fit_is_named():
-    eta = 1.05 + 2 * np.linspace(0, 1, 17)  # MoonRay's η layout, entering
-    table = (eta - 1) / (4.08567 + 1.00071 * eta)  # Kulla & Conty's fit, as OSPRay's fresnelDielectricAvg
+@pytest.mark.parametrize("exiting, largest", [(False, 6.52e-3), (True, 7.51e-4)])
+def test_the_ospray_dielectric_fit_is_named(exiting, largest):
+    eta = 1.05 + 2 * np.linspace(0, 1, 17)  # MoonRay's η layout
+    if exiting:  # Kulla & Conty's fit below 1, as OSPRay's fresnelDielectricAvg (written for interior/exterior)
+        eta = 1 / eta
+        table = 0.997118 + 0.1014 * eta - 0.965241 * eta**2 - 0.130607 * eta**3
+    else:
+        table = (eta - 1) / (4.08567 + 1.00071 * eta)
     result = audit(table, "ggx", dense=False, sweep=False, pins={"axes": "eta"})
     assert result.approximation["name"] == "OSPRay's Kulla–Conty fit of the dielectric's F_avg"
     worst = result.approximation["channels"][0]
     i = worst["worst_cell"][0]
-    assert worst["max"] == pytest.approx(abs(table[i] - favg_quad(worst["worst_at"]["eta"])), abs=1e-11)
+    assert worst["worst_at"]["eta"] == pytest.approx(eta[i])
+    assert worst["max"] == pytest.approx(abs(table[i] - favg_quad(eta[i])), abs=1e-11)
+    assert worst["max"] == pytest.approx(largest, abs=1e-5)
 
 
 def test_bad_pins_are_refused_naming_the_argument():
