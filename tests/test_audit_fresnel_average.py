@@ -215,3 +215,34 @@ def test_a_bad_f_avg_pin_is_one_line_exit_2(tmp_path, capsys):
     assert done.value.code == 2 and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and "axes=f0,eta" in lines[0], err
+
+
+def test_fix_of_an_f_avg_header_touches_only_the_wrong_cells(tmp_path, capsys):
+    from brdfnorm.cli import main
+    from brdfnorm.models.fresnel import Fresnel
+
+    r, g = _grid(9)
+    exact, _ = Fresnel("artistic", r=np.minimum(r, 1 - 1e-15), g=g).average()
+    exact[r == 1] = 1.0
+    rows = [[f"{v:.9g}f" for v in row] for row in exact.astype(np.float32)]
+    rows[4][3] = "0.5f"  # one wrong cell
+    source = tmp_path / "favg.h"
+    source.write_text("static const float favg[9 * 9] = {\n" + ",\n".join(", ".join(row) for row in rows) + "\n};\n")
+
+    def run(*argv):
+        try:
+            main(["audit", *argv, "--as", "channels=F_avg"])
+            code = 0
+        except SystemExit as done:
+            code = done.code or 0
+        return code, capsys.readouterr()
+
+    code, _ = run(str(source), "--fix", "-o", str(tmp_path / "fixed.h"))
+    assert code == 1
+    before = source.read_text().splitlines()
+    after = (tmp_path / "fixed.h").read_text().splitlines()[1:]  # a comment line with the fix's metadata first
+    changed = [(a, b) for a, b in zip(before, after, strict=True) if a != b]
+    assert len(changed) == 1 and changed[0][0].replace("0.5f", f"{np.float32(exact[4, 3]):.9g}f") == changed[0][1]
+    assert float(f"{np.float32(exact[4, 3]):.9g}") == pytest.approx(artistic_quad(0.5, 3 / 8), abs=1e-7)
+    code, (out, _) = run(str(tmp_path / "fixed.h"))
+    assert code == 0 and "PASS" in out
