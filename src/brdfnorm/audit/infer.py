@@ -331,6 +331,10 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
                       bulk=bulk, base=base, factor=factor)
 
 
+#: One channel's residuals judged against the tolerance (the F_avg tables of :mod:`.fresnel_average` too).
+fit_channel = _fit
+
+
 def full_hypothesis(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:
     """Residuals of ``c`` on every cell, or on the cells ``index`` (one index vector per axis)."""
     grid = values.shape[:-1]
