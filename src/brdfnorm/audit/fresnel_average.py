@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError
-from ..models.fresnel import OSPRAY_R_MAX, Fresnel, kulla_conty_artistic_fit, kulla_conty_dielectric_fit
+from ..models.fresnel import DESCRIPTIONS, OSPRAY_R_MAX, Fresnel, kulla_conty_artistic_fit, kulla_conty_dielectric_fit
 from .conventions import ETA_AXES, PINNED_ETA_AXES, Convention, role_value
 from .fits import Hypothesis, Inference, Precision
 from .infer import fit_channel
@@ -75,7 +75,7 @@ class AverageConvention:
                 "channels": list(self.meanings)}
 
     def text(self) -> str:
-        parts = [f"F_avg of the {FRESNEL_NAMES[self.kind]}", f"axes ({', '.join(self.roles)})",
+        parts = [f"F_avg of the {DESCRIPTIONS[self.kind]}", f"axes ({', '.join(self.roles)})",
                  ", ".join(f"{role} {pos}" for role, pos in zip(self.roles, self.positions, strict=True))]
         flipped = [role for role, f in zip(self.roles, self.flips, strict=True) if f]
         if flipped:
@@ -114,10 +114,6 @@ class AverageConvention:
         if "r" in out:
             out["r"] = np.minimum(out["r"], self.r_max)
         return out
-
-
-FRESNEL_NAMES = {"artistic": "artistic conductor (Gulbrandsen 2014, r and g)",
-                 "schlick": "Schlick factor (f0 + (1 - f0)/21)", "dielectric": "exact dielectric Fresnel factor"}
 
 
 #: The η layouts as :func:`.conventions.role_value` evaluates them.

@@ -50,6 +50,12 @@ KERNEL_CODES = {kind: code for code, kind in enumerate(MICROFACET_KINDS)}
 #: OpenPBR's ``metal_fresnel`` and ``coat_fresnel`` choices (its ``dielectric_fresnel`` says exact | schlick).
 METAL_KINDS = ("f82-tint", "schlick", "artistic", "conductor")
 COAT_KINDS = ("dielectric", "none")
+#: Each factor's name in prose (the audit's F_avg findings name the factor by it).
+DESCRIPTIONS = {"none": "constant factor F = 1", "schlick": "Schlick factor (f0 + (1 - f0)/21)",
+                "generalized-schlick": "generalized Schlick factor (exponent p)",
+                "f82-tint": "F82-tint conductor (Hoffman 2023)", "conductor": "conductor Fresnel factor (eta + ik)",
+                "artistic": "artistic conductor (Gulbrandsen 2014, r and g)",
+                "dielectric": "exact dielectric Fresnel factor"}
 #: Kulla & Conty 2017's fit of the artistic conductor's F_avg, as OSPRay evaluates it: the constant, then the
 #: coefficients of g, g², g³, r, r², r³, gr, g²r, gr².
 KULLA_CONTY_ARTISTIC_FIT = (0.087237, 0.0230685, -0.0864902, 0.0774594, 0.782654, -0.136432, 0.278708, 0.19744,
