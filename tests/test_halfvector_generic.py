@@ -26,7 +26,7 @@ def kept(monkeypatch):
 
     def spy(*args, **kwargs):
         out = original(*args, **kwargs)
-        calls.append(out.settled)
+        calls.append(out.converged)
         return out
 
     monkeypatch.setattr(halfvector_generic, "route", spy)
@@ -111,7 +111,7 @@ def test_mirror_symmetry_is_measured_not_assumed():
     result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), lopsided, fixed * [-1, -1, 1], np.array([0.2]), np.arange(1),
         np.zeros((1, 1)), rtol=1e-10, atol=0.0, max_evaluations=10**6)
-    assert result.settled.all()
+    assert result.converged.all()
     assert abs(result.value[0, 0] - np.pi) <= result.error[0, 0] <= 1e-10 * np.pi
 
 
@@ -145,7 +145,7 @@ def test_nonfinite_values_are_not_kept():
     result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), broken, fixed, np.array([1.0]), np.arange(1), np.zeros((1, 1)),
         rtol=1e-8, atol=0.0, max_evaluations=10**6)
-    assert not result.settled.any() and result.evaluations[0] > 0
+    assert not result.converged.any() and result.evaluations[0] > 0
 
 
 def test_isotropy_is_tested_at_each_cases_parameters(kept):

@@ -12,7 +12,8 @@ import pytest
 from conftest import ggx_albedo_reference, nquad_albedo, phong_like_reference, run_cli
 
 import brdfnorm as bn
-from brdfnorm.engine.routes.hemisphere import REASONS, fibonacci_hemisphere, integrate_hemisphere, lobe_frame
+from brdfnorm.engine.machinery.result import REASONS
+from brdfnorm.engine.routes.hemisphere import fibonacci_hemisphere, integrate_hemisphere, lobe_frame
 from brdfnorm.models import closed_forms
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

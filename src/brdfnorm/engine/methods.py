@@ -37,6 +37,7 @@ from ..output.formats import Column, Records, channel_value, degrees, format_val
 from ..registry import Registry
 from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from .compiled import backend as compiled_backend
+from .machinery.result import RouteResult
 from .routes import azimuthal, certified, halfvector_generic
 from .routes.dielectric import albedo_method as _dielectric
 from .routes.hemisphere import (
@@ -233,10 +234,11 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    #: (value, error, evaluations, converged, nonfinite share[, extra]): ``extra`` maps further result fields
-    #: to arrays — ``reason`` (K,) (without one an unconverged point's reason is "budget"), or the certified
-    #: ``lower``/``upper`` bounds (K, C).
-    run: Callable[..., tuple]
+    #: ``run(problem, rtol=, atol=, nonfinite=, max_evaluations=, **options)`` -> a :class:`RouteResult` of the
+    #: K cases, value and error (K, C); its ``reason`` None where it gives none ("budget" where unconverged), and
+    #: its extras further result fields: ``nonfinite_fraction`` (K,), ``reflected``/``transmitted`` (K, C), the
+    #: certified ``lower``/``upper`` bounds (K, C).
+    run: Callable[..., RouteResult]
     description: str = ""
     #: Keyword options of :func:`albedo` this method takes besides the tolerances (e.g. ``digits``).
     options: tuple[str, ...] = ()
@@ -258,10 +260,10 @@ def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFin
     # A BSDF: the lower hemisphere as a second hemisphere integral, mirrored into the upper one (ω_z → −ω_z),
     # about its own peak, the refraction direction.
     lower = _quadrature_hemisphere(problem, True, options)
-    reason = np.where(upper[5]["reason"] != "", upper[5]["reason"], lower[5]["reason"])
-    bad = None if upper[4] is None else upper[4] + lower[4]
-    return (upper[0] + lower[0], upper[1] + lower[1], upper[2] + lower[2], upper[3] & lower[3], bad,
-            {"reason": reason, "reflected": upper[0], "transmitted": lower[0]})
+    return RouteResult(upper.value + lower.value, upper.error + lower.error, upper.evaluations + lower.evaluations,
+                       upper.converged & lower.converged, np.where(upper.reason != "", upper.reason, lower.reason),
+                       {"nonfinite_fraction": upper.nonfinite_fraction + lower.nonfinite_fraction,
+                        "reflected": upper.value, "transmitted": lower.value})
 
 
 #: ω_z → −ω_z: the lower hemisphere of a BSDF integrated as an upper one.
@@ -274,7 +276,7 @@ def _quadrature_hemisphere(problem: Problem, lower: bool, options: dict):
     with np.errstate(all="ignore"):
         try:
             outcome = _integrate(problem, None, lower, **options)
-            overflowed = not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1])))
+            overflowed = not (np.all(np.isfinite(outcome.value)) and np.all(np.isfinite(outcome.error)))
         except NonFiniteIntegrand as bad:
             if np.all(np.isfinite(bad.direction)):  # the BRDF itself is NaN or infinite there
                 raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
@@ -288,13 +290,13 @@ def _quadrature_hemisphere(problem: Problem, lower: bool, options: dict):
                 outcome = _integrate(problem, scale, lower, **options)
             except NonFiniteIntegrand as bad:
                 raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
-            if not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1]))):
+            if not (np.all(np.isfinite(outcome.value)) and np.all(np.isfinite(outcome.error))):
                 raise EvaluationError("the albedo or its error estimate exceeds float64's range", where=where)
     return outcome
 
 
 def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, *, rtol: float, atol: float,
-               nonfinite: NonFinitePolicy, max_evaluations: int):
+               nonfinite: NonFinitePolicy, max_evaluations: int) -> RouteResult:
     """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case; with
     ``lower``, of the lower hemisphere mirrored into the upper one."""
     K = problem.fixed.shape[0]
@@ -326,9 +328,8 @@ def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, 
                                   nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first,
                                   anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None))
     # Each case is charged the isotropy test as if it had run alone: counts do not depend on how cases are batched.
-    evaluations = result.evaluations + 3 * ISOTROPY_PAIRS
-    return (result.value * scale[:, None], result.error * scale[:, None], evaluations, result.converged,
-            result.nonfinite_fraction, {"reason": result.reason})
+    return result.with_(value=result.value * scale[:, None], error=result.error * scale[:, None],
+                        evaluations=result.evaluations + 3 * ISOTROPY_PAIRS)
 
 
 #: Random direction pairs per parameter set for the isotropy test.
@@ -421,7 +422,7 @@ def _closed_form(problem: Problem, **_: object):
             f"no closed form for {problem.model.name} (over the {problem.over}) at the requested directions; "
             "closed forms hold at normal incidence (theta 0) — use method 'quadrature'", where="method")
     error = 4.0 * np.finfo(float).eps * np.abs(value)  # a few roundings in the formula
-    return value, error, np.zeros(K, dtype=np.int64), np.ones(K, dtype=bool), None
+    return RouteResult(value, error, np.zeros(K, dtype=np.int64), np.ones(K, dtype=bool))
 
 
 def _has_closed_form(model: Model, over: Over) -> bool:
@@ -536,21 +537,29 @@ def albedo(
     if chosen.name == "quadrature":  # the only method that samples the model's own lobe
         problem = with_native(problem, backend)
     problem = replace(problem, compiled=backend == "compiled")
-    value, error, evaluations, converged, bad, *extra = chosen.run(
-        problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
-        **{name: given for name, given in options.items() if given is not None})
-    if chosen.name != "certified":  # a certified error is the enclosure's radius: it bounds the rounding already
+    result = chosen.run(problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
+                        **{name: given for name, given in options.items() if given is not None})
+    return albedo_result(result, problem, chosen.name, rtol)
+
+
+def albedo_result(result: RouteResult, problem: Problem, method: str, rtol: float) -> AlbedoResult:
+    """The public :class:`AlbedoResult` of a method's :class:`RouteResult` over ``problem``'s batch: reshaped to
+    the batch's shape, every estimate at least the final rounding (:func:`with_final_rounding`), the batch's
+    warnings given once."""
+    value, error = result.value, result.error
+    if method != "certified":  # a certified error is the enclosure's radius: it bounds the rounding already
         error = with_final_rounding(value, error)
-    extra = dict(extra[0]) if extra else {}
-    reason = np.asarray(extra.pop("reason", np.where(converged, "", "budget")), dtype=str)
+    extras = dict(result.extras)
+    bad = extras.pop("nonfinite_fraction", None)
+    reason = result.reasons()
     S, C = problem.shape, value.shape[-1]
-    warn_about(model.name, rtol, converged, reason, bad, stacklevel=3)
+    warn_about(problem.model.name, rtol, result.converged, reason, bad, stacklevel=4)
     return AlbedoResult(
-        value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
-        converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
-        params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
-        reason=reason.reshape(S), **{name: bound.reshape(S + (C,)) for name, bound in extra.items()},
-        model=model.name, bound=model.params, rtol=rtol,
+        value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=result.evaluations.reshape(S),
+        converged=result.converged.reshape(S), method=method, theta=problem.theta, phi=problem.phi,
+        over=problem.over, params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+        reason=reason.reshape(S), **{name: part.reshape(S + (C,)) for name, part in extras.items()},
+        model=problem.model.name, bound=problem.model.params, rtol=rtol,
     )
 
 

@@ -94,7 +94,8 @@ from scipy.special import hyp1f1
 
 from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS
-from .halfvector import CubatureResult, single_scattering_albedo
+from ..machinery.result import RouteResult
+from .halfvector import single_scattering_albedo
 from .series import adaptive_gauss_legendre
 
 _HALF_PI = 0.5 * np.pi
@@ -141,7 +142,7 @@ def applies(model, over) -> bool:
 
 
 def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
-                 atol: float | np.ndarray = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                 atol: float | np.ndarray = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
     by this module's 1-D integral where it has the distribution, else by the half-vector cubature (H1), which
     also takes any case the 1-D route does not settle (none is known). ``atol`` scalar or (K,)."""
@@ -162,7 +163,7 @@ def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, 
                                          atol=atol[rest, None], max_evaluations=max_evaluations)
         value[rest], error[rest], converged[rest] = again.value, again.error, again.converged
         evaluations[rest] += again.evaluations
-    return CubatureResult(value, error, evaluations, converged)
+    return RouteResult(value, error, evaluations, converged)
 
 
 def cosine_moments(kappa) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

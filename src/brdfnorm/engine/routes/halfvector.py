@@ -62,6 +62,7 @@ from ...models.microfacet import Distribution, fresnel, roughness, shadowing_mas
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
+from ..machinery.result import RouteResult
 from . import halfvector_global as global_rule
 
 _EPS = np.finfo(float).eps
@@ -76,14 +77,6 @@ _TWO_PI = 2.0 * np.pi
 
 #: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), piece floor(v) (R,)) -> (R, n, n, C).
 RectangleIntegrand = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class CubatureResult:
-    value: np.ndarray  # (K, C)
-    error: np.ndarray  # (K, C)
-    evaluations: np.ndarray  # (K,)
-    converged: np.ndarray  # (K,)
 
 
 @dataclass
@@ -179,7 +172,7 @@ def _per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
 
 def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int, *, rtol: float | np.ndarray,
                         atol: float | np.ndarray, max_evaluations: int,
-                        chunk: int = PANELS_PER_CHUNK) -> CubatureResult:
+                        chunk: int = PANELS_PER_CHUNK) -> RouteResult:
     """Integrate every case over the union of its initial panels, adaptively and all cases at once (``rtol`` and
     ``atol`` scalars or per case, (K, 1))."""
     value = error = None
@@ -238,7 +231,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int,
             np.concatenate([parents.b0, np.where(along_a, parents.b0, mb)]),
             np.concatenate([np.where(along_a, parents.b1, mb), parents.b1]),
         )
-    return CubatureResult(value, error, evaluations, converged)
+    return RouteResult(value, error, evaluations, converged)
 
 
 # -- the microfacet integrand (H1) -------------------------------------------------------------------------
@@ -458,7 +451,7 @@ def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
                              rtol: float = DEFAULT_RTOL, atol: float | np.ndarray = 0.0,
                              max_evaluations: int = DEFAULT_MAX_EVALUATIONS, use_global: bool = True,
-                             compiled: bool = False) -> CubatureResult:
+                             compiled: bool = False) -> RouteResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 
     Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
@@ -482,13 +475,13 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
     mass, moment = distribution.truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
-    return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
+    return RouteResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
 
 
 def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
                      atol: float | np.ndarray, max_evaluations: int, use_global: bool = True,
                      max_nodes: int = global_rule.MAX_NODES, chunk: int = PANELS_PER_CHUNK,
-                     rectangle: Callable[[bool], RectangleIntegrand] | None = None) -> CubatureResult:
+                     rectangle: Callable[[bool], RectangleIntegrand] | None = None) -> RouteResult:
     """∫∫ w du dφ/2π over the rectangle of (H1) for every case of ``g``: the global rule first (``max_nodes`` per
     radial piece), then the adaptive panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric
     about the plane of N and V, so half the azimuth range, counted twice, is the whole integral (the azimuth map's
@@ -526,7 +519,7 @@ def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray
         error[~settled] = np.broadcast_to(panels.error, shape)[~settled]
         evaluations = evaluations + np.where(settled, 0, panels.evaluations)
         settled = settled | panels.converged
-    return CubatureResult(value, error, evaluations, settled)
+    return RouteResult(value, error, evaluations, settled)
 
 
 # -- limits ---------------------------------------------------------------------------------------------------

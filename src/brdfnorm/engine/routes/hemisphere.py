@@ -73,8 +73,9 @@ from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
 from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
+from ..machinery.result import RouteResult
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from ..machinery.tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
+from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -85,9 +86,9 @@ _EPS = np.finfo(float).eps
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
-#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> GlobalResult (``settled``:
+#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> RouteResult (``converged``:
 #: the cases it keeps): a route tried before the others (``integrate_hemisphere``'s first_route).
-FirstRoute = Callable[..., GlobalResult]
+FirstRoute = Callable[..., RouteResult]
 
 
 class NonFiniteIntegrand(ArithmeticError):
@@ -98,23 +99,6 @@ class NonFiniteIntegrand(ArithmeticError):
         self.case = case
         self.direction = direction
         self.value = value
-
-
-@dataclass(frozen=True)
-class HemisphereResult:
-    """Result of :func:`integrate_hemisphere`, one row per case (scipy.integrate style)."""
-
-    value: np.ndarray  # (K, C)
-    error: np.ndarray  # (K, C) error estimate
-    evaluations: np.ndarray  # (K,) integrand evaluations
-    converged: np.ndarray  # (K,) bool
-    nonfinite_fraction: np.ndarray  # (K,) share of the hemisphere's solid angle zeroed (nonfinite="zero")
-    reason: np.ndarray  # (K,) str: "" where converged, else why not (one of :data:`REASONS`)
-
-
-#: Why a case ends unconverged: its integrand's float64 rounding noise exceeds the tolerance
-#: ("rounding-limited"), its estimate stopped improving ("stalled"), or the evaluation budget ran out ("budget").
-REASONS = ("rounding-limited", "stalled", "budget")
 
 
 @dataclass
@@ -214,7 +198,7 @@ def integrate_hemisphere(
     first_route: FirstRoute | None = None,
     anisotropic: np.ndarray | None = None,
     epsilon: float | None = None,
-) -> HemisphereResult:
+) -> RouteResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
     Parameters
@@ -269,13 +253,13 @@ def integrate_hemisphere(
         first = first_route(integrand, poles, widths, quiet, noise_amplitude, rtol=rtol, atol=atol,
                             max_evaluations=max_evaluations // 4)
         evaluations += first.evaluations
-        quiet = quiet[~first.settled[quiet]]
+        quiet = quiet[~first.converged[quiet]]
     tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
                              noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
                              max_nodes_per_call=max_nodes_per_call, azimuthal_tail=anisotropic)
     evaluations += tried.evaluations
     routes = [tried] + ([first] if first else [])
-    remaining = np.flatnonzero(~np.any([route.settled for route in routes], axis=0))
+    remaining = np.flatnonzero(~np.any([route.converged for route in routes], axis=0))
     panels = _Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
                                       frame[0][remaining, 2], widths[remaining], supports[remaining]))
     history = []  # total error estimate per case and round (for the stall check)
@@ -389,10 +373,11 @@ def integrate_hemisphere(
         value = np.zeros((K, max(route.value.shape[1] for route in routes)))
         error = np.zeros_like(value)
     for route in routes:
-        value[route.settled], error[route.settled] = route.value[route.settled], route.error[route.settled]
-        converged |= route.settled
+        value[route.converged], error[route.converged] = route.value[route.converged], route.error[route.converged]
+        converged |= route.converged
     reason[converged] = ""
-    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
+    return RouteResult(value, error, evaluations, converged, reason.astype(str),
+                       {"nonfinite_fraction": bad_total / (2.0 * np.pi)})
 
 
 def _case_errors(pool: _Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):

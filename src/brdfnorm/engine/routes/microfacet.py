@@ -29,9 +29,10 @@ from ...models.microfacet import (
 )
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
+from ..machinery.result import RouteResult
 from . import anisotropic_compensation  # noqa: F401 — registers the anisotropic lobes' compensation
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
+from .halfvector import MU_MIN, require_mu_min, single_scattering_albedo
 from .series import adaptive_gauss_legendre
 
 #: The μ = 0 row of a table is evaluated here (a renderer clamps μ there too).
@@ -57,7 +58,7 @@ def _albedo_method(single_scattering, compiles: bool = False):
         result = single_scattering(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
                                    max_evaluations=max_evaluations, **options)
         value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
-        return value, error, result.evaluations, result.converged, None
+        return result.with_(value=value, error=error)
     return run
 
 
@@ -124,7 +125,7 @@ def _anisotropic_compensation(model, fixed, params, value, error):
 # -- Kulla & Conty's compensation tables -------------------------------------------------------------------
 
 def _albedo_grid(distribution: Distribution, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
-                 rtol: float = _TABLE_RTOL, atol=0.0) -> CubatureResult:
+                 rtol: float = _TABLE_RTOL, atol=0.0) -> RouteResult:
     """Single-scattering E (F = 1, isotropic) at the pairs (μ, α) of two equal-shape arrays, flattened."""
     mu = np.clip(np.ravel(mu), MU_MIN, 1.0)
     fixed = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=-1)

@@ -66,13 +66,13 @@ At θ_o = 0, λ = 1 and G = 1, and (S5) reduces to seed 000's Eq. 3, 8π(2^(−n
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import roots_legendre
 
 from ... import validate
 from ...errors import ParameterError, ParameterTypeError
+from ..machinery.result import RouteResult
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
 _INNER_ORDER = 24
@@ -97,17 +97,6 @@ _P_NODES, _P_WEIGHTS = roots_legendre(_OUTER_ORDER)
 
 #: A batch integrand: (case indices (P,), abscissae (P, N)) -> values (P, N).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class SeriesResult:
-    """Albedo by seed 002's form: ``value`` and ``error`` (estimate) arrays of the broadcast shape of (n, θ),
-    ``evaluations`` the number of outer nodes used (each one Legendre-function evaluation of 24 terms)."""
-
-    value: np.ndarray
-    error: np.ndarray
-    evaluations: np.ndarray
-    converged: np.ndarray
 
 
 def legendre_ratio(m: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -236,12 +225,14 @@ def _check(n: object, theta: object, rtol: object, atol: object) -> tuple[np.nda
     return n_arr, validate.polar_angles(theta, horizon=True)
 
 
-def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.0) -> SeriesResult:
+def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.0) -> RouteResult:
     """Albedo ∫ max(0,N·H)^n (N·L) dL of Blinn-Phong at view angle ``theta`` (radians) by seed 002's form.
 
     ``n`` and ``theta`` broadcast together; a case is done when its error estimate is at most
     max(rtol·|E|, atol). The error estimate is an upper bound in practice: the difference of a 15-point rule on
-    a panel and on its halves (the finer of which is kept), plus the rounding of G_m and of the sums.
+    a panel and on its halves (the finer of which is kept), plus the rounding of G_m and of the sums. The result's
+    arrays have the broadcast shape of (n, θ); ``evaluations`` counts outer nodes (each one Legendre-function
+    evaluation of 24 terms).
     """
     n_arr, theta_arr = _check(n, theta, rtol, atol)
     shape = np.broadcast_shapes(n_arr.shape, theta_arr.shape)
@@ -260,7 +251,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     # The quadrature's estimate sees only the truncation; the rounding of G (where it is not exactly 1: theta > 0
     # and n > 0) and of the sums is added, so the estimate bounds the error to the last bits.
     rounding = np.abs(value) * (_SUM_ULPS * _EPS + np.where((tc > 0) & (nc > 0), _G_RTOL, 0.0))
-    return SeriesResult(
+    return RouteResult(
         value=(scale * value).reshape(shape),
         error=(scale * (error + rounding)).reshape(shape),
         evaluations=evaluations.reshape(shape),
@@ -272,7 +263,7 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     """``brdfnorm.engine.methods`` method adapter: a :class:`brdfnorm.engine.methods.Problem` batch for ``blinn-phong``.
 
     The lobe is reciprocal, so the light and view integrals coincide and both are (S5) at the fixed direction's
-    polar angle. Returns (value (K, 1), error (K, 1), evaluations (K,), converged (K,), None).
+    polar angle. Returns value and error (K, 1).
     """
     fixed = np.asarray(problem.fixed, dtype=float)
     count = fixed.shape[0]
@@ -280,4 +271,4 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     n = np.asarray(problem.case_params(np.arange(count))["n"], dtype=float)
     n = n.reshape(-1) if n.size == count else np.broadcast_to(n.reshape(-1)[:1], (count,))
     result = blinn_phong_albedo_series(n, theta, rtol=rtol, atol=atol)
-    return result.value[:, None], result.error[:, None], result.evaluations, result.converged, None
+    return result.with_(value=result.value[:, None], error=result.error[:, None])
