@@ -12,8 +12,8 @@ import pytest
 from conftest import half_vector_gauss_legendre
 
 import brdfnorm as bn
-from brdfnorm.engine.methods import rotation_invariant
 from brdfnorm.engine.routes import halfvector_generic
+from brdfnorm.engine.routes.quadrature import rotation_invariant
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -173,8 +173,6 @@ PRIVATE_CROSSINGS_LEFT = {
     ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._atan"),
     ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._nan"),
     ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._power"),
-    ("brdfnorm.engine.routes.dielectric", "brdfnorm.engine.routes.halfvector._Panels"),
-    ("brdfnorm.engine.routes.halfvector_generic", "brdfnorm.engine.routes.halfvector._Geometry"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._FLOOR"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._doublings"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._normalized"),

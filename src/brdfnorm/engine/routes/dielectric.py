@@ -34,9 +34,10 @@ from ...models.dielectric import MicrofacetDielectric, refraction_kind, refracti
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.grazing_panels import ladder
+from ..machinery.panels import Panels, adaptive_rectangles
 from ..machinery.result import RouteResult
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, _Panels, adaptive_rectangles, fill_pieces, single_scattering_albedo
+from .halfvector import MU_MIN, fill_pieces, single_scattering_albedo
 
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
@@ -373,7 +374,7 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     a0 = np.concatenate([np.arange(n, dtype=float) for n in counts])
     cases, a0 = np.repeat(cases, 3), np.repeat(a0, 3)
     b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
-    initial = _Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
+    initial = Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
     integrand = _part_integrand(distribution, shadowing, fixed, alpha, eta, part, table, graded)
     result = adaptive_rectangles(integrand, initial, K, rtol=rtol, atol=atol, max_evaluations=max_evaluations,
                                  chunk=_PANELS_PER_CHUNK)

@@ -29,8 +29,8 @@ c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks
 
 Where it is tried, and when its answer is kept
 ----------------------------------------------
-- Only for isotropic lobes (:func:`brdfnorm.engine.methods.rotation_invariant`, at each case's parameters), for
-  cases whose rounding noise is far below the tolerance (the same test as the global rule of
+- Only for isotropic lobes (:func:`brdfnorm.engine.routes.quadrature.rotation_invariant`, at each case's
+  parameters), for cases whose rounding noise is far below the tolerance (the same test as the global rule of
   :mod:`brdfnorm.engine.machinery.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon,
   and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
@@ -57,7 +57,7 @@ from ..compiled import drivers as native
 from ..machinery.result import RouteResult
 from ..machinery.rounding import noise_bound
 from . import halfvector_global as global_rule
-from .halfvector import SlopeNodes, _Geometry, integrate_slopes, slope_map
+from .halfvector import SlopeGeometry, SlopeNodes, integrate_slopes, slope_map
 from .hemisphere import fibonacci_hemisphere
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
@@ -170,7 +170,7 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
     evaluations[cases] += 2 * (LATTICE + len(RINGS) * AZIMUTHS)
     F = fixed[cases]
-    g = _Geometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
+    g = SlopeGeometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
     failed = np.zeros(cases.size, dtype=bool)
     fused = hasattr(integrand, "kernels")  # the compiled backend: the rectangle integrand is one kernel
 
