@@ -64,3 +64,62 @@ def test_a_route_result_reads_its_extras_and_survives_copies():
     assert result.value[0, 0] == 1.0 and "transmitted" not in result.extras
     for twin in (copy.deepcopy(changed), pickle.loads(pickle.dumps(changed))):
         assert twin.transmitted[1, 0] == 0.75 and twin.evaluations.tolist() == [3, 4]
+
+
+# -- no registration by import side effect (issue 39 item 1) --------------------------------------------------
+
+def _import_side_effects(path: Path) -> list[tuple[int, str]]:
+    """(line, what) of each module-level statement of ``path`` that fills something of the package outside the
+    module while it is imported: a call of a ``register…`` function or method, an assignment into an attribute or
+    item of a name imported from the package (``table.ROUTES["x"] = …``, ``module.VALUE = …``); and every
+    ``global`` statement (a function that rebinds a module global, as a registration hook does)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    imported = {(alias.asname or alias.name).split(".")[0] for node in tree.body
+                if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("brdfnorm"))
+                or isinstance(node, ast.Import) and all(a.name.startswith("brdfnorm") for a in node.names)
+                for alias in node.names}
+    found = [(node.lineno, "global") for node in ast.walk(tree) if isinstance(node, ast.Global)]
+
+    def base(node: ast.AST) -> ast.AST:
+        while isinstance(node, ast.Attribute | ast.Subscript):
+            node = node.value
+        return node
+
+    def top_level(statements):
+        for node in statements:
+            if isinstance(node, ast.If | ast.Try | ast.With):  # conditional registration is registration too
+                yield from top_level(node.body + getattr(node, "orelse", []))
+            else:
+                yield node
+
+    for node in top_level(tree.body):
+        calls = [c for c in ast.walk(node) if isinstance(c, ast.Call)] if isinstance(node, ast.Expr) else []
+        for call in calls:
+            name = call.func.attr if isinstance(call.func, ast.Attribute) else getattr(call.func, "id", "")
+            if name.startswith("register"):
+                found.append((node.lineno, f"calls {name}"))
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(
+            node, ast.AugAssign | ast.AnnAssign) else []
+        for target in targets:
+            root = base(target)
+            if target is not root and isinstance(root, ast.Name) and root.id in imported:
+                found.append((node.lineno, f"writes into {root.id}"))
+    return found
+
+
+def test_no_module_fills_another_at_import_and_no_late_imports():
+    found = {str(path.relative_to(PACKAGE)): hits for path in sorted(PACKAGE.rglob("*.py"))
+             if (hits := _import_side_effects(path))}
+    assert found == {}
+    late = [str(path.relative_to(PACKAGE)) for path in PACKAGE.rglob("*.py")
+            if "noqa: E402" in path.read_text(encoding="utf-8")]
+    assert late == []
+
+
+def test_the_side_effect_finder_sees_registrations(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text("from . import table as T\nfrom .r import REGISTRY\n\nT.ROUTES['x'] = 1\n"
+                    "if 'a' not in REGISTRY:\n    REGISTRY.register('a', 1)\nregister_hook(print)\n"
+                    "LOCAL = {}\nLOCAL['k'] = 2\n\ndef hook(p):\n    global LOCAL\n    LOCAL = p\n")
+    assert _import_side_effects(path) == [(12, "global"), (4, "writes into T"), (6, "calls register"),
+                                          (7, "calls register_hook")]

@@ -34,7 +34,7 @@ from ..models.blinn_phong import BlinnPhong
 from ..models.dielectric import MicrofacetDielectric
 from ..models.microfacet import MicrofacetModel
 from ..output.formats import Column, Records, channel_value, degrees, format_value
-from ..registry import Registry
+from ..registry import Reference, Registry
 from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from .compiled import backend as compiled_backend
 from .machinery.result import RouteResult
@@ -282,9 +282,13 @@ METHODS: Registry[Method] = Registry("method", "method", {
                          "reflection + refraction over the facet normal, the slope distribution as measure"),
     "certified": Method("certified", certified.applies, certified.albedo_method,
                         "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)),
+    # brdfnorm.materials lies above the engine: its method is declared by where it lives, imported on first use
+    "material": Method("material", Reference("brdfnorm.materials.route:applies").call(),
+                       Reference("brdfnorm.materials.route:albedo_method").call(),
+                       "a material term by term: its lobes' exact albedos through the layering factors"),
 })
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
-AUTO_ORDER: list[str] = ["series", "azimuthal", "microfacet", "dielectric", "quadrature"]
+AUTO_ORDER: list[str] = ["material", "series", "azimuthal", "microfacet", "dielectric", "quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:

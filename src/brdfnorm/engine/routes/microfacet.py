@@ -25,12 +25,10 @@ from ...models.microfacet import (
     MicrofacetModel,
     fresnel_multiple_scattering,
     fresnel_normal,
-    register_compensation,
 )
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
 from ..machinery.result import RouteResult
-from . import anisotropic_compensation  # noqa: F401 — registers the anisotropic lobes' compensation
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, require_mu_min, single_scattering_albedo
 from .series import adaptive_gauss_legendre
@@ -245,6 +243,3 @@ def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensa
 def compensation(distribution: Distribution, shadowing: str, size: int) -> Compensation:
     """The (cached) Kulla-Conty tables of a lobe; ``size`` 0 for exact values."""
     return _compensation(distribution.name, shadowing, int(size))
-
-
-register_compensation(compensation)
