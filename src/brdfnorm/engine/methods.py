@@ -325,6 +325,29 @@ def warn_about(name: str, rtol: float, converged: np.ndarray, reason: np.ndarray
                       "of the hemisphere's solid angle", stacklevel=stacklevel)
 
 
+def check_settings(model: Model, *, over: Over = "light", rtol: float = DEFAULT_RTOL, atol: float = 0.0,
+                   method: str = "auto", nonfinite: NonFinitePolicy = "raise",
+                   max_evaluations: int = DEFAULT_MAX_EVALUATIONS, digits: int | None = None
+                   ) -> tuple[float, float, Method]:
+    """The settings of an albedo computation checked once, for :func:`albedo` and for a table job before its work
+    is sent out (:class:`brdfnorm.parallel.job.AlbedoSettings`): (rtol, atol) as floats and the method chosen
+    (``"auto"`` resolved for this model and ``over``). Raises :class:`ArgumentError` naming the API argument."""
+    rtol, atol = validate.tolerances(rtol, atol)
+    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
+    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
+    check_model(model)
+    validate.choice(over, ("light", "view"), "over")
+    if over == "view" and getattr(model, "transmits", False):
+        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
+                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
+                            where="over")
+    chosen = resolve_method(model, over, method)
+    for name, given in {"digits": digits}.items():
+        if given is not None and name not in chosen.options:
+            raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
+    return rtol, atol, chosen
+
+
 def albedo(
     model: Model,
     theta,
@@ -349,20 +372,11 @@ def albedo(
     ``$BRDFNORM_BACKEND``, else "compiled" where Numba imports) chooses how the integrand and the cubature's inner
     loops run (:mod:`brdfnorm.engine.compiled`); the answers agree within their error estimates.
     """
-    rtol, atol = validate.tolerances(rtol, atol)
-    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
-    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
+    rtol, atol, chosen = check_settings(model, over=over, rtol=rtol, atol=atol, method=method, nonfinite=nonfinite,
+                                        max_evaluations=max_evaluations, digits=digits)
+    options = {"digits": digits}
     problem = make_problem(model, theta, phi, over)
     backend = compiled_backend.requested(backend)
-    if over == "view" and getattr(model, "transmits", False):
-        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
-                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
-                            where="over")
-    chosen = resolve_method(model, over, method)
-    options = {"digits": digits}
-    for name, given in options.items():
-        if given is not None and name not in chosen.options:
-            raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
     if chosen.name == "quadrature":  # the only method that samples the model's own lobe
         problem = with_native(problem, backend)
     problem = replace(problem, compiled=backend == "compiled")
