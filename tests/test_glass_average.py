@@ -102,8 +102,8 @@ def test_spread_over_processes_is_bit_identical():
 def test_the_mu_average_is_honest_over_a_kink_of_e_mu():
     """Beckmann α = 1, η = 1/1.5: E(μ)'' drops from −70 to −17 within Δ√μ ≈ 0.003 near μ = 0.99, inside the
     μ-average's last panel, where K15 and G7 shared an error: at rtol 1e-8 it was 5.7e-9 off with an estimate of
-    3.2e-9. The parents' bisection discrepancies (brdfnorm.lut.adaptive) now bound it (1.9e-10 off, estimate
-    4.6e-9); the reference is the 3-D route at rtol 1e-12, which shares no integral with it."""
+    3.2e-9. The parents' bisection discrepancies (brdfnorm.engine.machinery.interval) now bound it (1.9e-10 off,
+    estimate 4.6e-9); the reference is the 3-D route at rtol 1e-12, which shares no integral with it."""
     model = bn.load("beckmann-dielectric")
     params = {"alpha": np.array([1.0]), "eta": np.array([1 / 1.5])}
     reference = dielectric_average.average_albedo(model.distribution, params["alpha"], params["eta"],

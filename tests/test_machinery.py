@@ -52,6 +52,26 @@ def test_the_check_sees_a_second_result_class_or_panel_pool(tmp_path):
                                              ("engine/routes/new.py", "CubatureResult")}
 
 
+def _adaptive_integrators(root: Path) -> set[str]:
+    """Modules under ``root`` (relative to its parent) that define a function named ``adaptive_…`` (the engine's
+    adaptive integrators: 1-D bisection, the rectangle driver)."""
+    return {path.relative_to(root.parent).as_posix() for path in root.rglob("*.py")
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.FunctionDef) and node.name.startswith("adaptive_")}
+
+
+def test_adaptive_integrators_live_in_the_machinery_only():
+    assert _adaptive_integrators(PACKAGE) == {"brdfnorm/engine/machinery/interval.py",
+                                              "brdfnorm/engine/machinery/panels.py"}
+
+
+def test_the_integrator_finder_sees_one_in_a_route(tmp_path):
+    (tmp_path / "pkg" / "lut").mkdir(parents=True)
+    (tmp_path / "pkg" / "lut" / "table.py").write_text("def adaptive_simpson(f):\n    return f\n")
+    (tmp_path / "pkg" / "lut" / "other.py").write_text("def _average_adaptive(f):\n    return f\n")
+    assert _adaptive_integrators(tmp_path / "pkg") == {"pkg/lut/table.py"}
+
+
 def test_a_route_result_reads_its_extras_and_survives_copies():
     result = RouteResult(np.ones((2, 1)), np.zeros((2, 1)), np.array([3, 4]), np.array([True, False]),
                          extras={"reflected": np.full((2, 1), 0.25)})

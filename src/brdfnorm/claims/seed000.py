@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..engine.routes.series import adaptive_gauss_legendre, blinn_phong_albedo_series
+from ..engine.machinery.interval import adaptive_gauss_legendre
+from ..engine.routes.series import blinn_phong_albedo_series
 from ..models import closed_forms
 from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 

@@ -9,7 +9,7 @@ import mpmath as mp
 import numpy as np
 from scipy.special import gammaln, roots_legendre
 
-from ..engine.routes.series import adaptive_gauss_legendre
+from ..engine.machinery.interval import adaptive_gauss_legendre
 from . import SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..engine.routes.series import adaptive_gauss_legendre
+from ..engine.machinery.interval import adaptive_gauss_legendre
 from ..models import closed_forms
 from . import GAUSSIAN_RANGE, SOURCES, TWO_PI, Claim, rel_error
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from .. import validate
 from ..engine.compiled.backend import scope as backend_scope
+from ..engine.machinery.interval import adaptive_unit_interval
 from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
 from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
 from ..engine.machinery.kronrod import NODES as KRONROD_NODES
@@ -41,7 +42,6 @@ from ..errors import ArgumentError
 from ..models.base import Model
 from ..validate import DEFAULT_RTOL
 from . import glass
-from .adaptive import adaptive_unit_interval
 from .axes import axis_parameter, checked_axes, per_cell
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
 from .cloth import cloth_model

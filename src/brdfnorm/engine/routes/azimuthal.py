@@ -77,10 +77,9 @@ relative to E by ~1/μ_V, see the tests' reach check), and G2's horizon layer ge
 Angles are carried both as θ and as elevations π/2 − θ (θ_L = θ_V + 2 atan d, e_L = e_V − 2 atan d), sin θ
 from the one and cos θ from the other, so that both keep their relative accuracy (at a normal view the peak
 lies at θ_L ~ α: sin θ_L from π/2 − e_L was 1e-11 off there at α = 6e-6). G2's boundary layer at the horizon
-(Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels
-of its own; the rest is :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
-bisected
-while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
+(Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels of its
+own; the rest is :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
+bisected while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
 halves, the error of the coarser value, while the finer one is kept).
 """
 
@@ -94,9 +93,9 @@ from scipy.special import hyp1f1
 
 from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS
+from ..machinery.interval import adaptive_gauss_legendre
 from ..machinery.result import RouteResult
 from .halfvector import single_scattering_albedo
-from .series import adaptive_gauss_legendre
 
 _HALF_PI = 0.5 * np.pi
 #: Rounding of the sum of positive node values, relative (as the half-vector rules' floor).

@@ -28,10 +28,10 @@ from ...models.microfacet import (
 )
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
+from ..machinery.interval import adaptive_gauss_legendre
 from ..machinery.result import RouteResult
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, require_mu_min, single_scattering_albedo
-from .series import adaptive_gauss_legendre
 
 #: The μ = 0 row of a table is evaluated here (a renderer clamps μ there too).
 MU_CLAMP = 1e-4
@@ -138,7 +138,7 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
     """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
 
     In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
-    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` over
+    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` over
     x ∈ [ln 1e-6, 0] converges fast; each node's E is computed to an absolute accuracy scaled by its weight,
     and the nodes' errors are added to the outer estimate (bounded by max(2μ²·err_E) times the x-range).
     """

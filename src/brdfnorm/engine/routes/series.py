@@ -65,24 +65,19 @@ At θ_o = 0, λ = 1 and G = 1, and (S5) reduces to seed 000's Eq. 3, 8π(2^(−n
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 from scipy.special import roots_legendre
 
 from ... import validate
 from ...errors import ParameterError, ParameterTypeError
+from ..machinery.interval import adaptive_gauss_legendre
 from ..machinery.result import RouteResult
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
 _INNER_ORDER = 24
-_OUTER_ORDER = 15
 #: Cut of the Gaussian e^{−(m−¾)s²} in (S4) and of cos^n(δ/2) in (S5), as exponents.
 _INNER_CUT = 45.0
 _OUTER_CUT = 60.0
-#: Panels are evaluated in blocks of this many, to bound the size of temporaries (panels × 30 × 24 floats).
-_BLOCK = 4096
-_MAX_ROUNDS = 60
 #: Rounding in the estimate, relative to E: G_m by (S4) is good to 5e-15 (tests/test_series.py checks it against
 #: mpmath's 2F1 at 30 digits), and the sums of nodes and panels and the cos^n factor round a few ulps each.
 #: Measured against mpmath at 25 digits (tests/test_error_bounds.py): errors up to 1.7e-15 relative; at n = 270,
@@ -93,10 +88,7 @@ _EPS = np.finfo(float).eps
 _HALF_PI = 0.5 * np.pi
 
 _S_NODES, _S_WEIGHTS = roots_legendre(_INNER_ORDER)
-_P_NODES, _P_WEIGHTS = roots_legendre(_OUTER_ORDER)
 
-#: A batch integrand: (case indices (P,), abscissae (P, N)) -> values (P, N).
-Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 def legendre_ratio(m: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -137,68 +129,6 @@ def _integrand(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore"):
         xi = np.where(q < 0.5, np.arctanh(np.minimum(q, 0.5)), np.log(half_cos / sum_cos))
     return power * legendre_ratio(0.5 * n, xi) * np.cos(phi) * np.sin(phi)
-
-
-def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """15-point Gauss–Legendre of ``func`` on each panel [a, b]; blocks of panels bound the temporaries."""
-    out = np.empty(a.shape)
-    for start in range(0, a.size, _BLOCK):
-        sl = slice(start, start + _BLOCK)
-        half = 0.5 * (b[sl] - a[sl])
-        x = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * _P_NODES
-        # A row sum, not a matrix-vector product: BLAS's gemv rounds a row differently with the number of rows
-        # (measured: 524 of 1 003 rows differ from the same rows one at a time), which made a cell's value depend
-        # on which other cells shared its call, and tables differ in the last bits between one process and
-        # several (tests/test_lut_parallel.py).
-        out[sl] = half * (func(case[sl], x) * _P_WEIGHTS).sum(axis=1)
-    return out
-
-
-def adaptive_gauss_legendre(
-    func: Integrand, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float, atol: float = 0.0
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate many one-dimensional integrals at once by adaptive bisection of Gauss–Legendre panels.
-
-    Case ``k`` is the sum of ∫ func over its initial panels [a[i], b[i]] with case[i] = k; ``func(case, x)``
-    takes case indices (P,) and abscissae (P, N) and returns (P, N). A panel's error estimate is the difference
-    between the 15-point rule on it and on its two halves (the finer value is kept); a case is done when its
-    summed estimate is at most max(rtol·|value|, atol). Returns (value, error, evaluations, converged), (cases,).
-    """
-    coarse = _panel_values(func, case, a, b)
-    done_value = np.zeros(cases)
-    done_error = np.zeros(cases)
-    evaluations = np.bincount(case, minlength=cases) * _OUTER_ORDER
-    converged = np.ones(cases, dtype=bool)
-    for round_ in range(_MAX_ROUNDS + 1):
-        mid = 0.5 * (a + b)
-        left = _panel_values(func, case, a, mid)
-        right = _panel_values(func, case, mid, b)
-        count = np.bincount(case, minlength=cases)
-        evaluations += 2 * _OUTER_ORDER * count
-        fine = left + right
-        err = np.abs(fine - coarse)
-        # Current estimate and error per case: accepted panels plus the live ones at their finer value.
-        total = done_value + np.bincount(case, weights=fine, minlength=cases)
-        total_err = done_error + np.bincount(case, weights=err, minlength=cases)
-        target = np.maximum(rtol * np.abs(total), atol)
-        unsettled = total_err > target
-        # Split a live panel only while its case misses the target and the panel carries more than its share
-        # of the error and more than rounding (a panel at rounding level cannot get better by splitting).
-        share = target[case] / np.maximum(count[case], 1)
-        split = unsettled[case] & (err > share) & (err > 64.0 * _EPS * np.abs(fine)) & (b - a > 1e-12)
-        if round_ == _MAX_ROUNDS:
-            converged &= np.bincount(case, weights=split, minlength=cases) == 0
-            split[:] = False
-        keep = ~split
-        done_value += np.bincount(case[keep], weights=fine[keep], minlength=cases)
-        done_error += np.bincount(case[keep], weights=err[keep], minlength=cases)
-        if not split.any():
-            break
-        a = np.concatenate([a[split], mid[split]])
-        b = np.concatenate([mid[split], b[split]])
-        coarse = np.concatenate([left[split], right[split]])
-        case = np.concatenate([case[split], case[split]])
-    return done_value, done_error, evaluations, converged
 
 
 def _initial_panels(n: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
