@@ -70,9 +70,9 @@ import numpy as np
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
-from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
-from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
-from ..machinery.panels import Panels, kronrod_estimate
+from ..machinery.kinks import LOBATTO_NODES, algebraic_floor, refinement_change
+from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
+from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
 from ..machinery.result import RouteResult
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
 from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u
@@ -364,28 +364,21 @@ def _node_values(panels: Panels, integrand, frame, widths, supports, nodes: np.n
 
 def _check_by_halves(panels: Panels, along_beta: bool, integrand, frame, widths, supports,
                      max_nodes_per_call) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum over its two halves (split along β or u) by Gauss-Lobatto in the split
-    direction ⊗ G7 across. Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an edge, beyond
-    all Gauss-Kronrod nodes (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and a jump J in
-    slope, the error J δ²/2 is below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9). G7 across,
-    as Lobatto was weaker than G7 on steep integrands (Phong n = 1e4, rtol 1e-12). docs/kinks.md has the details."""
-    halves = panels.halves(np.full(panels.case.size, along_beta))
-    nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
-    if not along_beta:
-        nodes, weights = nodes[::-1], weights[::-1]
-    half = panels.case.size
-    if hasattr(integrand, "kernels"):  # the compiled backend: map, shader, Jacobian and sums in one kernel
-        total = native.hemisphere_sums(integrand, halves.case, halves.a0, halves.a1, halves.b0, halves.b1, frame,
-                                       widths, supports, *nodes, *weights)
-        return refinement_change(panels.value, total[:half], total[half:])
-    sums = []
-    with np.errstate(all="ignore"):
-        for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
-                                                   max_nodes_per_call, nodes[1]):
-            values = np.where(np.isfinite(values), values, 0.0)
-            sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
-    total = np.concatenate(sums)
-    return refinement_change(panels.value, total[:half], total[half:])
+    """:func:`brdfnorm.engine.machinery.panels.check_by_halves` of each panel, split along β or u, with this
+    route's node map (or, under the compiled backend, one fused kernel: map, shader, Jacobian and sums)."""
+    def sums(halves: Panels, nodes: tuple, weights: tuple) -> np.ndarray:
+        if hasattr(integrand, "kernels"):
+            return native.hemisphere_sums(integrand, halves.case, halves.a0, halves.a1, halves.b0, halves.b1, frame,
+                                          widths, supports, *nodes, *weights)
+        parts = []
+        with np.errstate(all="ignore"):
+            for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
+                                                       max_nodes_per_call, nodes[1]):
+                values = np.where(np.isfinite(values), values, 0.0)
+                parts.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
+        return np.concatenate(parts)
+
+    return check_by_halves(panels, along_beta, sums)
 
 
 def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
