@@ -7,8 +7,9 @@ fixed (``over="light"``, the default). ``over="view"`` is the other reading: the
 
 Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.engine.routes.quadrature`, any model),
 ``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
-substituted silently), the exact routes of particular lobes (:mod:`brdfnorm.engine.routes`), and those registered
-with :func:`register_method` (``"material"`` for OpenPBR). ``"auto"`` takes the first applicable of
+substituted silently), the exact routes of particular lobes (:mod:`brdfnorm.engine.routes`), ``"material"`` for
+OpenPBR (declared by where it lives, :class:`brdfnorm.registry.Reference`: :mod:`brdfnorm.materials` lies above
+the engine), and those a user adds with :func:`register_method`. ``"auto"`` takes the first applicable of
 :data:`AUTO_ORDER`.
 
 This module is the front door only: it turns angles and parameter values into a :class:`Problem`, picks the
