@@ -306,7 +306,8 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
 
-    total, total_error = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    averaged = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    total, total_error = averaged.value, averaged.error
     floor_error = MU_FLOOR**2 * largest_e
     total_error = total_error + floor_error
     converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)

@@ -33,6 +33,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.special import roots_legendre
 
+from .result import RouteResult
+
 _EPS = np.finfo(float).eps
 #: Gauss–Legendre order of one panel of :func:`adaptive_gauss_legendre`.
 _ORDER = 15
@@ -62,13 +64,14 @@ def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarra
 
 def adaptive_gauss_legendre(
     func: Integrand, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float, atol: float = 0.0
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> RouteResult:
     """Integrate many one-dimensional integrals at once by adaptive bisection of Gauss–Legendre panels.
 
     Case ``k`` is the sum of ∫ func over its initial panels [a[i], b[i]] with case[i] = k; ``func(case, x)``
     takes case indices (P,) and abscissae (P, N) and returns (P, N). A panel's error estimate is the difference
     between the 15-point rule on it and on its two halves (the finer value is kept); a case is done when its
-    summed estimate is at most max(rtol·|value|, atol). Returns (value, error, evaluations, converged), (cases,).
+    summed estimate is at most max(rtol·|value|, atol). The result's arrays are (cases,); ``evaluations`` counts
+    calls of ``func`` per abscissa.
     """
     coarse = _panel_values(func, case, a, b)
     done_value = np.zeros(cases)
@@ -104,18 +107,19 @@ def adaptive_gauss_legendre(
         b = np.concatenate([mid[split], b[split]])
         coarse = np.concatenate([left[split], right[split]])
         case = np.concatenate([case[split], case[split]])
-    return done_value, done_error, evaluations, converged
+    return RouteResult(done_value, done_error, evaluations, converged)
 
 
-def adaptive_unit_interval(evaluate: Callable, count: int, *, rtol: float, max_panels: int
-                           ) -> tuple[np.ndarray, np.ndarray]:
+def adaptive_unit_interval(evaluate: Callable, count: int, *, rtol: float, max_panels: int) -> RouteResult:
     """``count`` integrals over [0, 1] at once, globally adaptive (as QUADPACK): ``evaluate(owner, left, width)``
     returns each panel's (value, error). A panel's error is the larger of that error and its parent's bisection
     discrepancy (module docstring). While an integral's summed errors exceed rtol·|value| and it has fewer than
-    ``max_panels`` panels, its worst panels (error ≥ ¼ of its largest) are halved. Returns (value, error)."""
+    ``max_panels`` panels, its worst panels (error ≥ ¼ of its largest) are halved. The result's arrays are
+    (count,); ``evaluations`` counts the panels ``evaluate`` was given per integral."""
     owner, left, width = np.arange(count), np.zeros(count), np.ones(count)
     whole, _ = evaluate(owner, left, width)
     owner, left, width, value, error = _halves(evaluate, owner, left, width, whole)
+    evaluations = np.full(count, 3, dtype=np.int64)  # the whole interval and its halves
     while True:
         total, total_error = np.bincount(owner, value, count), np.bincount(owner, error, count)
         open_ = (total_error > rtol * np.abs(total)) & (np.bincount(owner, minlength=count) < max_panels)
@@ -127,10 +131,11 @@ def adaptive_unit_interval(evaluate: Callable, count: int, *, rtol: float, max_p
         if not split.any():
             break
         keep = ~split
+        evaluations += 2 * np.bincount(owner[split], minlength=count)
         children = _halves(evaluate, owner[split], left[split], width[split], value[split])
         owner, left, width, value, error = (np.concatenate([kept[keep], new]) for kept, new in
                                             zip((owner, left, width, value, error), children, strict=True))
-    return total, total_error
+    return RouteResult(total, total_error, evaluations, total_error <= rtol * np.abs(total))
 
 
 def _halves(evaluate: Callable, owner: np.ndarray, left: np.ndarray, width: np.ndarray, parent: np.ndarray

@@ -1,10 +1,10 @@
 """The one result of every route of the engine: a batch of K integrals, scipy.integrate style.
 
-Each route (``engine/routes/``) and each rule of the machinery (the global tensor rules, the adaptive panels, the
-1-D integrator) returns a :class:`RouteResult`; the front door (:func:`brdfnorm.engine.methods.albedo`) builds the
-public :class:`brdfnorm.engine.methods.AlbedoResult` from it. A result names its fields instead of a position in a
-tuple, so adding what one route knows (the transmitted part of a BSDF, the certified bounds, the share of the
-hemisphere where the integrand was not finite) goes into ``extras`` and changes no other route.
+Each route (``engine/routes/``) and each rule of the machinery (the lobe-aligned global tensor rule, the adaptive
+panels, the 1-D integrators) returns a :class:`RouteResult`; the front door (:func:`brdfnorm.engine.methods.albedo`)
+builds the public :class:`brdfnorm.engine.methods.AlbedoResult` from it. A result names its fields instead of a
+position in a tuple, so adding what one route knows (the transmitted part of a BSDF, the certified bounds, the share
+of the hemisphere where the integrand was not finite) goes into ``extras`` and changes no other route.
 """
 
 from __future__ import annotations

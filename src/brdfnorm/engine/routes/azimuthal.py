@@ -219,8 +219,8 @@ def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray
 
     scale = 1.0 / mu
     atol_scaled = np.broadcast_to(np.asarray(atol, dtype=float), (K,)) / scale
-    value, error, evaluations, converged = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol,
-                                                                   atol=atol_scaled)
+    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol, atol=atol_scaled)
+    value, error, evaluations, converged = result.value, result.error, result.evaluations, result.converged
     # The integrand is positive, so its rounding (a few ulps a node, summed over the nodes) is bounded by
     # ROUNDING_FLOOR · E, which the panel differences cannot see.
     error = error + ROUNDING_FLOOR * np.abs(value)

@@ -159,9 +159,9 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
         np.maximum.at(inner_error, index, np.max(weight * result.error[:, 0].reshape(mu.shape), axis=1))
         return weight * result.value[:, 0].reshape(mu.shape)
 
-    value, error, _, converged = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
+    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
     dropped = _AVERAGE_MU_MIN**2 / 2
-    return value + dropped, error + span * inner_error + dropped
+    return result.value + dropped, result.error + span * inner_error + dropped
 
 
 @dataclass(frozen=True)

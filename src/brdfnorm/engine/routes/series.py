@@ -174,9 +174,8 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     def integrand(index: np.ndarray, phi: np.ndarray) -> np.ndarray:
         return _integrand(nc[index, None], tc[index, None], phi)
 
-    value, error, evaluations, converged = adaptive_gauss_legendre(
-        integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi)
-    )
+    result = adaptive_gauss_legendre(integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi))
+    value, error = result.value, result.error
     scale = 2.0 * np.pi
     # The quadrature's estimate sees only the truncation; the rounding of G (where it is not exactly 1: theta > 0
     # and n > 0) and of the sums is added, so the estimate bounds the error to the last bits.
@@ -184,8 +183,8 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     return RouteResult(
         value=(scale * value).reshape(shape),
         error=(scale * (error + rounding)).reshape(shape),
-        evaluations=evaluations.reshape(shape),
-        converged=converged.reshape(shape),
+        evaluations=result.evaluations.reshape(shape),
+        converged=result.converged.reshape(shape),
     )
 
 
