@@ -50,11 +50,11 @@ def rng():
 def lobe_aligned_only(monkeypatch):
     """The generic engine without its half-vector route (brdfnorm.engine.routes.halfvector_generic), for tests of the
     lobe-aligned routes behind it."""
-    from brdfnorm.engine.machinery.tensor_rule import GlobalResult
+    from brdfnorm.engine.machinery.result import RouteResult
     from brdfnorm.engine.routes import halfvector_generic
 
     def nothing_kept(fixed, *args, **kwargs):
         K = fixed.shape[0]
-        return GlobalResult(np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool))
+        return RouteResult(np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool))
 
     monkeypatch.setattr(halfvector_generic, "route", nothing_kept)

@@ -12,8 +12,8 @@ from helpers.paths import EXAMPLES
 from helpers.references import half_vector_gauss_legendre
 
 import brdfnorm as bn
-from brdfnorm.engine.methods import rotation_invariant
 from brdfnorm.engine.routes import halfvector_generic
+from brdfnorm.engine.routes.quadrature import rotation_invariant
 
 
 @pytest.fixture
@@ -24,7 +24,7 @@ def kept(monkeypatch):
 
     def spy(*args, **kwargs):
         out = original(*args, **kwargs)
-        calls.append(out.settled)
+        calls.append(out.converged)
         return out
 
     monkeypatch.setattr(halfvector_generic, "route", spy)
@@ -109,7 +109,7 @@ def test_mirror_symmetry_is_measured_not_assumed():
     result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), lopsided, fixed * [-1, -1, 1], np.array([0.2]), np.arange(1),
         np.zeros((1, 1)), rtol=1e-10, atol=0.0, max_evaluations=10**6)
-    assert result.settled.all()
+    assert result.converged.all()
     assert abs(result.value[0, 0] - np.pi) <= result.error[0, 0] <= 1e-10 * np.pi
 
 
@@ -143,7 +143,7 @@ def test_nonfinite_values_are_not_kept():
     result = halfvector_generic.route(
         fixed, np.ones(1, dtype=bool), broken, fixed, np.array([1.0]), np.arange(1), np.zeros((1, 1)),
         rtol=1e-8, atol=0.0, max_evaluations=10**6)
-    assert not result.settled.any() and result.evaluations[0] > 0
+    assert not result.converged.any() and result.evaluations[0] > 0
 
 
 def test_isotropy_is_tested_at_each_cases_parameters(kept):

@@ -18,6 +18,7 @@ import pytest
 from helpers.microfacet_reference import FRESNEL_LOBES, reference_albedo
 
 import brdfnorm as bn
+from brdfnorm.engine.machinery.result import RouteResult
 from brdfnorm.engine.routes import halfvector
 from brdfnorm.engine.routes.halfvector_global import azimuth_map, clustering
 
@@ -30,8 +31,8 @@ RTOLS = (1e-3, 1e-5, 1e-7, 1e-9)
 def global_only(monkeypatch):
     """Replace the adaptive panels by a stand-in that leaves every case it gets unconverged (NaN)."""
     def no_panels(integrand, initial, K, **_):
-        return halfvector.CubatureResult(np.full((K, 1), np.nan), np.full((K, 1), np.inf), np.zeros(K, dtype=np.int64),
-                                         np.zeros(K, dtype=bool))
+        return RouteResult(np.full((K, 1), np.nan), np.full((K, 1), np.inf), np.zeros(K, dtype=np.int64),
+                           np.zeros(K, dtype=bool))
 
     monkeypatch.setattr(halfvector, "adaptive_rectangles", no_panels)
 

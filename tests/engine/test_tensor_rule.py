@@ -80,7 +80,7 @@ def test_global_rule_alone_is_honest_at_grazing_views(rng, monkeypatch, lobe_ali
         settled.clear()
         _quiet(model, theta, rtol=rtol)
         (result,) = settled
-        picked = result.settled
+        picked = result.converged
         true_error = np.abs(result.value[picked, 0] - reference.value[picked, 0])
         allowance = reference.error[picked, 0] + 4e-15 * reference.value[picked, 0]
         assert np.all(result.error[picked, 0] + allowance >= true_error), (rtol, np.flatnonzero(picked))
@@ -112,7 +112,7 @@ def test_unsettled_and_nonfinite_cases_go_to_the_panels():
     frame = lobe_frame(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]))
     result = integrate_global(integrand, frame, np.full(2, 0.5), np.full(2, np.pi), np.arange(2), np.zeros((2, 1)),
                               rtol=1e-10, atol=0.0, noise_bound=noise_bound)
-    assert result.settled.tolist() == [True, False]
+    assert result.converged.tolist() == [True, False]
     assert abs(result.value[0, 0] - np.pi) < 1e-10 * np.pi
     assert result.evaluations[1] == 2 ** START_LEVELS[0] * (2 ** START_LEVELS[1] - 1)
 

@@ -1,5 +1,6 @@
-"""The globally adaptive bisection behind E_avg's μ integral (brdfnorm.lut.adaptive): its estimate must cover the
-true error where the integrand is not smooth inside a panel, against mpmath with the feature as a breakpoint."""
+"""The globally adaptive bisection behind E_avg's μ integral (brdfnorm.engine.machinery.interval): its estimate must
+cover the true error where the integrand is not smooth inside a panel, against mpmath with the feature as a
+breakpoint."""
 
 from __future__ import annotations
 
@@ -7,10 +8,10 @@ import mpmath
 import numpy as np
 import pytest
 
+from brdfnorm.engine.machinery.interval import adaptive_unit_interval
 from brdfnorm.engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
 from brdfnorm.engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
 from brdfnorm.engine.machinery.kronrod import NODES as KRONROD_NODES
-from brdfnorm.lut.adaptive import adaptive_unit_interval
 
 #: A jump of the second derivative (c·x₊²) smoothed over WIDTH, as a rough dielectric's E(μ) has near μ = 1.
 WIDTH, JUMP = 1e-3, 25.0
@@ -39,6 +40,7 @@ def test_estimate_covers_a_smoothed_kink_anywhere(rtol):
     to 1 200 times short, at x0 = 0.970 and rtol 1e-6, where the parents' discrepancies leave 0.29 at worst)."""
     for x0 in np.linspace(0.3, 0.99, 36):
         evaluate, exact = _kinked(x0)
-        value, error = adaptive_unit_interval(evaluate, 1, rtol=rtol, max_panels=400)
+        result = adaptive_unit_interval(evaluate, 1, rtol=rtol, max_panels=400)
+        value, error = result.value, result.error
         assert abs(value[0] - exact) <= error[0] <= rtol * abs(value[0]), x0
 

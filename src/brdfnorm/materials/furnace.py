@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..brdffile import random_hemisphere
+from ..engine.machinery.directions import random_hemisphere
 from ..engine.methods import albedo
 from ..models.base import Model
 from ..validate import DEFAULT_RTOL

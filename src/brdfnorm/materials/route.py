@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..engine.machinery.result import RouteResult
 from ..engine.methods import albedo as engine_albedo
 from ..models.base import Lobe, Model, mirror, normal_lobe
 from ..models.fresnel import average_quadrature
@@ -124,4 +125,4 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     params = problem.case_params(np.arange(K))
     value, error = material_albedo(problem.model, problem.fixed[:, 2], params, rtol=rtol)
     converged = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=-1)
-    return value, error, np.zeros(K, dtype=np.int64), converged, None
+    return RouteResult(value, error, np.zeros(K, dtype=np.int64), converged)

@@ -45,8 +45,9 @@ from collections.abc import Callable, Mapping
 import numpy as np
 from scipy.special import erfcx
 
-from ..errors import EvaluationError, ParameterError
+from ..errors import ParameterError
 from ..parameters import Parameter
+from ..registry import Reference
 from .base import Lobe, Model, mirror
 from .fresnel import MICROFACET_KINDS, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 
@@ -113,30 +114,17 @@ class BeckmannDistribution(Distribution):
 
 # -- the model ---------------------------------------------------------------------------------------------
 
-#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer
-#: (brdfnorm.engine.routes.microfacet), which registers its provider here when it is imported:
+#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer: declared here by where they
+#: live and imported on first use (models stay below the integrator in the import graph):
 #: ``provider(distribution, shadowing, size)`` -> an object with ``energies(mu_l, mu_v, alpha)``.
-#: Models stay below the integrator in the import graph.
-_COMPENSATION: Callable | None = None
-
-
-def register_compensation(provider: Callable) -> None:
-    global _COMPENSATION
-    _COMPENSATION = provider
-
-
-#: The anisotropic lobes' compensation (brdfnorm.engine.routes.anisotropic_compensation registers it):
+COMPENSATION = Reference("brdfnorm.engine.routes.microfacet:compensation")
+#: The anisotropic lobes' compensation, likewise:
 #: ``provider(distribution_name, shadowing, size, alpha_x, alpha_y)`` -> an object with ``albedo(mu, phi)``,
 #: ``average`` (E_avg) and ``missing`` ((1/π)∫(1 − E) cos dω of E as read).
-_ANISOTROPIC_COMPENSATION: Callable | None = None
+ANISOTROPIC_COMPENSATION = Reference("brdfnorm.engine.routes.anisotropic_compensation:anisotropic_compensation")
 #: Anisotropic compensation tables cover lobes up to this width and down to this aspect α_y/α_x.
 ANISOTROPIC_ALPHA_MAX = 10.0
 ANISOTROPIC_ASPECT_MIN = 0.01
-
-
-def register_anisotropic_compensation(provider: Callable) -> None:
-    global _ANISOTROPIC_COMPENSATION
-    _ANISOTROPIC_COMPENSATION = provider
 
 
 SHADOWING = ("height-correlated", "separable")
@@ -344,21 +332,15 @@ class MicrofacetModel(Model):
         return value
 
     def _table(self, params):
-        if _COMPENSATION is None:
-            raise EvaluationError(f"ms={params['ms']} needs the half-vector integrator (import brdfnorm)",
-                                  where=self.name)
-        return _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+        return COMPENSATION.resolve()(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
 
     def anisotropic_table(self, params: Mapping[str, object]):
         """The compensation of this anisotropic lobe: E(μ, φ), E_avg (engine.routes.anisotropic_compensation)."""
-        if _ANISOTROPIC_COMPENSATION is None:
-            raise EvaluationError(f"ms={params['ms']} needs the anisotropic integrator (import brdfnorm)",
-                                  where=self.name)
         ax, ay = (np.unique(np.ravel(a)) for a in roughness(params))  # one lobe, however broadcast
         if ax.size != 1 or ay.size != 1:
             raise ParameterError(f"ms={params['ms']} with alpha_x/alpha_y takes one lobe", where="parameter ms")
-        return _ANISOTROPIC_COMPENSATION(self.distribution.name, params["shadowing"],
-                                         int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
+        return ANISOTROPIC_COMPENSATION.resolve()(self.distribution.name, params["shadowing"],
+                                                  int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
 
     def _anisotropic(self, params: Mapping[str, object]) -> bool:
         return bool(np.any(np.asarray(params["alpha_x"]) > 0) or np.any(np.asarray(params["alpha_y"]) > 0))

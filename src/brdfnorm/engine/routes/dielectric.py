@@ -34,9 +34,11 @@ from ...models.dielectric import MicrofacetDielectric, refraction_kind, refracti
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.grazing_panels import ladder
+from ..machinery.panels import Panels, adaptive_rectangles
+from ..machinery.result import RouteResult
 from ..machinery.slope_coordinates import slope_coordinates
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, fill_pieces, single_scattering_albedo
+from .halfvector import MU_MIN, fill_pieces, single_scattering_albedo
 
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
@@ -358,7 +360,7 @@ def _kinks(distribution: Distribution, fixed: np.ndarray, alpha, eta, part: str,
 
 def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shadowing: str, part: str, *,
                 rtol: float = DEFAULT_RTOL, atol: float = 0.0,
-                max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """One part (:data:`PARTS`) of E(V) for fixed directions (K, 3) (upper hemisphere) and per-case α, η."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     K = fixed.shape[0]
@@ -374,7 +376,7 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     a0 = np.concatenate([np.arange(n, dtype=float) for n in counts])
     cases, a0 = np.repeat(cases, 3), np.repeat(a0, 3)
     b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
-    initial = _Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
+    initial = Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
     integrand = _part_integrand(distribution, shadowing, fixed, alpha, eta, part, table, graded)
     result = adaptive_rectangles(integrand, initial, K, rtol=rtol, atol=atol, max_evaluations=max_evaluations,
                                  chunk=_PANELS_PER_CHUNK)
@@ -383,12 +385,12 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     p = alpha * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2]
     mass, moment = slope_coordinates(distribution).truncated_moments()
     dropped = 1.0 / _S_CAP**2 + 2.0 * p / _S_CAP + mass + moment * p
-    return CubatureResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
+    return RouteResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
 
 
 def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.ndarray, eta: np.ndarray,
                       shadowing: str, *, rtol: float, atol: float | np.ndarray = 0.0,
-                      max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                      max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """R(V) per case (``atol`` scalar or (K,)). From the rarer side (η > 1) F is analytic over every facet, so R is
     the microfacet BRDF's albedo with the exact dielectric Fresnel, by the half-vector route of
     :mod:`brdfnorm.engine.routes.halfvector` (GGX, 16 μ × 16 α at η = 1.5, rtol 1e-9: 1.56 M evaluations against 4.67 M
@@ -416,7 +418,7 @@ def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.n
         value[rest], error[rest] = white.value - loss.value, white.error + loss.error
         evaluations[rest] = white.evaluations + loss.evaluations
         converged[rest] = white.converged & loss.converged
-    return CubatureResult(value, error, evaluations, converged)
+    return RouteResult(value, error, evaluations, converged)
 
 
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS,
@@ -434,7 +436,7 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
     # the refraction part takes the refraction's G2 kind (its integrand uses ``shadowing`` for nothing else)
     refraction = refraction_kind(str(params["shadowing"]), str(params.get("refraction_shadowing", "auto")))
 
-    def parts(rows: np.ndarray, relative: float, absolute: np.ndarray) -> tuple[CubatureResult, CubatureResult]:
+    def parts(rows: np.ndarray, relative: float, absolute: np.ndarray) -> tuple[RouteResult, RouteResult]:
         fixed, a, e = problem.fixed[rows], alpha[rows], eta[rows]
         return (reflection_albedo(model.distribution, fixed, a, e, params["shadowing"], rtol=relative,
                                   atol=absolute, max_evaluations=budget),
@@ -454,4 +456,4 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
         r[over], t[over], error[over] = again_r.value, again_t.value, again_r.error + again_t.error
         evaluations[over] += again_r.evaluations + again_t.evaluations
         converged[over] = again_r.converged & again_t.converged
-    return r + t, error, evaluations, converged, None, {"reflected": r, "transmitted": t}
+    return RouteResult(r + t, error, evaluations, converged, extras={"reflected": r, "transmitted": t})

@@ -29,8 +29,8 @@ c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks
 
 Where it is tried, and when its answer is kept
 ----------------------------------------------
-- Only for isotropic lobes (:func:`brdfnorm.engine.methods.rotation_invariant`, at each case's parameters), for
-  cases whose rounding noise is far below the tolerance (the same test as the global rule of
+- Only for isotropic lobes (:func:`brdfnorm.engine.routes.quadrature.rotation_invariant`, at each case's
+  parameters), for cases whose rounding noise is far below the tolerance (the same test as the global rule of
   :mod:`brdfnorm.engine.machinery.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon,
   and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
@@ -54,10 +54,10 @@ import numpy as np
 
 from ...models.microfacet import GGXDistribution
 from ..compiled import drivers as native
+from ..machinery.result import RouteResult
 from ..machinery.rounding import noise_bound
-from ..machinery.tensor_rule import GlobalResult
 from . import halfvector_global as global_rule
-from .halfvector import SlopeNodes, _Geometry, integrate_slopes, slope_map
+from .halfvector import SlopeGeometry, SlopeNodes, integrate_slopes, slope_map
 from .hemisphere import fibonacci_hemisphere
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
@@ -149,10 +149,10 @@ def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, 
 
 def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: np.ndarray, widths: np.ndarray,
           quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
-          max_evaluations: int) -> GlobalResult:
+          max_evaluations: int) -> RouteResult:
     """(G1) for the ``quiet`` cases whose lobe is ``isotropic`` (K,) and :func:`specular` (module docstring), as
-    :func:`brdfnorm.engine.routes.hemisphere.integrate_hemisphere` tries it first: ``settled`` says which cases it
-    keeps (the
+    :func:`brdfnorm.engine.routes.hemisphere.integrate_hemisphere` tries it first: ``converged`` says which cases
+    it keeps (the
     other rows are to be ignored; their evaluations are counted)."""
     K = fixed.shape[0]
     eligible, alpha, broad = specular(fixed, poles, widths)
@@ -166,11 +166,11 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
         evaluations[narrow] += 2 * AZIMUTHS
         cases = np.union1d(cases[broad[cases]], narrow[heavy_tailed(integrand, fixed, alpha, narrow)])
     if not cases.size:
-        return GlobalResult(np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept)
+        return RouteResult(np.zeros((K, 1)), np.zeros((K, 1)), evaluations, kept)
     symmetric = mirror_symmetric(integrand, fixed, alpha, cases, rtol)
     evaluations[cases] += 2 * (LATTICE + len(RINGS) * AZIMUTHS)
     F = fixed[cases]
-    g = _Geometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
+    g = SlopeGeometry(_GGX, "", F, alpha[cases], alpha[cases], np.zeros(cases.size))
     failed = np.zeros(cases.size, dtype=bool)
     fused = hasattr(integrand, "kernels")  # the compiled backend: the rectangle integrand is one kernel
 
@@ -212,4 +212,4 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     out_value[cases], out_error[cases] = value, error
     evaluations[cases] += result.evaluations
     kept[cases] = ok
-    return GlobalResult(out_value, out_error, evaluations, kept)
+    return RouteResult(out_value, out_error, evaluations, kept)

@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....errors import ArgumentError, EvaluationError
+from ...machinery.result import RouteResult
 from .core import (
     DEFAULT_DIGITS,
     EVAL_LIMIT,
@@ -194,7 +195,7 @@ def enclose(model, theta: float, params: dict, over: str = "light", digits: int 
 
 
 def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
-    """The ``certified`` albedo method: per case, Arb enclosures; returns the albedo module's tuple + bounds."""
+    """The ``certified`` albedo method: per case, Arb enclosures; the result's extras are the bounds."""
     route(problem.model)  # the model's reason for having no certified route, before any work
     K = problem.fixed.shape[0]
     C = problem.model.channels
@@ -213,7 +214,7 @@ def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
         evaluations[k] = enclosures[0].evaluations
         reached[k] = all(e.reached for e in enclosures)
     # An enclosure is always valid; "converged" says whether it is as narrow as the digits asked for.
-    return value, error, evaluations, reached, None, {"lower": lower, "upper": upper}
+    return RouteResult(value, error, evaluations, reached, extras={"lower": lower, "upper": upper})
 
 
 def applies(model, over) -> bool:
