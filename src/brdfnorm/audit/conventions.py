@@ -40,8 +40,13 @@ F0_POSITIONS = ("f0-node", "f0-texel")
 #: (``eta-cycles-exiting``: 1/η), or values given with ``--axis eta=…`` (``eta-explicit``).
 ETA_AXES = ("eta-cycles", "eta-cycles-exiting")
 #: η layouts taken when pinned (``--as f0=eta-moonray``), not searched: MoonRay's ``TransmissionAlbedo`` accessor
-#: (``netaRange``: η = 1.05 + 2t at nodes t = z/(n − 1), entering; ``-exiting``: 1/η, its ``mEExit`` table).
-PINNED_ETA_AXES = ("eta-moonray", "eta-moonray-exiting")
+#: (``netaRange``: η = 1.05 + 2t at nodes t = z/(n − 1), entering; ``-exiting``: 1/η, its ``mEExit`` table), and
+#: appleseed's glass tables (``AlbedoTable3D``, ``glassbsdf.cpp``: η = lerp(1.01, 3, t), light entering,
+#: ``g_glass_ggx_albedo_table``; ``eta-appleseed-exiting``: η = lerp(1/3, 1/1.01, t) — linear in η, not 1/η of the
+#: entering nodes — ``g_glass_ggx_rcp_eta_albedo_table``).
+PINNED_ETA_AXES = ("eta-moonray", "eta-moonray-exiting", "eta-appleseed", "eta-appleseed-exiting")
+#: appleseed's η range (``MinEta``, ``MaxEta`` of glassbsdf.cpp).
+APPLESEED_ETA = (1.01, 3.0)
 #: For rough dielectrics (a model with ``refraction_shadowing``) the refraction's G2 is searched too: Heitz's Beta
 #: form (``height-correlated``, brdfnorm's default), G1·G1 for both (``separable``: OpenPBR, Mitsuba), and
 #: height-correlated reflection with the refraction's G2 as the reflection's 1/(1 + Λ_V + Λ_L) (Blender Cycles'
@@ -196,6 +201,11 @@ def role_value(c: Convention, role: str, t: np.ndarray) -> np.ndarray:
         return mu_of(c.direction, t)
     if role == "alpha":
         return alpha_of(c.roughness, t)
+    if role == "eta" and c.f0.startswith("eta-appleseed"):
+        lo, hi = APPLESEED_ETA
+        if c.f0.endswith("exiting"):
+            lo, hi = 1.0 / hi, 1.0 / lo
+        return lo + t * (hi - lo)
     if role == "eta" and c.f0.startswith("eta-moonray"):
         eta = 1.05 + 2.0 * t
         return 1.0 / eta if c.f0.endswith("exiting") else eta

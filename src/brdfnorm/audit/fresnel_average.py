@@ -43,7 +43,8 @@ from .infer import fit_channel
 
 F_AVG = "F_avg"
 POSITIONS = ("node", "texel")
-#: Layouts of an η axis: Cycles' (F0 = t⁴), MoonRay's (η = 1.05 + 2t), each entering or exiting (1/η).
+#: Layouts of an η axis: Cycles' (F0 = t⁴), MoonRay's (η = 1.05 + 2t), appleseed's (η = lerp(1.01, 3, t)), each
+#: entering or exiting.
 ETA_LAYOUTS = ETA_AXES + PINNED_ETA_AXES
 #: The Fresnel factor an F_avg table averages, by its axis roles.
 KIND_OF_ROLES = {("g", "r"): "artistic", ("f0",): "schlick", ("eta",): "dielectric"}
