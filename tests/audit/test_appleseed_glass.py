@@ -174,7 +174,7 @@ def test_stored_average_albedo_is_high_by_its_quadrature_rule():
     for eta, avg_name, z, expected in ((ETA_IN[0], "g_glass_ggx_average_albedo_excerpt", 0, 0.0109),
                                        (ETA_OUT[3], "g_glass_ggx_rcp_eta_average_albedo_excerpt", 3, 0.0110)):
         stored = _array(avg_name).reshape(4, 16)[z, 15]
-        exact_avg = 2.0 * sum(wi * m * _exact(m, 1.0, eta) for m, wi in zip(mu, w))
+        exact_avg = 2.0 * sum(wi * m * _exact(m, 1.0, eta) for m, wi in zip(mu, w, strict=True))
         assert stored - exact_avg == pytest.approx(expected, abs=3e-4)
         e = np.array([1.0] + [_exact(m, 1.0, eta) for m in nodes[1:]])
         rule = min(2.0 * float((e * nodes).sum()) / 16, 1.0)
