@@ -179,3 +179,34 @@ def test_stored_average_albedo_is_high_by_its_quadrature_rule():
         e = np.array([1.0] + [_exact(m, 1.0, eta) for m in nodes[1:]])
         rule = min(2.0 * float((e * nodes).sum()) / 16, 1.0)
         assert 0.0 < stored - rule < 7e-4 and rule - exact_avg > 0.0095
+
+
+@pytest.mark.slow
+def test_a_table_made_in_appleseeds_exiting_layout_is_named_in_it(tmp_path, run_cli):
+    """R + T made by ``brdfnorm lut`` at appleseed's rcp-eta nodes (5 η, 3 roughness, 4 cos θ; α ≥ 1e-3), one cell
+    made 1 % high: with ``f0=eta-appleseed-exiting`` pinned the table is named and exactly that cell listed (its
+    exact value checked by the facet quadrature); pinned to the entering layout it does not fit."""
+    import brdfnorm as bn
+    from brdfnorm import lut
+
+    t_eta, t_r, t_mu = np.linspace(0, 1, 5), np.linspace(0, 1, 3), np.linspace(0, 1, 4)
+    eta = 1 / 3.0 + t_eta * (1 / 1.01 - 1 / 3.0)
+    model = bn.load("ggx-dielectric", refraction_shadowing="reflection-form")
+    table = lut.compute(model, {"eta": eta, "alpha": np.maximum(t_r**2, 1e-3), "mu": np.maximum(t_mu, 1e-4)},
+                        rtol=1e-9, average=False)["E"]
+    table[3, 1, 2] *= 1.01
+    np.savez(tmp_path / "glass.npz", lut=table.astype(np.float32))
+    runs = {}
+    for layout in ("eta-appleseed-exiting", "eta-appleseed"):
+        code, out, err = run_cli("audit", str(tmp_path / "glass.npz"), "--model", "ggx-dielectric", *PINS,
+                                 "--as", "shadowing=height-correlated/refraction=reflection-form",
+                                 "--as", f"f0={layout}", "--no-sweep", "--no-interpolation", "--json")
+        runs[layout] = (code, json.loads(out))
+    code, result = runs["eta-appleseed-exiting"]
+    assert code == 1 and result["verdict"] == "fits"
+    cells = result["wrong_cells"]["0"]["cells"]
+    assert [tuple(c["index"]) for c in cells] == [(3, 1, 2)]
+    exact = _exact(2 / 3, 0.25, eta[3])
+    assert cells[0]["exact"] == pytest.approx(exact, abs=1e-6) and cells[0]["at"]["eta"] == pytest.approx(eta[3])
+    code, result = runs["eta-appleseed"]
+    assert code == 1 and result["verdict"] == "no hypothesis fits"
