@@ -5,6 +5,11 @@ CPU seconds, ratios of CPU seconds):
 
 * ``generic-vs-dblquad``: one Blinn-Phong (n = 100) albedo at θ_o = 60° by the generic engine (method
   "quadrature") at rtol 1e-9, and by ``scipy.integrate.dblquad`` at the same rtol; errors against mpmath;
+* ``generic-batch-vs-dblquad``: the same lobe and rtol over a curve of 18 views θ_o = 0, 5, …, 85° in ONE call of
+  the generic engine (the per-call set-up — lobe search, isotropy test, rounding-noise probe, global-rule set-up —
+  paid once for the batch), CPU per albedo, against dblquad's mean CPU per albedo over the same views (one call
+  each: dblquad has no batch); ``per_call_overhead_ms`` is the single-call CPU less the batch's per-albedo CPU;
+  the largest error against mpmath and the smallest estimate/error ratio of both;
 * ``evaluations``: integrand evaluations per generic Blinn-Phong albedo over θ_o = 0…89° (rtol 1e-9);
 * ``generic-table``: a 32 × 32 E(μ, α) table and E_avg of built-in GGX through the generic engine (method
   "quadrature": the route a ``.brdf`` GGX takes, with the compiled lobe as its shader), rtol 1e-10;
@@ -75,6 +80,38 @@ def _generic_vs_dblquad(repeats: int) -> dict:
     return row
 
 
+def _generic_batch_vs_dblquad(repeats: int) -> dict:
+    sys.path.insert(0, str(HERE))
+    import peers
+
+    n, rtol = 100.0, 1e-9
+    theta = np.radians(np.arange(0.0, 90.0, 5.0))
+    model = bn.load("blinn-phong", n=n)
+    truth = np.array([peers.blinn_phong_reference(n, t) for t in theta])
+    row = {"title": f"Blinn-Phong n={n:g}, {theta.size} views 0…85° in one call, rtol {rtol:g}: CPU per albedo"}
+    for backend in BACKENDS:
+        seconds, result = _best(lambda b=backend: bn.albedo(model, theta, method="quadrature", rtol=rtol, backend=b),
+                                repeats)
+        error = np.abs(result.value[:, 0] - truth)
+        single = _best(lambda b=backend: bn.albedo(model, theta[12], method="quadrature", rtol=rtol, backend=b),
+                       repeats)[1]
+        per_albedo = CPU[id(result)] / theta.size
+        row[backend] = {"cpu_ms_per_albedo": 1e3 * per_albedo, "wall_ms_per_albedo": 1e3 * seconds / theta.size,
+                        "single_call_cpu_ms": 1e3 * CPU[id(single)],
+                        "per_call_overhead_ms": 1e3 * (CPU[id(single)] - per_albedo),
+                        "max_error": float(error.max()),
+                        "all_within_estimates": bool(np.all(error <= result.error[:, 0])),
+                        "evaluations_mean": float(np.mean(result.evaluations))}
+    start = time.process_time()
+    peer = [peers.dblquad_albedo(peers.blinn_phong(n), t, rtol) for t in theta]
+    cpu = (time.process_time() - start) / theta.size
+    row["dblquad"] = {"cpu_ms_per_albedo": 1e3 * cpu,
+                      "max_error": float(np.max(np.abs([p.value for p in peer] - truth)))}
+    for backend in BACKENDS:
+        row[f"dblquad_over_{backend}"] = cpu / (row[backend]["cpu_ms_per_albedo"] / 1e3)
+    return row
+
+
 def _evaluations() -> dict:
     theta = np.radians(np.arange(90.0))
     result = bn.albedo(bn.load("blinn-phong", n=100.0), theta, method="quadrature", rtol=1e-9, backend="numpy")
@@ -130,6 +167,7 @@ def w_backends(cfg, refs=None) -> dict:
         "title": "compiled backend (issue 39): numpy vs compiled vs dblquad",
         "status": "ok", "load_average": os.getloadavg()[0],
         "generic_vs_dblquad": _generic_vs_dblquad(repeats),
+        "generic_batch_vs_dblquad": _generic_batch_vs_dblquad(repeats),
         "evaluations": _evaluations(),
         "generic_table": _table(ggx, size, repeats, method="quadrature"),
         "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness"),
