@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
+from brdfnorm.engine.machinery.tensor_rule import GlobalResult
 from brdfnorm.engine.routes import halfvector_generic
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -53,13 +54,38 @@ def test_estimates_cover_the_one_dimensional_integral_at_grazing_views(kept, rto
     assert np.all(result.error[:, 0] <= rtol * result.value[:, 0])
 
 
-def test_only_narrow_lobes_are_taken_below_mu_min():
-    # Both lobes centred on the mirror direction of F at μ = 1e-4: the narrow one is tried, the broad one (smooth
-    # broad lobes cost the lobe-aligned panels less there) is not, and nothing below MU_MIN_NARROW.
-    fixed = np.array([[np.sqrt(1 - 1e-8), 0.0, 1e-4], [np.sqrt(1 - 1e-8), 0.0, 1e-4],
-                      [np.sqrt(1 - 2.5e-9), 0.0, 5e-5]])
-    poles = fixed * [-1, -1, 1]
-    eligible, _, broad = halfvector_generic.specular(fixed, poles, np.array([0.1, 0.8, 0.1]))
-    assert eligible.tolist() == [True, False, False]
-    assert broad.tolist() == [False, True, False]
-    assert halfvector_generic.specular(fixed[1:2] * [1, 1, 10], poles[1:2], np.array([0.8]))[0].all()
+def test_a_sheen_lobe_at_grazing_views(kept, monkeypatch):
+    # examples/charlie.brdf: a broad lobe peaked near the horizon, taken below MU_MIN; against the lobe-aligned
+    # routes alone at rtol 1e-12 (the half-vector route switched off: no code of it in the reference).
+    model = bn.load(str(EXAMPLES / "charlie.brdf"))
+    theta = np.arccos(np.geomspace(1e-4, 9e-4, 6))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = bn.albedo(model, theta, rtol=1e-9, method="quadrature")
+    assert kept[0].all()
+
+    def nothing_kept(fixed, *args, **kwargs):
+        K = fixed.shape[0]
+        return GlobalResult(np.zeros((K, 1)), np.zeros((K, 1)), np.zeros(K, dtype=np.int64),
+                            np.zeros(K, dtype=bool))
+
+    monkeypatch.setattr(halfvector_generic, "route", nothing_kept)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reference = bn.albedo(model, theta, rtol=1e-12, method="quadrature")
+    error = np.abs(result.value - reference.value)
+    assert np.all(error <= result.error + reference.error), (error / result.error).max()
+    assert np.all(result.evaluations < reference.evaluations)
+
+
+def test_which_lobes_are_taken_below_mu_min():
+    # At μ = 1e-4: a narrow lobe centred on the mirror direction of F is tried, a broad one peaked near N (a diffuse
+    # lobe, cheap for the lobe-aligned panels) is not, a broad one peaked near the horizon is; nothing below
+    # MU_MIN_NARROW; above MU_MIN a broad lobe is taken wherever its peak lies.
+    grazing = [np.sqrt(1 - 1e-8), 0.0, 1e-4]
+    fixed = np.array([grazing, grazing, grazing, [np.sqrt(1 - 2.5e-9), 0.0, 5e-5]])
+    poles = np.array([[-grazing[0], 0.0, 1e-4], [0.0, 0.0, 1.0], [-0.9, 0.0, np.sqrt(0.19)], [-1.0, 0.0, 5e-5]])
+    eligible, _, broad = halfvector_generic.specular(fixed, poles, np.array([0.1, 0.9, 0.9, 0.1]))
+    assert eligible.tolist() == [True, False, True, False]
+    assert broad.tolist() == [False, True, True, False]
+    assert halfvector_generic.specular(np.array([[0.0, np.sqrt(1 - 4e-6), 2e-3]]), poles[1:2], np.array([0.9]))[0].all()

@@ -63,16 +63,22 @@ from .hemisphere import fibonacci_hemisphere
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).
 MU_MIN = 1e-3
-#: The same for narrow heavy-tailed lobes (not :data:`BROAD`), whose grazing views the route's graded azimuth map
-#: (:mod:`brdfnorm.engine.routes.halfvector_global`) settles far cheaper than the lobe-aligned panels: examples/ggx.brdf
-#: at μ ∈ [1e-4, 1e-3], random roughness 0.05…1, rtol 1e-9 / 1e-10: 206 000 / 274 000 evaluations per albedo
-#: → 31 000 / 97 000, the true error at most 0.22 of the estimate (tests/test_halfvector_generic_grazing.py); 1e-4
-#: itself (the tables' clamp) less the rounding of cos(arccos 1e-4). Not for broad lobes: smooth ones cost the
-#: route more there than the panels (examples/lambert.brdf, rtol 1e-9: 1 344 → 32 000; charlie.brdf and
-#: multi_lobe.brdf would gain 2.6× and 1.4×, but no test on the samples told them apart). Where the shader is not
-#: finite at a node (examples/ggx.brdf at μ = 1e-4 for some roughnesses) or the route fails (cook_torrance.brdf at
-#: rtol ≤ 1e-9), its evaluations are lost: up to 1.5× more there. Below 1e-4 the route rarely settles.
+#: Below MU_MIN the route is tried down to this μ (1e-4, the tables' clamp, less the rounding of cos(arccos 1e-4))
+#: for narrow heavy-tailed lobes and for broad lobes peaked near the horizon (:data:`LOW_PEAK`), whose grazing views
+#: the route's graded azimuth map (:mod:`brdfnorm.engine.routes.halfvector_global`) settles far cheaper than the
+#: lobe-aligned panels: examples/ggx.brdf at μ ∈ [1e-4, 1e-3], random roughness 0.05…1, rtol 1e-9 / 1e-10:
+#: 206 000 / 274 000 evaluations per albedo → 31 000 / 97 000 (the true error at most 0.22 of the estimate,
+#: tests/test_halfvector_generic_grazing.py); charlie.brdf 219 000 → 85 000 and multi_lobe.brdf 105 000 → 73 000
+#: at rtol 1e-9. Where the shader is not finite at a node (examples/ggx.brdf at μ = 1e-4 for some roughnesses) or
+#: the route fails (cook_torrance.brdf at rtol ≤ 1e-9), its evaluations are lost: up to 1.5× more there. Below
+#: 1e-4 the route rarely settles.
 MU_MIN_NARROW = 0.99e-4
+#: Below MU_MIN a broad lobe is taken only where its peak's cos θ is below this: the horizon cuts a broad lobe
+#: peaked near N (diffuse lobes: lambert, disney_diffuse, oren_nayar, eon.brdf, peaks at cos θ ≥ 0.9) far from its
+#: core, which the lobe-aligned panels resolve in a few thousand evaluations (lambert.brdf at μ = 5e-4, rtol 1e-9:
+#: 1 344 against 32 000 by this route), and through the core of one peaked near the horizon (charlie.brdf's sheen,
+#: multi_lobe.brdf: cos θ ≤ 0.52).
+LOW_PEAK = 0.7
 #: A lobe whose (ω-space) width is at least this is broad: taken wherever its peak lies, since a narrow feature at
 #: the mirror direction over it (a clear coat's spike over a diffuse base) lies at this route's pole, where the
 #: lobe-aligned coordinates about the base's peak can miss it entirely (examples/layered_series.brdf).
@@ -100,7 +106,8 @@ def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[
     tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
     width = np.asarray(widths, dtype=float)
     broad = width >= BROAD
-    eligible = (fixed[:, 2] >= np.where(broad, MU_MIN, MU_MIN_NARROW)) & ((tilt <= width) | broad)
+    eligible = (fixed[:, 2] >= MU_MIN_NARROW) & ((tilt <= width) | broad)
+    eligible &= (fixed[:, 2] >= MU_MIN) | ~broad | (poles[:, 2] < LOW_PEAK)
     alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
     return eligible, alpha, broad
 
