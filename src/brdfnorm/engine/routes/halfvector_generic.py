@@ -30,9 +30,8 @@ c_P of its pole, where the trapezoid rule needs hundreds of azimuths (benchmarks
 Where it is tried, and when its answer is kept
 ----------------------------------------------
 - Only for isotropic lobes (:func:`brdfnorm.engine.methods.rotation_invariant`, at each case's parameters), for
-  cases whose rounding noise is far below the tolerance (the same test as the global rule of
-  :mod:`brdfnorm.engine.machinery.tensor_rule`), whose fixed direction is at least :data:`MU_MIN` above the horizon,
-  and either
+  cases whose rounding noise is below half the tolerance (:data:`HOPEFUL`), whose fixed direction is at least
+  :data:`MU_MIN` above the horizon (:data:`MU_MIN_NARROW` for some lobes), and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
   whose peak's half vector lies within the lobe's core of N (:func:`specular`) and whose tail is a power law
   (:func:`heavy_tailed`): narrow Gaussian lobes cost both routes about the same evaluations, each cheaper in
@@ -91,6 +90,13 @@ HEAVY = 1e-6
 LATTICE = 96
 RINGS = (0.125, 0.5, 1.0, 2.0, 8.0)
 AZIMUTHS = 12
+#: The route takes cases whose rounding-noise bound is below rtol/HOPEFUL — not only the quiet ones (below rtol/16)
+#: that the global rule of the lobe-aligned coordinates takes: it adds the bound to its estimate before it keeps a
+#: case, so a noisier case costs it evaluations, never honesty. examples/ggx.brdf at roughness 0.05 (noise ~6e-11
+#: of the albedo): E_avg at rtol 1e-10 of roughness 0.05 and 0.1, 3.16 → 2.19 CPU s (at rtol/16); 30 random views
+#: of roughness 0.03…0.12 at rtol 2.5e-11…1e-9, 18–45 % fewer evaluations, true errors ≤ 0.21 of the estimates
+#: (tests/test_halfvector_generic_grazing.py).
+HOPEFUL = 2.0
 #: Evaluations this route may spend on a case before the lobe-aligned routes take it, and the least budget (what
 #: the engine passes: a quarter of its own) for which it is tried at all.
 BUDGET = 200_000
@@ -167,11 +173,13 @@ def mirror_symmetric(integrand: Callable, fixed: np.ndarray, alpha: np.ndarray, 
 def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: np.ndarray, widths: np.ndarray,
           quiet: np.ndarray, noise_amplitude: np.ndarray, *, rtol: float, atol: float,
           max_evaluations: int) -> GlobalResult:
-    """(G1) for the ``quiet`` cases whose lobe is ``isotropic`` (K,) and :func:`specular` (module docstring), as
+    """(G1) for the cases ``quiet`` whose noise is below rtol/:data:`HOPEFUL`, whose lobe is ``isotropic`` (K,) and
+    :func:`specular` (module docstring), as
     :func:`brdfnorm.engine.routes.hemisphere.integrate_hemisphere` tries it first: ``settled`` says which cases it
     keeps (the
     other rows are to be ignored; their evaluations are counted)."""
     K = fixed.shape[0]
+    quiet = quiet[np.all(noise_bound(noise_amplitude[quiet], 1.0) < rtol / HOPEFUL, axis=-1)]
     eligible, alpha, broad = specular(fixed, poles, widths)
     eligible &= isotropic
     cases = quiet[eligible[quiet]] if max_evaluations >= MIN_BUDGET else quiet[:0]
