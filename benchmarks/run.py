@@ -41,6 +41,7 @@ sys.path.insert(0, str(HERE))
 import peers as P  # noqa: E402
 from bench_anisotropy import w_anisotropy  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
+from bench_backends import rows as backend_rows  # noqa: E402
 from bench_backends import w_backends  # noqa: E402
 from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
@@ -1030,6 +1031,14 @@ def print_tables(results: dict) -> None:
 
     console = Console()
     for name, w in results["workloads"].items():
+        if name == "backends" and w.get("status") == "ok":  # issue 39: numpy and compiled side by side
+            table = Table(title=f"{name}: {w['title']} (load average {w['load_average']:.1f})", title_justify="left")
+            for column in ("workload", "numpy", "compiled", "against", "goal"):
+                table.add_column(column)
+            for row in backend_rows(w):
+                table.add_row(*row)
+            console.print(table)
+            continue
         if "methods" not in w:
             if name not in ("work-precision", "memory", "profile"):
                 console.print(f"[bold]{name}[/]: {w.get('status')}")

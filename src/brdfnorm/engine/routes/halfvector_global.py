@@ -126,6 +126,7 @@ class _Group:
 def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u):
     """Weighted values (n, len(index), len(u), C) at t = 2π·index/M and v = piece + u (sharing mirror nodes)."""
     out = None
+    fresh = getattr(integrand, "compiled", False)
     for mirrored in (False, True):
         rows = np.flatnonzero(symmetric[case] == mirrored)
         if not rows.size:
@@ -142,7 +143,14 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
             r = rows[start:start + chunk]
             k = case[r]
             values = integrand(k, phi[start:start + chunk, :, None], (piece[r][:, None] + u)[:, None, :], piece[r])
-            values = values * (dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None])
+            factor = dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None]
+            if fresh:  # (a compiled integrand's output is its own: scaled in place, and kept where it is all)
+                values *= factor
+                if not mirrored and r.size == case.size:
+                    out = values
+                    continue
+            else:
+                values = values * factor
             if out is None:
                 out = np.empty((case.size, index.size, u.size, values.shape[-1]))
             out[r] = values[:, back] if mirrored else values  # (index is sorted: back is the identity)

@@ -191,7 +191,8 @@ def integrate_hemisphere(
     quiet = np.flatnonzero((rtol == 0) | np.all(noise_bound(noise_amplitude, 1.0) < rtol / 16, axis=-1))
     first = None
     if first_route is not None and rtol > 0:
-        first = first_route(integrand, poles, widths, quiet, noise_amplitude, rtol=rtol, atol=atol,
+        # (every case: the first route chooses by the noise itself, halfvector_generic.HOPEFUL)
+        first = first_route(integrand, poles, widths, np.arange(K), noise_amplitude, rtol=rtol, atol=atol,
                             max_evaluations=max_evaluations // 4)
         evaluations += first.evaluations
         quiet = quiet[~first.converged[quiet]]
