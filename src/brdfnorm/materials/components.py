@@ -11,6 +11,8 @@ with brdfnorm's engine, so that the layering rules (:mod:`brdfnorm.materials.com
 * :class:`Diffuse` — Lambert ρ/π (E = ρ exactly) or EON (Portsmouth et al. 2025, the ``eon`` lobe, whose albedo is
   exact in closed form).
 * :class:`Sheen` — the ``charlie`` lobe (Estevez & Kulla 2017) as the fuzz; E(μ) by the engine's quadrature.
+* :class:`LTCSheen` — the ``zeltner`` lobe (Zeltner et al. 2022's LTC sheen, OpenPBR's recommended fuzz); E(μ) is
+  the fit R(μ, r) in closed form (the LTC integrates to 1: :mod:`brdfnorm.models.zeltner`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from ..models.charlie import Charlie
 from ..models.eon import EnergyPreservingOrenNayar
 from ..models.fresnel import Fresnel
 from ..models.microfacet import GGXDistribution, shadowing_masking, smith_a2
+from ..models.zeltner import albedo_fit, ltc_density
 from ..validate import DEFAULT_MAX_EVALUATIONS
 
 #: Tolerance of every exact component albedo (the layering's E(μ) inside the integrand).
@@ -206,3 +209,28 @@ class Sheen(Component):
             warnings.simplefilter("ignore", UserWarning)
             result = engine_albedo(self._model(), np.arccos(fixed[:, 2]), rtol=SHEEN_RTOL)
         return result.value.reshape(-1, 3), result.error.reshape(-1, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class LTCSheen(Component):
+    """The ``zeltner`` LTC sheen with colour and roughness r ∈ [0.01, 1]; E(μ) = colour·R(μ, r) exactly."""
+
+    color: tuple = (1.0, 1.0, 1.0)
+    roughness: float = 0.5
+
+    @property
+    def key(self) -> tuple:
+        return ("ltc-sheen", tuple(self.color), self.roughness)
+
+    def with_roughness(self, roughness: float) -> LTCSheen:
+        # an engine's table row at roughness 0 is read at the fit's smallest roughness
+        return LTCSheen(self.label, self.color, max(roughness, 0.01))
+
+    def projected(self, L, V):
+        white = albedo_fit(np.clip(V[..., 2], 0.0, 1.0), self.roughness) * ltc_density(L, V, self.roughness)
+        return white[..., None] * np.asarray(self.color, dtype=float)
+
+    def albedo(self, mu):
+        mu = np.clip(np.asarray(mu, dtype=float).ravel(), 0.0, 1.0)
+        value = albedo_fit(mu, self.roughness)[:, None] * np.asarray(self.color, dtype=float)
+        return value, 8 * np.finfo(float).eps * np.abs(value)

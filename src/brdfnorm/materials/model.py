@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..models.base import Lobe, Model, mirror
+from ..models.zeltner import ROUGHNESS_MIN as ZELTNER_MIN
 from ..parameters import Parameter
 from . import openpbr
 from .compose import Term, evaluate_terms
@@ -77,8 +78,8 @@ class OpenPBR(Model):
     material = True
     formula = ("f = F f_fuzz + lerp(1, 1−E_fuzz, F)[C f_coat + lerp(1, T(1−E_coat), C) mix(f_spec + (1−E_spec) "
                "f_diffuse, f_metal, M)]  (OpenPBR Surface, albedo-scaling layering; rules selectable)")
-    energy = ("layered by albedo scaling: E ≤ 1 where every lobe's is (view-side rule); the charlie fuzz gains "
-              "energy at grazing views at low roughness")
+    energy = ("layered by albedo scaling: E ≤ 1 where every lobe's is (view-side rule); the charlie fuzz "
+              "(fuzz_lobe=charlie) gains energy at grazing views at low roughness")
     closed_form_domain = "none"
     parameters = openpbr.PARAMETERS
     channels = 3
@@ -86,7 +87,11 @@ class OpenPBR(Model):
     def _check(self) -> None:
         p = self._params
         fuzz = np.asarray(p["fuzz_roughness"], dtype=float)
-        if np.any((np.asarray(p["fuzz_weight"]) > 0) & (fuzz * fuzz < 1e-3 * (1 - 1e-12))):
+        on = np.asarray(p["fuzz_weight"]) > 0
+        if p["fuzz_lobe"] == "zeltner" and np.any(on & (fuzz < ZELTNER_MIN)):
+            raise ParameterError(f"the fuzz (zeltner LTC sheen) needs fuzz_roughness ≥ {ZELTNER_MIN:g} (the fit's "
+                                 "range)", where="parameter fuzz_roughness")
+        if p["fuzz_lobe"] == "charlie" and np.any(on & (fuzz * fuzz < 1e-3 * (1 - 1e-12))):
             raise ParameterError("the fuzz (charlie sheen) needs fuzz_roughness ≥ 0.0317 (α ≥ 1e-3)",
                                  where="parameter fuzz_roughness")
 
@@ -99,6 +104,9 @@ class OpenPBR(Model):
             space.update(metal_eta=None, metal_k=None)
         if p["fuzz_weight"] == 0:
             space.update(fuzz_roughness=None)
+        else:  # the lobe's own range of roughness
+            low = ZELTNER_MIN if p["fuzz_lobe"] == "zeltner" else float(np.sqrt(1e-3))
+            space.update(fuzz_roughness=(low, 1.0))
         space.update(specular_weight=(0.0, 1.0))
         return space
 

@@ -20,8 +20,9 @@ layering eq. [non-reciprocal-albedo-scaling]):
 * diffuse: Lambert (base_diffuse_roughness 0) or EON (Portsmouth et al. 2025, the *Glossy-diffuse* section's
   f_diffuse), ρ = base_weight·base_color;
 * coat: GGX, α = coat_roughness², exact dielectric Fresnel of coat_ior, T_coat = coat_color;
-* fuzz: the Estevez–Kulla ``charlie`` sheen in place of the specification's recommended Zeltner et al. 2022 LTC
-  fit (not vendored here), fuzz_color the tint, fuzz_roughness its roughness.
+* fuzz: the specification's recommended Zeltner et al. 2022 LTC sheen (*Fuzz*; :mod:`brdfnorm.models.zeltner`,
+  albedo R(μ, r) exact), fuzz_color the tint, fuzz_roughness its roughness; ``fuzz_lobe = "charlie"`` puts the
+  Estevez–Kulla ``charlie`` sheen (α = fuzz_roughness²) in its place.
 
 Not modelled (documented in docs/materials.md): transmission, subsurface, thin film, the coat's darkening, roughening
 and its effect on the specular IOR ratio (η_s = specular_ior/coat_ior under the coat), anisotropy, emission,
@@ -45,7 +46,7 @@ from ..models.fresnel import Fresnel, multiple_scattering_colour
 from ..parameters import Parameter
 from . import compose
 from .albedo import top_average
-from .components import Diffuse, Microfacet, Sheen
+from .components import Diffuse, LTCSheen, Microfacet, Sheen
 from .compose import Term, layer, lobe, mix
 
 _C = "color"
@@ -66,7 +67,7 @@ PARAMETERS = (
     Parameter("coat_ior", "float", 1.6, 1e-3, 1e3, "refractive index of the coat"),
     Parameter("fuzz_weight", "float", 0.0, 0.0, 1.0, "coverage F of the fuzz"),
     Parameter("fuzz_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "tint of the fuzz lobe"),
-    Parameter("fuzz_roughness", "float", 0.5, 0.0, 1.0, "roughness of the fuzz (charlie sheen, α = r²)"),
+    Parameter("fuzz_roughness", "float", 0.5, 0.0, 1.0, "roughness of the fuzz (zeltner: r ≥ 0.01; charlie: α = r²)"),
     Parameter("layering", "choice", "view", choices=compose.LAYERING,
               description="albedo scaling: view (1−E(ωo)), symmetric (1−E(ωi))(1−E(ωo)), reciprocal (…)/(1−E_avg)"),
     Parameter("base_mix", "choice", "brdf", choices=("brdf", "f0-blend"),
@@ -83,8 +84,10 @@ PARAMETERS = (
               description="the specular's Fresnel: exact dielectric of η'_s, or Schlick of its F0"),
     Parameter("coat_fresnel", "choice", "dielectric", choices=("dielectric", "none"),
               description="the coat's Fresnel: exact dielectric of coat_ior, or none (F = 1)"),
+    Parameter("fuzz_lobe", "choice", "zeltner", choices=("zeltner", "charlie"),
+              description="the fuzz lobe: Zeltner et al. 2022's LTC sheen (the specification's), or charlie"),
     Parameter("fuzz_shadowing", "choice", "kulla", choices=("kulla", "neubelt"),
-              description="the charlie sheen's shadowing"),
+              description="the charlie sheen's shadowing (fuzz_lobe=charlie)"),
     Parameter("albedo_source", "choice", "exact", choices=("exact", "table"),
               description="E of the top lobes: exact integrals, or an engine's N×N (μ, roughness) bilinear table"),
     Parameter("albedo_table", "int", 32, 2.0, 1024.0, "table size N (albedo_source=table)"),
@@ -177,6 +180,10 @@ def build(p: dict) -> list[Term]:
     coat = Microfacet("coat", float(p["coat_roughness"]), coat_f)
     coated = layer(lobe(coat), substrate, coat, rule, coverage=float(p["coat_weight"]), tint=p["coat_color"],
                    source=source, size=size)
-    fuzz_white = Sheen("fuzz", (1.0, 1.0, 1.0), float(p["fuzz_roughness"]), p["fuzz_shadowing"])
-    fuzz = Sheen("fuzz", tuple(_colour(p["fuzz_color"])), float(p["fuzz_roughness"]), p["fuzz_shadowing"])
+    r_fuzz, fuzz_colour = float(p["fuzz_roughness"]), tuple(_colour(p["fuzz_color"]))
+    if p["fuzz_lobe"] == "zeltner":
+        fuzz_white, fuzz = LTCSheen("fuzz", (1.0, 1.0, 1.0), r_fuzz), LTCSheen("fuzz", fuzz_colour, r_fuzz)
+    else:
+        fuzz_white = Sheen("fuzz", (1.0, 1.0, 1.0), r_fuzz, p["fuzz_shadowing"])
+        fuzz = Sheen("fuzz", fuzz_colour, r_fuzz, p["fuzz_shadowing"])
     return layer(lobe(fuzz), coated, fuzz_white, rule, coverage=float(p["fuzz_weight"]), source=source, size=size)
