@@ -11,6 +11,8 @@ with brdfnorm's engine, so that the layering rules (:mod:`brdfnorm.materials.com
 * :class:`Diffuse` — Lambert ρ/π (E = ρ exactly) or EON (Portsmouth et al. 2025, the ``eon`` lobe, whose albedo is
   exact in closed form).
 * :class:`Sheen` — the ``charlie`` lobe (Estevez & Kulla 2017) as the fuzz; E(μ) by the engine's quadrature.
+* :class:`Darkening` — not a lobe: OpenPBR's coat darkening factor lerp(1, Δ(μ_o), δ) as a view-side layering
+  factor (its "albedo" is δ(1 − Δ), so that 1 − E is the factor), exact in closed form.
 * :class:`LTCSheen` — the ``zeltner`` lobe (Zeltner et al. 2022's LTC sheen, OpenPBR's recommended fuzz); E(μ) is
   the fit R(μ, r) in closed form (the LTC integrates to 1: :mod:`brdfnorm.models.zeltner`).
 """
@@ -63,6 +65,9 @@ class Component:
     def key(self) -> tuple:
         """What identifies the lobe's values (for caches of its albedo)."""
         raise NotImplementedError
+
+    #: An albedo in closed form, read as is by every ``albedo_source`` (no curve, no table).
+    closed_form = False
 
     #: The table axis an engine tabulates this lobe over (its roughness; a dataclass field of each lobe).
     roughness = None
@@ -234,3 +239,54 @@ class LTCSheen(Component):
         mu = np.clip(np.asarray(mu, dtype=float).ravel(), 0.0, 1.0)
         value = albedo_fit(mu, self.roughness)[:, None] * np.asarray(self.color, dtype=float)
         return value, 8 * np.finfo(float).eps * np.abs(value)
+
+
+@dataclass(frozen=True, eq=False)
+class Darkening(Component):
+    """OpenPBR's coat darkening (*Coat* → *Darkening*) as a factor of the coated base, at view cosine μ_o:
+
+    Δ(μ_o) = (1 − K)/(1 − E_b K)  (eq. [general_darkening_formula]),  K = lerp(K_s, K_r, r_b)
+    (eq. [internal_diffuse_reflection_coefficient_for_general_base]), K_s = F_c(μ_o) (eq. [..._smooth_base]),
+    K_r = 1 − (1 − E_F)/η_c² (eq. [..._rough_base]) with E_F the coat Fresnel's exact hemispherical average;
+    the coated base is multiplied by B(δ) Δ = lerp(1, Δ, δ) (eq. [boost_factor], B_0 = 1/Δ). E_b (per channel) is
+    the base's albedo at normal incidence, Δ = 1 where E_b K = 1 (E_b = K = 1: no energy is lost). With
+    ``reciprocal`` (the symmetric and reciprocal layering rules) K_s is its hemispherical average E_F, so that the
+    factor is a constant and the material stays reciprocal (brdfnorm's choice; the specification gives the view-side
+    form only)."""
+
+    eta: float = 1.6
+    base_albedo: tuple = (1.0, 1.0, 1.0)
+    base_roughness: float = 1.0
+    darkening: float = 1.0
+    #: K_s averaged over the hemisphere (E_F): a constant factor, for the reciprocal layering rules.
+    reciprocal: bool = False
+    closed_form = True
+
+    @property
+    def key(self) -> tuple:
+        return ("darkening", self.eta, tuple(self.base_albedo), self.base_roughness, self.darkening, self.reciprocal)
+
+    def with_roughness(self, roughness: float) -> Darkening:
+        return self
+
+    @property
+    def roughness(self) -> float:  # the table axis: none (the factor is read exactly)
+        return 0.0
+
+    def factor(self, mu: np.ndarray) -> np.ndarray:
+        """lerp(1, Δ(μ), δ): (n, 3) at view cosines μ (n,)."""
+        mu = np.clip(np.asarray(mu, dtype=float).ravel(), 0.0, 1.0)
+        coat = Fresnel("dielectric", eta=self.eta)
+        e_f = float(np.ravel(coat.average()[0])[0])
+        k_rough = 1.0 - (1.0 - e_f) / self.eta**2
+        k_smooth = np.full((mu.size, 1), e_f) if self.reciprocal else np.asarray(coat(mu[:, None]), dtype=float)[:, :1]
+        K = k_smooth + (k_rough - k_smooth) * self.base_roughness
+        e_b = np.asarray(self.base_albedo, dtype=float)
+        lost = 1.0 - e_b * K
+        with np.errstate(divide="ignore", invalid="ignore"):
+            delta = np.where(lost > 0, (1.0 - K) / np.where(lost > 0, lost, 1.0), 1.0)
+        return 1.0 + self.darkening * (delta - 1.0)
+
+    def albedo(self, mu):
+        value = 1.0 - self.factor(mu)
+        return value, 8 * np.finfo(float).eps * (1.0 + np.abs(value))

@@ -65,9 +65,11 @@ def mix(a: Sequence[Term], b: Sequence[Term], w: float) -> list[Term]:
 
 
 def layer(top: Sequence[Term], sub: Sequence[Term], attenuator: Component, rule: str, *, coverage: float = 1.0,
-          tint=1.0, source: str = "exact", size: int = 32) -> list[Term]:
-    """C·top + lerp(1, T·A, C)·sub with A the rule's albedo-scaling factor of ``attenuator`` (see the module
-    docstring); the reciprocal form's 1/(1 − E_avg) is folded into the weight."""
+          tint=1.0, source: str = "exact", size: int = 32, darkening: Component | None = None) -> list[Term]:
+    """C·top + lerp(1, T·A·B, C)·sub with A the rule's albedo-scaling factor of ``attenuator`` (see the module
+    docstring) and B = 1 − E_darkening(μ_o) a further view-side factor of the covered part (the coat's darkening,
+    :class:`brdfnorm.materials.components.Darkening`); the reciprocal form's 1/(1 − E_avg) is folded into the
+    weight."""
     if coverage <= 0:
         return list(sub)
     out = [t.scaled(coverage) for t in top]
@@ -78,7 +80,7 @@ def layer(top: Sequence[Term], sub: Sequence[Term], attenuator: Component, rule:
         lost = 1.0 - top_average(attenuator, source, size)
         factor = factor * np.where(lost > 0, 1.0 / np.where(lost > 0, lost, 1.0), 0.0)
     for t in sub:
-        view = t.view + (attenuator,)
+        view = t.view + (attenuator,) + ((darkening,) if darkening is not None else ())
         light = t.light + ((attenuator,) if rule != "view" else ())
         out.append(replace(t.scaled(factor), view=view, light=light))
     return out

@@ -46,8 +46,12 @@ from ..models.fresnel import Fresnel, multiple_scattering_colour
 from ..parameters import Parameter
 from . import compose
 from .albedo import top_average
-from .components import Diffuse, LTCSheen, Microfacet, Sheen
+from .components import Darkening, Diffuse, LTCSheen, Microfacet, Sheen
 from .compose import Term, layer, lobe, mix
+from .terms import term_albedo
+
+#: Tolerance of the base's normal-incidence albedo E_b in the coat's darkening.
+BASE_ALBEDO_RTOL = 1e-12
 
 _C = "color"
 
@@ -65,6 +69,7 @@ PARAMETERS = (
     Parameter("coat_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "T_coat: the coat's transmittance squared"),
     Parameter("coat_roughness", "float", 0.0, 0.0, 1.0, "roughness of the GGX coat (α = r²)"),
     Parameter("coat_ior", "float", 1.6, 1e-3, 1e3, "refractive index of the coat"),
+    Parameter("coat_darkening", "float", 1.0, 0.0, 1.0, "modulates the coat's darkening of the base (δ; 0: none)"),
     Parameter("fuzz_weight", "float", 0.0, 0.0, 1.0, "coverage F of the fuzz"),
     Parameter("fuzz_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "tint of the fuzz lobe"),
     Parameter("fuzz_roughness", "float", 0.5, 0.0, 1.0, "roughness of the fuzz (zeltner: r ≥ 0.01; charlie: α = r²)"),
@@ -82,6 +87,9 @@ PARAMETERS = (
               description="the metal's multiple scattering: none, or Kulla-Conty's lobe with the exact F_avg"),
     Parameter("dielectric_fresnel", "choice", "exact", choices=("exact", "schlick"),
               description="the specular's Fresnel: exact dielectric of η'_s, or Schlick of its F0"),
+    Parameter("coat_adjustments", "choice", "spec", choices=("spec", "spec-no-tir-fix", "none"),
+              description="the coat's darkening, roughening and IOR ratio under it as the specification gives them "
+                          "(spec-no-tir-fix: without inverting a denser coat's ratio), or none of them"),
     Parameter("coat_fresnel", "choice", "dielectric", choices=("dielectric", "none"),
               description="the coat's Fresnel: exact dielectric of coat_ior, or none (F = 1)"),
     Parameter("fuzz_lobe", "choice", "zeltner", choices=("zeltner", "charlie"),
@@ -123,9 +131,48 @@ def metal_fresnel(p: dict) -> Fresnel:
     return Fresnel("conductor", eta=_colour(p["metal_eta"]), k=_colour(p["metal_k"]))
 
 
+def specular_ior_ratio(p: dict) -> float:
+    """η_s, the specular IOR over its surroundings' (*Coat*, eq. [specular_ior_ratio]): lerp(n_b/n_a, n_b/n_c, C)
+    with n_a = 1, the coat-base ratio inverted where the coat is denser (eq. [specular_ior_ratio_with_tir_fix]) under
+    ``coat_adjustments = "spec"``; n_b alone (the coat ignored) under ``"none"``."""
+    n_b, n_c, coverage = float(p["specular_ior"]), float(p["coat_ior"]), float(p["coat_weight"])
+    if p["coat_adjustments"] == "none" or coverage == 0.0:
+        return n_b
+    eta_bc = n_c / n_b if (p["coat_adjustments"] == "spec" and n_c > n_b) else n_b / n_c
+    return n_b + (eta_bc - n_b) * coverage
+
+
+def coat_roughened(p: dict) -> float:
+    """r'_B = lerp(r_B, min(1, r_B⁴ + 2 r_C⁴)^¼, C) (*Coat* → *Roughening*), r_B = specular_roughness,
+    r_C = coat_roughness; r_B itself under ``coat_adjustments = "none"``."""
+    r_b, r_c, coverage = float(p["specular_roughness"]), float(p["coat_roughness"]), float(p["coat_weight"])
+    if p["coat_adjustments"] == "none":
+        return r_b
+    return r_b + (min(1.0, r_b**4 + 2.0 * r_c**4) ** 0.25 - r_b) * coverage
+
+
 def dielectric_f0(p: dict) -> float:
-    eta = modulated_ior(float(p["specular_ior"]), float(p["specular_weight"]))
+    """ξ_s F_s clamped to [0, 1]: the F0 of the modulated IOR η'_s (eq. [modulated_ior]) of η_s."""
+    eta = modulated_ior(specular_ior_ratio(p), float(p["specular_weight"]))
     return 1.0 if np.isinf(eta) else ((eta - 1.0) / (eta + 1.0)) ** 2
+
+
+def darkening(p: dict, substrate: list[Term], source: str, size: int) -> Darkening | None:
+    """The coat's darkening factor of the base (:class:`Darkening`) with E_b the base substrate's exact albedo at
+    normal incidence and r_b = lerp(r_d, r_m, M) (eq. [base_roughness_estimate]), r_d = lerp(1, r, ξ_s F_s)
+    (eq. [dielectric_roughness_estimate]), r_m = r = specular_roughness; None where it does nothing (no coat,
+    ``coat_darkening = 0``, ``coat_adjustments = "none"``, or the furnace's coat with F = 1, whose K = 1)."""
+    delta = float(p["coat_darkening"])
+    if (p["coat_adjustments"] == "none" or float(p["coat_weight"]) == 0.0 or delta == 0.0
+            or p["coat_fresnel"] != "dielectric" or float(p["coat_ior"]) == 1.0):
+        return None
+    e_b = np.zeros(3)
+    for term in substrate:
+        e_b += term_albedo(term, np.array([1.0]), source, size, BASE_ALBEDO_RTOL)[0][0]
+    r = float(p["specular_roughness"])
+    r_d = 1.0 + (r - 1.0) * min(max(dielectric_f0(p), 0.0), 1.0)
+    r_b = r_d + (r - r_d) * float(p["base_metalness"])
+    return Darkening("coat-darkening", float(p["coat_ior"]), tuple(e_b), r_b, delta, p["layering"] != "view")
 
 
 def compensation(metal: Microfacet, source: str, size: int) -> list[Term]:
@@ -146,13 +193,13 @@ def build(p: dict) -> list[Term]:
     """The terms of one material (scalar parameter values ``p``)."""
     source, size = p["albedo_source"], int(p["albedo_table"])
     rule = p["layering"]
-    r_spec = float(p["specular_roughness"])
+    r_spec = coat_roughened(p)
     rho = p["base_weight"] * _colour(p["base_color"])
     diffuse = lobe(Diffuse("diffuse", tuple(rho), float(p["base_diffuse_roughness"])))
     metalness = float(p["base_metalness"])
     spec_tint = tuple(_colour(p["specular_color"]))
     if p["dielectric_fresnel"] == "exact":
-        eta = modulated_ior(float(p["specular_ior"]), float(p["specular_weight"]))
+        eta = modulated_ior(specular_ior_ratio(p), float(p["specular_weight"]))
         dielectric_f = Fresnel("dielectric", eta=eta) if np.isfinite(eta) else Fresnel("none")
     else:
         dielectric_f = Fresnel("schlick", f0=dielectric_f0(p))
@@ -179,7 +226,7 @@ def build(p: dict) -> list[Term]:
     coat_f = Fresnel("dielectric", eta=float(p["coat_ior"])) if p["coat_fresnel"] == "dielectric" else Fresnel("none")
     coat = Microfacet("coat", float(p["coat_roughness"]), coat_f)
     coated = layer(lobe(coat), substrate, coat, rule, coverage=float(p["coat_weight"]), tint=p["coat_color"],
-                   source=source, size=size)
+                   source=source, size=size, darkening=darkening(p, substrate, source, size))
     r_fuzz, fuzz_colour = float(p["fuzz_roughness"]), tuple(_colour(p["fuzz_color"]))
     if p["fuzz_lobe"] == "zeltner":
         fuzz_white, fuzz = LTCSheen("fuzz", (1.0, 1.0, 1.0), r_fuzz), LTCSheen("fuzz", fuzz_colour, r_fuzz)
