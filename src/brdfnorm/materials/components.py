@@ -11,6 +11,9 @@ with brdfnorm's engine, so that the layering rules (:mod:`brdfnorm.materials.com
 * :class:`Diffuse` — Lambert ρ/π (E = ρ exactly) or EON (Portsmouth et al. 2025, the ``eon`` lobe, whose albedo is
   exact in closed form).
 * :class:`Sheen` — the ``charlie`` lobe (Estevez & Kulla 2017) as the fuzz; E(μ) by the engine's quadrature.
+* :class:`Transmission` — the refraction of brdfnorm's ``ggx-dielectric`` lobe (Walter et al. 2007, energy form,
+  its exact Fresnel 1 − F kept), the translucent base's f^T; E_T(μ) by the dielectric route
+  (:mod:`brdfnorm.engine.routes.dielectric`), exact from rough to smooth.
 * :class:`Darkening` — not a lobe: OpenPBR's coat darkening factor lerp(1, Δ(μ_o), δ) as a view-side layering
   factor (its "albedo" is δ(1 − Δ), so that 1 − E is the factor), exact in closed form.
 * :class:`LTCSheen` — the ``zeltner`` lobe (Zeltner et al. 2022's LTC sheen, OpenPBR's recommended fuzz); E(μ) is
@@ -30,6 +33,7 @@ from ..engine.routes.azimuthal import white_albedo
 from ..models.charlie import Charlie
 from ..models.eon import EnergyPreservingOrenNayar
 from ..models.fresnel import Fresnel
+from ..models.ggx_dielectric import GGXDielectric
 from ..models.microfacet import GGXDistribution, shadowing_masking, smith_a2
 from ..models.zeltner import albedo_fit, ltc_density
 from ..validate import DEFAULT_MAX_EVALUATIONS
@@ -68,6 +72,8 @@ class Component:
 
     #: An albedo in closed form, read as is by every ``albedo_source`` (no curve, no table).
     closed_form = False
+    #: Scatters into the lower hemisphere (light from inside the object): the refraction of a translucent base.
+    transmits = False
 
     #: The table axis an engine tabulates this lobe over (its roughness; a dataclass field of each lobe).
     roughness = None
@@ -290,3 +296,37 @@ class Darkening(Component):
     def albedo(self, mu):
         value = 1.0 - self.factor(mu)
         return value, 8 * np.finfo(float).eps * (1.0 + np.abs(value))
+
+
+@dataclass(frozen=True, eq=False)
+class Transmission(Component):
+    """The refraction of the ``ggx-dielectric`` lobe (roughness r, α = r², at least the lobe's α_min; interior index
+    ``eta``), times a tint: f·|N·L| for L below the surface and V above, 0 elsewhere."""
+
+    roughness: float = 0.5
+    eta: float = 1.5
+    tint: tuple = (1.0, 1.0, 1.0)
+    transmits = True
+
+    @property
+    def key(self) -> tuple:
+        return ("transmission", self.roughness, self.eta, tuple(self.tint))
+
+    def with_roughness(self, roughness: float) -> Transmission:
+        return Transmission(self.label, roughness, self.eta, self.tint)
+
+    def model(self) -> GGXDielectric:
+        return GGXDielectric(alpha=max(self.roughness * self.roughness, 1e-12), eta=self.eta)
+
+    def projected(self, L, V):
+        model = self.model()
+        value = model.projected(L, V, model.params)
+        below = np.broadcast_to(L[..., 2:3] < 0, value.shape)
+        return np.where(below, value, 0.0) * np.asarray(self.tint, dtype=float)
+
+    def albedo(self, mu):
+        fixed = _view(mu)
+        result = engine_albedo(self.model(), np.arccos(fixed[:, 2]), method="dielectric", rtol=ALBEDO_RTOL)
+        tint = np.asarray(self.tint, dtype=float)
+        # the route's estimate covers reflection plus refraction: a bound on the refraction's own error
+        return result.transmitted.reshape(-1, 1) * tint, result.error.reshape(-1, 1) * tint

@@ -18,7 +18,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import ParameterError
-from ..models.base import Lobe, Model, mirror
+from ..models.base import Lobe, Model, mirror, normal_lobe
 from ..models.zeltner import ROUGHNESS_MIN as ZELTNER_MIN
 from ..parameters import Parameter
 from . import openpbr
@@ -86,6 +86,12 @@ class OpenPBR(Model):
 
     def _check(self) -> None:
         p = self._params
+        weight = np.asarray(p["transmission_weight"], dtype=float)
+        #: Scatters into the lower hemisphere where a translucent base is present (the engine then integrates both).
+        self.transmits = bool(np.any(weight > 0))
+        if self.transmits and all(np.ndim(p[q.name]) == (1 if q.per_channel else 0) for q in self.parameters
+                                  if q.kind not in ("choice", "bool")):
+            openpbr.check_transmission(dict(p))
         fuzz = np.asarray(p["fuzz_roughness"], dtype=float)
         on = np.asarray(p["fuzz_weight"]) > 0
         if p["fuzz_lobe"] == "zeltner" and np.any(on & (fuzz < ZELTNER_MIN)):
@@ -125,8 +131,18 @@ class OpenPBR(Model):
 
     def evaluate(self, L, V, params):
         with np.errstate(divide="ignore", invalid="ignore"):
-            value = self.projected(L, V, params) / L[..., 2:3]
-        return np.where(L[..., 2:3] > 0, value, 0.0)
+            value = self.projected(L, V, params) / np.abs(L[..., 2:3])
+        return np.where(L[..., 2:3] != 0, value, 0.0)
+
+    def transmission_lobe(self, fixed, params) -> Lobe:
+        """The refraction lobe of the translucent base (its ``ggx-dielectric`` lobe's hint, for the first parameter
+        set: a hint only)."""
+        first = next(parameter_sets(self.parameters, params, np.shape(fixed)[:-1]))[1]
+        component = next((t.component for t in terms_of(first) if t.component.transmits), None)
+        if component is None:
+            return normal_lobe(fixed)
+        model = component.model()
+        return model.transmission_lobe(fixed, model.params)
 
     def lobe(self, fixed, params, over):
         """The mirror direction, as wide as the sharper of the specular and (present) coat lobes (the diffuse part is

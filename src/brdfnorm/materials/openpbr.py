@@ -24,9 +24,13 @@ layering eq. [non-reciprocal-albedo-scaling]):
   albedo R(μ, r) exact), fuzz_color the tint, fuzz_roughness its roughness; ``fuzz_lobe = "charlie"`` puts the
   Estevez–Kulla ``charlie`` sheen (α = fuzz_roughness²) in its place.
 
-Not modelled (documented in docs/materials.md): transmission, subsurface, thin film, the coat's darkening, roughening
-and its effect on the specular IOR ratio (η_s = specular_ior/coat_ior under the coat), anisotropy, emission,
-geometry_opacity and thin-walled mode.
+Coat adjustments (*Coat*; ``coat_adjustments = "spec"``, the default): the specular IOR ratio under the coat
+(:func:`specular_ior_ratio`, eqs. [specular_ior_ratio], [specular_ior_ratio_with_tir_fix]), the roughening of the
+specular and metal lobes (:func:`coat_roughened`, *Roughening*) and the darkening of the coated base
+(:func:`darkening`, :class:`brdfnorm.materials.components.Darkening`, *Darkening*, with ``coat_darkening``).
+
+Not modelled (documented in docs/materials.md): subsurface, thin film, the coat's view-dependent absorption,
+anisotropy, emission, geometry_opacity.
 
 ``metal_ms = "kulla-conty"`` adds Kulla & Conty's multiple-scattering lobe to the metal (the white metal then passes
 the furnace the specification's *White furnace testing* section lists).
@@ -42,11 +46,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ParameterError
+from ..models.dielectric import ETA_MATCH
 from ..models.fresnel import Fresnel, multiple_scattering_colour
 from ..parameters import Parameter
 from . import compose
 from .albedo import top_average
-from .components import Darkening, Diffuse, LTCSheen, Microfacet, Sheen
+from .components import Darkening, Diffuse, LTCSheen, Microfacet, Sheen, Transmission
 from .compose import Term, layer, lobe, mix
 from .terms import term_albedo
 
@@ -65,6 +71,12 @@ PARAMETERS = (
     Parameter("specular_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "tints the dielectric Fresnel; the metal's F82 tint"),
     Parameter("specular_roughness", "float", 0.3, 0.0, 1.0, "roughness r of the GGX specular and metal (α = r²)"),
     Parameter("specular_ior", "float", 1.5, 1e-3, 1e3, "refractive index of the dielectric base"),
+    Parameter("transmission_weight", "float", 0.0, 0.0, 1.0, "mix weight T of the translucent base (refraction)"),
+    Parameter("transmission_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "tint of the refraction (transmission_depth 0)"),
+    Parameter("transmission_depth", "float", 0.0, 0.0, 1e6, "distance at which white light becomes "
+              "transmission_color inside the medium (0: the colour tints the refraction instead)"),
+    Parameter("geometry_thin_walled", "bool", False, description="thin-walled mode (with transmission: not "
+              "modelled)"),
     Parameter("coat_weight", "float", 0.0, 0.0, 1.0, "coverage C of the coat"),
     Parameter("coat_color", _C, (1.0, 1.0, 1.0), 0.0, 1.0, "T_coat: the coat's transmittance squared"),
     Parameter("coat_roughness", "float", 0.0, 0.0, 1.0, "roughness of the GGX coat (α = r²)"),
@@ -167,7 +179,7 @@ def darkening(p: dict, substrate: list[Term], source: str, size: int) -> Darkeni
             or p["coat_fresnel"] != "dielectric" or float(p["coat_ior"]) == 1.0):
         return None
     e_b = np.zeros(3)
-    for term in substrate:
+    for term in (t for t in substrate if not t.component.transmits):  # transmitted light does not come back
         e_b += term_albedo(term, np.array([1.0]), source, size, BASE_ALBEDO_RTOL)[0][0]
     r = float(p["specular_roughness"])
     r_d = 1.0 + (r - 1.0) * min(max(dielectric_f0(p), 0.0), 1.0)
@@ -189,8 +201,26 @@ def compensation(metal: Microfacet, source: str, size: int) -> list[Term]:
     return [Term(Diffuse("metal-ms", tuple(np.broadcast_to(rho, (3,)))), np.ones(3), (white,), (white,))]
 
 
+def check_transmission(p: dict) -> None:
+    """Refuse the translucent base where it is not modelled (one material's scalar parameters)."""
+    if float(p["transmission_weight"]) <= 0:
+        return
+    where = "parameter transmission_weight"
+    if p["geometry_thin_walled"]:
+        raise ParameterError("thin-walled transmission (a thin sheet's inter-reflections) is not modelled; use "
+                             "geometry_thin_walled=0", where=where)
+    if p["base_mix"] != "brdf" or p["dielectric_fresnel"] != "exact":
+        raise ParameterError("transmission needs base_mix=brdf and dielectric_fresnel=exact (the refraction is the "
+                             "rough dielectric's, with its exact Fresnel)", where=where)
+    eta = modulated_ior(specular_ior_ratio(p), float(p["specular_weight"]))
+    if abs(eta - 1.0) < ETA_MATCH:
+        raise ParameterError(f"the specular IOR ratio η'_s = {eta:.9g} is index-matched: the transmission is a "
+                             "delta straight through, not a lobe", where=where)
+
+
 def build(p: dict) -> list[Term]:
     """The terms of one material (scalar parameter values ``p``)."""
+    check_transmission(p)
     source, size = p["albedo_source"], int(p["albedo_table"])
     rule = p["layering"]
     r_spec = coat_roughened(p)
@@ -216,8 +246,15 @@ def build(p: dict) -> list[Term]:
     if p["base_mix"] == "brdf":
         specular = Microfacet("specular", r_spec, dielectric_f, spec_tint)
         metal_terms = lobe(metal) + (compensation(metal, source, size) if p["metal_ms"] == "kulla-conty" else [])
-        substrate = mix(under(specular, diffuse) if metalness < 1 else [], metal_terms if metalness > 0 else [],
-                        metalness)
+        dielectric = under(specular, diffuse) if metalness < 1 else []
+        weight = float(p["transmission_weight"])
+        if weight > 0 and metalness < 1 and dielectric_f.kind == "dielectric":
+            # *Translucent base*: the interface's own BSDF, f^R_specular + f^T (transmission_color tints f^T at
+            # transmission_depth 0; a medium of depth > 0 absorbs inside the object, beyond the surface's albedo)
+            tint = tuple(_colour(p["transmission_color"])) if float(p["transmission_depth"]) == 0 else (1.0,) * 3
+            translucent = lobe(specular) + lobe(Transmission("transmission", r_spec, float(dielectric_f.eta), tint))
+            dielectric = mix(dielectric, translucent, weight)
+        substrate = mix(dielectric, metal_terms if metalness > 0 else [], metalness)
     else:
         # One Schlick lobe, F0 = lerp(F0_dielectric · specular_color, F0_metal, M), over (1 − M) × diffuse.
         f0 = (1.0 - metalness) * dielectric_f0(p) * np.asarray(spec_tint) + metalness * rho

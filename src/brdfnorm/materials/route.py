@@ -23,9 +23,10 @@ from .terms import term_albedo
 
 
 def material_albedo(model: OpenPBR, mu: np.ndarray, params: dict, *, rtol: float = DEFAULT_RTOL):
-    """(value, error) (K, 3) of the material's albedo over the light at view cosines μ (K,)."""
+    """(value, error, transmitted) (K, 3) of the material's albedo over the light at view cosines μ (K,): the total
+    (reflected + transmitted), its error, and the share of the terms that transmit (the translucent base's)."""
     K = mu.shape[0]
-    value, error = np.zeros((K, 3)), np.zeros((K, 3))
+    value, error, transmitted = np.zeros((K, 3)), np.zeros((K, 3)), np.zeros((K, 3))
     for mask, scalar in parameter_sets(model.parameters, params, (K,)):
         rows = np.arange(K) if mask is None else np.flatnonzero(mask)
         source, size = scalar["albedo_source"], int(scalar["albedo_table"])
@@ -35,7 +36,9 @@ def material_albedo(model: OpenPBR, mu: np.ndarray, params: dict, *, rtol: float
             v, e = term_albedo(term, mu[rows], source, size, rtol)
             value[rows] += v
             error[rows] += e
-    return value, error + 4 * np.finfo(float).eps * np.abs(value)
+            if term.component.transmits:
+                transmitted[rows] += v
+    return value, error + 4 * np.finfo(float).eps * np.abs(value), transmitted
 
 
 def applies(model: Model, over: str) -> bool:
@@ -45,6 +48,7 @@ def applies(model: Model, over: str) -> bool:
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     K = problem.fixed.shape[0]
     params = problem.case_params(np.arange(K))
-    value, error = material_albedo(problem.model, problem.fixed[:, 2], params, rtol=rtol)
+    value, error, transmitted = material_albedo(problem.model, problem.fixed[:, 2], params, rtol=rtol)
     converged = np.all(error <= np.maximum(atol, rtol * np.abs(value)), axis=-1)
-    return value, error, np.zeros(K, dtype=np.int64), converged, None
+    extra = {"reflected": value - transmitted, "transmitted": transmitted} if problem.model.transmits else {}
+    return value, error, np.zeros(K, dtype=np.int64), converged, None, extra
