@@ -25,7 +25,8 @@ subsections *Layering* and *Mixing*, and its *Model* sections):
   diffuse lobe added unattenuated (f_spec + f_diffuse; Filament #10140 discusses attenuating it).
 * A lobe that **transmits** (the translucent base's refraction, :class:`brdfnorm.materials.components.Transmission`)
   takes every layer's view-side factor only: its light arrives from inside the object and crosses the layers above
-  once, on the way to the view, so neither a light-side factor nor the reciprocal form's 1/(1 − E_avg) applies.
+  once, on the way to the view, so neither a light-side factor nor the reciprocal form's 1/(1 − E_avg) applies, nor
+  the coat's darkening (which assumes that what the base does not reflect it absorbs).
 * **F0 blend** (``base_mix = "f0-blend"``): the engines' shortcut — one Schlick specular lobe whose F0 is
   lerp(F0_dielectric, base colour, metalness), over (1 − metalness) × diffuse by the ``layering`` rule — for
   comparison with the BRDF mix (bevy #24246, three.js #32190).
@@ -84,10 +85,10 @@ def layer(top: Sequence[Term], sub: Sequence[Term], attenuator: Component, rule:
         lost = 1.0 - top_average(attenuator, source, size)
         factor = factor * np.where(lost > 0, 1.0 / np.where(lost > 0, lost, 1.0), 0.0)
     for t in sub:
-        view = t.view + (attenuator,) + ((darkening,) if darkening is not None else ())
         if t.component.transmits:  # light from the other side crosses the layer once, on the view's side
-            out.append(replace(t.scaled(plain), view=view))
+            out.append(replace(t.scaled(plain), view=t.view + (attenuator,)))
             continue
+        view = t.view + (attenuator,) + ((darkening,) if darkening is not None else ())
         light = t.light + ((attenuator,) if rule != "view" else ())
         out.append(replace(t.scaled(factor), view=view, light=light))
     return out
