@@ -99,3 +99,18 @@ def test_darkening_uses_the_base_albedo_at_normal_incidence():
     assert factor.base_roughness == pytest.approx(0.3)  # r_b = r_m = specular_roughness for a metal
     white = dict(base_color=(1, 1, 1), specular_weight=0.0, coat_weight=1.0, coat_roughness=0.0)
     assert np.abs(_albedo(**white) - _albedo(**white, coat_darkening=0.0)).max() <= 1e-15
+
+
+def test_darkening_keeps_the_reciprocal_rules_reciprocal():
+    """Under the symmetric rule the darkening's K_s is its average E_F (a constant factor): f(L, V) = f(V, L); under
+    the view rule K_s = F(μ_o) makes it view-dependent (the view rule is not reciprocal anyway)."""
+    rng = np.random.default_rng(3)
+    L, V = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    L[:, 2], V[:, 2] = np.abs(L[:, 2]), np.abs(V[:, 2])
+    L, V = L / np.linalg.norm(L, axis=1, keepdims=True), V / np.linalg.norm(V, axis=1, keepdims=True)
+    common = dict(base_color=(0.6, 0.4, 0.2), specular_weight=0.0, coat_weight=1.0, coat_roughness=0.3)
+    model = bn.load("openpbr", layering="symmetric", **common)
+    forward, backward = model.eval(L, V), model.eval(V, L)
+    assert np.abs(forward - backward).max() <= 1e-12 * np.abs(forward).max()
+    undarkened = bn.load("openpbr", layering="symmetric", coat_darkening=0.0, **common).eval(L, V)
+    assert np.all(forward < undarkened)  # and it does darken

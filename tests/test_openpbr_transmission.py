@@ -102,3 +102,15 @@ def test_refusals():
         bn.load("openpbr", transmission_weight=0.5, specular_weight=0.0)
     assert not bn.load("openpbr").transmits and bn.load("openpbr", transmission_weight=0.1).transmits
     bn.load("openpbr", geometry_thin_walled=True)  # without transmission the reflection is the same
+
+
+def test_lut_writes_the_reflected_and_transmitted_tables():
+    from brdfnorm import lut
+
+    model = bn.load("openpbr", transmission_weight=1.0)
+    mu = np.array([0.2, 1.0])
+    tables = lut.compute(model, {"mu": mu, "specular_roughness": np.array([0.2, 0.6])}, rtol=1e-10, average=False)
+    for j, r in enumerate((0.2, 0.6)):
+        lobe = bn.albedo(bn.load("ggx-dielectric", alpha=r * r, eta=1.5), np.arccos(mu), rtol=1e-12)
+        assert np.abs(np.asarray(tables["E_T"])[:, j] - lobe.transmitted[:, 0]).max() <= 1e-12
+        assert np.abs(np.asarray(tables["E_R"])[:, j] - lobe.reflected[:, 0]).max() <= 1e-12
