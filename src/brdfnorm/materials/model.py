@@ -102,8 +102,8 @@ class OpenPBR(Model):
                                  where="parameter fuzz_roughness")
 
     def search_space(self) -> dict[str, tuple[float, float] | None]:
-        """``check`` holds the table size, the conductor's index unless it is used, and the weights of layers
-        that are off (their parameters then do nothing)."""
+        """``check`` holds the table size, the conductor's index unless it is used, the parameters of layers that
+        are off (they then do nothing; the translucent base unless transmission_weight > 0) and thin-walled mode."""
         p = self._params
         space: dict[str, tuple[float, float] | None] = {"albedo_table": None}
         if p["metal_fresnel"] != "conductor":
@@ -113,7 +113,11 @@ class OpenPBR(Model):
         else:  # the lobe's own range of roughness
             low = ZELTNER_MIN if p["fuzz_lobe"] == "zeltner" else float(np.sqrt(1e-3))
             space.update(fuzz_roughness=(low, 1.0))
-        space.update(specular_weight=(0.0, 1.0))
+        space.update(specular_weight=(0.0, 1.0), geometry_thin_walled=None)
+        if np.all(np.asarray(p["transmission_weight"]) == 0):  # opaque as given: the translucent base stays off
+            space.update(transmission_weight=None, transmission_color=None, transmission_depth=None)
+        else:  # an index-matched interface (specular_weight 0) refracts into a delta, refused
+            space.update(specular_weight=(1e-3, 1.0))
         return space
 
     def projected(self, L, V, params):
