@@ -104,3 +104,20 @@ def test_openpbr_fuzz_is_the_ltc_sheen():
     assert np.all(np.abs(by_quadrature - expected) <= 1e-8)
     charlie = bn.albedo(bn.load("openpbr", **common, fuzz_color=(0.5, 0.5, 0.5), fuzz_lobe="charlie"), theta)
     assert np.max(np.abs(charlie.value[:, 0] - expected)) > 1e-2  # the other lobe is a different fuzz
+
+
+def test_compiled_kernel_matches_numpy():
+    pytest.importorskip("numba")
+    model = bn.load("zeltner", roughness=0.35, color=(0.9, 0.5, 0.2))
+    kernel = model.native_kernel()
+    u = kernel.pack(model.params)
+    rng = np.random.default_rng(11)
+    L, V = rng.normal(size=(40, 3)), rng.normal(size=(40, 3))
+    L, V = L / np.linalg.norm(L, axis=1, keepdims=True), V / np.linalg.norm(V, axis=1, keepdims=True)
+    V[0] = [0.0, 0.0, 1.0]  # normal incidence: any frame
+    expected = model.eval(L, V)
+    got = np.array([kernel.function(*l_, *v_, u) for l_, v_ in zip(L, V, strict=True)])
+    assert np.allclose(got, expected, rtol=1e-14, atol=0)
+    theta = np.arccos([0.9, 0.3])
+    compiled = bn.albedo(model, theta, method="quadrature", rtol=1e-10, backend="compiled")
+    assert np.abs(compiled.value - albedo_fit(np.cos(theta), 0.35)[:, None] * [0.9, 0.5, 0.2]).max() <= 1e-10

@@ -88,6 +88,11 @@ class Zeltner(Model):
         if np.any(np.asarray(self._params["roughness"], dtype=float) < ROUGHNESS_MIN):
             raise ParameterError(f"must be ≥ {ROUGHNESS_MIN:g} (the fit's range)", where="parameter roughness")
 
+    def native_kernel(self):
+        from .zeltner_native import kernel  # Numba is imported only by the compiled backend
+
+        return kernel()
+
     def projected(self, L, V, params):
         white = albedo_fit(np.clip(V[..., 2], 0.0, 1.0), params["roughness"]) * ltc_density(L, V,
                                                                                             params["roughness"])
