@@ -114,3 +114,13 @@ def test_lut_writes_the_reflected_and_transmitted_tables():
         lobe = bn.albedo(bn.load("ggx-dielectric", alpha=r * r, eta=1.5), np.arccos(mu), rtol=1e-12)
         assert np.abs(np.asarray(tables["E_T"])[:, j] - lobe.transmitted[:, 0]).max() <= 1e-12
         assert np.abs(np.asarray(tables["E_R"])[:, j] - lobe.reflected[:, 0]).max() <= 1e-12
+
+
+def test_reference_carries_reflected_and_transmitted():
+    from brdfnorm.materials.reference import reference
+
+    doc = reference(bn.load("openpbr", transmission_weight=1.0, specular_roughness=0.0), {"specular_ior": [1.5]},
+                    np.array([0.5, 1.0]))
+    point = doc["points"][0]
+    assert np.abs(np.asarray(point["E_R"]) + np.asarray(point["E_T"]) - np.asarray(point["E"])).max() <= 1e-15
+    assert abs(point["max_residual"]) <= 1e-12  # the smooth white interface: R + T = 1
