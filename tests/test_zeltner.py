@@ -121,3 +121,19 @@ def test_compiled_kernel_matches_numpy():
     theta = np.arccos([0.9, 0.3])
     compiled = bn.albedo(model, theta, method="quadrature", rtol=1e-10, backend="compiled")
     assert np.abs(compiled.value - albedo_fit(np.cos(theta), 0.35)[:, None] * [0.9, 0.5, 0.2]).max() <= 1e-10
+
+
+def test_example_file_is_the_same_lobe():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "examples" / "zeltner.brdf"
+    file = bn.load(path, roughness=0.3, sheenColor=(0.9, 0.5, 0.2))
+    builtin = bn.load("zeltner", roughness=0.3, color=(0.9, 0.5, 0.2))
+    rng = np.random.default_rng(5)
+    L, V = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
+    L, V = L / np.linalg.norm(L, axis=1, keepdims=True), V / np.linalg.norm(V, axis=1, keepdims=True)
+    a, b = file.eval(L, V), builtin.eval(L, V)
+    assert np.allclose(a, b, rtol=1e-12, atol=1e-300)
+    theta = np.arccos([0.8, 0.2])
+    e = bn.albedo(file, theta, rtol=1e-9, backend="numpy").value
+    assert np.abs(e - albedo_fit(np.cos(theta), 0.3)[:, None] * [0.9, 0.5, 0.2]).max() <= 1e-9
