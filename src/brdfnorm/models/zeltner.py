@@ -20,6 +20,9 @@ mx_microfacet_sheen.glsl, Apache-2.0, read at AcademySoftwareFoundation/Material
 written from the formulas. Roughness r ∈ [0.01, 1], the range of the original implementation (MaterialX clamps
 its sampling there). The lobe is not reciprocal (M depends on the view) and does not claim energy conservation:
 it is a layer whose albedo R is what the layering removes from the base (OpenPBR eq. [fuzz-layering-approx]).
+The fit R is slightly negative for r ∈ [0.042, 0.132] (down to −2.11e-5 at μ_o = 0.7745, r = 0.0985: its offset
+o(r) < 0 there); the lobe is reproduced as published, unclamped, as MaterialX evaluates it. The compiled kernel is
+:mod:`brdfnorm.models.zeltner_native`.
 """
 
 from __future__ import annotations
