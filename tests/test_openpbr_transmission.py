@@ -124,3 +124,12 @@ def test_reference_carries_reflected_and_transmitted():
     point = doc["points"][0]
     assert np.abs(np.asarray(point["E_R"]) + np.asarray(point["E_T"]) - np.asarray(point["E"])).max() <= 1e-15
     assert abs(point["max_residual"]) <= 1e-12  # the smooth white interface: R + T = 1
+
+
+def test_white_furnace_of_a_coated_translucent_base():
+    """The specification's *White furnace testing* list: a translucent base (white transmission_color) under a
+    white coat. Smooth interfaces: E = 1 (the darkening's E_b counts the transmitted share, so Δ = 1)."""
+    model = bn.load("openpbr", transmission_weight=1.0, specular_roughness=0.0, coat_weight=1.0, coat_roughness=0.0)
+    result = bn.albedo(model, THETA)
+    assert np.abs(result.value - 1.0).max() <= 1e-12
+    assert result.transmitted[0, 0] > 0.9  # most of it goes through, head-on

@@ -171,15 +171,17 @@ def dielectric_f0(p: dict) -> float:
 
 def darkening(p: dict, substrate: list[Term], source: str, size: int) -> Darkening | None:
     """The coat's darkening factor of the base (:class:`Darkening`) with E_b the base substrate's exact albedo at
-    normal incidence and r_b = lerp(r_d, r_m, M) (eq. [base_roughness_estimate]), r_d = lerp(1, r, ξ_s F_s)
-    (eq. [dielectric_roughness_estimate]), r_m = r = specular_roughness; None where it does nothing (no coat,
+    normal incidence (reflected plus transmitted: the energy the base does not absorb, so that a white translucent
+    base under a clear coat passes the specification's white furnace) and r_b = lerp(r_d, r_m, M)
+    (eq. [base_roughness_estimate]), r_d = lerp(1, r, ξ_s F_s) (eq. [dielectric_roughness_estimate]),
+    r_m = r = specular_roughness; None where it does nothing (no coat,
     ``coat_darkening = 0``, ``coat_adjustments = "none"``, or the furnace's coat with F = 1, whose K = 1)."""
     delta = float(p["coat_darkening"])
     if (p["coat_adjustments"] == "none" or float(p["coat_weight"]) == 0.0 or delta == 0.0
             or p["coat_fresnel"] != "dielectric" or float(p["coat_ior"]) == 1.0):
         return None
     e_b = np.zeros(3)
-    for term in (t for t in substrate if not t.component.transmits):  # transmitted light does not come back
+    for term in substrate:  # what the base does not absorb, transmitted light included (a lossless base: Δ = 1)
         e_b += term_albedo(term, np.array([1.0]), source, size, BASE_ALBEDO_RTOL)[0][0]
     r = float(p["specular_roughness"])
     r_d = 1.0 + (r - 1.0) * min(max(dielectric_f0(p), 0.0), 1.0)
