@@ -149,7 +149,7 @@ def test_sheen_curve():
 
 def test_bad_parameters():
     with pytest.raises(ParameterError, match="fuzz_roughness"):
-        bn.load("openpbr", fuzz_weight=1.0, fuzz_roughness=0.01)
+        bn.load("openpbr", fuzz_weight=1.0, fuzz_roughness=0.01, fuzz_lobe="charlie")
     with pytest.raises(ParameterError, match="layering"):
         bn.load("openpbr", layering="sideways")
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..engine.routes.dielectric_average import average_albedo
 from ..models.base import Model
+from ..models.dielectric import MicrofacetDielectric
 from ..parallel.executors import Workers
 
 #: Albedo methods under which the 3-D route stands in for the μ-average of albedos.
@@ -35,7 +36,7 @@ def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, gene
     the combinations this route does not settle. With ``spread`` (``workers``, ``scheduler``) the combinations run
     where the table's cells do, in :data:`CHUNKS_PER_WORKER` chunks per worker; each combination's value does not
     depend on where it ran."""
-    if method not in ROUTE_METHODS:
+    if method not in ROUTE_METHODS or not isinstance(model, MicrofacetDielectric):  # a material that transmits too
         return generic(model, params, rtol=rtol, method=method)
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
