@@ -255,7 +255,7 @@ def test_glsl_and_hlsl_compile(fitted, tmp_path):
 
 def test_glsl_runs_on_mesa_and_matches_the_fit(fitted):
     """The emitted GLSL in a compute shader on llvmpipe: float32 agrees with the float64 fit to 2e-6."""
-    import mesa
+    from helpers import mesa
 
     try:
         ctx = mesa.context()
