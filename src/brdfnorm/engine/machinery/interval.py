@@ -145,22 +145,21 @@ def adaptive_interval(rule: PanelRule, a: np.ndarray, b: np.ndarray, case: np.nd
     parent, _ = rule.apply(case, a, b)
     evaluations = np.bincount(case, minlength=cases).astype(np.int64) * rule.cost
     done_value, done_error = np.zeros(cases), np.zeros(cases)
-    split = np.ones(a.size, dtype=bool)
-    value = error = np.zeros(a.size)  # the initial panels are all halved: their slots are never read
+    # The panels to halve (pa, pb, pc: owner, pv: their value), and the pool of live panels (a, b, case, value,
+    # error) that stay as they are (the global policy's; the local policy's pool is only the new halves).
+    pa, pb, pc, pv = a, b, case, parent
+    a, b, value, error = np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+    case = np.zeros(0, dtype=pc.dtype)
     for round_ in range(max_rounds + 1):
-        # Halve the panels marked: the halves replace them, each with at least half the parent's discrepancy.
-        evaluations += 2 * rule.cost * np.bincount(case[split], minlength=cases)
-        keep = ~split
-        mid = 0.5 * (a[split] + b[split])
-        left, right = (a[split], mid), (mid, b[split])
-        owners = np.concatenate([case[split], case[split]])
-        ha, hb = np.concatenate([left[0], right[0]]), np.concatenate([left[1], right[1]])
+        # Halve: the halves replace their parent, each with at least half the parent's discrepancy.
+        evaluations += 2 * rule.cost * np.bincount(pc, minlength=cases)
+        mid = 0.5 * (pa + pb)
+        ha, hb, owners = np.concatenate([pa, mid]), np.concatenate([mid, pb]), np.concatenate([pc, pc])
         h_value, h_error = rule.apply(owners, ha, hb)
-        n = mid.size
-        discrepancy = 0.5 * np.abs(parent[split] - (h_value[:n] + h_value[n:]))
-        h_error = np.maximum(h_error, np.tile(discrepancy, 2))
-        a, b, case = np.concatenate([a[keep], ha]), np.concatenate([b[keep], hb]), np.concatenate([case[keep], owners])
-        value, error = np.concatenate([value[keep], h_value]), np.concatenate([error[keep], h_error])
+        discrepancy = 0.5 * np.abs(pv - (h_value[:mid.size] + h_value[mid.size:]))
+        h_error = np.maximum(h_error, np.concatenate([discrepancy, discrepancy]))
+        a, b, case = np.concatenate([a, ha]), np.concatenate([b, hb]), np.concatenate([case, owners])
+        value, error = np.concatenate([value, h_value]), np.concatenate([error, h_error])
 
         total = done_value + np.bincount(case, weights=value, minlength=cases)
         total_error = done_error + np.bincount(case, weights=error, minlength=cases)
@@ -173,20 +172,18 @@ def adaptive_interval(rule: PanelRule, a: np.ndarray, b: np.ndarray, case: np.nd
         else:
             worst = np.zeros(cases)
             np.maximum.at(worst, case, error)
-            split = open_[case] & (error >= 0.25 * worst[case]) & improvable
-            split &= (count < max_panels)[case]
-        if round_ == max_rounds:
-            split[:] = False
+            split = open_[case] & (error >= 0.25 * worst[case]) & improvable & (count < max_panels)[case]
+        if round_ == max_rounds or not split.any():
+            break
+        pa, pb, pc, pv = a[split], b[split], case[split], value[split]
+        keep = ~split
         if policy == "local":
             # Accepted panels leave the pool.
-            accept = ~split
-            done_value += np.bincount(case[accept], weights=value[accept], minlength=cases)
-            done_error += np.bincount(case[accept], weights=error[accept], minlength=cases)
-            a, b, case, value, error = a[split], b[split], case[split], value[split], error[split]
-            split = np.ones(a.size, dtype=bool)
-        if not split.any():
-            break
-        parent = value
+            done_value += np.bincount(case[keep], weights=value[keep], minlength=cases)
+            done_error += np.bincount(case[keep], weights=error[keep], minlength=cases)
+            a, b, value, error, case = a[:0], b[:0], value[:0], error[:0], case[:0]
+        else:
+            a, b, case, value, error = a[keep], b[keep], case[keep], value[keep], error[keep]
     total = done_value + np.bincount(case, weights=value, minlength=cases)
     total_error = done_error + np.bincount(case, weights=error, minlength=cases)
     return RouteResult(total, total_error, evaluations, total_error <= np.maximum(rtol * np.abs(total), atol))
