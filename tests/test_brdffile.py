@@ -16,8 +16,9 @@ import pytest
 from typer.testing import CliRunner
 
 import brdfnorm as bn
-from brdfnorm.brdffile import BrdfModel, load_brdf, parse_brdf, random_hemisphere, read_brdf, reciprocity_check
+from brdfnorm.brdffile import BrdfModel, load_brdf, parse_brdf, read_brdf, reciprocity_check
 from brdfnorm.cli import app
+from brdfnorm.engine.machinery.directions import random_hemisphere
 from brdfnorm.errors import BrdfFileError, ModelNotFoundError, ParameterError
 from brdfnorm.models import REGISTRY, closed_forms
 

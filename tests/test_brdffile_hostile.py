@@ -23,7 +23,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import brdfnorm as bn
-from brdfnorm.brdffile import load_brdf, random_hemisphere, read_brdf
+from brdfnorm.brdffile import load_brdf, read_brdf
+from brdfnorm.engine.machinery.directions import random_hemisphere
 from brdfnorm.errors import BrdfFileError, EvaluationError, ModelNotFoundError
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.brdf"))

@@ -343,3 +343,45 @@ def test_the_tests_mirror_the_packages_and_share_by_fixture_or_helper():
                     and path != TESTS / "helpers" / "paths.py"):
                 bad.append(f"{path.relative_to(TESTS)}:{node.lineno}: a path from __file__ (use helpers.paths)")
     assert bad == []
+
+
+def _is_test_module(dotted: str) -> bool:
+    return any(part.startswith("test_") for part in dotted.split("."))
+
+
+def _test_module_imports(root: Path) -> list[str]:
+    """``path:line: module`` for every import under ``root`` of a test module (a dotted name with a ``test_…``
+    part): ``from glsl.test_compiler import mesa``, ``import report.test_layout``, ``from . import test_x``,
+    ``from .test_x import y``, ``importlib.import_module("glsl.test_x")``."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                names = [node.module or ""] + [f"{node.module or ''}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif (isinstance(node, ast.Call) and getattr(node.func, "attr", getattr(node.func, "id", None))
+                  in ("import_module", "__import__") and node.args and isinstance(node.args[0], ast.Constant)):
+                names = [str(node.args[0].value)]
+            else:
+                continue
+            found += [f"{path.relative_to(root).as_posix()}:{node.lineno}: {name.lstrip('.')}"
+                      for name in [n for n in names if _is_test_module(n)][:1]]
+    return found
+
+
+def test_no_test_module_imports_another():
+    """Issue 40, item 6: what tests share lives in tests/helpers/ or in a conftest fixture, never in a test module
+    (importing one runs its module-level code and collects nothing, and hides a helper where no one looks)."""
+    assert _test_module_imports(TESTS) == []
+
+
+def test_the_test_import_finder_sees_every_form(tmp_path):
+    (tmp_path / "glsl").mkdir()
+    (tmp_path / "glsl" / "test_a.py").write_text(
+        "import importlib\nfrom glsl.test_compiler import mesa\nimport report.test_layout\nfrom . import test_b\n"
+        "from .test_c import x\nimportlib.import_module('glsl.test_d')\nfrom helpers.mesa import mesa_lanes\n"
+        "import pytest\nfrom helpers import paths\n")
+    assert _test_module_imports(tmp_path) == [
+        "glsl/test_a.py:2: glsl.test_compiler", "glsl/test_a.py:3: report.test_layout", "glsl/test_a.py:4: test_b",
+        "glsl/test_a.py:5: test_c", "glsl/test_a.py:6: glsl.test_d"]

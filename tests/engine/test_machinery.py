@@ -53,24 +53,47 @@ def test_the_check_sees_a_second_result_class_or_panel_pool(tmp_path):
                                              ("engine/routes/new.py", "CubatureResult")}
 
 
-def _adaptive_integrators(root: Path) -> set[str]:
-    """Modules under ``root`` (relative to its parent) that define a function named ``adaptive_…`` (the engine's
-    adaptive integrators: 1-D bisection, the rectangle driver)."""
-    return {path.relative_to(root.parent).as_posix() for path in root.rglob("*.py")
+def _adaptive_integrators(root: Path) -> set[tuple[str, str]]:
+    """(module relative to ``root``'s parent, name) of every function under ``root`` named ``adaptive_…`` (the
+    engine's adaptive drivers: the 1-D bisection, the rectangle driver)."""
+    return {(path.relative_to(root.parent).as_posix(), node.name) for path in root.rglob("*.py")
             for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
-            if isinstance(node, ast.FunctionDef) and node.name.startswith("adaptive_")}
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.name.startswith("adaptive_")}
 
 
-def test_adaptive_integrators_live_in_the_machinery_only():
-    assert _adaptive_integrators(PACKAGE) == {"brdfnorm/engine/machinery/interval.py",
-                                              "brdfnorm/engine/machinery/panels.py"}
+#: The one 1-D driver and the one 2-D (rectangle) driver; a second of either, anywhere, is a second driver.
+DRIVERS = {("brdfnorm/engine/machinery/interval.py", "adaptive_interval"),
+           ("brdfnorm/engine/machinery/panels.py", "adaptive_rectangles")}
 
 
-def test_the_integrator_finder_sees_one_in_a_route(tmp_path):
+def test_one_1d_and_one_2d_adaptive_driver():
+    assert _adaptive_integrators(PACKAGE) == DRIVERS
+
+
+def test_the_integrator_finder_sees_a_second_driver(tmp_path):
     (tmp_path / "pkg" / "lut").mkdir(parents=True)
     (tmp_path / "pkg" / "lut" / "table.py").write_text("def adaptive_simpson(f):\n    return f\n")
     (tmp_path / "pkg" / "lut" / "other.py").write_text("def _average_adaptive(f):\n    return f\n")
-    assert _adaptive_integrators(tmp_path / "pkg") == {"pkg/lut/table.py"}
+    # A second driver beside the one in interval.py (the two this module had before issue 39 item 1).
+    (tmp_path / "pkg" / "interval.py").write_text("def adaptive_interval(r):\n    return r\n\n\n"
+                                                  "def adaptive_unit_interval(e):\n    return e\n")
+    assert _adaptive_integrators(tmp_path / "pkg") == {("pkg/lut/table.py", "adaptive_simpson"),
+                                                       ("pkg/interval.py", "adaptive_interval"),
+                                                       ("pkg/interval.py", "adaptive_unit_interval")}
+
+
+def test_every_1d_caller_goes_through_the_one_driver():
+    """The 1-D callers import the driver and a rule class of interval.py (no other name: the old drivers are gone)."""
+    imported = {}
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").endswith("machinery.interval"):
+                imported[path.relative_to(PACKAGE.parent).as_posix()] = {alias.name for alias in node.names}
+    assert set(imported) >= {"brdfnorm/engine/routes/series.py", "brdfnorm/engine/routes/azimuthal.py",
+                             "brdfnorm/engine/routes/microfacet.py", "brdfnorm/lut/table.py"}
+    for path, names in imported.items():
+        assert "adaptive_interval" in names and names <= {"adaptive_interval", "GaussLegendre", "GaussKronrod",
+                                                         "PanelRule"}, path
 
 
 def test_a_route_result_reads_its_extras_and_survives_copies():

@@ -5,11 +5,11 @@ positions in the file's own numbering; Mesa's choices for undefined results; bou
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
 import pytest
+from helpers.mesa import mesa_lanes
 
 from brdfnorm.errors import BrdfFileError, EvaluationError
 from brdfnorm.glsl import MAX_LOOP_ITERATIONS, compile_shader
@@ -42,76 +42,11 @@ def evaluate(shader: str, uniforms: dict | None = None, types: dict | None = Non
     return program.brdf(*dirs, uniforms or {})
 
 
-# --- Mesa llvmpipe through moderngl ---------------------------------------------------------------------
-
-_HEADER = """#version 430
-layout(local_size_x = 64) in;
-layout(std430, binding = 0) readonly buffer BnIn { float bn_in[]; };
-layout(std430, binding = 1) writeonly buffer BnOut { float bn_out[]; };
-uniform uint bn_count;
-"""
-
-_MAIN = """
-void main() {
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= bn_count) return;
-    vec3 d[5];
-    for (int k = 0; k < 5; k++)
-        for (int c = 0; c < 3; c++) d[k][c] = bn_in[15u * i + 3u * uint(k) + uint(c)];
-    vec3 r = BRDF(d[0], d[1], d[2], d[3], d[4]);
-    bn_out[3u * i] = r.x; bn_out[3u * i + 1u] = r.y; bn_out[3u * i + 2u] = r.z;
-}
-"""
-
-
-#: What the output buffer holds where llvmpipe wrote nothing (see :func:`mesa`).
-MESA_SENTINEL = 1234.5
-
-
-@functools.cache
-def _mesa_context():
-    try:
-        import moderngl
-
-        return moderngl.create_context(standalone=True, backend="egl", require=430)
-    except Exception as exc:  # a missing libEGL / driver surfaces as a plain Exception
-        return f"no headless EGL OpenGL 4.3 context: {exc}"
-
-
-def mesa(shader: str, uniforms: dict | None = None, types: dict | None = None, dirs=DIRS) -> np.ndarray:
-    """The shader's BRDF evaluated by Mesa (float32) on the same lanes; skips (printing why) without EGL."""
-    ctx = _mesa_context()
-    if isinstance(ctx, str):
-        print(f"skipping the Mesa comparison: {ctx}")
-        pytest.skip(ctx)
-    declarations = "".join(f"uniform {t} {name};\n" for name, t in (types or {}).items())
-    program = ctx.compute_shader(_HEADER + declarations + shader + _MAIN)
-    for name, value in (uniforms or {}).items():
-        if name in program:
-            program[name].value = tuple(value) if np.ndim(value) else value
-    stacked = np.stack(np.broadcast_arrays(*dirs), axis=-2).astype(np.float32)  # (count, 5, 3)
-    count = stacked.shape[0]
-    program["bn_count"].value = count
-    # The output starts as a sentinel: llvmpipe writes nothing for some shaders (e.g. dividing by a constant
-    # 0.0), which must not pass for a result of 0.
-    sentinel = np.full((count, 3), MESA_SENTINEL, dtype=np.float32)
-    source, target = ctx.buffer(stacked.tobytes()), ctx.buffer(sentinel.tobytes())
-    try:
-        source.bind_to_storage_buffer(0)
-        target.bind_to_storage_buffer(1)
-        program.run(group_x=(count + 63) // 64)
-        return np.frombuffer(target.read(), dtype=np.float32).reshape(count, 3).astype(np.float64)
-    finally:
-        source.release()
-        target.release()
-        program.release()
-
-
 def check(shader, expected, uniforms=None, types=None, dirs=DIRS, rtol=1e-12, mesa_rtol=2e-4, mesa_atol=2e-5):
     """Compiled result == the independent numpy value (float64) and == Mesa's (float32 accuracy)."""
     ours = evaluate(shader, uniforms, types, dirs)
     np.testing.assert_allclose(ours, np.broadcast_to(expected, ours.shape), rtol=rtol, atol=1e-14, equal_nan=True)
-    theirs = mesa(shader, uniforms, types, dirs)
+    theirs = mesa_lanes(shader, uniforms, types, dirs=dirs)
     np.testing.assert_allclose(ours, theirs, rtol=mesa_rtol, atol=mesa_atol, equal_nan=True)
 
 
@@ -644,7 +579,7 @@ def test_undefined_results_follow_mesa(expression):
         expected = SPECIAL_CASES[expression](_GA, _GB)
     ours = evaluate(shader, dirs=GRID)[:, 0]
     np.testing.assert_allclose(ours, expected, rtol=1e-12, atol=0, equal_nan=True)
-    theirs = mesa(shader, dirs=GRID)[:, 0]
+    theirs = mesa_lanes(shader, dirs=GRID)[:, 0]
     # exact special values (NaN, ±inf, 0) must coincide; finite ones to llvmpipe's float32 accuracy (atan ~4e-6)
     np.testing.assert_allclose(ours, theirs, rtol=1e-5, atol=1e-5, equal_nan=True)
 
@@ -667,21 +602,21 @@ def test_pow_rewrites_of_constant_arguments_follow_mesa():
         expected = vec3(_GA * _GA + _mesa_pow(_GA, 3.0), (_GA * _GA) ** 2, np.exp2(_GA) - 8.0 + 1.0)
     ours = evaluate(shader, dirs=GRID)
     np.testing.assert_allclose(ours, expected, rtol=1e-12, equal_nan=True)
-    np.testing.assert_allclose(ours, mesa(shader, dirs=GRID), rtol=1e-6, equal_nan=True)
+    np.testing.assert_allclose(ours, mesa_lanes(shader, dirs=GRID), rtol=1e-6, equal_nan=True)
 
 
 def test_calls_with_only_constant_arguments_fold_with_ieee_arithmetic():
     shader = SIGNATURE + "{ return vec3(smoothstep(0.25, 0.25, 0.5), mod(0.5, 0.0), 0.5 / 0.0); }"
     ours = evaluate(shader, dirs=GRID)
     np.testing.assert_array_equal(ours, np.broadcast_to([1.0, np.nan, np.inf], ours.shape))
-    np.testing.assert_array_equal(ours, mesa(shader, dirs=GRID))
+    np.testing.assert_array_equal(ours, mesa_lanes(shader, dirs=GRID))
 
 
 def test_products_with_and_quotients_of_constant_zero_are_zero_even_for_inf_and_nan():
     shader = SIGNATURE + "{ float a = L.x, b = L.y; return vec3(a * 0.0 + 0.0 * a, 0.0 / a, (a * 0.0) / b); }"
     ours = evaluate(shader, dirs=GRID)
     np.testing.assert_array_equal(ours, 0.0)
-    np.testing.assert_allclose(ours, mesa(shader, dirs=GRID), equal_nan=True)
+    np.testing.assert_allclose(ours, mesa_lanes(shader, dirs=GRID), equal_nan=True)
 
 
 def test_integer_division_and_remainder_by_zero_and_negative_follow_mesa():
@@ -707,7 +642,7 @@ def test_integer_division_and_remainder_by_zero_and_negative_follow_mesa():
         div = np.where(b == 0, 0.0, np.trunc(a / b))
     ours = evaluate(shader, dirs=dirs)
     np.testing.assert_array_equal(ours, vec3(div, urem(a, b), urem(np.full_like(b, 7), b)))
-    np.testing.assert_array_equal(ours, mesa(shader, dirs=dirs))
+    np.testing.assert_array_equal(ours, mesa_lanes(shader, dirs=dirs))
 
 
 # --- errors --------------------------------------------------------------------------------------------

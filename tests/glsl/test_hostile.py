@@ -15,16 +15,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import paths
 from helpers.brdf_files import DIRECTIONS, brdf_text, hang_guard, where, write
+from helpers.shader_mutations import mutated_shaders
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from brdfnorm.brdffile import load_brdf, read_brdf
 from brdfnorm.errors import BrdfFileError, BrdfnormError
 from brdfnorm.glsl import compile_shader
 
-EXAMPLES = sorted(paths.EXAMPLES.glob("*.brdf"))
 SIGNATURE = "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"
 
 
@@ -211,36 +209,6 @@ def test_integer_increments_wrap(tmp_path):
 
 # -- fuzz: mutated example shaders ------------------------------------------------------------------------
 
-VOCABULARY = [
-    "09", "0x", "0xFFFFFFFFF", "4294967296", "99999999999999999999", "1e39", "1e-400", "-1u", "2147483647", "3u",
-    "int", "uint", "float", "vec3", "mat4", "bool", "[", "]", "[1024]", "[0]", "[-1]", "[3]", "(", ")", "{", "}",
-    ";", ",", ".", ".xyz", ".w", "++", "--", "+", "-", "*", "/", "%", "<<", ">>", "&", "|", "^", "^^", "~",
-    "!", "==", "<", "?", ":", "=", "+=", "/=", "%=", "for", "while", "if", "else", "return", "break",
-    "continue", "switch", "case", "default", "discard", "const", "uniform", "in", "out", "inout", "#define",
-    "#undef", "\n", "true", "false", "L", "V", "N", "pow", "dot", "normalize", "length", "modf", "mix", "mod",
-    "int(", "float[3](", ".length()", "BRDF", "0.0/0.0", "int(0.0/0.0)", "1.0/0.0", "// c", "/*", "*/", "#if",
-]  # fmt: skip
-_TOKEN = re.compile(r"\w+|\S")
-
-
-@st.composite
-def mutated_shaders(draw):
-    brdf = read_brdf(draw(st.sampled_from(EXAMPLES)))
-    tokens = _TOKEN.findall(brdf.shader.text)
-    for _ in range(draw(st.integers(1, 4))):
-        at = draw(st.integers(0, len(tokens)))
-        action = draw(st.sampled_from(["replace", "insert", "delete", "duplicate"]))
-        if action == "replace" and at < len(tokens):
-            tokens[at] = draw(st.sampled_from(VOCABULARY))
-        elif action == "insert":
-            tokens.insert(at, draw(st.sampled_from(VOCABULARY)))
-        elif action == "delete":
-            del tokens[at : at + draw(st.integers(1, 6))]
-        else:
-            tokens[at:at] = tokens[at : at + draw(st.integers(1, 12))]
-    return brdf, " ".join(tokens)
-
-
 @settings(
     max_examples=int(os.environ.get("BRDFNORM_FUZZ_EXAMPLES", "300")),
     deadline=None,
@@ -264,14 +232,14 @@ def test_mutated_shaders_raise_only_the_projects_errors(case):
 @pytest.mark.parametrize("expression", [e for e, _ in WRAPPING])
 def test_integer_wrap_around_agrees_with_mesa(expression):
     # The same expression in Mesa's llvmpipe (a compute shader, float32 output), folded and at run time.
-    from glsl.test_compiler import mesa
+    from helpers.mesa import mesa_lanes
 
     at_run_time = re.sub(r"\b(\d+)(u?)\b", lambda m: f"({m[1]}{m[2]} + z{m[2] or 'i'})", expression)
     for text in (expression, at_run_time):
         shader = SIGNATURE + f" {{ return vec3(float({text}), 0.0, 0.0); }}"
         types, values = {"zi": "int", "zu": "uint"}, {"zi": 0, "zu": 0}
         ours = compile_shader(shader, uniforms=types).brdf(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0], values)
-        theirs = mesa(shader, values, types, dirs=(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0]))
+        theirs = mesa_lanes(shader, values, types, dirs=(*DIRECTIONS, *DIRECTIONS, DIRECTIONS[0]))
         np.testing.assert_allclose(ours, theirs, rtol=1e-7, err_msg=text)
 
 
@@ -304,13 +272,13 @@ def test_the_number_of_parameters_is_bounded(tmp_path):
 )
 def test_valid_glsl_the_grammar_needs_rewrites_for_evaluates_as_mesa_does(prelude, expression, expected):
     # `(float(x) + 1.0)` reads as a C cast to tree-sitter, and a macro body's `^^` was lost: both parse now.
-    from glsl.test_compiler import mesa
+    from helpers.mesa import mesa_lanes
 
     L, V = DIRECTIONS
     shader = prelude + SIGNATURE + f" {{ return vec3({expression}); }}"
     ours = compile_shader(shader).brdf(L, V, L, L, L)
     np.testing.assert_allclose(ours[:, 0], expected(L, V), rtol=1e-15)
-    np.testing.assert_allclose(ours, mesa(shader, dirs=(L, V, L, L, L)), rtol=1e-6)
+    np.testing.assert_allclose(ours, mesa_lanes(shader, dirs=(L, V, L, L, L)), rtol=1e-6)
 
 
 def test_a_user_function_named_like_a_rewritten_constructor_is_its_own():

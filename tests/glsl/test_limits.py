@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from helpers import paths
 
-from brdfnorm.brdffile import load_brdf, random_hemisphere, read_brdf
+from brdfnorm.brdffile import load_brdf, read_brdf
+from brdfnorm.engine.machinery.directions import random_hemisphere
 from brdfnorm.errors import BrdfFileError, EvaluationError
 from brdfnorm.glsl import compile_shader, limits, parser
 from brdfnorm.glsl.compiler import Compiler, statements

@@ -132,7 +132,8 @@ def test_a_million_directions_through_large_variables_stay_in_bounded_memory(tmp
     path.write_text(brdf_text(shader), encoding="utf-8")
     code = f"""
 import numpy as np
-from brdfnorm.brdffile import load_brdf, random_hemisphere
+from brdfnorm.brdffile import load_brdf
+from brdfnorm.engine.machinery.directions import random_hemisphere
 model = load_brdf({str(path)!r})
 rng = np.random.default_rng(0)
 L = random_hemisphere(rng, 1_000_000)

@@ -34,7 +34,8 @@ import pytest
 from helpers import paths
 from helpers.mesa import MesaBrdf, MesaUnavailable, context, uniform_values
 
-from brdfnorm.brdffile import FRAME_N, FRAME_X, FRAME_Y, load_brdf, random_hemisphere
+from brdfnorm.brdffile import FRAME_N, FRAME_X, FRAME_Y, load_brdf
+from brdfnorm.engine.machinery.directions import random_hemisphere
 
 EXAMPLES = sorted(paths.EXAMPLES.glob("*.brdf"))
 PAIRS = 4096

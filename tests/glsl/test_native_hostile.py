@@ -15,11 +15,10 @@ import warnings
 import numpy as np
 import pytest
 from helpers import paths
+from helpers.native import assert_same, directions, native_values
+from helpers.shader_mutations import EXAMPLES, mutated_shaders
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from glsl.test_hostile import EXAMPLES, mutated_shaders
-from glsl.test_native import assert_same, directions, native_values
 
 pytest.importorskip("numba")
 

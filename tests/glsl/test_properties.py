@@ -360,14 +360,14 @@ def test_generated_expressions_agree_with_mesa(node):
     float32 rounding of its threshold may legitimately go the other way in a few lanes (seen: 3 of 32 for
     ``1.0 < length(normalize(v))``); a semantic difference shows in most lanes, hence the 25 % allowance.
     """
-    from glsl.test_compiler import MESA_SENTINEL, mesa  # mesa() skips, printing why, without EGL
+    from helpers.mesa import MESA_SENTINEL, mesa_lanes  # skips, printing why, without EGL
 
     source = _shader(node.text, node.size)
     ours = compile_shader(source).brdf(*DIRS, {})
     # An exact identity such as cross(L, L) = 0 is NaN after normalize in every lane here, while llvmpipe's
     # fused multiply-adds leave a rounding residue it normalizes: no GLSL semantics to compare there.
     assume(not np.isnan(ours).all())
-    theirs = mesa(source, dirs=DIRS)
+    theirs = mesa_lanes(source, dirs=DIRS)
     # llvmpipe writes nothing for a shader dividing by a constant 0 (e.g. smoothstep(e, e, x)): no value
     assume(not (theirs == MESA_SENTINEL).all())
     agree = np.isclose(ours, theirs, rtol=1e-3, atol=1e-4, equal_nan=True)

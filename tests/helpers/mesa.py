@@ -14,6 +14,7 @@ import functools
 from collections.abc import Mapping
 
 import numpy as np
+import pytest
 
 from brdfnorm.brdffile import BrdfFile
 
@@ -133,3 +134,60 @@ def uniform_values(parameters, values: Mapping[str, object]) -> dict[str, object
         else:
             out[p.name] = float(value)
     return out
+
+
+# --- a bare shader on lanes of directions (the GLSL compiler's tests) ----------------------------------
+
+_LANES_HEADER = """#version 430
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer BnIn { float bn_in[]; };
+layout(std430, binding = 1) writeonly buffer BnOut { float bn_out[]; };
+uniform uint bn_count;
+"""
+
+_LANES_MAIN = """
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= bn_count) return;
+    vec3 d[5];
+    for (int k = 0; k < 5; k++)
+        for (int c = 0; c < 3; c++) d[k][c] = bn_in[15u * i + 3u * uint(k) + uint(c)];
+    vec3 r = BRDF(d[0], d[1], d[2], d[3], d[4]);
+    bn_out[3u * i] = r.x; bn_out[3u * i + 1u] = r.y; bn_out[3u * i + 2u] = r.z;
+}
+"""
+
+
+#: What the output buffer holds where llvmpipe wrote nothing (see :func:`mesa`).
+MESA_SENTINEL = 1234.5
+
+
+def mesa_lanes(shader: str, uniforms: dict | None = None, types: dict | None = None, *, dirs: tuple) -> np.ndarray:
+    """A bare shader's ``BRDF(L, V, N, X, Y)`` evaluated by Mesa (float32) on lanes of the five directions
+    ``dirs`` (each (count, 3) or broadcastable), its ``types`` declared as uniforms; skips (printing why) without
+    EGL. Moved from tests/glsl/test_compiler.py (issue 40 item 6)."""
+    ctx = _context_or_reason()
+    if isinstance(ctx, str):
+        print(f"skipping the Mesa comparison: {ctx}")
+        pytest.skip(ctx)
+    declarations = "".join(f"uniform {t} {name};\n" for name, t in (types or {}).items())
+    program = ctx.compute_shader(_LANES_HEADER + declarations + shader + _LANES_MAIN)
+    for name, value in (uniforms or {}).items():
+        if name in program:
+            program[name].value = tuple(value) if np.ndim(value) else value
+    stacked = np.stack(np.broadcast_arrays(*dirs), axis=-2).astype(np.float32)  # (count, 5, 3)
+    count = stacked.shape[0]
+    program["bn_count"].value = count
+    # The output starts as a sentinel: llvmpipe writes nothing for some shaders (e.g. dividing by a constant
+    # 0.0), which must not pass for a result of 0.
+    sentinel = np.full((count, 3), MESA_SENTINEL, dtype=np.float32)
+    source, target = ctx.buffer(stacked.tobytes()), ctx.buffer(sentinel.tobytes())
+    try:
+        source.bind_to_storage_buffer(0)
+        target.bind_to_storage_buffer(1)
+        program.run(group_x=(count + 63) // 64)
+        return np.frombuffer(target.read(), dtype=np.float32).reshape(count, 3).astype(np.float64)
+    finally:
+        source.release()
+        target.release()
+        program.release()

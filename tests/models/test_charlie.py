@@ -11,8 +11,8 @@ from helpers.references import dblquad_albedo
 from scipy import integrate
 
 import brdfnorm as bn
-from brdfnorm.brdffile import random_hemisphere
 from brdfnorm.check import check
+from brdfnorm.engine.machinery.directions import random_hemisphere
 from brdfnorm.errors import ParameterError
 from brdfnorm.models.charlie import charlie_distribution, charlie_lambda
 

@@ -12,8 +12,8 @@ from helpers.paths import EXAMPLES
 from scipy import integrate
 
 import brdfnorm as bn
-from brdfnorm.brdffile import random_hemisphere
 from brdfnorm.check import check
+from brdfnorm.engine.machinery.directions import random_hemisphere
 from brdfnorm.models.fon import fon_albedo_approx, fon_albedo_exact, fon_average_approx, fon_average_exact
 
 THETA = np.radians([0.0, 25.0, 50.0, 75.0, 89.0])

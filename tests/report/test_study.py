@@ -19,6 +19,7 @@ from pathlib import Path
 import mpmath as mp
 import numpy as np
 import pytest
+from helpers.page_layout import assert_tables_fit
 from helpers.paths import EXAMPLES
 from helpers.references import phong_like_reference
 
@@ -460,6 +461,4 @@ def test_every_image_loads_in_chromium(default_report, tmp_path):
 @pytest.mark.slow
 def test_tables_fit_the_page_in_chromium(default_report):
     # issue 43: the factor table was 1 394 px wide in the 1 240 px page
-    from report.test_layout import assert_tables_fit
-
     assert_tables_fit(default_report / "index.html", "default-report")

@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..engine.machinery.interval import adaptive_gauss_legendre
+from ..engine.machinery.interval import GaussLegendre, adaptive_interval
 from ..engine.routes.series import blinn_phong_albedo_series
 from ..models import closed_forms
 from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
@@ -90,7 +90,7 @@ def phong_energy(original: bool, n: np.ndarray, theta: np.ndarray) -> np.ndarray
             azimuth = np.where(inside, TWO_PI * A, 2.0 * (A * beta0 + B * np.sin(beta0)))
         return np.exp(nc[index, None] * np.log(np.cos(alpha))) * np.sin(alpha) * azimuth
 
-    value = adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], nc.size, rtol=1e-12).value
+    value = adaptive_interval(GaussLegendre(integrand), a[keep], b[keep], case[keep], nc.size, rtol=1e-12).value
     return value.reshape(n.shape)
 
 

@@ -12,7 +12,7 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 * E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
   table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|), and for what that does not
   settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
-  pessimistic bound for the K15 value that is used, and at least the parent panel's bisection discrepancy); both
+  pessimistic bound for the K15 value that is used, and at least half the parent panel's bisection discrepancy); both
   add the albedo error estimates through |weights|.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
@@ -33,10 +33,7 @@ import numpy as np
 
 from .. import validate
 from ..engine.compiled.backend import scope as backend_scope
-from ..engine.machinery.interval import adaptive_unit_interval
-from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
-from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
-from ..engine.machinery.kronrod import NODES as KRONROD_NODES
+from ..engine.machinery.interval import GaussKronrod, adaptive_interval
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
@@ -278,10 +275,10 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
     In x = √μ the integral is ∫₀¹ 4x³ E(x²) dx: the weight vanishes where E has its boundary layer (μ ≲ α for a
     height-correlated microfacet lobe), so that layer needs no refinement. Globally adaptive (as QUADPACK):
     while a combination's summed panel errors exceed rtol·|E_avg|, its worst panels (error ≥ ¼ of its largest)
-    are halved. A panel's error is |K15 − G7| plus the albedo error estimates through the K15 weights, and at
-    least its parent's bisection discrepancy (:mod:`.adaptive`: a kink inside a panel can give K15 and G7 one
-    shared error); albedos
-    are computed to rtol/4, looser where the weight 4x³ is below 1 (rtol/(4·4x³), at most NODE_RTOL_MAX). Nodes
+    are halved (:func:`brdfnorm.engine.machinery.interval.adaptive_interval`, ``policy="global"``). A panel's error
+    is |K15 − G7| plus the albedo error estimates through the K15 weights, and at least half its parent's bisection
+    discrepancy (a kink inside a panel can give K15 and G7 one shared error); albedos are computed to rtol/4,
+    looser where the weight 4x³ is below 1 (rtol/(4·4x³), at most NODE_RTOL_MAX). Nodes
     below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing directions); that changes the
     integral by at most MU_FLOOR²·max|E|, which is added to the error.
     Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
@@ -291,9 +288,8 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
     albedo_converged, largest_e = np.ones(M, dtype=bool), np.zeros(M)
     integrals = 0
 
-    def evaluate(owner: np.ndarray, left: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def integrand(owner: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         nonlocal integrals
-        x = left[:, None] + 0.5 * width[:, None] * (KRONROD_NODES + 1.0)  # (P, 15)
         mu, density = x * x, 4.0 * x**3  # dμ 2μ = 4x³ dx
         which = np.broadcast_to(owner[:, None], x.shape)
         E, E_error, good = (a.reshape(x.shape) for a in _node_albedos(
@@ -301,12 +297,10 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         integrals += x.size
         albedo_converged[owner[~good.all(axis=1)]] = False
         np.maximum.at(largest_e, owner, np.abs(E).max(axis=1))
-        g, g_error, half = density * E, density * E_error, 0.5 * width
-        kronrod = half * (g @ KRONROD_WEIGHTS)
-        difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
-        return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
+        return density * E, density * E_error
 
-    averaged = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    averaged = adaptive_interval(GaussKronrod(integrand), np.zeros(M), np.ones(M), np.arange(M), M, rtol=rtol,
+                                 policy="global", max_panels=max_panels)
     total, total_error = averaged.value, averaged.error
     floor_error = MU_FLOOR**2 * largest_e
     total_error = total_error + floor_error

@@ -1,149 +1,192 @@
-"""The engine's one-dimensional adaptive integration: bisection of panels for many integrals at once (no Python
-loop per integral), in two acceptance policies.
+"""The engine's one one-dimensional adaptive integrator: bisection of panels for many integrals at once (no Python
+loop per integral), as scipy.integrate.quad_vec and mpmath's ``QuadratureRule``: the rule is a small class
+(:class:`PanelRule`, override :meth:`PanelRule.apply`), the driver is one function, :func:`adaptive_interval`.
 
-:func:`adaptive_gauss_legendre` — the 1-D routes' integrator (:mod:`brdfnorm.engine.routes.series`,
-:mod:`~brdfnorm.engine.routes.azimuthal`, :mod:`~brdfnorm.engine.routes.microfacet`'s E_avg, the claims' seed
-integrals): 15-point Gauss–Legendre panels; a panel's error is the difference between the rule on it and on its two
-halves (the finer value is kept), and a panel whose error is below its share of its case's tolerance, or at
-rounding level, is accepted and leaves the pool (locally adaptive).
+Callers: the 1-D routes (:mod:`brdfnorm.engine.routes.series`, :mod:`~brdfnorm.engine.routes.azimuthal`,
+:mod:`~brdfnorm.engine.routes.microfacet`'s E_avg) and the claims' seed integrals with :class:`GaussLegendre`; the
+tables' μ-average E_avg (:mod:`brdfnorm.lut.table`) with :class:`GaussKronrod` on albedos.
 
-:func:`adaptive_unit_interval` — the tables' μ-average of E_avg (:mod:`brdfnorm.lut.table`, and the fallback of
-:mod:`brdfnorm.lut.glass`), whose panel rule and its error estimate the caller supplies (a Gauss–Kronrod pair on
-albedos): globally adaptive as QUADPACK's QAG, every panel stays in the pool and the worst are halved.
+The error of a panel. Every panel is evaluated once, as a whole, by the rule; splitting it evaluates the rule on
+its two halves, and the halves replace it. Each half's error is the larger of the rule's own estimate on it (0 for
+a lone Gauss rule, |K15 − G7| plus the node errors for the Gauss–Kronrod pair) and half the parent's bisection
+discrepancy |Q_parent − (Q_left + Q_right)|. That discrepancy is the parent's error seen from the finer value
+(the check of a rule on its halves, Piessens et al. 1983 §2.2): while bisection converges on a panel holding a
+point where the integrand is not smooth (a kink, a square-root onset: a singularity of order p > 0, each halving
+gains 2^(p+1)), it bounds the pair's error. It is needed even with a Gauss–Kronrod pair, whose |K15 − G7|
+measures the coarser rule's error and is pessimistic for the finer one only while the integrand is smooth on the
+panel: a rough dielectric's E(μ) (Beckmann, α = 1, η = 1/1.5) has a jump in its second derivative at μ ≈ 0.992, and
+on the panel x = √μ ∈ [0.96875, 1] the K15 value was 5.9e-9 off with |K15 − G7| plus the albedo errors at 1.9e-9
+(tests/lut/test_adaptive.py). On smooth panels the discrepancy is far below the rule's own estimate and costs
+nothing. The two halves share the discrepancy, half each, so a pair carries it once in the sum (as the former
+local driver did); the former QAG driver gave each half all of it, which took 375 albedos instead of 195 for
+examples/ggx.brdf's E_avg at roughness 0.05 (rtol 1e-10; the values 1.6e-14 apart, the estimate 8.2e-12), while
+the kink test above holds either way.
 
-In :func:`adaptive_unit_interval`, a panel rule's own estimate (|K15 − G7| for the callers' Gauss–Kronrod pair)
-measures the coarser rule's error, and is pessimistic for the finer one only while the integrand is smooth on the
-panel. At a point where it is not, both rules can share one error: a rough dielectric's E(μ) (Beckmann, α = 1, η =
-1/1.5) has a jump in its second derivative at μ ≈ 0.992, and on the panel x = √μ ∈ [0.96875, 1] the K15 value was
-5.9e-9 off with |K15 − G7| plus the albedo errors at 1.9e-9, so E_avg at rtol 1e-8 settled 1.8 times outside its
-estimate. Every panel therefore also carries the discrepancy of its parent, |Q_parent − (Q_left + Q_right)|: the
-parent's error, which bounds each child's while bisection converges (it gains a factor 2^(p+1) per halving on a
-panel holding a singularity of order p; p > 0 for the kinks and square-root onsets these integrands have). On smooth
-panels that discrepancy is the finer rule's error on the parent, far below |K15 − G7|, so it costs evaluations only
-next to such points. The whole interval is evaluated once as the parent of the first two halves.
+Acceptance, ``policy=``:
 
-The two policies are not merged: each keeps its callers' recorded results bit for bit (tests/test_engine_grid.py),
-and one acceptance rule for both would change them.
+- ``"local"`` (the 1-D routes): a panel whose error is within its share of its case's tolerance (the tolerance
+  over the case's live panels), or at rounding level, is accepted and leaves the pool; the others are halved.
+- ``"global"`` (QUADPACK's QAG, the μ-average): every panel stays in the pool; while a case's summed errors exceed
+  its tolerance, its worst panels (error ≥ ¼ of its largest) are halved, up to ``max_panels`` panels.
+
+In both, a case is done when its summed errors are within max(rtol·|value|, atol), and is reported converged
+exactly then; it stops short of that when no panel is worth halving (each at rounding level, or narrower than
+1e-12) or a budget (``max_rounds`` halvings, ``max_panels``) is spent. The estimate covers the rules' truncation;
+the rounding of the integrand and of the sums is the caller's to add (each 1-D route adds its floor).
+
+A lone Gauss–Legendre rule has no estimate but the discrepancy, and across a kink inside a panel that can fall
+short (the kink's place in the panel moves with each halving, so the error does not shrink by a steady factor:
+|x − 0.3141| on [0, 1] at rtol 1e-10 ends 3.7 times outside; tests/engine/test_interval.py): its callers start
+with panel edges at their integrands' kinks, and an integrand with kinks at unknown places takes the
+Gauss–Kronrod pair.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 from scipy.special import roots_legendre
 
+from .kronrod import GAUSS, KRONROD, NODES
 from .result import RouteResult
 
 _EPS = np.finfo(float).eps
-#: Gauss–Legendre order of one panel of :func:`adaptive_gauss_legendre`.
-_ORDER = 15
-_NODES, _WEIGHTS = roots_legendre(_ORDER)
-#: Panels are evaluated in blocks of this many, to bound the size of temporaries (panels × 30 × 24 floats).
+#: Panels are evaluated in blocks of this many, to bound the size of temporaries (panels × nodes × the
+#: integrand's own intermediates).
 _BLOCK = 4096
-_MAX_ROUNDS = 60
+#: A panel whose error is at most this many ulps of its value is at rounding level: halving cannot improve it.
+_ROUNDING_ULPS = 64.0
+#: Panels narrower than this are not halved.
+_MIN_WIDTH = 1e-12
 
 #: A batch integrand: (case indices (P,), abscissae (P, N)) -> values (P, N).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
-def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """15-point Gauss–Legendre of ``func`` on each panel [a, b]; blocks of panels bound the temporaries."""
-    out = np.empty(a.shape)
-    for start in range(0, a.size, _BLOCK):
-        sl = slice(start, start + _BLOCK)
-        half = 0.5 * (b[sl] - a[sl])
-        x = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * _NODES
-        # A row sum, not a matrix-vector product: BLAS's gemv rounds a row differently with the number of rows
-        # (measured: 524 of 1 003 rows differ from the same rows one at a time), which made a cell's value depend
-        # on which other cells shared its call, and tables differ in the last bits between one process and
-        # several (tests/test_lut_parallel.py).
-        out[sl] = half * (func(case[sl], x) * _WEIGHTS).sum(axis=1)
-    return out
+class PanelRule:
+    """A quadrature rule on panels. Subclasses set :attr:`cost` and override :meth:`apply`."""
+
+    #: Integrand evaluations one panel costs (what :func:`adaptive_interval` counts as ``evaluations``).
+    cost: int = 1
+
+    def apply(self, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(value, error estimate), each (P,), of the rule on the panels [a, b] of cases ``case`` (each (P,))."""
+        raise NotImplementedError
 
 
-def adaptive_gauss_legendre(
-    func: Integrand, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float, atol: float = 0.0
-) -> RouteResult:
-    """Integrate many one-dimensional integrals at once by adaptive bisection of Gauss–Legendre panels.
+class _NodeRule(PanelRule):
+    """A rule with fixed nodes on [−1, 1]: ``func(case, x)`` on panels in blocks, the sums as row sums."""
 
-    Case ``k`` is the sum of ∫ func over its initial panels [a[i], b[i]] with case[i] = k; ``func(case, x)``
-    takes case indices (P,) and abscissae (P, N) and returns (P, N). A panel's error estimate is the difference
-    between the 15-point rule on it and on its two halves (the finer value is kept); a case is done when its
-    summed estimate is at most max(rtol·|value|, atol). The result's arrays are (cases,); ``evaluations`` counts
-    calls of ``func`` per abscissa.
+    nodes: np.ndarray
+
+    def __init__(self, func: Callable) -> None:
+        self.func = func
+        self.cost = self.nodes.size
+
+    def apply(self, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        value, error = np.empty(a.shape), np.empty(a.shape)
+        for start in range(0, a.size, _BLOCK):
+            sl = slice(start, start + _BLOCK)
+            half = 0.5 * (b[sl] - a[sl])
+            x = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * self.nodes
+            value[sl], error[sl] = self.sums(self.func(case[sl], x), half)
+        return value, error
+
+    def sums(self, values: object, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(value, error) of the panels from the integrand's output at the nodes; ``half`` is each half-width.
+        Sums are row sums, not matrix-vector products: BLAS's gemv rounds a row differently with the number of
+        rows (measured: 524 of 1 003 rows differ from the same rows one at a time), which made a cell's value
+        depend on which other cells shared its call (tests/lut/test_parallel.py)."""
+        raise NotImplementedError
+
+
+class GaussLegendre(_NodeRule):
+    """``order``-point Gauss–Legendre (default 15) of ``func(case, x) -> values``; no error of its own (the
+    driver's bisection discrepancy is the estimate)."""
+
+    def __init__(self, func: Integrand, order: int = 15) -> None:
+        self.nodes, self.weights = roots_legendre(order)
+        super().__init__(func)
+
+    def sums(self, values: object, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return half * (np.asarray(values) * self.weights).sum(axis=1), np.zeros(half.shape)
+
+
+class GaussKronrod(_NodeRule):
+    """The G7/K15 pair (:mod:`.kronrod`) of ``func(case, x)``, which returns the values (P, 15) or (values, their
+    error estimates): the K15 value, with error |K15 − G7| plus the node errors through |K15 weights|."""
+
+    nodes = NODES
+
+    def sums(self, values: object, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        g, g_error = values if isinstance(values, tuple) else (values, None)
+        kronrod = half * (g * KRONROD).sum(axis=1)
+        error = np.abs(kronrod - half * (g * GAUSS).sum(axis=1))
+        if g_error is not None:
+            error = error + half * (g_error * np.abs(KRONROD)).sum(axis=1)
+        return kronrod, error
+
+
+def adaptive_interval(rule: PanelRule, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float,
+                      atol: float | np.ndarray = 0.0, policy: Literal["local", "global"] = "local",
+                      max_panels: int | None = None, max_rounds: int = 60) -> RouteResult:
+    """Integrate ``cases`` one-dimensional integrals at once by adaptive bisection (module docstring).
+
+    Case ``k`` is the sum of the integrals over its initial panels [a[i], b[i]] with case[i] = k, each evaluated
+    by ``rule`` and halved once; then, per ``policy``, panels are halved until the case's summed error estimate is
+    at most max(rtol·|value|, atol) (``atol`` a scalar or (cases,)), for at most ``max_rounds`` rounds and (global
+    policy) ``max_panels`` live panels a case. The result's arrays are (cases,); ``evaluations`` counts
+    ``rule.cost`` per panel evaluated.
     """
-    coarse = _panel_values(func, case, a, b)
-    done_value = np.zeros(cases)
-    done_error = np.zeros(cases)
-    evaluations = np.bincount(case, minlength=cases) * _ORDER
-    converged = np.ones(cases, dtype=bool)
-    for round_ in range(_MAX_ROUNDS + 1):
-        mid = 0.5 * (a + b)
-        left = _panel_values(func, case, a, mid)
-        right = _panel_values(func, case, mid, b)
-        count = np.bincount(case, minlength=cases)
-        evaluations += 2 * _ORDER * count
-        fine = left + right
-        err = np.abs(fine - coarse)
-        # Current estimate and error per case: accepted panels plus the live ones at their finer value.
-        total = done_value + np.bincount(case, weights=fine, minlength=cases)
-        total_err = done_error + np.bincount(case, weights=err, minlength=cases)
+    if policy not in ("local", "global"):
+        raise ValueError(f"policy must be 'local' or 'global', not {policy!r}")
+    a, b, case = (np.asarray(v) for v in (a, b, case))
+    atol = np.broadcast_to(np.asarray(atol, dtype=float), (cases,))
+    max_panels = np.inf if max_panels is None else max_panels
+    parent, _ = rule.apply(case, a, b)
+    evaluations = np.bincount(case, minlength=cases).astype(np.int64) * rule.cost
+    done_value, done_error = np.zeros(cases), np.zeros(cases)
+    # The panels to halve (pa, pb, pc: owner, pv: their value), and the pool of live panels (a, b, case, value,
+    # error) that stay as they are (the global policy's; the local policy's pool is only the new halves).
+    pa, pb, pc, pv = a, b, case, parent
+    a, b, value, error = np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+    case = np.zeros(0, dtype=pc.dtype)
+    for round_ in range(max_rounds + 1):
+        # Halve: the halves replace their parent, each with at least half the parent's discrepancy.
+        evaluations += 2 * rule.cost * np.bincount(pc, minlength=cases)
+        mid = 0.5 * (pa + pb)
+        ha, hb, owners = np.concatenate([pa, mid]), np.concatenate([mid, pb]), np.concatenate([pc, pc])
+        h_value, h_error = rule.apply(owners, ha, hb)
+        discrepancy = 0.5 * np.abs(pv - (h_value[:mid.size] + h_value[mid.size:]))
+        h_error = np.maximum(h_error, np.concatenate([discrepancy, discrepancy]))
+        a, b, case = np.concatenate([a, ha]), np.concatenate([b, hb]), np.concatenate([case, owners])
+        value, error = np.concatenate([value, h_value]), np.concatenate([error, h_error])
+
+        total = done_value + np.bincount(case, weights=value, minlength=cases)
+        total_error = done_error + np.bincount(case, weights=error, minlength=cases)
         target = np.maximum(rtol * np.abs(total), atol)
-        unsettled = total_err > target
-        # Split a live panel only while its case misses the target and the panel carries more than its share
-        # of the error and more than rounding (a panel at rounding level cannot get better by splitting).
-        share = target[case] / np.maximum(count[case], 1)
-        split = unsettled[case] & (err > share) & (err > 64.0 * _EPS * np.abs(fine)) & (b - a > 1e-12)
-        if round_ == _MAX_ROUNDS:
-            converged &= np.bincount(case, weights=split, minlength=cases) == 0
-            split[:] = False
+        open_ = total_error > target
+        count = np.bincount(case, minlength=cases)
+        improvable = (error > _ROUNDING_ULPS * _EPS * np.abs(value)) & (b - a > _MIN_WIDTH)
+        if policy == "local":
+            split = open_[case] & (error > target[case] / np.maximum(count[case], 1)) & improvable
+        else:
+            worst = np.zeros(cases)
+            np.maximum.at(worst, case, error)
+            split = open_[case] & (error >= 0.25 * worst[case]) & improvable & (count < max_panels)[case]
+        if round_ == max_rounds or not split.any():
+            break
+        pa, pb, pc, pv = a[split], b[split], case[split], value[split]
         keep = ~split
-        done_value += np.bincount(case[keep], weights=fine[keep], minlength=cases)
-        done_error += np.bincount(case[keep], weights=err[keep], minlength=cases)
-        if not split.any():
-            break
-        a = np.concatenate([a[split], mid[split]])
-        b = np.concatenate([mid[split], b[split]])
-        coarse = np.concatenate([left[split], right[split]])
-        case = np.concatenate([case[split], case[split]])
-    return RouteResult(done_value, done_error, evaluations, converged)
-
-
-def adaptive_unit_interval(evaluate: Callable, count: int, *, rtol: float, max_panels: int) -> RouteResult:
-    """``count`` integrals over [0, 1] at once, globally adaptive (as QUADPACK): ``evaluate(owner, left, width)``
-    returns each panel's (value, error). A panel's error is the larger of that error and its parent's bisection
-    discrepancy (module docstring). While an integral's summed errors exceed rtol·|value| and it has fewer than
-    ``max_panels`` panels, its worst panels (error ≥ ¼ of its largest) are halved. The result's arrays are
-    (count,); ``evaluations`` counts the panels ``evaluate`` was given per integral."""
-    owner, left, width = np.arange(count), np.zeros(count), np.ones(count)
-    whole, _ = evaluate(owner, left, width)
-    owner, left, width, value, error = _halves(evaluate, owner, left, width, whole)
-    evaluations = np.full(count, 3, dtype=np.int64)  # the whole interval and its halves
-    while True:
-        total, total_error = np.bincount(owner, value, count), np.bincount(owner, error, count)
-        open_ = (total_error > rtol * np.abs(total)) & (np.bincount(owner, minlength=count) < max_panels)
-        if not open_.any():
-            break
-        worst = np.zeros(count)
-        np.maximum.at(worst, owner, error)
-        split = open_[owner] & (error >= 0.25 * worst[owner]) & (width > 1e-12)
-        if not split.any():
-            break
-        keep = ~split
-        evaluations += 2 * np.bincount(owner[split], minlength=count)
-        children = _halves(evaluate, owner[split], left[split], width[split], value[split])
-        owner, left, width, value, error = (np.concatenate([kept[keep], new]) for kept, new in
-                                            zip((owner, left, width, value, error), children, strict=True))
-    return RouteResult(total, total_error, evaluations, total_error <= rtol * np.abs(total))
-
-
-def _halves(evaluate: Callable, owner: np.ndarray, left: np.ndarray, width: np.ndarray, parent: np.ndarray
-            ) -> tuple[np.ndarray, ...]:
-    """The two halves of each panel (owner, left, width; its value ``parent``), interleaved: (owner, left, width,
-    value, error), each half's error at least the parent's bisection discrepancy |parent − (left + right half)|."""
-    owner, width = np.repeat(owner, 2), np.repeat(0.5 * width, 2)
-    left = np.stack([left, left + width[::2]], axis=1).ravel()
-    value, error = evaluate(owner, left, width)
-    discrepancy = np.abs(parent - value.reshape(-1, 2).sum(axis=1))
-    return owner, left, width, value, np.maximum(error, np.repeat(discrepancy, 2))
+        if policy == "local":
+            # Accepted panels leave the pool.
+            done_value += np.bincount(case[keep], weights=value[keep], minlength=cases)
+            done_error += np.bincount(case[keep], weights=error[keep], minlength=cases)
+            a, b, value, error, case = a[:0], b[:0], value[:0], error[:0], case[:0]
+        else:
+            a, b, case, value, error = a[keep], b[keep], case[keep], value[keep], error[keep]
+    total = done_value + np.bincount(case, weights=value, minlength=cases)
+    total_error = done_error + np.bincount(case, weights=error, minlength=cases)
+    return RouteResult(total, total_error, evaluations, total_error <= np.maximum(rtol * np.abs(total), atol))

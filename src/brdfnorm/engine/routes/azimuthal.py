@@ -78,7 +78,7 @@ Angles are carried both as θ and as elevations π/2 − θ (θ_L = θ_V + 2 ata
 from the one and cos θ from the other, so that both keep their relative accuracy (at a normal view the peak
 lies at θ_L ~ α: sin θ_L from π/2 − e_L was 1e-11 off there at α = 6e-6). G2's boundary layer at the horizon
 (Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels of its
-own; the rest is :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
+own; the rest is :func:`brdfnorm.engine.machinery.interval.adaptive_interval` (15-point Gauss–Legendre panels
 bisected while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
 halves, the error of the coarser value, while the finer one is kept).
 """
@@ -93,7 +93,7 @@ from scipy.special import hyp1f1
 
 from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS
-from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.interval import GaussLegendre, adaptive_interval
 from ..machinery.result import RouteResult
 from .halfvector import single_scattering_albedo
 
@@ -219,7 +219,7 @@ def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray
 
     scale = 1.0 / mu
     atol_scaled = np.broadcast_to(np.asarray(atol, dtype=float), (K,)) / scale
-    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol, atol=atol_scaled)
+    result = adaptive_interval(GaussLegendre(integrand), a, b, case, K, rtol=rtol, atol=atol_scaled)
     value, error, evaluations, converged = result.value, result.error, result.evaluations, result.converged
     # The integrand is positive, so its rounding (a few ulps a node, summed over the nodes) is bounded by
     # ROUNDING_FLOOR · E, which the panel differences cannot see.

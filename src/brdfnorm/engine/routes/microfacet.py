@@ -28,7 +28,7 @@ from ...models.microfacet import (
 )
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
-from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.interval import GaussLegendre, adaptive_interval
 from ..machinery.result import RouteResult
 from .azimuthal import white_albedo
 from .halfvector import MU_MIN, require_mu_min, single_scattering_albedo
@@ -138,7 +138,7 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
     """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
 
     In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
-    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` over
+    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.machinery.interval.adaptive_interval` over
     x ∈ [ln 1e-6, 0] converges fast; each node's E is computed to an absolute accuracy scaled by its weight,
     and the nodes' errors are added to the outer estimate (bounded by max(2μ²·err_E) times the x-range).
     """
@@ -159,7 +159,7 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
         np.maximum.at(inner_error, index, np.max(weight * result.error[:, 0].reshape(mu.shape), axis=1))
         return weight * result.value[:, 0].reshape(mu.shape)
 
-    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
+    result = adaptive_interval(GaussLegendre(integrand), a, b, case, K, rtol=rtol)
     dropped = _AVERAGE_MU_MIN**2 / 2
     return result.value + dropped, result.error + span * inner_error + dropped
 

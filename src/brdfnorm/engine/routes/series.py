@@ -70,7 +70,7 @@ from scipy.special import roots_legendre
 
 from ... import validate
 from ...errors import ParameterError, ParameterTypeError
-from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.interval import GaussLegendre, adaptive_interval
 from ..machinery.result import RouteResult
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
@@ -174,7 +174,7 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     def integrand(index: np.ndarray, phi: np.ndarray) -> np.ndarray:
         return _integrand(nc[index, None], tc[index, None], phi)
 
-    result = adaptive_gauss_legendre(integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi))
+    result = adaptive_interval(GaussLegendre(integrand), a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi))
     value, error = result.value, result.error
     scale = 2.0 * np.pi
     # The quadrature's estimate sees only the truncation; the rounding of G (where it is not exactly 1: theta > 0
