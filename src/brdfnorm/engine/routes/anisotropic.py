@@ -54,6 +54,8 @@ from ..machinery.kronrod import GAUSS, KRONROD, NODES
 
 DISTRIBUTIONS = ("ggx", "beckmann")
 SHADOWING = ("height-correlated", "separable")
+#: What multiplies the lobe: nothing (E), Schlick's coefficient of f0, 1 − (1 − V·H)⁵, or of f90, (1 − V·H)⁵.
+WEIGHTS = ("white", "f0", "f90")
 #: Panels per case before the 2-D cubature gives up (reported as not converged).
 MAX_PANELS = 4000
 #: Nested trapezoid levels of the view-azimuth average: M = 2 … 2**MAX_LEVEL intervals on [0, π/2].
@@ -99,8 +101,9 @@ def _unstretch(phi: float, k: float) -> float:
 
 @numba.njit(cache=True)
 def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, ay: float, dist: int, sep: int,
-           lam_v: float, k: float) -> float:
-    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E)."""
+           lam_v: float, k: float, weight: int) -> float:
+    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E), times the
+    split-sum weight of ``weight`` (:data:`WEIGHTS`: 1, 1 − (1 − V·H)⁵ or (1 − V·H)⁵)."""
     cphi, sphi, dphi = _stretch(theta, k)
     dx, dy = ax * cphi, ay * sphi
     dd = dx * dx + dy * dy
@@ -134,11 +137,16 @@ def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, a
         g2 = 1.0 / ((1.0 + lam_l) * (1.0 + lam_v))
     else:
         g2 = 1.0 / (1.0 + lam_l + lam_v)
-    return g2 * (1.0 + s * p) * du * jac * dphi / (2.0 * math.pi)
+    f = g2 * (1.0 + s * p) * du * jac * dphi / (2.0 * math.pi)
+    if weight == 0:
+        return f
+    # V·H = (V_x x1 + V_y x2 + V_z)/|(x1, x2, 1)| for H ∝ (x1, x2, 1), i.e. scale·|(x1, x2, 1)|/2
+    tail = (1.0 - min(1.0, 0.5 * scale * math.sqrt(1.0 + x1 * x1 + x2 * x2))) ** 5
+    return f * (1.0 - tail) if weight == 1 else f * tail
 
 
 @numba.njit(cache=True)
-def _panel(a0, a1, b0, b1, vx, vy, vz, ax, ay, dist, sep, lam_v, k, x, wk, wg):
+def _panel(a0, a1, b0, b1, vx, vy, vz, ax, ay, dist, sep, lam_v, k, weight, x, wk, wg):
     """K15⊗K15 value, |KK − GK| (error along φ), |KK − KG| (along v) and Σ|f| (for the rounding floor)."""
     ha, hb = 0.5 * (a1 - a0), 0.5 * (b1 - b0)
     ca, cb = 0.5 * (a0 + a1), 0.5 * (b0 + b1)
@@ -147,7 +155,7 @@ def _panel(a0, a1, b0, b1, vx, vy, vz, ax, ay, dist, sep, lam_v, k, x, wk, wg):
         phi = ca + ha * x[i]
         rk = rg = 0.0
         for j in range(15):
-            f = _point(phi, cb + hb * x[j], vx, vy, vz, ax, ay, dist, sep, lam_v, k)
+            f = _point(phi, cb + hb * x[j], vx, vy, vz, ax, ay, dist, sep, lam_v, k, weight)
             rk += wk[j] * f
             rg += wg[j] * f
             absum += wk[i] * wk[j] * abs(f)
@@ -160,8 +168,8 @@ def _panel(a0, a1, b0, b1, vx, vy, vz, ax, ay, dist, sep, lam_v, k, x, wk, wg):
 
 @numba.njit(cache=True)
 def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: int, rtol: float, atol: float,
-                max_panels: int, x, wk, wg):
-    """(E, error, evaluations, converged) at the view (μ, φ_v) of one lobe."""
+                max_panels: int, weight: int, x, wk, wg):
+    """(E, error, evaluations, converged) at the view (μ, φ_v) of one lobe (times a split-sum ``weight``)."""
     st = math.sqrt(max(0.0, 1.0 - mu * mu))
     vx, vy, vz = st * math.cos(phi_v), st * math.sin(phi_v), mu
     lam_v = _smith_lambda(dist, ((ax * vx) ** 2 + (ay * vy) ** 2) / (vz * vz))
@@ -207,7 +215,7 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
             a0[n], a1[n] = lo, hi
             b0[n], b1[n] = float(piece), float(piece + 1)
             val[n], ea[n], eb[n], ab[n] = _panel(a0[n], a1[n], b0[n], b1[n], vx, vy, vz, ax, ay, dist, sep,
-                                                  lam_v, k, x, wk, wg)
+                                                  lam_v, k, weight, x, wk, wg)
             n += 1
     evaluations = 225 * n
     while True:
@@ -238,7 +246,7 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
             a0[n], a1[n], b0[n], b1[n] = pa0, pa1, mid, pb1
         for m in (i, n):
             val[m], ea[m], eb[m], ab[m] = _panel(a0[m], a1[m], b0[m], b1[m], vx, vy, vz, ax, ay, dist, sep,
-                                                  lam_v, k, x, wk, wg)
+                                                  lam_v, k, weight, x, wk, wg)
         half = 0.5 * abs(parent - val[i] - val[n])
         for m in (i, n):
             if along_a:
@@ -250,17 +258,18 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
 
 
 @numba.njit(cache=True)
-def _stretched_view(mu, chi, ax, ay, dist, sep, rtol, atol, x, wk, wg):
+def _stretched_view(mu, chi, ax, ay, dist, sep, rtol, atol, weight, x, wk, wg):
     """E(μ, ψ(χ))·ψ'(χ) with ψ = atan2(k sin χ, cos χ), k = √(α_x/α_y) (E turns within α_y/α_x of ψ = π/2 in
     ψ, within √(α_y/α_x) in χ); the tolerance is E's, scaled by ψ'."""
     cpsi, spsi, dpsi = _stretch(chi, math.sqrt(ax / ay))
     v, e, ev, c = view_albedo(mu, math.atan2(spsi, cpsi), ax, ay, dist, sep, rtol, atol / dpsi, MAX_PANELS,
-                              x, wk, wg)
+                              weight, x, wk, wg)
     return v * dpsi, e * dpsi, ev, c
 
 
 @numba.njit(cache=True)
-def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: float, atol: float, x, wk, wg):
+def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: float, atol: float, weight: int,
+                    x, wk, wg):
     """(Ē, error, evaluations, converged, intervals M used): the view-azimuth average (module docstring)."""
     size = 2 ** MAX_LEVEL + 1
     values = np.empty(size)
@@ -271,14 +280,14 @@ def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: 
     step = 2 ** (MAX_LEVEL - 1)  # index stride of M = 2 within the finest level's nodes
     for j in range(0, size, step):
         v, e, ev, c = _stretched_view(mu, j * (0.5 * math.pi) / (size - 1), ax, ay, dist, sep, inner_rtol,
-                                      inner_atol, x, wk, wg)
+                                      inner_atol, weight, x, wk, wg)
         values[j], errors[j], evaluations, ok = v, e, evaluations + ev, ok and c
     previous = _trapezoid(values, errors, step)[0]
     while True:
         step //= 2
         for j in range(step, size, 2 * step):
             v, e, ev, c = _stretched_view(mu, j * (0.5 * math.pi) / (size - 1), ax, ay, dist, sep, inner_rtol,
-                                          inner_atol, x, wk, wg)
+                                          inner_atol, weight, x, wk, wg)
             values[j], errors[j], evaluations, ok = v, e, evaluations + ev, ok and c
         value, inner = _trapezoid(values, errors, step)
         error = abs(value - previous) + inner
@@ -302,21 +311,21 @@ def _trapezoid(values, errors, step):
 
 
 @numba.njit(cache=True)
-def _cell(mu, phi_v, ax, ay, dist, sep, rtol, average, x, wk, wg):
+def _cell(mu, phi_v, ax, ay, dist, sep, rtol, average, weight, x, wk, wg):
     if average:
-        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol, 0.0, x, wk, wg)
+        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol, 0.0, weight, x, wk, wg)
         return v, e, ev, c
-    return view_albedo(mu, phi_v, ax, ay, dist, sep, rtol, 0.0, MAX_PANELS, x, wk, wg)
+    return view_albedo(mu, phi_v, ax, ay, dist, sep, rtol, 0.0, MAX_PANELS, weight, x, wk, wg)
 
 
 @numba.njit(cache=True)
-def _cells(mu, phi_v, ax, ay, dist, sep, rtol, average, x, wk, wg):
+def _cells(mu, phi_v, ax, ay, dist, sep, rtol, average, weight, x, wk, wg):
     n = mu.size
     value, error = np.empty(n), np.empty(n)
     evaluations, converged = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.bool_)
     for i in range(n):
         value[i], error[i], evaluations[i], converged[i] = _cell(mu[i], phi_v[i], ax[i], ay[i], dist, sep, rtol,
-                                                                 average, x, wk, wg)
+                                                                 average, weight, x, wk, wg)
     return value, error, evaluations, converged
 
 
@@ -333,7 +342,7 @@ def _average_panel(left, width, ax, ay, dist, sep, rtol, scale, x, wk, wg):
         weight = 4.0 * xi ** 3
         # A node's albedo needs rtol·scale/(4·weight) absolutely (scale ~ the integral): looser where weight is small.
         atol = rtol * scale / (4.0 * max(weight, 1e-300))
-        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol / 4.0, atol, x, wk, wg)
+        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol / 4.0, atol, 0, x, wk, wg)
         evaluations += ev
         ok = ok and c
         kron += wk[i] * weight * v
@@ -426,13 +435,18 @@ def _checked(mu, alpha_x, alpha_y, phi_v=None):
     return mu, ax, ay, phi
 
 
-def albedo(distribution: str, shadowing: str, mu, alpha_x, alpha_y, phi_v=None, *, rtol: float = 1e-8):
+def albedo(distribution: str, shadowing: str, mu, alpha_x, alpha_y, phi_v=None, *, rtol: float = 1e-8,
+           weight: str = "white"):
     """White single-scattering albedo of anisotropic GGX/Beckmann (arrays broadcast together, flattened):
     at the view (μ, φ_v) — φ_v measured from the X axis (α_x's) — or, with ``phi_v=None``, averaged over φ_v.
+    ``weight`` ``f0`` or ``f90``: the split-sum (DFG) terms instead, the lobe times 1 − (1 − V·H)⁵ or
+    (1 − V·H)⁵ (the coefficients of f0 and f90 in Schlick's Fresnel; Karis 2013).
     Returns (value, error, evaluations, converged), each (K,)."""
     d, s = kernel_codes(distribution, shadowing)
+    if weight not in WEIGHTS:
+        raise ArgumentError(f"unknown weight {weight!r} (known: {', '.join(WEIGHTS)})", where="weight")
     mu, ax, ay, phi = _checked(mu, alpha_x, alpha_y, phi_v)
-    return _cells(mu, phi, ax, ay, d, s, float(rtol), phi_v is None, _X, _WK, _WG)
+    return _cells(mu, phi, ax, ay, d, s, float(rtol), phi_v is None, WEIGHTS.index(weight), _X, _WK, _WG)
 
 
 def average_albedo(distribution: str, shadowing: str, alpha_x, alpha_y, *, rtol: float = 1e-8):
