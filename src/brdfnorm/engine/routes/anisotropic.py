@@ -58,8 +58,10 @@ SHADOWING = ("height-correlated", "separable")
 WEIGHTS = ("white", "f0", "f90")
 #: Panels per case before the 2-D cubature gives up (reported as not converged).
 MAX_PANELS = 4000
-#: Nested trapezoid levels of the view-azimuth average: M = 2 … 2**MAX_LEVEL intervals on [0, π/2].
+#: Nested trapezoid levels of the view-azimuth average: M = 1 … 2**MAX_LEVEL intervals on [0, π/2].
 MAX_LEVEL = 7
+#: The largest ratio |T_2M − T_M| / |T_M − T_{M/2}| read as geometric convergence (module docstring).
+RATIO_MAX = 0.25
 #: E_avg: smallest μ evaluated, and panels of its μ integral.
 MU_FLOOR = 1e-7
 MAX_AVG_PANELS = 200
@@ -277,12 +279,13 @@ def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: 
     inner_rtol, inner_atol = rtol / 4.0, atol / 4.0
     evaluations = 0
     ok = True
-    step = 2 ** (MAX_LEVEL - 1)  # index stride of M = 2 within the finest level's nodes
+    step = 2 ** MAX_LEVEL  # index stride of M = 1 (the two ends) within the finest level's nodes
     for j in range(0, size, step):
         v, e, ev, c = _stretched_view(mu, j * (0.5 * math.pi) / (size - 1), ax, ay, dist, sep, inner_rtol,
                                       inner_atol, weight, x, wk, wg)
         values[j], errors[j], evaluations, ok = v, e, evaluations + ev, ok and c
     previous = _trapezoid(values, errors, step)[0]
+    change = -1.0  # |T_M − T_{M/2}| of the previous level (none yet)
     while True:
         step //= 2
         for j in range(step, size, 2 * step):
@@ -290,11 +293,17 @@ def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: 
                                           inner_atol, weight, x, wk, wg)
             values[j], errors[j], evaluations, ok = v, e, evaluations + ev, ok and c
         value, inner = _trapezoid(values, errors, step)
-        error = abs(value - previous) + inner
         intervals = (size - 1) // step
-        if error <= max(atol, rtol * abs(value)) or step == 1:
-            return value, error, evaluations, ok and error <= max(atol, rtol * abs(value)), intervals
-        previous = value
+        difference = abs(value - previous)
+        error = difference + inner
+        if change > 0.0 and difference <= RATIO_MAX * change:
+            # geometric convergence seen over two doublings: T_2M's error is about difference·ratio² (module
+            # docstring); difference·ratio keeps a factor 1/ratio ≥ 4 in hand
+            error = difference * (difference / change) + inner
+        tolerance = max(atol, rtol * abs(value))
+        if (intervals >= 4 and error <= tolerance) or step == 1:
+            return value, error, evaluations, ok and error <= tolerance, intervals
+        previous, change = value, difference
 
 
 @numba.njit(cache=True)
