@@ -107,38 +107,68 @@ def _averages_task(distribution: str, shadowing: str, ax, ay, rtol: float):
     return kernel.average_albedo(distribution, shadowing, ax, ay, rtol=rtol)
 
 
-def _spread(function, fixed: tuple, arrays: Sequence[np.ndarray], workers, scheduler,
-            checkpoint: Path | None = None) -> list[np.ndarray]:
-    """``function(*fixed[:2], *chunk of arrays…, *fixed[2:])`` over fixed chunks of CHUNK_CELLS, joined in order.
-    With ``checkpoint`` (a directory) the chunks found there are read instead of computed and each computed one is
-    saved — after each batch of 2 chunks per worker when the chunks go to workers (what an interruption can
-    lose)."""
-    n = arrays[0].size
-    tasks = [(*fixed[:2], *(a[s:s + CHUNK_CELLS] for a in arrays), *fixed[2:]) for s in range(0, n, CHUNK_CELLS)]
-    store = None
+def _task(kind: str, args: tuple):
+    """One chunk of any stage (a module-level function: one ``map`` carries every stage's chunks, each task the
+    same two arguments)."""
+    return (_cells_task if kind == "cells" else _averages_task)(*args)
+
+
+@dataclass
+class _Stage:
+    """One table's cells: ``kind`` ``cells`` (:func:`_cells_task`) or ``averages``, the fixed arguments around
+    the chunk's arrays (``fixed[:2]`` before them, ``fixed[2:]`` after), and the cells' arrays."""
+
+    name: str
+    kind: str
+    fixed: tuple
+    arrays: list[np.ndarray]
+
+    def tasks(self) -> list[tuple]:
+        n = self.arrays[0].size
+        return [(self.kind, (*self.fixed[:2], *(a[s:s + CHUNK_CELLS] for a in self.arrays), *self.fixed[2:]))
+                for s in range(0, n, CHUNK_CELLS)]
+
+
+def _run(stages: Sequence[_Stage], workers, scheduler, checkpoint: str | Path | None) -> dict[str, list]:
+    """Every stage's chunks of CHUNK_CELLS cells, computed here (``workers`` 1, no ``scheduler``) or by one pool
+    of workers for all stages — E_avg's chunks first, the costliest (a chunk is 64 hemispherical averages), so
+    that no worker waits at the end — and each stage's (value, error, evaluations, converged) joined in order.
+    With ``checkpoint`` (a directory) each stage's chunks found in ``checkpoint/NAME`` are read instead of computed
+    and each computed one is saved — with workers after each batch of 2 chunks per worker (what an interruption
+    can lose)."""
+    tasks = {stage.name: stage.tasks() for stage in stages}
+    parts: dict[str, list] = {stage.name: [None] * len(tasks[stage.name]) for stage in stages}
+    stores = {}
     if checkpoint is not None:
         from .anisotropy_checkpoint import ChunkStore
 
-        store = ChunkStore(checkpoint, {"task": function.__name__, "fixed": list(fixed)}, arrays, CHUNK_CELLS)
-    parts: list = [None if store is None else store.load(k) for k in range(len(tasks))]
-    missing = [k for k, part in enumerate(parts) if part is None]
+        for stage in stages:
+            store = ChunkStore(Path(checkpoint) / stage.name, {"task": stage.kind, "fixed": list(stage.fixed)},
+                               stage.arrays, CHUNK_CELLS)
+            stores[stage.name] = store
+            parts[stage.name] = [store.load(k) for k in range(len(tasks[stage.name]))]
+    order = sorted(stages, key=lambda stage: stage.kind != "averages")
+    missing = [(stage.name, k) for stage in order for k, part in enumerate(parts[stage.name]) if part is None]
+
+    def keep(name: str, k: int, part) -> None:
+        parts[name][k] = part
+        if name in stores:
+            stores[name].save(k, part)
+
     if workers == 1 and scheduler is None:
-        for k in missing:
-            parts[k] = function(*tasks[k])
-            if store is not None:
-                store.save(k, parts[k])
+        for name, k in missing:
+            keep(name, k, _task(*tasks[name][k]))
     elif missing:
         from ..parallel import Workers
 
         with Workers(workers, scheduler) as pool:
-            batch = len(missing) if store is None else 2 * max(1, pool.count or 1)
+            batch = len(missing) if not stores else 2 * max(1, pool.count or 1)
             for start in range(0, len(missing), batch):
                 chosen = missing[start:start + batch]
-                for k, part in zip(chosen, pool.map(function, [tasks[k] for k in chosen]), strict=True):
-                    parts[k] = part
-                    if store is not None:
-                        store.save(k, part)
-    return [np.concatenate([p[k] for p in parts]) for k in range(4)]
+                for (name, k), part in zip(chosen, pool.map(_task, [tasks[name][k] for name, k in chosen]),
+                                           strict=True):
+                    keep(name, k, part)
+    return {name: [np.concatenate([p[i] for p in chunks]) for i in range(4)] for name, chunks in parts.items()}
 
 
 def lobe_of(model: Model) -> tuple[str, str]:
@@ -177,9 +207,6 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
     for c in channels:
         if c != "dfg":
             raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="channels")
-
-    def stage(name: str) -> Path | None:
-        return None if checkpoint is None else Path(checkpoint) / name
 
     clamp = dict(clamp or {})
     names = list(axes)
@@ -222,28 +249,31 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
     full = [np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()
             for a in (along(direction[0], mu, names), phi, ax, ay)]
     averaged = VIEW_AZIMUTH_AXIS not in names
-    tables, table_axes = {}, {}
-    converged, count = np.ones(full[0].size, dtype=bool), 0
-    for name, weight in [("E", "white")] + ([(DFG_F0, "f0"), (DFG_F90, "f90")] if channels else []):
-        value, error, evaluations, ok = _spread(_cells_task, (distribution, shadowing, averaged, float(rtol), weight),
-                                                full, workers, scheduler, stage(name))
-        tables[name], tables[f"{name}_error"] = value.reshape(shape), error.reshape(shape)
-        table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
-        converged &= ok
-        count += int(evaluations.sum())
-    unconverged = int(np.count_nonzero(~converged))
+    grids = [("E", "white")] + ([(DFG_F0, "f0"), (DFG_F90, "f90")] if channels else [])
+    stages = [_Stage(name, "cells", (distribution, shadowing, averaged, float(rtol), weight), full)
+              for name, weight in grids]
     if average:
         others = [n for n in names if n not in (direction[0], VIEW_AZIMUTH_AXIS)]
         avg_shape = tuple(values[n].size for n in others)
         a_x, a_y = parameterization(along(roughness[0], alpha, others),
                                     along(parameterization.axis, evaluated[parameterization.axis], others))
         pairs = [np.ascontiguousarray(np.broadcast_to(a, avg_shape), dtype=float).ravel() for a in (a_x, a_y)]
-        avg, avg_error, avg_evaluations, avg_converged = _spread(_averages_task, (distribution, shadowing, float(rtol)),
-                                                                 pairs, workers, scheduler, stage("E_avg"))
-        tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
-        table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
-        unconverged += int(np.count_nonzero(~avg_converged))
-        count += int(avg_evaluations.sum())
+        stages.append(_Stage("E_avg", "averages", (distribution, shadowing, float(rtol)), pairs))
+    results = _run(stages, workers, scheduler, checkpoint)
+    tables, table_axes = {}, {}
+    converged, unconverged, count = np.ones(full[0].size, dtype=bool), 0, 0
+    for stage in stages:
+        value, error, evaluations, ok = results[stage.name]
+        cells = stage.kind == "cells"
+        table_shape = shape if cells else avg_shape
+        tables[stage.name], tables[f"{stage.name}_error"] = value.reshape(table_shape), error.reshape(table_shape)
+        table_axes[stage.name] = table_axes[f"{stage.name}_error"] = tuple(names) if cells else tuple(others)
+        if cells:  # a cell counts once, whichever of its channels missed
+            converged &= ok
+        else:
+            unconverged += int(np.count_nonzero(~ok))
+        count += int(evaluations.sum())
+    unconverged += int(np.count_nonzero(~converged))
     tables["1-E"] = 1.0 - tables["E"]
     table_axes["1-E"] = tuple(names)
     fixed = {k: v for k, v in model.params.items() if k not in ("alpha", "alpha_x", "alpha_y")}

@@ -60,6 +60,9 @@ WEIGHTS = ("white", "f0", "f90")
 MAX_PANELS = 4000
 #: Nested trapezoid levels of the view-azimuth average: M = 1 … 2**MAX_LEVEL intervals on [0, π/2].
 MAX_LEVEL = 7
+#: The share of a nested average's tolerance given to its nodes' own errors (views in the φ_v average, φ_v
+#: averages in E_avg); the rule's error estimate gets the rest.
+INNER_SHARE = 0.5
 #: The largest ratio |T_2M − T_M| / |T_M − T_{M/2}| read as geometric convergence (module docstring).
 RATIO_MAX = 0.25
 #: E_avg: smallest μ evaluated, and panels of its μ integral.
@@ -276,7 +279,7 @@ def azimuth_average(mu: float, ax: float, ay: float, dist: int, sep: int, rtol: 
     size = 2 ** MAX_LEVEL + 1
     values = np.empty(size)
     errors = np.empty(size)
-    inner_rtol, inner_atol = rtol / 4.0, atol / 4.0
+    inner_rtol, inner_atol = rtol * INNER_SHARE, atol * INNER_SHARE
     evaluations = 0
     ok = True
     step = 2 ** MAX_LEVEL  # index stride of M = 1 (the two ends) within the finest level's nodes
@@ -349,9 +352,10 @@ def _average_panel(left, width, ax, ay, dist, sep, rtol, scale, x, wk, wg):
         xi = left + half * (x[i] + 1.0)
         mu = max(xi * xi, MU_FLOOR)
         weight = 4.0 * xi ** 3
-        # A node's albedo needs rtol·scale/(4·weight) absolutely (scale ~ the integral): looser where weight is small.
-        atol = rtol * scale / (4.0 * max(weight, 1e-300))
-        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol / 4.0, atol, 0, x, wk, wg)
+        # A node's albedo needs rtol·share·scale/weight absolutely (scale ~ the integral): looser where weight is
+        # small; the nodes' errors take that share of the tolerance, |K15 − G7| the rest.
+        atol = rtol * INNER_SHARE * scale / max(weight, 1e-300)
+        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol * INNER_SHARE, atol, 0, x, wk, wg)
         evaluations += ev
         ok = ok and c
         kron += wk[i] * weight * v
