@@ -197,9 +197,9 @@ def lut_command(
                 raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="--channels")
         m = load_model(model, param)
         if anisotropy is not None:
-            if method != "auto" or channels or digits is not None:
-                raise ArgumentError("anisotropic tables are computed by their own route (no --method, --channels, "
-                                    "--digits)", where="--anisotropy")
+            if method != "auto" or digits is not None:
+                raise ArgumentError("anisotropic tables are computed by their own route (no --method, --digits)",
+                                    where="--anisotropy")
             anisotropic_tables.lobe_of(m)
             anisotropic_tables.PARAMETERIZATIONS.validate(anisotropy)
         for axis_name in axes if anisotropy is None else ():
@@ -220,11 +220,10 @@ def lut_command(
         with progress_bar(f"{m.name}: table cells") as bar:
             progress = bar or stage_lines(m.name, axes, channels, not no_average)
             if anisotropy is not None:
-                if spread.checkpoint is not None:
-                    raise ArgumentError("anisotropic tables are not checkpointed", where="--checkpoint")
                 result = anisotropic_tables.compute(m, axes, anisotropy=anisotropy, clamp=clamps, rtol=rtol,
                                                     average=not no_average, grid=grid, source=model,
-                                                    workers=spread.workers, scheduler=spread.dask_scheduler())
+                                                    workers=spread.workers, scheduler=spread.dask_scheduler(),
+                                                    channels=channels, checkpoint=spread.checkpoint)
             elif method == "certified":
                 if spread.given():
                     raise ArgumentError("certified tables are computed in this process", where="--workers")

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from ..errors import ArgumentError
 from ..models.base import Model
 from ..registry import Registry
 from .axes import DIRECTION_AXES
+from .splitsum import DFG_F0, DFG_F90
 from .table import Lut, plain_params
 
 #: Cells per task sent to a worker (fixed, so that the chunks — and the results — do not depend on the workers).
@@ -96,28 +98,77 @@ for _p in (
     PARAMETERIZATIONS.register(_p.name, _p)
 
 
-def _cells_task(distribution: str, shadowing: str, mu, phi, ax, ay, average: bool, rtol: float):
+def _cells_task(distribution: str, shadowing: str, mu, phi, ax, ay, average: bool, rtol: float, weight: str):
     """One chunk's cells (a module-level function: it travels to pool processes and Dask workers)."""
-    return kernel.albedo(distribution, shadowing, mu, ax, ay, None if average else phi, rtol=rtol)
+    return kernel.albedo(distribution, shadowing, mu, ax, ay, None if average else phi, rtol=rtol, weight=weight)
 
 
 def _averages_task(distribution: str, shadowing: str, ax, ay, rtol: float):
     return kernel.average_albedo(distribution, shadowing, ax, ay, rtol=rtol)
 
 
-def _spread(function, fixed: tuple, arrays: Sequence[np.ndarray], workers, scheduler) -> list[np.ndarray]:
-    """``function(*fixed, *chunk of arrays…, …)`` over fixed chunks of CHUNK_CELLS, joined in order."""
-    n = arrays[0].size
-    starts = range(0, n, CHUNK_CELLS)
+def _task(kind: str, args: tuple):
+    """One chunk of any stage (a module-level function: one ``map`` carries every stage's chunks, each task the
+    same two arguments)."""
+    return (_cells_task if kind == "cells" else _averages_task)(*args)
+
+
+@dataclass
+class _Stage:
+    """One table's cells: ``kind`` ``cells`` (:func:`_cells_task`) or ``averages``, the fixed arguments around
+    the chunk's arrays (``fixed[:2]`` before them, ``fixed[2:]`` after), and the cells' arrays."""
+
+    name: str
+    kind: str
+    fixed: tuple
+    arrays: list[np.ndarray]
+
+    def tasks(self) -> list[tuple]:
+        n = self.arrays[0].size
+        return [(self.kind, (*self.fixed[:2], *(a[s:s + CHUNK_CELLS] for a in self.arrays), *self.fixed[2:]))
+                for s in range(0, n, CHUNK_CELLS)]
+
+
+def _run(stages: Sequence[_Stage], workers, scheduler, checkpoint: str | Path | None) -> dict[str, list]:
+    """Every stage's chunks of CHUNK_CELLS cells, computed here (``workers`` 1, no ``scheduler``) or by one pool
+    of workers for all stages — E_avg's chunks first, the costliest (a chunk is 64 hemispherical averages), so
+    that no worker waits at the end — and each stage's (value, error, evaluations, converged) joined in order.
+    With ``checkpoint`` (a directory) each stage's chunks found in ``checkpoint/NAME`` are read instead of computed
+    and each computed one is saved — with workers after each batch of 2 chunks per worker (what an interruption
+    can lose)."""
+    tasks = {stage.name: stage.tasks() for stage in stages}
+    parts: dict[str, list] = {stage.name: [None] * len(tasks[stage.name]) for stage in stages}
+    stores = {}
+    if checkpoint is not None:
+        from .anisotropy_checkpoint import ChunkStore
+
+        for stage in stages:
+            store = ChunkStore(Path(checkpoint) / stage.name, {"task": stage.kind, "fixed": list(stage.fixed)},
+                               stage.arrays, CHUNK_CELLS)
+            stores[stage.name] = store
+            parts[stage.name] = [store.load(k) for k in range(len(tasks[stage.name]))]
+    order = sorted(stages, key=lambda stage: stage.kind != "averages")
+    missing = [(stage.name, k) for stage in order for k, part in enumerate(parts[stage.name]) if part is None]
+
+    def keep(name: str, k: int, part) -> None:
+        parts[name][k] = part
+        if name in stores:
+            stores[name].save(k, part)
+
     if workers == 1 and scheduler is None:
-        parts = [function(*fixed[:2], *(a[s:s + CHUNK_CELLS] for a in arrays), *fixed[2:]) for s in starts]
-    else:
+        for name, k in missing:
+            keep(name, k, _task(*tasks[name][k]))
+    elif missing:
         from ..parallel import Workers
 
-        tasks = [(*fixed[:2], *(a[s:s + CHUNK_CELLS] for a in arrays), *fixed[2:]) for s in starts]
         with Workers(workers, scheduler) as pool:
-            parts = pool.map(function, tasks)
-    return [np.concatenate([p[k] for p in parts]) for k in range(4)]
+            batch = len(missing) if not stores else 2 * max(1, pool.count or 1)
+            for start in range(0, len(missing), batch):
+                chosen = missing[start:start + batch]
+                for (name, k), part in zip(chosen, pool.map(_task, [tasks[name][k] for name, k in chosen]),
+                                           strict=True):
+                    keep(name, k, part)
+    return {name: [np.concatenate([p[i] for p in chunks]) for i in range(4)] for name, chunks in parts.items()}
 
 
 def lobe_of(model: Model) -> tuple[str, str]:
@@ -136,11 +187,13 @@ def lobe_of(model: Model) -> tuple[str, str]:
 def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: str = "burley",
             clamp: Mapping[str, float] | None = None, rtol: float = 1e-6, average: bool = True,
             grid: str | None = None, source: str | None = None, workers: int | None = 1,
-            scheduler: str | None = None) -> Lut:
+            scheduler: str | None = None, channels: Sequence[str] = (), checkpoint: str | Path | None = None) -> Lut:
     """E (and E_error, 1-E; E_avg, E_avg_error over the non-view axes) of ``model`` (ggx or beckmann, white) over
     ``axes`` (name -> values, in the arrays' order): ``mu`` or ``theta`` (radians), ``alpha`` or ``roughness``, the
     ``anisotropy`` parameterization's axis and optionally ``phi_v`` (radians from the tangent; without it E is the
-    view-azimuth average). ``clamp`` raises axis values below a minimum before evaluation.
+    view-azimuth average). ``clamp`` raises axis values below a minimum before evaluation. ``channels=("dfg",)``
+    adds the split-sum pair DFG_f0, DFG_f90 (with their errors) over the same axes, averaged over φ_v like E.
+    ``checkpoint`` (a directory): each table resumable in its own subdirectory (:mod:`.anisotropy_checkpoint`).
 
     >>> import brdfnorm as bn
     >>> t = compute(bn.load("ggx"), {"mu": [1.0], "alpha": [0.5], "anisotropy": [0.0, 1.0]}, rtol=1e-5)
@@ -151,6 +204,10 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
 
     distribution, shadowing = lobe_of(model)
     parameterization = PARAMETERIZATIONS[PARAMETERIZATIONS.validate(anisotropy)]
+    for c in channels:
+        if c != "dfg":
+            raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="channels")
+
     clamp = dict(clamp or {})
     names = list(axes)
     values = {n: np.asarray(axes[n], dtype=float) for n in names}
@@ -192,24 +249,31 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
     full = [np.ascontiguousarray(np.broadcast_to(a, shape), dtype=float).ravel()
             for a in (along(direction[0], mu, names), phi, ax, ay)]
     averaged = VIEW_AZIMUTH_AXIS not in names
-    value, error, evaluations, converged = _spread(_cells_task, (distribution, shadowing, averaged, float(rtol)),
-                                                   full, workers, scheduler)
-    tables = {"E": value.reshape(shape), "E_error": error.reshape(shape)}
-    table_axes = {"E": tuple(names), "E_error": tuple(names)}
-    unconverged = int(np.count_nonzero(~converged))
-    count = int(evaluations.sum())
+    grids = [("E", "white")] + ([(DFG_F0, "f0"), (DFG_F90, "f90")] if channels else [])
+    stages = [_Stage(name, "cells", (distribution, shadowing, averaged, float(rtol), weight), full)
+              for name, weight in grids]
     if average:
         others = [n for n in names if n not in (direction[0], VIEW_AZIMUTH_AXIS)]
         avg_shape = tuple(values[n].size for n in others)
         a_x, a_y = parameterization(along(roughness[0], alpha, others),
                                     along(parameterization.axis, evaluated[parameterization.axis], others))
         pairs = [np.ascontiguousarray(np.broadcast_to(a, avg_shape), dtype=float).ravel() for a in (a_x, a_y)]
-        avg, avg_error, avg_evaluations, avg_converged = _spread(_averages_task, (distribution, shadowing, float(rtol)),
-                                                                 pairs, workers, scheduler)
-        tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
-        table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
-        unconverged += int(np.count_nonzero(~avg_converged))
-        count += int(avg_evaluations.sum())
+        stages.append(_Stage("E_avg", "averages", (distribution, shadowing, float(rtol)), pairs))
+    results = _run(stages, workers, scheduler, checkpoint)
+    tables, table_axes = {}, {}
+    converged, unconverged, count = np.ones(full[0].size, dtype=bool), 0, 0
+    for stage in stages:
+        value, error, evaluations, ok = results[stage.name]
+        cells = stage.kind == "cells"
+        table_shape = shape if cells else avg_shape
+        tables[stage.name], tables[f"{stage.name}_error"] = value.reshape(table_shape), error.reshape(table_shape)
+        table_axes[stage.name] = table_axes[f"{stage.name}_error"] = tuple(names) if cells else tuple(others)
+        if cells:  # a cell counts once, whichever of its channels missed
+            converged &= ok
+        else:
+            unconverged += int(np.count_nonzero(~ok))
+        count += int(evaluations.sum())
+    unconverged += int(np.count_nonzero(~converged))
     tables["1-E"] = 1.0 - tables["E"]
     table_axes["1-E"] = tuple(names)
     fixed = {k: v for k, v in model.params.items() if k not in ("alpha", "alpha_x", "alpha_y")}
@@ -224,4 +288,8 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, anisotropy: st
                                             "E averaged over the view azimuth phi_v (E_avg over the hemisphere)")}}
     if roughness[0] == "roughness":
         meta["aliases"] = {"roughness": "alpha = roughness²"}
-    return Lut(tables, axes, meta, table_axes)
+    if channels:
+        meta["dfg"] = ("the lobe times 1 - (1 - V.H)^5 (DFG_f0) and (1 - V.H)^5 (DFG_f90), white, by the same "
+                       "cubature as E" + ("" if VIEW_AZIMUTH_AXIS in names else ", averaged over phi_v"))
+    order = ["E", "E_error", "E_avg", "E_avg_error", "1-E", DFG_F0, f"{DFG_F0}_error", DFG_F90, f"{DFG_F90}_error"]
+    return Lut({n: tables[n] for n in order if n in tables}, axes, meta, table_axes)

@@ -21,14 +21,15 @@ format    layout                                                                
 ========  ===========================================================================  =====================
 
 The engine formats (exr, png, h, glsl, hlsl) are written in the engine layout, x = N·V, y = roughness
-(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others;
-:func:`load` undoes the layout. PNG holds tables of one or two axes (a 1-axis table is one row); three or more
-axes are refused (use EXR or npz). Identifiers in code are ``prefix`` (``lut_``) + the table name with every
-other character than letters, digits and ``_`` replaced (``1-E`` -> ``lut_one_minus_E``), the mapping kept in
-the meta comment. Text from the meta (model names, parameters) only ever appears inside JSON with every
-non-ASCII character, ``*``, ``/``, ``?`` and ``\\`` escaped, so no comment can be closed or continued by it.
-Written with zlib + struct (no imaging library is a dependency). Readers (:mod:`.readers`) are bounded before
-they allocate and report ``FILE:LINE`` (or the file) on a bad file.
+(:mod:`.layout`, ``--layout``), with only the values an engine samples unless ``tables`` names others; :func:`load`
+undoes the layout. PNG holds tables of any number of axes in one image, as EXR does: a 1-axis table is one row;
+three or more axes are an atlas, one tile (rows: the second-last axis, columns: the last) per value of the leading
+axes, stacked top to bottom with the first axis slowest, named in ``meta["png"]["atlas"]``. Identifiers in code are
+``prefix`` (``lut_``) + the table name with every other character than letters, digits and ``_`` replaced (``1-E``
+-> ``lut_one_minus_E``), the mapping kept in the meta comment. Text from the meta (model names, parameters) only
+ever appears inside JSON with every non-ASCII character, ``*``, ``/``, ``?`` and ``\\`` escaped, so no comment can
+be closed or continued by it. Written with zlib + struct (no imaging library is a dependency). Readers
+(:mod:`.readers`) are bounded before they allocate and report ``FILE:LINE`` (or the file) on a bad file.
 """
 
 

@@ -103,6 +103,17 @@ def write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
 
 # -- PNG -------------------------------------------------------------------------------------------------------
 
+def atlas_layout(axes: Sequence[tuple[str, int]]) -> str:
+    """How an image of three or more axes is tiled (the same rows as an EXR of them): one slice of the last two
+    axes per tile, tiles stacked top to bottom with the first axis slowest — pixel (row, column) of axes
+    (a, b, …, y, x) is cell [a, b, …, y, x] with row = ((a·n_b + b)·… )·n_y + y, column = x."""
+    names = [name for name, _ in axes]
+    sizes = " x ".join(f"{name} ({n})" for name, n in axes)
+    return (f"atlas of {sizes}: column = {names[-1]}, row = the row-major index of ({', '.join(names[:-1])}): one "
+            f"tile of {axes[-2][1]} rows ({names[-2]}) x {axes[-1][1]} columns ({names[-1]}) per value of "
+            f"({', '.join(names[:-2])}), stacked top to bottom, {names[0]} slowest")
+
+
 def write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     """``tables`` as a 16-bit PNG file's bytes (the ``png`` writer of :data:`brdfnorm.lut.formats.FORMATS`)."""
     parts = _image_parts(lut, tables, opts, "PNG")
@@ -111,9 +122,6 @@ def write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
         raise ArgumentError(f"a PNG holds one image: {other} has other axes than {first}; write it to its own "
                             "PNG (--tables E_avg) or broadcast it (--broadcast-average)", where="tables")
     (part,) = parts
-    if len(part["axes"]) > 2:
-        raise ArgumentError(f"a PNG image holds a table of one or two axes; {', '.join(tables)} has "
-                            f"{len(part['axes'])} (use .exr or .npz)", where="tables")
     check_finite(lut, tables, "PNG")
     shape = _image_shape(tuple(len(lut.axes[a]) for a in part["axes"]))
     samples, mapping = [], {}
@@ -131,6 +139,8 @@ def write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["png"] = {"axes": part["axes"], "channels": mapping, "value": "lo + code / 65535 * (hi - lo)",
                    "colour": {0: "greyscale (read as R)", 2: "RGB", 6: "RGBA"}[colour]}
+    if len(part["axes"]) > 2:  # an atlas: the last axis across, the others as stacked blocks of rows
+        meta["png"]["atlas"] = atlas_layout([(a, len(lut.axes[a])) for a in part["axes"]])
     return png.encode(codes, 16, {MAGIC: json.dumps(meta, ensure_ascii=True)})
 
 
