@@ -156,8 +156,8 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     """The microfacet rectangle integrand (case, φ (R, n, 1), v (R, 1, m), piece (R,)) -> (R, n, m, C) of the
-    half-vector geometry ``g`` (:class:`brdfnorm.engine.routes.halfvector.SlopeGeometry`) as the compiled kernel; ``geometry`` is
-    ``halfvector.slope_map(g)``."""
+    half-vector geometry ``g`` (:class:`brdfnorm.engine.routes.halfvector.SlopeGeometry`) as the compiled kernel;
+    ``geometry`` is ``halfvector.slope_map(g)``."""
     K = g.V.shape[0]
     names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
     per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
