@@ -166,6 +166,11 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
     integrand's weight into one over the full azimuth range."""
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
     width = np.zeros(K) if width is None else width
+    fused = getattr(integrand, "fused", None)
+    if fused is not None and np.size(rtol) in (1, K):  # (one tolerance per case: the fused kernel's)
+        per_case = np.broadcast_to(np.asarray(rtol, dtype=float).reshape(-1), (K,))
+        return RouteResult(*fused(cases, lam, width, symmetric, np.broadcast_to(scale, (K,)), per_case, atol,
+                                  max_nodes, GRADED_PREDICTS))
     evaluations = np.zeros(K, dtype=np.int64)
     value = error = None
     settled = np.zeros(K, dtype=bool)
