@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
-from brdfnorm.engine.compiled import slopes
+from brdfnorm.engine.compiled import global_rule, slopes
 from brdfnorm.engine.machinery.result import RouteResult
 from brdfnorm.engine.routes import halfvector
 
@@ -44,20 +44,18 @@ def global_only(monkeypatch):
 @pytest.fixture
 def drivers(monkeypatch):
     """albedo(fused: bool, ...) under the compiled backend, with the fused kernel used (and seen used) or hidden."""
-    original = slopes.microfacet_rectangle
+    original, kernel = slopes.microfacet_rectangle, global_rule.integrate
     calls = []
 
     def rectangle(*args, fused: bool, **kwargs):
         integrand = original(*args, **kwargs)
-        if fused:
-            kernel = integrand.fused
-            integrand.fused = lambda *a: calls.append(1) or kernel(*a)
-        else:
+        if not fused:
             del integrand.fused
         return integrand
 
     def albedo(fused: bool, model, theta, **kwargs):
         monkeypatch.setattr(slopes, "microfacet_rectangle", lambda *a, **k: rectangle(*a, fused=fused, **k))
+        monkeypatch.setattr(global_rule, "integrate", lambda *a: calls.append(1) or kernel(*a))
         before = len(calls)
         result = bn.albedo(model, theta, method="microfacet", backend="compiled", **kwargs)
         assert (len(calls) > before) == fused

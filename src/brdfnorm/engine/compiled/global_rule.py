@@ -305,3 +305,20 @@ def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gra
             if not error[k, c] <= max(atol[k], rtol[k] * abs(value[k, c])):
                 ok = False
         settled[k] = ok
+
+
+def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
+              rtol: np.ndarray, atol: np.ndarray, max_nodes: int, graded_predicts: int,
+              lobe: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases`` (the others
+    zero and unsettled); ``lobe``: the microfacet rectangle integrand's ``fused`` arguments
+    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), its channel count first."""
+    K, channels = lam.size, lobe[0]
+    value, error = np.zeros((K, channels)), np.zeros((K, channels))
+    evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
+    fused_global(np.ascontiguousarray(cases, dtype=np.int64), *(np.ascontiguousarray(x, dtype=float) for x in
+                                                                (lam, width)),
+                 np.ascontiguousarray(symmetric, dtype=bool),
+                 *(np.ascontiguousarray(x, dtype=float) for x in (scale, rtol, atol)), max_nodes, graded_predicts,
+                 *lobe, value, error, evaluations, settled)
+    return value, error, evaluations, settled

@@ -197,19 +197,8 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
                         fresnel, out)
         return out
 
-    def fused(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts):
-        from .global_rule import fused_global
-
-        value, error = np.zeros((K, channels)), np.zeros((K, channels))
-        evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
-        fused_global(np.ascontiguousarray(cases, dtype=np.int64), *(np.ascontiguousarray(x, dtype=float) for x in
-                                                                    (lam, width)),
-                     np.ascontiguousarray(symmetric, dtype=bool), np.ascontiguousarray(scale, dtype=float),
-                     *(np.ascontiguousarray(x, dtype=float) for x in (rtol, atol)), max_nodes, graded_predicts,
-                     channels, linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:], lambda_v, kind,
-                     fresnel, value, error, evaluations, settled)
-        return value, error, evaluations, settled
-
     integrand.compiled = True  # the route's sums run compiled too
-    integrand.fused = fused  # and its global rule (compiled.global_rule)
+    # and its global rule (compiled.global_rule.integrate), with these arguments of the lobe
+    integrand.fused = (channels, linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:], lambda_v,
+                       kind, fresnel)
     return integrand

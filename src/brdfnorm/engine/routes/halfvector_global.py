@@ -163,14 +163,17 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
                      max_nodes: int = MAX_NODES, width: np.ndarray | None = None):
     """The global rule for ``cases`` as a :class:`RouteResult` (value and error (K, C), evaluations and converged
     (K,): ``converged`` marks the cases it settled; the others go to the panels); ``scale`` (K,) turns the
-    integrand's weight into one over the full azimuth range."""
+    integrand's weight into one over the full azimuth range. A compiled microfacet integrand (its ``fused``
+    arguments) runs the whole rule in one kernel (:mod:`brdfnorm.engine.compiled.global_rule`)."""
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
     width = np.zeros(K) if width is None else width
-    fused = getattr(integrand, "fused", None)
-    if fused is not None and np.size(rtol) in (1, K):  # (one tolerance per case: the fused kernel's)
+    lobe = getattr(integrand, "fused", None)
+    if lobe is not None and np.size(rtol) in (1, K):  # (one tolerance per case: the fused kernel's)
+        from ..compiled.global_rule import integrate  # (the compiled backend's: Numba imported only there)
+
         per_case = np.broadcast_to(np.asarray(rtol, dtype=float).reshape(-1), (K,))
-        return RouteResult(*fused(cases, lam, width, symmetric, np.broadcast_to(scale, (K,)), per_case, atol,
-                                  max_nodes, GRADED_PREDICTS))
+        return RouteResult(*integrate(cases, np.broadcast_to(lam, (K,)), width, symmetric,
+                                      np.broadcast_to(scale, (K,)), per_case, atol, max_nodes, GRADED_PREDICTS, lobe))
     evaluations = np.zeros(K, dtype=np.int64)
     value = error = None
     settled = np.zeros(K, dtype=bool)
