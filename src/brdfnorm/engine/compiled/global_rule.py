@@ -29,6 +29,8 @@ from .slopes import azimuth_node, microfacet_weight, piece_extent
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
 _LEVELS = 14
+#: Nodes per piece at most that the tables allow (the route's cap is 32 768).
+MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
 
 
 def _fejer_tables() -> tuple[np.ndarray, np.ndarray]:
@@ -313,6 +315,8 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
     """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases`` (the others
     zero and unsettled); ``lobe``: the microfacet rectangle integrand's ``fused`` arguments
     (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), its channel count first."""
+    if max_nodes > MAX_NODES:
+        raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
     K, channels = lam.size, lobe[0]
     value, error = np.zeros((K, channels)), np.zeros((K, channels))
     evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)

@@ -168,7 +168,8 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
     width = np.zeros(K) if width is None else width
     lobe = getattr(integrand, "fused", None)
-    if lobe is not None and np.size(rtol) in (1, K):  # (one tolerance per case: the fused kernel's)
+    # (one tolerance per case, and the route's node cap, which the fused kernel's tables cover)
+    if lobe is not None and np.size(rtol) in (1, K) and max_nodes <= MAX_NODES:
         from ..compiled.global_rule import integrate  # (the compiled backend's: Numba imported only there)
 
         per_case = np.broadcast_to(np.asarray(rtol, dtype=float).reshape(-1), (K,))
