@@ -13,7 +13,7 @@ one lobe and its threads, woken per call, cost more than they gave on a loaded m
   directions (every route that samples the integrand: lobe search, rounding noise, global rules, isotropy test);
 * :func:`hemisphere_panels` — the lobe-aligned map of :func:`brdfnorm.engine.machinery.tensor_rule.map_grid`
   (horizon grading p = 2), the shader, the Jacobian and the G7/K15 tensor sums and rounding floor of
-  :func:`brdfnorm.engine.routes.hemisphere._estimate` for whole panels;
+  :func:`brdfnorm.engine.machinery.panels.kronrod_estimate` for whole panels;
 * :func:`hemisphere_sums` — the same map and shader under any tensor rule (the Lobatto ⊗ G7 check on halves);
 * :func:`slope_grid` — the half-vector route's rectangle integrand
   (:func:`brdfnorm.engine.routes.halfvector_generic.route`): the slope map of the GGX measure, the reflection

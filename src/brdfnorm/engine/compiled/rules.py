@@ -1,4 +1,4 @@
-"""The global tensor rule's sums (:func:`brdfnorm.engine.machinery.tensor_rule._sums`) as one compiled pass over
+"""The global tensor rule's sums (:func:`brdfnorm.engine.machinery.tensor_rule.sums`) as one compiled pass over
 the grid: the rule Q and its embedded coarser rules (every other and every fourth azimuth; every other and every
 fourth radial node, Fejér's nested weights) and the |F| integral, per case and channel. Under the compiled backend
 these sums took more time than the compiled integrand on the same grid (numpy's transposed matmuls over strided

@@ -108,15 +108,50 @@ def radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_hor
     return radius, _density(radius, beckmann) * length, (s_h - s_end) + length * (1.0 - at)
 
 
+@njit(**_OPTIONS, inline="always")
+def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
+                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
+                      out):  # pragma: no cover - compiled
+    """w = G2(L, V) F(V·H)(1 + c·x) times du/dt and the azimuth's Jacobian at position ``at`` of radial piece
+    ``kind``, for one azimuth (the results of :func:`azimuth_node` and :func:`piece_extent`) and one case's
+    parameters: out[:C] (C = 1 where ``fresnel_kind`` is 0, else 3)."""
+    s, weight_t, gap_h = radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann)
+    one_sp = 1.0 + s * p
+    n2 = 1.0 + s * s * d2
+    Lz = vz * gap_h * (d2 * s + q_minus_p) / n2
+    C = 1 if fresnel_kind == 0 else 3
+    if not Lz > 0:
+        for c in range(C):
+            out[c] = 0.0
+        return
+    tangent2 = max((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay * ay)
+    if ax != ay:
+        Lx = 2.0 * vz * one_sp * s * dx / n2 - vx
+        tangent2 += (ax * ax - ay * ay) * Lx * Lx
+    a2 = tangent2 / (Lz * Lz)
+    lambda_l = beckmann_lambda(a2) if beckmann else ggx_lambda(a2)
+    if separable:
+        G2 = 1.0 / ((1.0 + lambda_l) * (1.0 + lambda_v))
+    else:
+        G2 = 1.0 / (1.0 + lambda_l + lambda_v)
+    weight = G2 * one_sp * weight_t * azimuth
+    if fresnel_kind == 0:
+        out[0] = weight
+    else:
+        cos_vh = vz * one_sp / math.sqrt(n2)
+        for c in range(C):
+            out[c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel, c)
+
+
 @njit(**_OPTIONS)
 def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
                     ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
                     out):  # pragma: no cover - compiled
-    """w = G2(L, V) F(V·H)(1 + c·x) of the microfacet lobe (H1) times du/dt and the azimuth's Jacobian on grids
-    φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial ``piece`` (R,): out (R, nφ, nv, C), C = 1
-    where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16): the packed f0, f90, η, k of
-    :func:`brdfnorm.models.native.fresnel_factor`)."""
+    """:func:`microfacet_weight` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
+    ``piece`` (R,): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16):
+    the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
     C = out.shape[3]
+    node = np.empty(3)
     for r in range(k.size):
         q = k[r]
         kind = piece[r]
@@ -126,38 +161,17 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
                 kappa[q], multiplicity[q], vz[q], beckmann)
             start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
             for j in range(v.shape[1]):
-                s, weight_t, gap_h = radial_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end,
-                                                 log_horizon, beckmann)
-                one_sp = 1.0 + s * p
-                n2 = 1.0 + s * s * d2
-                Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2
-                if not Lz > 0:
-                    for c in range(C):
-                        out[r, i, j, c] = 0.0
-                    continue
-                tangent2 = max((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay[q] * ay[q])
-                if ax[q] != ay[q]:
-                    Lx = 2.0 * vz[q] * one_sp * s * dx / n2 - vx[q]
-                    tangent2 += (ax[q] * ax[q] - ay[q] * ay[q]) * Lx * Lx
-                a2 = tangent2 / (Lz * Lz)
-                lambda_l = beckmann_lambda(a2) if beckmann else ggx_lambda(a2)
-                if separable:
-                    G2 = 1.0 / ((1.0 + lambda_l) * (1.0 + lambda_v[q]))
-                else:
-                    G2 = 1.0 / (1.0 + lambda_l + lambda_v[q])
-                weight = G2 * one_sp * weight_t * azimuth
-                if fresnel_kind == 0:
-                    out[r, i, j, 0] = weight
-                else:
-                    cos_vh = vz[q] * one_sp / math.sqrt(n2)
-                    for c in range(C):
-                        out[r, i, j, c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel[q], c)
+                microfacet_weight(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
+                                  beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], vx[q], ax[q], ay[q], lambda_v[q],
+                                  separable, fresnel_kind, fresnel[q], node)
+                for c in range(C):
+                    out[r, i, j, c] = node[c]
 
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     """The microfacet rectangle integrand (case, φ (R, n, 1), v (R, 1, m), piece (R,)) -> (R, n, m, C) of the
-    half-vector geometry ``g`` (``halfvector._Geometry``) as the compiled kernel; ``geometry`` is
-    ``halfvector.slope_map(g)``."""
+    half-vector geometry ``g`` (:class:`brdfnorm.engine.routes.halfvector.SlopeGeometry`) as the compiled kernel;
+    ``geometry`` is ``halfvector.slope_map(g)``."""
     K = g.V.shape[0]
     names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
     per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
@@ -184,4 +198,7 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
         return out
 
     integrand.compiled = True  # the route's sums run compiled too
+    # and its global rule (compiled.global_rule.integrate), with these arguments of the lobe
+    integrand.fused = (channels, linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:], lambda_v,
+                       kind, fresnel)
     return integrand

@@ -37,7 +37,7 @@ before any panel is cut, each case is integrated by one tensor rule over the who
 
 The error estimate of the M × N rule is built from the deviations of the embedded coarser rules, which cost no
 evaluation (every other node, every fourth node): along each direction d₁ + min(d₂, 9 d₁), with d₁ = |Q − Q(½)| and
-d₂ = |Q(½) − Q(¼)| (:func:`_sums`), plus the rounding floor and the integrand's float64 noise bound
+d₂ = |Q(½) − Q(¼)| (:func:`sums`), plus the rounding floor and the integrand's float64 noise bound
 (:mod:`brdfnorm.engine.machinery.rounding`). d₁ is the error of the *coarser* rule; the reported Q(M, N), with twice
 the nodes, is
 far more accurate once convergence is geometric (its error is roughly the square of d₁, relative). The factor 10
@@ -87,13 +87,13 @@ LAMBDA_MIN_HEAVY_TAIL = 0.6
 HEAVY_TAIL_GRADING = 3
 #: A lobe is heavy-tailed when this share of its |integrand| on the start grid lies at u ≥ 1/2.
 HEAVY_TAIL_SHARE = 0.15
-#: The plain deviation's margin (:func:`_sums`).
+#: The plain deviation's margin (:func:`sums`).
 SAFETY = 9.0
 #: A level-to-level change of the value larger than this share of the one before is a stall
 #: (:func:`_stalled`).
 STALL = 0.5
 #: Rounding floor per node sum, as QUADPACK's on |K − G|.
-_FLOOR = 50.0 * _EPS
+FLOOR = 50.0 * _EPS
 
 
 def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
@@ -123,7 +123,7 @@ def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
 
 
 def _neck_levels(u_neck: np.ndarray) -> np.ndarray:
-    """The smallest radial level whose coarsest embedded rule (two levels down, :func:`_sums`) has its first node
+    """The smallest radial level whose coarsest embedded rule (two levels down, :func:`sums`) has its first node
     (1 − cos(π/2^l))/2 = sin²(π/2^(l+1)) at or below ``u_neck``: only then do the rules whose deviations make the
     estimate see the neck (:func:`neck_u`)."""
     with np.errstate(divide="ignore"):
@@ -297,7 +297,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             finite = np.isfinite(F).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 F = np.where(finite[:, None, None, None], F, 0.0)
-                q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else _sums)(
+                q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else sums)(
                     F, group.level_u)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
@@ -306,7 +306,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
                 shape = (K, q.shape[1])
                 value, error = np.broadcast_to(value, shape).copy(), np.broadcast_to(error, shape).copy()
             noise = noise_bound(noise_amplitude[group.case], magnitude)
-            floor = _FLOOR * magnitude
+            floor = FLOOR * magnitude
             tolerance = np.maximum(atol, rtol * np.abs(q))
             estimate = e_b + e_u + floor + noise
             earlier = np.full((q.shape[0], 3, q.shape[1]), np.nan) if group.earlier is None else group.earlier
@@ -326,8 +326,8 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             larger_b = np.any(e_b >= e_u, axis=1)
             more_b |= neither & larger_b
             more_u |= neither & ~larger_b
-            ratio_b = _normalized(e_b, share).max(axis=1)
-            ratio_u = _normalized(e_u, share).max(axis=1)
+            ratio_b = normalized(e_b, share).max(axis=1)
+            ratio_u = normalized(e_u, share).max(axis=1)
             # Where both exceed their shares but one direction's estimate is within the whole tolerance on its
             # own (ratio < 2), double only the other: it then has the rest of the tolerance to reach, at half the
             # cost (examples/ggx.brdf, roughness 0.107, θ_o = 60°, rtol 1e-9: e_u at 1.1 shares after 64 × 127
@@ -341,8 +341,8 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
             size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
             # Give up early where geometric convergence, extrapolated from the last doubling, would not settle
             # the case within max_nodes (a kink, a feature the coordinates do not follow): the panels will.
-            needed_b = np.where(lone_u, 0, _doublings(ratio_b, group.last_b))
-            needed_u = np.maximum(np.where(lone_b & ~short, 0, _doublings(ratio_u, group.last_u)),
+            needed_b = np.where(lone_u, 0, doublings(ratio_b, group.last_b))
+            needed_u = np.maximum(np.where(lone_b & ~short, 0, doublings(ratio_u, group.last_u)),
                                   min_level_u[group.case] - group.level_u)
             hopeless = ((needed_b + group.level_b) > MAX_LEVEL_B) | (
                 2 ** (group.level_b + needed_b) * (2 ** (group.level_u + needed_u) - 1) > max_nodes)
@@ -357,7 +357,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
 def schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine) -> None:
     """Double the cases ``go_on`` of ``group`` along β (``more_b``), u (``more_u``) or both:
     ``refine(group, pick, b, u)`` makes the finer group of the picked cases, filed in ``refined`` by its levels
-    with the ratios it was doubled on (the extrapolation of :func:`_doublings`)."""
+    with the ratios it was doubled on (the extrapolation of :func:`doublings`)."""
     for b in (False, True):
         for u in (False, True):
             pick = go_on & (more_b == b) & (more_u == u)
@@ -416,7 +416,7 @@ def _stalled(q: np.ndarray, earlier: np.ndarray) -> np.ndarray:
         return np.any((change[:, 0] > STALL * change[:, 1]) | (change[:, 1] > STALL * change[:, 2]), axis=1)
 
 
-def _doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
+def doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
     """Doublings still needed along a direction for its estimate to fall from ``ratio`` (× its share of the
     tolerance) to 1, if each doubling squares the last one's reduction r = ``ratio / last`` (geometric
     convergence, err ∝ ρ^M): after k more, ratio·r^(2^(k+1) − 2). 0 where already within or before any doubling
@@ -429,12 +429,13 @@ def _doublings(ratio: np.ndarray, last: np.ndarray) -> np.ndarray:
     return np.clip(np.nan_to_num(needed, nan=0.0), 0.0, 99.0).astype(int)
 
 
-def _normalized(error: np.ndarray, share: np.ndarray) -> np.ndarray:
+def normalized(error: np.ndarray, share: np.ndarray) -> np.ndarray:
+    """error / share, with 0/0 = 0 and x/0 = inf (a zero tolerance accepts only a zero error)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(share > 0, error / share, np.where(error > 0, np.inf, 0.0))
 
 
-def _sums(F: np.ndarray, level_u: int):
+def sums(F: np.ndarray, level_u: int):
     """Q(M, N), the error estimates along β and along u, and the |F| integral, per case and channel.
 
     Along each direction the estimate is d₁ + min(d₂, 9 d₁), with d₁ = |Q − Q(½)| and d₂ = |Q(½) − Q(¼)| the
@@ -457,7 +458,7 @@ def _sums(F: np.ndarray, level_u: int):
 
 
 def compiled_sums(F: np.ndarray, level_u: int):
-    """:func:`_sums` by one compiled pass (:mod:`brdfnorm.engine.compiled.rules`), for the compiled backend."""
+    """:func:`sums` by one compiled pass (:mod:`brdfnorm.engine.compiled.rules`), for the compiled backend."""
     from ..compiled.rules import tensor_sums
 
     M = F.shape[1]

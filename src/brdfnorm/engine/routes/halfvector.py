@@ -346,9 +346,10 @@ def integrate_slopes(g: SlopeGeometry, weight_of: SlopeWeight, symmetric: np.nda
         bounds.append([np.tile(x.ravel(), index.size) for x in (a0, a1, b0, b1)])
     lam = global_rule.clustering(g.V[:, 2])
     tried = np.arange(K) if use_global else np.arange(0)
-    value, error, evaluations, settled = global_rule.integrate_global(
+    rule = global_rule.integrate_global(
         rectangle(True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
         atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name))
+    value, error, evaluations, settled = rule.value, rule.error, rule.evaluations, rule.converged
     initial = Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:

@@ -7,7 +7,7 @@ tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule
 with its
 helpers: the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM Review 56, 2014) ×
 Fejér's second rule in v, both nested under doubling, error along each direction d₁ + min(d₂, 9 d₁) from the
-embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule._sums`), plus the rounding floor.
+embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule.sums`), plus the rounding floor.
 
 Azimuth nodes. At grazing views the horizon radius s_h(φ) varies over an azimuthal width ~V_z next to the zeros
 of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.engine.routes.halfvector.slope_integrand`
@@ -52,17 +52,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..machinery.result import RouteResult
 from ..machinery.tensor_rule import (
-    _FLOOR,
+    FLOOR,
     MAX_LEVEL_B,
     START_LEVELS,
-    _doublings,
-    _normalized,
-    _sums,
     beta_map,
     compiled_sums,
+    doublings,
     fejer,
+    normalized,
     schedule_doublings,
+    sums,
 )
 
 #: Radial pieces of (H1): pole, tail, horizon layer.
@@ -160,10 +161,20 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
 def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symmetric: np.ndarray,
                      scale: np.ndarray, *, rtol: float | np.ndarray, atol: float | np.ndarray,
                      max_nodes: int = MAX_NODES, width: np.ndarray | None = None):
-    """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases``; ``scale`` (K,)
-    turns the integrand's weight into one over the full azimuth range."""
+    """The global rule for ``cases`` as a :class:`RouteResult` (value and error (K, C), evaluations and converged
+    (K,): ``converged`` marks the cases it settled; the others go to the panels); ``scale`` (K,) turns the
+    integrand's weight into one over the full azimuth range. A compiled microfacet integrand (its ``fused``
+    arguments) runs the whole rule in one kernel (:mod:`brdfnorm.engine.compiled.global_rule`)."""
     atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
     width = np.zeros(K) if width is None else width
+    lobe = getattr(integrand, "fused", None)
+    # (one tolerance per case, and the route's node cap, which the fused kernel's tables cover)
+    if lobe is not None and np.size(rtol) in (1, K) and max_nodes <= MAX_NODES:
+        from ..compiled.global_rule import integrate  # (the compiled backend's: Numba imported only there)
+
+        per_case = np.broadcast_to(np.asarray(rtol, dtype=float).reshape(-1), (K,))
+        return RouteResult(*integrate(cases, np.broadcast_to(lam, (K,)), width, symmetric,
+                                      np.broadcast_to(scale, (K,)), per_case, atol, max_nodes, GRADED_PREDICTS, lobe))
     evaluations = np.zeros(K, dtype=np.int64)
     value = error = None
     settled = np.zeros(K, dtype=bool)
@@ -177,7 +188,7 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
         value[part], error[part], settled[part] = v[part], e[part], ok[part]
     if value is None:
         value, error = np.zeros((K, 1)), np.zeros((K, 1))
-    return value, error, evaluations, settled
+    return RouteResult(value, error, evaluations, settled)
 
 
 def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, atol, max_nodes, evaluations):
@@ -194,22 +205,22 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
     inf = np.full(case.size, np.inf)
     groups = [_Group(case, piece, level_b, level_u, grid, inf, inf.copy())]
     while groups:
-        sums = []
+        rules = []
         for group in groups:
             finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
-                rule_sums = compiled_sums if getattr(integrand, "compiled", False) else _sums
+                rule_sums = compiled_sums if getattr(integrand, "compiled", False) else sums
                 grid = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = rule_sums(grid, group.level_u)
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
-            sums.append((finite, q, e_b, e_u, magnitude))
+            rules.append((finite, q, e_b, e_u, magnitude))
         total = np.where(done_piece[..., None], value, latest).sum(axis=1)
         case_tolerance = np.maximum(atol[:, None], rtol * np.abs(total)) / PIECES
         refined: dict[tuple[int, int], list[_Group]] = {}
-        for group, (finite, q, e_b, e_u, magnitude) in zip(groups, sums, strict=True):
-            floor = _FLOOR * magnitude
+        for group, (finite, q, e_b, e_u, magnitude) in zip(groups, rules, strict=True):
+            floor = FLOOR * magnitude
             tolerance = case_tolerance[group.case]
             estimate = e_b + e_u + floor
             done = np.all(estimate <= tolerance, axis=1) & finite
@@ -223,8 +234,8 @@ def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, at
             more_b |= neither & larger_b
             more_u |= neither & ~larger_b
             size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
-            ratio_b, ratio_u = _normalized(e_b, share).max(axis=1), _normalized(e_u, share).max(axis=1)
-            need_b, need_u = _doublings(ratio_b, group.last_b), _doublings(ratio_u, group.last_u)
+            ratio_b, ratio_u = normalized(e_b, share).max(axis=1), normalized(e_u, share).max(axis=1)
+            need_b, need_u = doublings(ratio_b, group.last_b), doublings(ratio_u, group.last_u)
             hopeless = (need_b + group.level_b > MAX_LEVEL_B) | (
                 2 ** (group.level_b + need_b) * (2 ** (group.level_u + need_u) - 1) > max_nodes)
             hopeless &= (group.level_b >= GRADED_PREDICTS) | (width[group.case] == 0)

@@ -75,7 +75,7 @@ from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
 from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
 from ..machinery.result import RouteResult
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u
+from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u, normalized
 
 NonFinitePolicy = Literal["raise", "zero"]
 
@@ -266,7 +266,7 @@ def integrate_hemisphere(
         converged |= case_ok
         # Fail fast where more nodes cannot help: the rounding noise alone exceeds the tolerance and the
         # quadrature error is already below it, or the estimate stopped improving (see _stalled).
-        rounding_limited = present & ~case_ok & np.any(_normalized(noise, tolerance) > 1.0, axis=1)
+        rounding_limited = present & ~case_ok & np.any(normalized(noise, tolerance) > 1.0, axis=1)
         history.append((evaluations.copy(), np.where(present, (quadrature_error + noise).max(axis=1), np.nan)))
         stop = rounding_limited & np.all(quadrature_error <= noise, axis=1)
         stalled = present & ~case_ok & ~stop & _stalled(history, evaluations, stall_after)
@@ -280,7 +280,7 @@ def integrate_hemisphere(
         # quadrature may still spend (the tolerance less the noise bound, or the noise bound where that exceeds
         # the tolerance): all but the smallest ones whose errors together stay under half of it.
         target = np.where(noise < tolerance, tolerance - noise, noise)
-        share = _normalized(panel_error, target[pool.case]).max(axis=1)
+        share = normalized(panel_error, target[pool.case]).max(axis=1)
         order = np.lexsort((share, pool.case))
         sorted_case = pool.case[order]
         cumulative = np.cumsum(share[order])
@@ -328,7 +328,7 @@ def _case_errors(pool: Panels, present: np.ndarray, noise: np.ndarray, tolerance
     panel_error = pool.error()
     summed = np.zeros_like(noise)
     np.add.at(summed, pool.case, panel_error)
-    return panel_error, summed, present & np.all(_normalized(summed + noise, tolerance) <= 1.0, axis=1)
+    return panel_error, summed, present & np.all(normalized(summed + noise, tolerance) <= 1.0, axis=1)
 
 
 #: Evaluations after which a case whose error estimate no longer halves when its evaluations double stops.
@@ -380,12 +380,6 @@ def _check_by_halves(panels: Panels, along_beta: bool, integrand, frame, widths,
         return np.concatenate(parts)
 
     return check_by_halves(panels, along_beta, sums)
-
-
-def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
-    """error / tolerance, with 0/0 = 0 and x/0 = inf (a zero tolerance accepts only a zero error)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(tolerance > 0, error / tolerance, np.where(error > 0, np.inf, 0.0))
 
 
 def _evaluate(panels: Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:

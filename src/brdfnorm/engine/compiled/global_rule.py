@@ -1,0 +1,328 @@
+"""The half-vector route's global tensor rule (:func:`brdfnorm.engine.routes.halfvector_global.integrate_global`)
+for the built-in microfacet lobes, fused into one compiled kernel that loops over the cases: per case its three
+radial pieces (pole, tail, horizon layer) start on 2^3 × (2^4 − 1) nodes and double along the azimuth t and/or the
+radial coordinate u, in lockstep, each doubling evaluating only the new nodes and reusing the nested old ones, until
+each piece's estimate meets its third of the case's tolerance, or the doubling prediction, the node cap or a
+non-finite value sends the case to the panels.
+
+The same rule as the numpy driver, term for term: the periodic trapezoid rule in t on the Möbius map tan φ = λ tan t
+or the graded map (:func:`brdfnorm.engine.routes.halfvector_global.azimuth_map`), Fejér's second rule in u, the
+mirror nodes t ↔ π − t of a symmetric case evaluated once, the sums and estimates of
+:func:`brdfnorm.engine.machinery.tensor_rule.sums` (d₁ + min(d₂, 9 d₁) along each direction plus the rounding floor),
+the choice of direction, the doubling prediction (:func:`brdfnorm.engine.machinery.tensor_rule.doublings`) and the
+graded map's late prediction. Why: the numpy driver's interleaving of old and new nodes, its merges and filters of
+the grids of all cases cost ~30 % of a 32 × 32 DFG table under the compiled backend (docs/performance.md); per case,
+the grids stay in cache. The values differ from the numpy driver's by the rounding of the transcendental functions
+(libm against numpy's), well within the estimates (tests/engine/test_compiled_global_rule.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS, fejer
+from .slopes import azimuth_node, microfacet_weight, piece_extent
+
+_OPTIONS = dict(cache=True, error_model="numpy")
+#: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
+_LEVELS = 14
+#: Nodes per piece at most that the tables allow (the route's cap is 32 768).
+MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
+
+
+def _fejer_tables() -> tuple[np.ndarray, np.ndarray]:
+    nodes, weights = np.zeros((_LEVELS, 2 ** (_LEVELS - 1))), np.zeros((_LEVELS, 2 ** (_LEVELS - 1)))
+    for level in range(1, _LEVELS):
+        u, w = fejer(level)
+        nodes[level, :u.size], weights[level, :w.size] = u, w
+    return nodes, weights
+
+
+_NODES, _WEIGHTS = _fejer_tables()
+
+
+@njit(**_OPTIONS, inline="always")
+def _azimuth(t, lam, width):  # pragma: no cover - compiled
+    """φ(t), dφ/dt of halfvector_global.azimuth_map (the graded map where ``width`` > 0)."""
+    if width > 0:
+        kappa = math.asinh(1.0 / width)
+        turns = math.floor(t / math.pi + 0.5)  # np.round: half to even
+        if turns - t / math.pi == 0.5 and turns % 2.0 != 0.0:
+            turns -= 1.0
+        sin_t, cos_t = math.sin(t - turns * math.pi), math.cos(t - turns * math.pi)
+        y = width * math.sinh(kappa * sin_t)
+        phi = math.atan2(y, cos_t) + turns * math.pi
+        return phi, (cos_t * cos_t * width * kappa * math.cosh(kappa * sin_t) + y * sin_t) / (cos_t * cos_t + y * y)
+    y = t - math.pi
+    sin_y, cos_y = math.sin(y), math.cos(y)
+    return t + (math.atan2(lam * sin_y, cos_y) - math.atan2(sin_y, cos_y)), lam / (cos_y * cos_y
+                                                                                    + lam * lam * sin_y * sin_y)
+
+
+@njit(**_OPTIONS, inline="always")
+def _canonical(i, M):  # pragma: no cover - compiled
+    """The azimuth index whose node a mirrored case evaluates for index ``i`` of ``M`` (t ↔ π − t)."""
+    i = i % M
+    if i <= M // 4 or i >= 3 * M // 4:
+        return i
+    return (M // 2 - i) % M
+
+
+@njit(**_OPTIONS)
+def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon, beckmann,
+          separable, vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, lambda_v,
+          fresnel_kind, fresnel, node):  # pragma: no cover - compiled
+    """The weighted values at the azimuth indices ``rows`` of ``M`` (t = 2π·index/M) and the radial nodes
+    ``radial`` of piece ``kind`` of case ``q``, written to grid[index, col_step·j]; a mirrored case's indices
+    outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). Returns the nodes evaluated."""
+    C = grid.shape[2]
+    count = 0
+    for a in range(rows.size):
+        index = rows[a]
+        if mirrored and _canonical(index, M) != index:
+            continue
+        phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
+        factor = dphi * scale
+        dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+            phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
+            multiplicity[q], vz[q], beckmann)
+        start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+        for j in range(radial.size):
+            microfacet_weight(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h, s_split, s_end,
+                              log_horizon, beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], vx[q], ax[q], ay[q],
+                              lambda_v[q], separable, fresnel_kind, fresnel[q], node)
+            for c in range(C):
+                grid[index, col_step * j, c] = node[c] * factor
+        count += radial.size
+    if mirrored:
+        for a in range(rows.size):
+            index = rows[a]
+            source = _canonical(index, M)
+            if source != index:
+                for j in range(radial.size):
+                    for c in range(C):
+                        grid[index, col_step * j, c] = grid[source, col_step * j, c]
+    return count
+
+
+@njit(**_OPTIONS, inline="always")
+def _margin(deviation, coarser):  # pragma: no cover - compiled
+    return deviation + min(coarser, SAFETY * deviation)
+
+
+@njit(**_OPTIONS, inline="always")
+def _normalized(error, share):  # pragma: no cover - compiled
+    if share > 0:
+        return error / share
+    return math.inf if error > 0 else 0.0
+
+
+@njit(**_OPTIONS, inline="always")
+def _doublings(ratio, last):  # pragma: no cover - compiled
+    """tensor_rule.doublings for one direction."""
+    if not ratio > 1.0:
+        return 0
+    reduction = ratio / last if (math.isfinite(last) and last > 0) else 0.0
+    if reduction != reduction:
+        reduction = 0.0
+    if reduction >= 1.0:
+        return 99
+    exponent = math.log(max(ratio, 1.0)) / -math.log(min(max(reduction, 1e-300), 1.0))
+    needed = math.ceil(math.log2(exponent + 2.0)) - 1.0
+    if needed != needed:
+        return 0
+    return int(min(max(needed, 0.0), 99.0))
+
+
+@njit(**_OPTIONS)
+def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
+    """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid (M, 2^level_u − 1, C), as
+    compiled.rules._tensor_sums and tensor_rule.compiled_sums."""
+    N1, C = grid.shape[1], grid.shape[2]
+    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
+    n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
+    step = 2 * np.pi / M
+    for c in range(C):
+        q = q_b = q_bb = q_u = q_uu = magnitude = 0.0
+        for i in range(M):
+            s = 0.0
+            s_abs = 0.0
+            for j in range(N1):
+                x = grid[i, j, c]
+                s += x * w[j]
+                s_abs += abs(x) * w[j]
+            s_u = 0.0
+            for j in range(n_half):
+                s_u += grid[i, 2 * j + 1, c] * w_half[j]
+            s_uu = 0.0
+            for j in range(n_quarter):
+                s_uu += grid[i, 4 * j + 3, c] * w_quarter[j]
+            q += s
+            if i % 2 == 0:
+                q_b += s
+            if i % 4 == 0:
+                q_bb += s
+            q_u += s_u
+            q_uu += s_uu
+            magnitude += s_abs
+        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
+        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
+        sums[0, c] = q
+        sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
+        sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
+        sums[3, c] = magnitude
+
+
+@njit(**_OPTIONS)
+def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, C, linear,
+                 log_horizon, beckmann, separable, vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
+                 kappa, multiplicity, lambda_v, fresnel_kind, fresnel, value, error, evaluations,
+                 settled):  # pragma: no cover - compiled
+    """The global rule of every case of ``cases``: fills value, error (K, C), evaluations and settled (K,)."""
+    pieces = 3
+    out_nodes = np.empty(3)
+    sums = np.empty((4, C))
+    for n in range(cases.size):
+        k = cases[n]
+        mirrored = symmetric[k]
+        level_b = np.full(pieces, START_LEVELS[0])
+        level_u = np.full(pieces, START_LEVELS[1])
+        last_b, last_u = np.full(pieces, np.inf), np.full(pieces, np.inf)
+        alive = np.ones(pieces, dtype=np.bool_)
+        done_piece = np.zeros(pieces, dtype=np.bool_)
+        latest, piece_value, piece_error = np.zeros((pieces, C)), np.zeros((pieces, C)), np.zeros((pieces, C))
+        results = np.zeros((pieces, 4, C))
+        finite = np.ones(pieces, dtype=np.bool_)
+        grids = []
+        M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
+        for kind in range(pieces):
+            grid = np.empty((M0, N0, C))
+            rows = np.arange(M0)
+            evaluations[k] += _fill(grid, rows, M0, 1, _NODES[START_LEVELS[1]][:N0], k, kind, mirrored, lam[k],
+                                    width[k], scale[k], linear, log_horizon, beckmann, separable, vz, vx, cos_offset,
+                                    sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, lambda_v,
+                                    fresnel_kind, fresnel, out_nodes)
+            grids.append(grid)
+        failed = False
+        while alive.any():
+            for kind in range(pieces):
+                if not alive[kind]:
+                    continue
+                grid = grids[kind]
+                finite[kind] = np.isfinite(grid).all()
+                if not finite[kind]:
+                    grid[:] = 0.0
+                    failed = True
+                _sums(grid, 2 ** level_b[kind], level_u[kind], sums)
+                results[kind] = sums
+                latest[kind] = sums[0]
+            tolerance = np.empty(C)
+            for c in range(C):
+                total = 0.0
+                for kind in range(pieces):
+                    total += piece_value[kind, c] if done_piece[kind] else latest[kind, c]
+                tolerance[c] = max(atol[k], rtol[k] * abs(total)) / pieces
+            more = np.zeros((pieces, 2), dtype=np.bool_)
+            for kind in range(pieces):
+                if not alive[kind]:
+                    continue
+                within, more_b, more_u, larger_b = True, False, False, False
+                ratio_b = ratio_u = 0.0
+                for c in range(C):
+                    e_b, e_u, magnitude = results[kind, 1, c], results[kind, 2, c], results[kind, 3, c]
+                    floor = FLOOR * magnitude
+                    if not e_b + e_u + floor <= tolerance[c]:
+                        within = False
+                    share = max(tolerance[c] - floor, 0.0) / 2
+                    more_b |= e_b > share
+                    more_u |= e_u > share
+                    larger_b |= e_b >= e_u
+                    ratio_b = max(ratio_b, _normalized(e_b, share))
+                    ratio_u = max(ratio_u, _normalized(e_u, share))
+                done = within and finite[kind]
+                if done:
+                    for c in range(C):
+                        piece_value[kind, c] = results[kind, 0, c]
+                        piece_error[kind, c] = (results[kind, 1, c] + results[kind, 2, c]
+                                                + FLOOR * results[kind, 3, c])
+                    done_piece[kind] = True
+                if not (more_b or more_u):
+                    more_b, more_u = larger_b, not larger_b
+                lb, lu = level_b[kind], level_u[kind]
+                size = 2 ** (lb + more_b) * (2 ** (lu + more_u) - 1)
+                need_b, need_u = _doublings(ratio_b, last_b[kind]), _doublings(ratio_u, last_u[kind])
+                # (int64 powers, as the numpy driver's)
+                hopeless = (need_b + lb > MAX_LEVEL_B) or (np.int64(2) ** (lb + need_b)
+                                                           * (np.int64(2) ** (lu + need_u) - 1) > max_nodes)
+                hopeless = hopeless and (lb >= graded_predicts or width[k] == 0)
+                go_on = finite[kind] and not done and size <= max_nodes and not hopeless and not failed
+                if finite[kind] and not done and not go_on:
+                    failed = True
+                alive[kind] = go_on
+                more[kind, 0], more[kind, 1] = more_b, more_u
+                if go_on:  # the ratios this doubling extrapolates from (the first from the start is skipped)
+                    if more_b and lb > START_LEVELS[0]:
+                        last_b[kind] = ratio_b
+                    if more_u and lu > START_LEVELS[1]:
+                        last_u[kind] = ratio_u
+            if failed:
+                break
+            for kind in range(pieces):
+                if not alive[kind]:
+                    continue
+                grid = grids[kind]
+                M, N1 = 2 ** level_b[kind], 2 ** level_u[kind] - 1
+                if more[kind, 0]:
+                    finer = np.empty((2 * M, N1, C))
+                    for i in range(M):
+                        finer[2 * i] = grid[i]
+                    rows = 2 * np.arange(M) + 1
+                    evaluations[k] += _fill(finer, rows, 2 * M, 1, _NODES[level_u[kind]][:N1], k, kind, mirrored,
+                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, separable,
+                                            vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa,
+                                            multiplicity, lambda_v, fresnel_kind, fresnel, out_nodes)
+                    grid, M = finer, 2 * M
+                    level_b[kind] += 1
+                if more[kind, 1]:
+                    finer = np.empty((M, 2 * N1 + 1, C))
+                    for i in range(M):
+                        for j in range(N1):
+                            finer[i, 2 * j + 1] = grid[i, j]
+                    lu = level_u[kind] + 1
+                    radial = _NODES[lu][0:2 ** lu - 1:2]
+                    evaluations[k] += _fill(finer, np.arange(M), M, 2, radial, k, kind, mirrored,
+                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, separable,
+                                            vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa,
+                                            multiplicity, lambda_v, fresnel_kind, fresnel, out_nodes)
+                    grid = finer
+                    level_u[kind] = lu
+                grids[kind] = grid
+        ok = (not failed) and done_piece.all()
+        for c in range(C):
+            value[k, c] = piece_value[:, c].sum()
+            error[k, c] = piece_error[:, c].sum()
+            if not error[k, c] <= max(atol[k], rtol[k] * abs(value[k, c])):
+                ok = False
+        settled[k] = ok
+
+
+def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
+              rtol: np.ndarray, atol: np.ndarray, max_nodes: int, graded_predicts: int,
+              lobe: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases`` (the others
+    zero and unsettled); ``lobe``: the microfacet rectangle integrand's ``fused`` arguments
+    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), its channel count first."""
+    if max_nodes > MAX_NODES:
+        raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
+    K, channels = lam.size, lobe[0]
+    value, error = np.zeros((K, channels)), np.zeros((K, channels))
+    evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
+    fused_global(np.ascontiguousarray(cases, dtype=np.int64), *(np.ascontiguousarray(x, dtype=float) for x in
+                                                                (lam, width)),
+                 np.ascontiguousarray(symmetric, dtype=bool),
+                 *(np.ascontiguousarray(x, dtype=float) for x in (scale, rtol, atol)), max_nodes, graded_predicts,
+                 *lobe, value, error, evaluations, settled)
+    return value, error, evaluations, settled
