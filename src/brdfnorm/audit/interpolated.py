@@ -9,8 +9,9 @@ quantities are smooth in the table's index elsewhere (its axis values are smooth
 centres, nodes, r² or θ), so the spline is fourth-order accurate. The error estimate of a cell is the difference
 between that spline and the spline through every other node (the error of the coarser spline, about 16 times the
 finer one's: a safety factor of ~16), widened to its largest value within two coarse intervals (the difference
-crosses 0 where the two splines' errors cross). It is then checked against exact values at CHECK_CELLS cells off the nodes
-(seeded, so that an audit is repeatable), and scaled up if any of them is wrong by more than its estimate.
+crosses 0 where the two splines' errors cross). It is then checked against exact values at CHECK_CELLS cells off
+the nodes (seeded, so that an audit is repeatable), and scaled up if any of them is wrong by more than its
+estimate.
 
 A cell whose verdict the estimate leaves open (its residual within the estimate of the tolerance) is computed
 exactly, as is every cell a fix would rewrite (:func:`brdfnorm.audit.infer.full_hypothesis`, up to a budget): an
