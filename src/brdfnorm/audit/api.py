@@ -156,6 +156,11 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
     return out
 
 
+#: Tables of more cells are not compared with the fitted approximations (each geometry's formula over every cell:
+#: ~18 s for a 1024² table); engines tabulate those formulas at 16² to 64².
+MAX_RECOGNISED = 256 * 256
+
+
 def _approximation(source: Source, reference: Reference, pins: dict, explicit: dict, step: float,
                    model: str) -> dict | None:
     """A fitted approximation (:mod:`.approximations`) the table is a tabulation of, with its error against the exact
@@ -168,6 +173,9 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
 
     grid = source.grid_shape
     if len(grid) != 2:
+        return None
+    if math.prod(grid) > MAX_RECOGNISED:
+        source.notes.append(f"not compared with fitted approximations: more than {MAX_RECOGNISED} cells")
         return None
     found = recognise(source.values, source.channel_names, geometries(2, pins, explicit, grid, reference.shadowings),
                       step, model)

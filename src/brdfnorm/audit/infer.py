@@ -172,13 +172,15 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, _ = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    best, runners, index = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
         wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
         second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
-            best, runners, _ = second
+            best, runners, index = second
+    if index is not None:  # found on a subgrid (both rounds compared there): measured on every cell
+        best = _complete(values, names, best, reference, precision)
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
 
 
@@ -228,9 +230,9 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
 
 def _rounds(values, names, reference, pins, precision, chosen, candidates,
-            meanings) -> tuple[Hypothesis, list[Hypothesis], list[Convention]]:
+            meanings) -> tuple[Hypothesis, list[Hypothesis], list[np.ndarray] | None]:
     """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
-    best hypothesis, the runners-up, and the candidates in stage 1's order."""
+    best hypothesis, the runners-up, and the subgrid they were measured on (None: every cell)."""
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
@@ -251,9 +253,7 @@ def _rounds(values, names, reference, pins, precision, chosen, candidates,
     finals.sort(key=lambda h: h.rank)
     finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
     finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
-    if index is not None:
-        finals[0] = _complete(values, names, finals[0], reference, precision)
-    return finals[0], finals[1:], [c for _, c in scored]
+    return finals[0], finals[1:], index
 
 
 def _complete(values, names, best: Hypothesis, reference, precision) -> Hypothesis:
@@ -400,10 +400,16 @@ def _interpolated_fit(data: np.ndarray, c: Convention, meaning: str, reference, 
     g = on_grid(evaluate, grid, NODE_CELLS[kind])
     fit = _fit(data, g.value, g.error, name, meaning, precision)
     magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
-    open_ = np.flatnonzero(~g.computed & (magnitude > fit.tolerance - g.spread))
-    margin = np.abs(magnitude - fit.tolerance).ravel()[open_] - g.spread.ravel()[open_]
-    g.resolve(evaluate, open_[np.argsort(margin, kind="stable")[:RESOLVE_CELLS[kind]]])
-    fit = _fit(data, g.value, g.error, name, meaning, precision)
+    wanted = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)  # open verdicts
+    if fit.fits:  # and the cells outside the tolerance of a named channel (listed, and rewritten by a fix)
+        wanted |= ~g.computed & (magnitude > fit.tolerance)
+    elif np.sum(~fit.bad | wanted) <= MAJORITY * fit.cells or fit.too_noisy:
+        wanted[...] = False  # not named however the open verdicts fall: they are left outside the tolerance
+    open_ = np.flatnonzero(wanted)
+    if open_.size:
+        margin = np.abs(magnitude - fit.tolerance).ravel()[open_] - g.spread.ravel()[open_]
+        g.resolve(evaluate, open_[np.argsort(margin, kind="stable")[:RESOLVE_CELLS[kind]]])
+        fit = _fit(data, g.value, g.error, name, meaning, precision)
     magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
     unsure = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
     if unsure.any():
