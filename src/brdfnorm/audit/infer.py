@@ -91,6 +91,9 @@ DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
 SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
+#: Geometries a 3-D table's exact-Fresnel round searches: the first of Schlick's ranking (a 32³ table made with the
+#: exact factor ranked its true geometry first under Schlick's when this was written).
+DIELECTRIC_GEOMETRIES_3D = 64
 
 
 def _subset(n: int, k: int) -> np.ndarray:
@@ -172,13 +175,16 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, index = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    best, runners, index, order = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
-        wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
+        # a 3-D table's exact-Fresnel round ranks the geometries Schlick's E_f0 ranked first (each of its cells is a
+        # quadrature at its own η): the two factors differ by a few per cent, a wrong geometry by far more
+        wider = (_with_fitted_eta(values, candidates, reference, chosen) if ndim == 2
+                 else order[:DIELECTRIC_GEOMETRIES_3D] if ndim == 3 else candidates)
         second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
-            best, runners, index = second
+            best, runners, index, _ = second
     if index is not None:  # found on a subgrid (both rounds compared there): measured on every cell
         best = _complete(values, names, best, reference, precision)
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
@@ -230,9 +236,10 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
 
 def _rounds(values, names, reference, pins, precision, chosen, candidates,
-            meanings) -> tuple[Hypothesis, list[Hypothesis], list[np.ndarray] | None]:
+            meanings) -> tuple[Hypothesis, list[Hypothesis], list[np.ndarray] | None, list[Convention]]:
     """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
-    best hypothesis, the runners-up, and the subgrid they were measured on (None: every cell)."""
+    best hypothesis, the runners-up, the subgrid they were measured on (None: every cell), and the candidates in
+    stage 1's order."""
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
@@ -253,7 +260,7 @@ def _rounds(values, names, reference, pins, precision, chosen, candidates,
     finals.sort(key=lambda h: h.rank)
     finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
     finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
-    return finals[0], finals[1:], index
+    return finals[0], finals[1:], index, [c for _, c in scored]
 
 
 def _complete(values, names, best: Hypothesis, reference, precision) -> Hypothesis:
