@@ -77,6 +77,12 @@ class AuditResult:
         return [c.channel for c in self.best.channels if not c.fits]
 
     @property
+    def unfixable(self) -> list[str]:
+        """Channels with cells outside the tolerance whose exact value was interpolated, not computed (a large
+        table past the audit's budget of exact cells): ``--fix`` refuses to write them."""
+        return [c.channel for c in self.best.channels if c.estimated is not None and c.estimated.any()]
+
+    @property
     def headline(self) -> str:
         """One sentence: the convention and how many cells it fits, or that none fits most cells."""
         h = self.best
@@ -393,7 +399,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
             if sweep:
                 result.resolution[fit.channel] = quality.sweep(best.convention, fit.meaning, reference, points,
                                                                len(grid))
-    if fix and not result.unnamed:
+    if fix and not result.unnamed and not result.unfixable:
         fixed = np.array(source.values, dtype=float)
         # only the wrong cells change: a cell within the tolerance is kept as read (a minimal diff)
         for fit in best.channels:
