@@ -84,6 +84,7 @@ RANK_CELLS = 256
 EXACT_CELLS = {"cheap": 16384, "expensive": 4096}
 NODE_CELLS = {"cheap": 16384, "expensive": 2048}
 RESOLVE_CELLS = {"cheap": 262144, "expensive": 40000}
+RESOLVE_ROUNDS = 4
 NOISE_FACTOR = 5.0
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
@@ -406,16 +407,20 @@ def _interpolated_fit(data: np.ndarray, c: Convention, meaning: str, reference, 
 
     g = on_grid(evaluate, grid, NODE_CELLS[kind])
     fit = _fit(data, g.value, g.error, name, meaning, precision)
-    magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
-    wanted = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)  # open verdicts
-    if fit.fits:  # and the cells outside the tolerance of a named channel (listed, and rewritten by a fix)
-        wanted |= ~g.computed & (magnitude > fit.tolerance)
-    elif np.sum(~fit.bad | wanted) <= MAJORITY * fit.cells or fit.too_noisy:
-        wanted[...] = False  # not named however the open verdicts fall: they are left outside the tolerance
-    open_ = np.flatnonzero(wanted)
-    if open_.size:
+    # computed values change the noise estimate and so the tolerance: the open cells are sought again (a few rounds)
+    for _ in range(RESOLVE_ROUNDS):
+        magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
+        wanted = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)  # open verdicts
+        if fit.fits:  # and the cells outside the tolerance of a named channel (listed, and rewritten by a fix)
+            wanted |= ~g.computed & (magnitude > fit.tolerance)
+        elif np.sum(~fit.bad | wanted) <= MAJORITY * fit.cells or fit.too_noisy:
+            break  # not named however the open verdicts fall: they are left outside the tolerance
+        open_ = np.flatnonzero(wanted)
+        budget = RESOLVE_CELLS[kind] - g.resolved
+        if not open_.size or budget <= 0:
+            break
         margin = np.abs(magnitude - fit.tolerance).ravel()[open_] - g.spread.ravel()[open_]
-        g.resolve(evaluate, open_[np.argsort(margin, kind="stable")[:RESOLVE_CELLS[kind]]])
+        g.resolve(evaluate, open_[np.argsort(margin, kind="stable")[:budget]])
         fit = _fit(data, g.value, g.error, name, meaning, precision)
     magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
     unsure = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
