@@ -82,7 +82,7 @@ RANK_CELLS = 256
 #: or a quadrature per cell); above, from a coarse subgrid of at most NODE_CELLS exact cells interpolated
 #: (:mod:`.interpolated`), with up to RESOLVE_CELLS more computed exactly where a verdict or a fix needs them.
 EXACT_CELLS = {"cheap": 16384, "expensive": 4096}
-NODE_CELLS = {"cheap": 16384, "expensive": 2048}
+NODE_CELLS = {"cheap": 65536, "expensive": 2048}
 RESOLVE_CELLS = {"cheap": 262144, "expensive": 40000}
 RESOLVE_ROUNDS = 4
 NOISE_FACTOR = 5.0
