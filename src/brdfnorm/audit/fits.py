@@ -42,7 +42,7 @@ class ChannelFit:
     spread: float = 0.0  # standard deviation of the exact values over the table
     worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
     cells: int = 0  # cells measured
-    sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
+    sampled: bool = False  # measured on a subgrid of the table (infer.inference_index), not on every cell
     bad: np.ndarray | None = None  # cells outside the tolerance or not finite (over the cells measured)
     within: int = 0  # cells within the tolerance
     #: How this channel alone is laid out when it is not laid out as the others ("transposed", "reversed along
