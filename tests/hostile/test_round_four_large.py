@@ -20,8 +20,10 @@ from test_hostile_cases import PEAK_RSS_KIB, run_limited
 import brdfnorm as bn
 from brdfnorm import lut
 from brdfnorm.audit import audit
+from brdfnorm.audit.conventions import coordinates, geometries
 from brdfnorm.audit.infer import EXACT_CELLS, INFER_CELLS, NODE_CELLS, RANK_CELLS, inference_index
 from brdfnorm.audit.interpolated import coarse_index, on_grid, per_axis
+from brdfnorm.audit.reference import Reference
 
 
 def _npz(path: Path, **arrays: np.ndarray) -> Path:
@@ -70,10 +72,31 @@ def test_interpolated_reference_estimate_bounds_its_error() -> None:
     assert g.nodes <= 900 and g.checked == 64 and 0 < float(np.median(g.spread)) < 1e-3  # 900 of 60 000 exact
 
 
+@pytest.mark.parametrize("convention", [("mu-texel", "r2-texel", "0,0"), ("theta-node", "alpha-node", "1,1")])
+def test_interpolated_albedo_estimate_bounds_its_error(convention) -> None:
+    """GGX's E over a 128² grid interpolated from 1 024 nodes (node grids reach μ = 0 and α = 0, clamped): every
+    cell's error against the exact value (beyond the two engine error estimates) is within its estimate."""
+    direction, roughness, flip = convention
+    reference = Reference(bn.load("ggx"))
+    c = next(c for c in geometries(2, {"direction": direction, "roughness": roughness, "flip": flip}, None,
+                                   (128, 128), reference.shadowings) if c.direction_axis == 0)
+    grid = (128, 128)
+    mesh = list(np.meshgrid(np.arange(128), np.arange(128), indexing="ij"))
+
+    def exact(index):
+        return reference.meaning("E", c.shadowing, **{k: v for k, v in coordinates(c, grid, index).items()})
+
+    truth, truth_error = exact(mesh)
+    g = on_grid(exact, grid, 1024)
+    miss = np.abs(g.value - truth) - g.error - truth_error
+    assert np.all(miss <= g.spread) and float(np.max(np.abs(g.value - truth))) > 1e-4  # not a trivial case
+
+
 def test_table_of_160_squared_with_a_block() -> None:
-    """A 160² float32 E table (more cells than EXACT_CELLS: its reference is interpolated) with a 3×3 block 1 % too bright: the convention
-    is named, exactly the block is listed, the fix writes the exact values there (lut's), the inference's
-    runners-up were measured on the subgrid only, and fewer reference cells were computed than the table has."""
+    """A 160² float32 E table (more cells than EXACT_CELLS: its reference is interpolated) with a 3×3 block 1 % too
+    bright: the convention is named, exactly the block is listed, the fix writes the exact values there (lut's),
+    the inference's runners-up were measured on the subgrid only, and fewer reference cells were computed than the
+    table has."""
     n = 160
     assert n * n > EXACT_CELLS["cheap"]
     t = (np.arange(n) + 0.5) / n
