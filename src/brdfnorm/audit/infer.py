@@ -379,7 +379,8 @@ def full_hypothesis(values, c: Convention, reference, names, precision, chosen, 
     for channel, meaning in enumerate(c.meanings):
         if channel not in chosen or meaning is None:
             continue
-        kind = "expensive" if Reference.expensive(meaning) else "cheap"
+        # E_avg is a quadrature over μ per α (~1 ms a cell): a large 1-D table's budget is the expensive one
+        kind = "expensive" if Reference.expensive(meaning) or meaning in ("E_avg", "1-E_avg") else "cheap"
         if sampled or int(np.prod(grid)) <= EXACT_CELLS[kind]:
             exact, error = _exact(reference, c, meaning, coords)
             fit = _fit(data[..., channel], exact, error, names[channel], meaning, precision)
