@@ -176,19 +176,26 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, index, order = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    best, runners, order = _measured(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
         # a 3-D table's exact-Fresnel round ranks the geometries Schlick's E_f0 ranked first (each of its cells is a
         # quadrature at its own η): the two factors differ by a few per cent, a wrong geometry by far more
         wider = (_with_fitted_eta(values, candidates, reference, chosen) if ndim == 2
                  else order[:DIELECTRIC_GEOMETRIES_3D] if ndim == 3 else candidates)
-        second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
+        second = _measured(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
-            best, runners, index, _ = second
-    if index is not None:  # found on a subgrid (both rounds compared there): measured on every cell
-        best = _complete(values, names, best, reference, precision)
+            best, runners, _ = second
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
+
+
+def _measured(values, names, reference, pins, precision, chosen, candidates, meanings):
+    """:func:`_rounds`, its best measured on every cell where the rounds ranked on a subgrid: whether it fits is
+    decided there (on a coarse subgrid a smooth misfit's curvature passes for noise and widens the tolerance)."""
+    best, runners, index, order = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    if index is not None:
+        best = _complete(values, names, best, reference, precision)
+    return best, runners, order
 
 
 def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
