@@ -60,7 +60,7 @@ from .conventions import (
     stored_axis_values,
 )
 from .fits import MAJORITY, MAX_NOISE_SHARE, ChannelFit, Hypothesis, Inference, Precision
-from .interpolated import coarse_index, on_grid, per_axis
+from .interpolated import coarse_index, measured, per_axis
 from .reference import Reference
 
 __all__ = ["MAJORITY", "MAX_NOISE_SHARE", "ChannelFit", "Hypothesis", "Inference", "Precision", "infer",
@@ -83,8 +83,9 @@ RANK_CELLS = 256
 #: (:mod:`.interpolated`), with up to RESOLVE_CELLS more computed exactly where a verdict or a fix needs them.
 EXACT_CELLS = {"cheap": 16384, "expensive": 4096}
 NODE_CELLS = {"cheap": 65536, "expensive": 2048}
+#: The coarse subgrid of a first probe (a table no convention fits stops there).
+PROBE_CELLS = {"cheap": 4096, "expensive": 256}
 RESOLVE_CELLS = {"cheap": 262144, "expensive": 40000}
-RESOLVE_ROUNDS = 4
 NOISE_FACTOR = 5.0
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
@@ -404,41 +405,14 @@ def full_hypothesis(values, c: Convention, reference, names, precision, chosen, 
 
 def _interpolated_fit(data: np.ndarray, c: Convention, meaning: str, reference, name: str, precision: Precision,
                       kind: str) -> ChannelFit:
-    """A channel of a large table against reference values interpolated from a coarse subgrid (:mod:`.interpolated`):
-    cells whose verdict the interpolation error estimate leaves open, and then the cells a fix would rewrite, are
-    computed exactly (nearest the tolerance first, up to RESOLVE_CELLS); a cell still open after that is outside
-    the tolerance (an interpolated value never makes a cell fit) and is marked ``estimated``."""
+    """A channel of a large table against an interpolated reference (:func:`.interpolated.measured`)."""
     grid = data.shape
 
     def evaluate(index: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         return _exact(reference, c, meaning, coordinates(c, grid, index))
 
-    g = on_grid(evaluate, grid, NODE_CELLS[kind])
-    fit = _fit(data, g.value, g.error, name, meaning, precision)
-    # computed values change the noise estimate and so the tolerance: the open cells are sought again (a few rounds)
-    for _ in range(RESOLVE_ROUNDS):
-        magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
-        wanted = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)  # open verdicts
-        if fit.fits:  # and the cells outside the tolerance of a named channel (listed, and rewritten by a fix)
-            wanted |= ~g.computed & (magnitude > fit.tolerance)
-        elif np.sum(~fit.bad | wanted) <= MAJORITY * fit.cells or fit.too_noisy:
-            break  # not named however the open verdicts fall: they are left outside the tolerance
-        open_ = np.flatnonzero(wanted)
-        budget = RESOLVE_CELLS[kind] - g.resolved
-        if not open_.size or budget <= 0:
-            break
-        margin = np.abs(magnitude - fit.tolerance).ravel()[open_] - g.spread.ravel()[open_]
-        g.resolve(evaluate, open_[np.argsort(margin, kind="stable")[:budget]])
-        fit = _fit(data, g.value, g.error, name, meaning, precision)
-    magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
-    unsure = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
-    if unsure.any():
-        fit.bad = fit.bad | unsure
-        fit.within = int(np.sum(~fit.bad))
-    fit.estimated = ~g.computed & fit.bad
-    fit.interpolation = {"nodes": g.nodes, "checked": g.checked, "resolved": g.resolved,
-                         "max_estimate": float(np.max(g.spread))}
-    return fit
+    return measured(data, evaluate, lambda value, error: _fit(data, value, error, name, meaning, precision),
+                    PROBE_CELLS[kind], NODE_CELLS[kind], RESOLVE_CELLS[kind])
 
 
 def _stage2(values, names, c: Convention, reference, precision, chosen, search=(True, True), index=None) -> Hypothesis:

@@ -14,8 +14,8 @@ the nodes (seeded, so that an audit is repeatable), and scaled up if any of them
 estimate.
 
 A cell whose verdict the estimate leaves open (its residual within the estimate of the tolerance) is computed
-exactly, as is every cell a fix would rewrite (:func:`brdfnorm.audit.infer.full_hypothesis`, up to a budget): an
-interpolated value never makes a cell fit.
+exactly, as is every cell a fix would rewrite (:func:`measured`, up to a budget): an interpolated value never
+makes a cell fit.
 """
 
 from __future__ import annotations
@@ -28,12 +28,17 @@ import numpy as np
 from scipy import ndimage
 from scipy.interpolate import CubicSpline
 
+from .fits import MAJORITY, ChannelFit
+
 #: Exact cells off the nodes that check the interpolation error estimate.
 CHECK_CELLS = 64
 #: The estimate is scaled up to this multiple of the worst ratio of a checked cell's true error to its estimate.
 CHECK_SAFETY = 2.0
 #: The smallest interpolation error estimate, relative to the value: a spline's rounding.
 ROUNDING = 16 * np.finfo(float).eps
+
+#: Rounds of computing the open cells (computed values move the noise estimate, and so the tolerance).
+RESOLVE_ROUNDS = 4
 
 Evaluate = Callable[[list[np.ndarray]], tuple[np.ndarray, np.ndarray]]
 
@@ -136,3 +141,49 @@ def on_grid(evaluate: Evaluate, shape: tuple[int, ...], budget: int, seed: int =
         if ratio > 1.0:  # the estimate missed a checked cell: every estimate is scaled up
             g.spread *= CHECK_SAFETY * ratio
     return g
+
+
+def measured(data: np.ndarray, evaluate: Evaluate, judge: Callable[[np.ndarray, np.ndarray], ChannelFit],
+             probe: int, nodes: int, resolve: int) -> ChannelFit:
+    """One channel ``data`` judged (``judge(exact, error)``: :func:`brdfnorm.audit.infer._fit`) against reference
+    values interpolated from a coarse subgrid. A probe on ``probe`` nodes first: a channel it shows cannot be named
+    however its open verdicts fall (a table no convention fits) is left there. Otherwise, on ``nodes`` nodes, the
+    cells whose verdict the estimate leaves open, and for a named channel the cells outside the tolerance (listed,
+    and rewritten by a fix), are computed exactly, nearest the tolerance first, up to ``resolve`` cells; a cell
+    still open after that is outside the tolerance (an interpolated value never makes a cell fit), and a bad cell
+    whose exact value was not computed is marked ``estimated``."""
+    g = on_grid(evaluate, data.shape, probe)
+    fit = judge(g.value, g.error)
+    if fit.fits or _could_be_named(fit, g):
+        g = on_grid(evaluate, data.shape, nodes)
+        fit = judge(g.value, g.error)
+    for _ in range(RESOLVE_ROUNDS):
+        magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
+        wanted = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
+        if fit.fits:
+            wanted |= ~g.computed & (magnitude > fit.tolerance)
+        elif not _could_be_named(fit, g):
+            break
+        cells = np.flatnonzero(wanted)
+        budget = resolve - g.resolved
+        if not cells.size or budget <= 0:
+            break
+        margin = np.abs(magnitude - fit.tolerance).ravel()[cells] - g.spread.ravel()[cells]
+        g.resolve(evaluate, cells[np.argsort(margin, kind="stable")[:budget]])
+        fit = judge(g.value, g.error)
+    magnitude = np.where(np.isfinite(data), np.abs(data - g.value), np.inf)
+    unsure = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
+    if unsure.any():
+        fit.bad = fit.bad | unsure
+        fit.within = int(np.sum(~fit.bad))
+    fit.estimated = ~g.computed & fit.bad
+    fit.interpolation = {"nodes": g.nodes, "checked": g.checked, "resolved": g.resolved,
+                         "max_estimate": float(np.max(g.spread))}
+    return fit
+
+
+def _could_be_named(fit: ChannelFit, g: GridReference) -> bool:
+    """Whether the channel would be named if every cell whose verdict ``g`` leaves open were within the tolerance."""
+    magnitude = np.abs(fit.residual)
+    open_ = ~g.computed & (np.abs(magnitude - fit.tolerance) <= g.spread)
+    return not fit.too_noisy and int(np.sum(~fit.bad | open_)) > MAJORITY * fit.cells
