@@ -81,7 +81,7 @@ RANK_CELLS = 256
 #: A hypothesis is measured on every cell of a table of up to so many cells exactly (by kind of meaning: cheap,
 #: or a quadrature per cell); above, from a coarse subgrid of at most NODE_CELLS exact cells interpolated
 #: (:mod:`.interpolated`), with up to RESOLVE_CELLS more computed exactly where a verdict or a fix needs them.
-EXACT_CELLS = {"cheap": 16384, "expensive": 4096}
+EXACT_CELLS = {"cheap": 16384, "expensive": 1024}
 NODE_CELLS = {"cheap": 65536, "expensive": 2048}
 #: The coarse subgrid of a first probe (a table no convention fits stops there).
 PROBE_CELLS = {"cheap": 4096, "expensive": 256}
