@@ -83,7 +83,7 @@ def w_anisotropy(cfg, refs=None, size: int = 32, workers: int = 2, rtol: float =
                                            "points": int(base["E"].size), "bit_identical": identical,
                                            "note": f"bit-identical to 1 worker: {'yes' if identical else 'NO'}"}
     return {"title": f"anisotropic GGX table (μ, α, aspect), view-azimuth average, rtol {rtol:g}", "status": "ok",
-            "reference": "error estimates of the compiled cubature (tests/test_anisotropy.py checks them)",
+            "reference": "error estimates of the compiled cubature (tests/lut/test_anisotropy.py checks them)",
             "methods": methods}
 
 

@@ -5,6 +5,11 @@ CPU seconds, ratios of CPU seconds):
 
 * ``generic-vs-dblquad``: one Blinn-Phong (n = 100) albedo at θ_o = 60° by the generic engine (method
   "quadrature") at rtol 1e-9, and by ``scipy.integrate.dblquad`` at the same rtol; errors against mpmath;
+* ``generic-batch-vs-dblquad``: the same lobe and rtol over a curve of 18 views θ_o = 0, 5, …, 85° in ONE call of
+  the generic engine (the per-call set-up — lobe search, isotropy test, rounding-noise probe, global-rule set-up —
+  paid once for the batch), CPU per albedo, against dblquad's mean CPU per albedo over the same views (one call
+  each: dblquad has no batch); ``per_call_overhead_ms`` is the single-call CPU less the batch's per-albedo CPU;
+  the largest error against mpmath and the smallest estimate/error ratio of both;
 * ``evaluations``: integrand evaluations per generic Blinn-Phong albedo over θ_o = 0…89° (rtol 1e-9);
 * ``generic-table``: a 32 × 32 E(μ, α) table and E_avg of built-in GGX through the generic engine (method
   "quadrature": the route a ``.brdf`` GGX takes, with the compiled lobe as its shader), rtol 1e-10;
@@ -20,6 +25,7 @@ Run alone: ``.venv/bin/python benchmarks/bench_backends.py [--quick]``; in ``mak
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -75,6 +81,38 @@ def _generic_vs_dblquad(repeats: int) -> dict:
     return row
 
 
+def _generic_batch_vs_dblquad(repeats: int) -> dict:
+    sys.path.insert(0, str(HERE))
+    import peers
+
+    n, rtol = 100.0, 1e-9
+    theta = np.radians(np.arange(0.0, 90.0, 5.0))
+    model = bn.load("blinn-phong", n=n)
+    truth = np.array([peers.blinn_phong_reference(n, t) for t in theta])
+    row = {"title": f"Blinn-Phong n={n:g}, {theta.size} views 0…85° in one call, rtol {rtol:g}: CPU per albedo"}
+    for backend in BACKENDS:
+        seconds, result = _best(lambda b=backend: bn.albedo(model, theta, method="quadrature", rtol=rtol, backend=b),
+                                repeats)
+        error = np.abs(result.value[:, 0] - truth)
+        single = _best(lambda b=backend: bn.albedo(model, theta[12], method="quadrature", rtol=rtol, backend=b),
+                       repeats)[1]
+        per_albedo = CPU[id(result)] / theta.size
+        row[backend] = {"cpu_ms_per_albedo": 1e3 * per_albedo, "wall_ms_per_albedo": 1e3 * seconds / theta.size,
+                        "single_call_cpu_ms": 1e3 * CPU[id(single)],
+                        "per_call_overhead_ms": 1e3 * (CPU[id(single)] - per_albedo),
+                        "max_error": float(error.max()),
+                        "all_within_estimates": bool(np.all(error <= result.error[:, 0])),
+                        "evaluations_mean": float(np.mean(result.evaluations))}
+    start = time.process_time()
+    peer = [peers.dblquad_albedo(peers.blinn_phong(n), t, rtol) for t in theta]
+    cpu = (time.process_time() - start) / theta.size
+    row["dblquad"] = {"cpu_ms_per_albedo": 1e3 * cpu,
+                      "max_error": float(np.max(np.abs([p.value for p in peer] - truth)))}
+    for backend in BACKENDS:
+        row[f"dblquad_over_{backend}"] = cpu / (row[backend]["cpu_ms_per_albedo"] / 1e3)
+    return row
+
+
 def _evaluations() -> dict:
     theta = np.radians(np.arange(90.0))
     result = bn.albedo(bn.load("blinn-phong", n=100.0), theta, method="quadrature", rtol=1e-9, backend="numpy")
@@ -103,22 +141,73 @@ def _table(model, size: int, repeats: int, *, method: str = "auto", channels=(),
     return row
 
 
-def _seconds_in_new_process(code: str, env: dict) -> float:
+def _seconds_in_new_process(code: str, env: dict) -> dict:
+    """Wall and CPU seconds (user + system, from the child's rusage) of a new process running ``code``: on a loaded
+    machine the wall time of a compile scales with the load, its CPU time hardly."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True)
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"wall_s": wall, "cpu_s": cpu}
 
 
 def _cold_start() -> dict:
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     builtin = "import brdfnorm as bn; bn.albedo(bn.load('ggx', alpha=0.3), 0.5)"
     generic = "import brdfnorm as bn; bn.albedo(bn.load('oren-nayar'), 0.5, method='quadrature')"
-    row = {"builtin_albedo_s": _seconds_in_new_process(builtin, env),
-           "generic_albedo_warm_cache_s": _seconds_in_new_process(generic, env)}
-    with tempfile.TemporaryDirectory() as empty:
-        row["generic_albedo_empty_cache_s"] = _seconds_in_new_process(generic, {**env, "BRDFNORM_CACHE_DIR": empty})
-    row["import_s"] = _seconds_in_new_process("import brdfnorm", env)
+    row = {"builtin_albedo": _seconds_in_new_process(builtin, env)}
+    with tempfile.TemporaryDirectory() as empty:  # a cache of its own: empty, then warmed by that first run
+        row["generic_albedo_empty_cache"] = _seconds_in_new_process(generic, {**env, "BRDFNORM_CACHE_DIR": empty})
+        row["generic_albedo_warm_cache"] = _seconds_in_new_process(generic, {**env, "BRDFNORM_CACHE_DIR": empty})
+    row["import"] = _seconds_in_new_process("import brdfnorm", env)
     return row
+
+
+def _cpu(line: dict) -> str:
+    return f"{line['cpu_s']:.3g} CPU s ({line['time_s']:.3g} s wall)"
+
+
+def rows(w: dict) -> list[tuple[str, str, str, str, str]]:
+    """(workload, numpy, compiled, against, goal) per issue-39 workload of ``w_backends``'s result, for the
+    side-by-side table of ``make bench`` (benchmarks/run.py)."""
+    out = []
+    single = w["generic_vs_dblquad"]
+    out.append((f"one generic albedo vs dblquad ({single['title']})", _cpu(single["numpy"]), _cpu(single["compiled"]),
+                f"dblquad {single['dblquad']['cpu_s'] * 1e3:.3g} CPU ms: {single['dblquad_over_numpy']:.3g}× / "
+                f"{single['dblquad_over_compiled']:.3g}× faster", "≥ 500×"))
+    batch = w["generic_batch_vs_dblquad"]
+
+    def per_albedo(line: dict) -> str:
+        return (f"{line['cpu_ms_per_albedo']:.3g} CPU ms per albedo, one call {line['single_call_cpu_ms']:.3g} ms "
+                f"(set-up {line['per_call_overhead_ms']:.3g} ms)")
+
+    out.append((f"generic albedos in a batch vs dblquad ({batch['title']})", per_albedo(batch["numpy"]),
+                per_albedo(batch["compiled"]),
+                f"dblquad {batch['dblquad']['cpu_ms_per_albedo']:.3g} CPU ms per albedo: "
+                f"{batch['dblquad_over_numpy']:.3g}× / {batch['dblquad_over_compiled']:.3g}× faster", "≥ 500×"))
+    evaluations = w["evaluations"]
+    out.append((evaluations["title"], f"{evaluations['mean']:.0f} mean, {evaluations['max']} max", "same", "",
+                "≤ 5 000"))
+    for key, title, goal in (("generic_table", "32×32 E + E_avg, built-in GGX through the generic engine", "—"),
+                             ("brdf_table", "lut examples/ggx.brdf 32×32 E + E_avg", "≤ 2 s"),
+                             ("ggx_table", "lut ggx 32×32 E + E_avg", "≤ 0.1 s"),
+                             ("dfg_table", "lut ggx --channels dfg 32×32", "≤ 3 s")):
+        table = w[key]
+        ratio = f"numpy/compiled {table['numpy_over_compiled']:.3g}×" if "numpy_over_compiled" in table else ""
+        if "compiled_within_estimates" in table:
+            ratio += f"; equal within estimates: {table['compiled_within_estimates']}"
+        out.append((title, *(f"{_cpu(table[b])}, {table[b]['evaluations']} evaluations, "
+                             f"{table[b]['unconverged']} unconverged" for b in BACKENDS), ratio, goal))
+    cold = w["cold_start"]
+    for key, title, goal in (("builtin_albedo", "new process: import + one built-in GGX albedo", "≤ 0.5 s"),
+                             ("generic_albedo_empty_cache", "new process, empty kernel cache: import + compile + "
+                              "first generic albedo (oren-nayar)", "≤ 5 s"),
+                             ("generic_albedo_warm_cache", "the same with the kernel cache warm", "—")):
+        out.append((title, "", f"{cold[key]['cpu_s']:.3g} CPU s ({cold[key]['wall_s']:.3g} s wall)",
+                    f"import alone {cold['import']['cpu_s']:.3g} CPU s", goal))
+    return out
 
 
 def w_backends(cfg, refs=None) -> dict:
@@ -130,6 +219,7 @@ def w_backends(cfg, refs=None) -> dict:
         "title": "compiled backend (issue 39): numpy vs compiled vs dblquad",
         "status": "ok", "load_average": os.getloadavg()[0],
         "generic_vs_dblquad": _generic_vs_dblquad(repeats),
+        "generic_batch_vs_dblquad": _generic_batch_vs_dblquad(repeats),
         "evaluations": _evaluations(),
         "generic_table": _table(ggx, size, repeats, method="quadrature"),
         "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness"),

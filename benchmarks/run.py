@@ -41,6 +41,7 @@ sys.path.insert(0, str(HERE))
 import peers as P  # noqa: E402
 from bench_anisotropy import w_anisotropy  # noqa: E402
 from bench_audit import audit_targets, w_audit  # noqa: E402
+from bench_backends import rows as backend_rows  # noqa: E402
 from bench_backends import w_backends  # noqa: E402
 from bench_certified import w_certified  # noqa: E402
 from bench_engine import GOAL_S, w_engine  # noqa: E402
@@ -422,7 +423,7 @@ def w_microfacet_table(cfg: Config, refs: References) -> dict:
     sizes = (8,) if cfg.quick else (32, 128)
     out = {"title": "ggx E(μ, α) tables, rtol 1e-10 (half-vector method)", "status": "ok", "methods": {},
            "reference": "μ = 1 row: method='certified' (Arb ball arithmetic, 1-D reduction), where python-flint is "
-                        "installed; the other rows are checked in tests/test_microfacet.py"}
+                        "installed; the other rows are checked in tests/engine/test_microfacet.py"}
     for size in sizes:
         mu = np.maximum(np.linspace(0.0, 1.0, size), 1e-4)
         alpha = np.maximum(np.linspace(0.0, 1.0, size), 1e-8)
@@ -1030,6 +1031,14 @@ def print_tables(results: dict) -> None:
 
     console = Console()
     for name, w in results["workloads"].items():
+        if name == "backends" and w.get("status") == "ok":  # issue 39: numpy and compiled side by side
+            table = Table(title=f"{name}: {w['title']} (load average {w['load_average']:.1f})", title_justify="left")
+            for column in ("workload", "numpy", "compiled", "against", "goal"):
+                table.add_column(column)
+            for row in backend_rows(w):
+                table.add_row(*row)
+            console.print(table)
+            continue
         if "methods" not in w:
             if name not in ("work-precision", "memory", "profile"):
                 console.print(f"[bold]{name}[/]: {w.get('status')}")

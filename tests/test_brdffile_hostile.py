@@ -11,16 +11,16 @@ from __future__ import annotations
 import contextlib
 import random
 import re
-import signal
 import tempfile
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.brdf_files import DIRECTIONS, brdf_text, hang_guard, where, write
+from helpers.mesa import MesaBrdf, MesaCompileError, MesaUnavailable
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from mesa import MesaBrdf, MesaCompileError, MesaUnavailable
 
 import brdfnorm as bn
 from brdfnorm.brdffile import load_brdf, random_hemisphere, read_brdf
@@ -28,28 +28,6 @@ from brdfnorm.errors import BrdfFileError, EvaluationError, ModelNotFoundError
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.brdf"))
 SIGNATURE = "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"
-
-
-def brdf_text(body: str, params: str = "float n 1 100 10") -> str:
-    return f"analytic\n::begin parameters\n{params}\n::end parameters\n::begin shader\n{body}\n::end shader\n"
-
-
-def where(text: str, needle: str, occurrence: int = 1) -> tuple[int, int]:
-    """1-based (line, column) of the ``occurrence``-th ``needle`` in ``text``."""
-    index = -1
-    for _ in range(occurrence):
-        index = text.index(needle, index + 1)
-    line_start = text.rfind("\n", 0, index) + 1
-    return text.count("\n", 0, index) + 1, index - line_start + 1
-
-
-def write(tmp_path: Path, content: str | bytes, name: str = "case.brdf") -> Path:
-    path = tmp_path / name
-    if isinstance(content, bytes):
-        path.write_bytes(content)
-    else:
-        path.write_text(content, encoding="utf-8")
-    return path
 
 
 def assert_file_error(path: Path, line: int, column: int | None = None, match: str = "") -> BrdfFileError:
@@ -67,23 +45,7 @@ def assert_file_error(path: Path, line: int, column: int | None = None, match: s
     return error
 
 
-@contextlib.contextmanager
-def hang_guard(seconds: float):
-    """Fail (instead of hanging the suite) if the body runs longer than ``seconds``; not a timing assertion."""
 
-    def expire(signum, frame):
-        raise TimeoutError(f"still running after {seconds} s")
-
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
-
-
-DIRECTIONS = (np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]]), np.array([[0.0, 0.0, 1.0], [-0.6, 0.0, 0.8]]))
 
 
 # -- the file format --------------------------------------------------------------------------------------
@@ -477,7 +439,7 @@ def test_random_directions_are_strictly_in_the_upper_hemisphere():
     ids=["unknown-identifier", "argument-count", "user-function-arguments"],
 )
 def test_error_lines_agree_with_mesa(tmp_path, body):
-    # The real compiler, fed the same file with its lines kept (tests/mesa.py), names the same line.
+    # The real compiler, fed the same file with its lines kept (tests/helpers/mesa.py), names the same line.
     path = write(tmp_path, brdf_text(body))
     with pytest.raises(BrdfFileError) as info:
         load_brdf(path)

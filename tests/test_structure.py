@@ -160,32 +160,10 @@ def test_the_fit_package_keeps_the_public_names_of_the_former_module():
 #: Private names still imported from another module (issue 40, item 5), in the areas being rewritten by other
 #: work: each should become public or stay inside its module; this list may only shrink.
 PRIVATE_CROSSINGS_LEFT = {
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.core._Integrator"),
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.microfacet._microfacet"),
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.microfacet._microfacet_route"),
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.seeds._blinn_phong"),
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.seeds._blinn_phong_gaussian"),
-    ("brdfnorm.engine.routes.certified", "brdfnorm.engine.routes.certified.seeds._phong"),
-    ("brdfnorm.engine.routes.certified.microfacet", "brdfnorm.engine.routes.certified.core._Integrator"),
-    ("brdfnorm.engine.routes.certified.microfacet", "brdfnorm.engine.routes.certified.core._atan"),
-    ("brdfnorm.engine.routes.certified.microfacet", "brdfnorm.engine.routes.certified.core._nan"),
-    ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._Integrator"),
-    ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._atan"),
-    ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._nan"),
-    ("brdfnorm.engine.routes.certified.seeds", "brdfnorm.engine.routes.certified.core._power"),
-    ("brdfnorm.engine.routes.dielectric", "brdfnorm.engine.routes.halfvector._Panels"),
-    ("brdfnorm.engine.routes.halfvector_generic", "brdfnorm.engine.routes.halfvector._Geometry"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._FLOOR"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._doublings"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._normalized"),
     ("brdfnorm.engine.routes.halfvector_global", "brdfnorm.engine.machinery.tensor_rule._sums"),
-    ("brdfnorm.lut.formats", "brdfnorm.lut.images._write_exr"),
-    ("brdfnorm.lut.formats", "brdfnorm.lut.images._write_png"),
-    ("brdfnorm.lut.formats", "brdfnorm.lut.layout._check_finite"),
-    ("brdfnorm.lut.formats", "brdfnorm.lut.layout._subset_meta"),
-    ("brdfnorm.lut.images", "brdfnorm.lut.layout._check_finite"),
-    ("brdfnorm.lut.images", "brdfnorm.lut.layout._subset_meta"),
-    ("brdfnorm.report.microfacet", "brdfnorm.report.figures._new"),
 }
 
 
@@ -298,3 +276,70 @@ def test_the_literal_default_finder_sees_parameters_and_fields(tmp_path):
                     "def g(rtol=1e-8, max_evaluations=RTOL): pass\n")
     assert sorted(_literal_defaults(path, {"rtol": 1e-10, "max_evaluations": 20_000_000})) == [
         (1, "max_evaluations"), (1, "rtol"), (3, "rtol")]
+
+
+def _word_lists(path: Path, words: set[str]) -> list[tuple[int, tuple[str, ...]]]:
+    """(line, words) of each literal tuple, list or set — or dict's keys — of two or more strings, all in
+    ``words``: a second home of a word list."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+            elements = node.elts
+        elif isinstance(node, ast.Dict):
+            elements = node.keys
+        else:
+            continue
+        texts = tuple(e.value for e in elements if isinstance(e, ast.Constant) and isinstance(e.value, str))
+        if len(texts) >= 2 and len(texts) == len(elements) and set(texts) <= words:
+            found.append((node.lineno, texts))
+    return found
+
+
+@pytest.mark.parametrize("home, name", [("models/fresnel.py", "KINDS"), ("models/microfacet.py", "SHADOWING")])
+def test_each_word_list_has_one_home(home, name):
+    """Issue 40, item 3: the Fresnel factors' names (and the codes the compiled kernels take) are spelled out in
+    ``models/fresnel.py`` only, the Smith shadowing choices in ``models/microfacet.py`` only; every other module
+    names their constants."""
+    from brdfnorm.models import fresnel
+
+    module = importlib.import_module("brdfnorm." + home.removesuffix(".py").replace("/", "."))
+    bad = {f"{path.relative_to(SRC)}:{line}: {texts}" for path in PACKAGE.rglob("*.py") if path != PACKAGE / home
+           for line, texts in _word_lists(path, set(getattr(module, name)))}
+    assert bad == set()
+    assert [fresnel.KERNEL_CODES[kind] for kind in fresnel.MICROFACET_KINDS] == [0, 1, 2, 3]
+
+
+def test_the_word_list_finder_sees_tuples_lists_sets_and_dict_keys(tmp_path):
+    path = tmp_path / "m.py"
+    path.write_text('a = ("none", "schlick")\nb = ["schlick", x]\nc = {"none": 0, "conductor": 3}\n'
+                    'd = {"dielectric", "exact"}\ne = ("schlick",)\nf = {"none", "dielectric"}\n')
+    assert _word_lists(path, {"none", "schlick", "conductor", "dielectric"}) == [
+        (1, ("none", "schlick")), (3, ("none", "conductor")), (6, ("none", "dielectric"))]
+
+
+TESTS = Path(__file__).resolve().parent
+#: Test folders that are not a package of src/brdfnorm: the pages of docs/, the cross-package hostile-input suite,
+#: the shared reference mathematics.
+TEST_FOLDERS_BESIDES_PACKAGES = {"docs", "hostile", "helpers"}
+
+
+def test_the_tests_mirror_the_packages_and_share_by_fixture_or_helper():
+    """Issue 40, item 6 (docs/architecture.md, "Where tests go"): each folder of tests/ is a package of
+    src/brdfnorm (or docs/, hostile/, helpers/) with an ``__init__.py``; nothing imports from ``conftest`` (shared
+    code is a fixture or a ``helpers`` function), and below tests/ no path is built from ``__file__`` but in
+    ``helpers/paths.py``."""
+    packages = {path.name for path in PACKAGE.iterdir() if (path / "__init__.py").is_file()}
+    folders = {path.parent for path in TESTS.rglob("*.py") if path.parent != TESTS}
+    assert {f.relative_to(TESTS).parts[0] for f in folders} <= packages | TEST_FOLDERS_BESIDES_PACKAGES
+    assert [str(f) for f in folders if not (f / "__init__.py").is_file()] == []
+    bad = []
+    for path in TESTS.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[-1] == "conftest" or \
+                    isinstance(node, ast.Import) and any(a.name.split(".")[-1] == "conftest" for a in node.names):
+                bad.append(f"{path.relative_to(TESTS)}:{node.lineno}: imports conftest")
+            if (isinstance(node, ast.Name) and node.id == "__file__" and path.parent != TESTS
+                    and path != TESTS / "helpers" / "paths.py"):
+                bad.append(f"{path.relative_to(TESTS)}:{node.lineno}: a path from __file__ (use helpers.paths)")
+    assert bad == []

@@ -74,19 +74,19 @@ def diffuse_page():
 
 def sheen_page():
     print("\n## Fuzz over a white Lambert base (view rule), E(mu) and the white fuzz's own E(mu) at mu =", MU)
-    for r in (0.3, 0.5, 0.8):
-        fuzz = bn.load("charlie", roughness=r)
-        e = bn.albedo(fuzz, THETA, rtol=1e-10).value[:, 0]
-        avg = average_albedo(fuzz)[0][0]
-        row(f"r={r} charlie E", e)
-        print(f"r={r} charlie E_avg {avg:.9f}")
-        m = bn.load("openpbr", base_color=(1, 1, 1), specular_weight=0.0, fuzz_weight=1.0, fuzz_roughness=r)
-        row(f"r={r} fuzz over white, view", bn.albedo(m, THETA).value[:, 0])
-        row(f"r={r} symmetric (E + (1-E)(1-E_avg))", e + (1 - e) * (1 - avg))
-        grey = bn.load("openpbr", base_color=(1, 1, 1), specular_weight=0.0, fuzz_weight=1.0, fuzz_roughness=r,
-                       fuzz_color=(0.5, 0.5, 0.5))
-        row(f"r={r} grey fuzz 0.5 over white, view", bn.albedo(grey, THETA).value[:, 0])
-
+    for lobe in ("zeltner", "charlie"):
+        for r in (0.3, 0.5, 0.8):
+            fuzz = bn.load(lobe, roughness=r)
+            e = bn.albedo(fuzz, THETA, rtol=1e-10, method="quadrature").value[:, 0]
+            avg = average_albedo(fuzz)[0][0]
+            row(f"r={r} {lobe} E", e)
+            print(f"r={r} {lobe} E_avg {avg:.9f}")
+            common = dict(base_color=(1, 1, 1), specular_weight=0.0, fuzz_weight=1.0, fuzz_roughness=r,
+                          fuzz_lobe=lobe)
+            row(f"r={r} fuzz over white, view", bn.albedo(bn.load("openpbr", **common), THETA).value[:, 0])
+            row(f"r={r} symmetric (E + (1-E)(1-E_avg))", e + (1 - e) * (1 - avg))
+            grey = bn.load("openpbr", **common, fuzz_color=(0.5, 0.5, 0.5))
+            row(f"r={r} grey fuzz 0.5 over white, view", bn.albedo(grey, THETA).value[:, 0])
 
 if __name__ == "__main__":
     fresnel_page()

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from . import materials  # noqa: F401 - registers the openpbr material and its albedo method
+from . import materials  # material files (load)
 from .engine.methods import AlbedoResult, albedo
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError, ParameterError
 from .models import REGISTRY, Model

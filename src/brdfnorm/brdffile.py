@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .engine.machinery.directions import random_hemisphere, rotation_about_normal
 from .errors import BrdfFileError, ModelNotFoundError
 from .glsl.names import ENTRY_POINT, reserved_kind
 from .inputs import parsing, read_bounded
@@ -489,20 +490,6 @@ class Reciprocity:
     @property
     def reciprocal(self) -> bool:
         return bool(self.max_relative <= self.tolerance)
-
-
-def random_hemisphere(rng: np.random.Generator, count: int) -> np.ndarray:
-    """Directions uniform in solid angle over the open upper hemisphere (z > 0), shape (count, 3)."""
-    z = 1.0 - rng.random(count)  # (0, 1]
-    phi = 2.0 * np.pi * rng.random(count)
-    r = np.sqrt(1.0 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-
-
-def rotation_about_normal(angle: float) -> np.ndarray:
-    """The (3, 3) rotation by ``angle`` about N = +z (rows act on column vectors: d @ R.T turns directions d)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rotation_asymmetry(model: Model, samples: int = 512, seed: int = 1) -> float:

@@ -3,28 +3,51 @@
 As colour-science pairs each ``*_METHODS`` mapping with ``validate_method``, a registry is a read-only mapping
 (models, albedo methods, fit forms, emitted languages, verified claims, output formats) plus one validation
 helper, :meth:`Registry.validate`, that turns an unknown or mistyped name into an
-:class:`~brdfnorm.errors.ArgumentError` naming the API argument and the known names. Entries are added with
-:meth:`Registry.register` by the module that defines them (a registry never imports its members' modules,
-so registration cannot create an import cycle).
+:class:`~brdfnorm.errors.ArgumentError` naming the API argument and the known names. Every entry is declared where
+the registry is built; one whose module lies above the registry's in the import graph (the ``openpbr`` model of
+:mod:`brdfnorm.materials` in the models' registry, its albedo method in the engine's) is declared as a
+:class:`Reference` — ``"package.module:name"`` — and imported when first looked up, so that a registry never
+imports its members' modules at import time and no module fills another package's registry as a side effect of
+being imported. :meth:`Registry.register` adds an entry from outside (a user's own model or method).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
-from typing import Generic, TypeVar
+import importlib
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
 
 from .errors import ArgumentError, ArgumentTypeError
 
 T = TypeVar("T")
 
 
+@dataclass(frozen=True)
+class Reference:
+    """An object named by where it lives, ``"package.module:name"``, imported when first resolved."""
+
+    target: str
+
+    def resolve(self) -> Any:
+        module, _, name = self.target.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+    def call(self) -> Callable[..., Any]:
+        """A function that resolves the target on its first call and calls it (a registry entry's callable that
+        lives above the registry, such as an albedo method's ``run``)."""
+        def call(*args: Any, **kwargs: Any) -> Any:
+            return self.resolve()(*args, **kwargs)
+        return call
+
+
 class Registry(Mapping[str, T], Generic[T]):
     """Names → objects of one kind; ``argument`` is the API argument that selects among them."""
 
-    def __init__(self, kind: str, argument: str, entries: Mapping[str, T] | None = None) -> None:
+    def __init__(self, kind: str, argument: str, entries: Mapping[str, T | Reference] | None = None) -> None:
         self.kind = kind
         self.argument = argument
-        self._entries: dict[str, T] = dict(entries or {})
+        self._entries: dict[str, T | Reference] = dict(entries or {})
 
     def register(self, name: str, entry: T) -> T:
         """Add ``entry`` under ``name`` (a name is registered once); returns the entry."""
@@ -44,7 +67,13 @@ class Registry(Mapping[str, T], Generic[T]):
         return name
 
     def __getitem__(self, name: str) -> T:
-        return self._entries[name]
+        entry = self._entries[name]
+        if isinstance(entry, Reference):  # declared by where it lives: imported on first use
+            entry = self._entries[name] = entry.resolve()
+        return entry
+
+    def __contains__(self, name: object) -> bool:  # without resolving a Reference
+        return name in self._entries
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._entries)

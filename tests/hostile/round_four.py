@@ -11,10 +11,10 @@ import zlib
 from pathlib import Path
 
 import numpy as np
-from hostile_cases import Case, small_lut
 
 from brdfnorm.inputs.png import SIGNATURE, encode
 from brdfnorm.lut.formats import dumps
+from hostile.hostile_cases import Case, small_lut
 
 
 def _chunk(kind: bytes, body: bytes) -> bytes:

@@ -15,8 +15,9 @@ import time
 from pathlib import Path
 
 import pytest
-from hostile_cases import CASES, PYTHON_API, Case
-from round_four import CASES as ROUND_FOUR
+
+from hostile.hostile_cases import CASES, PYTHON_API, Case
+from hostile.round_four import CASES as ROUND_FOUR
 
 ADDRESS_SPACE = 4 * 1024**3
 PEAK_RSS_KIB = 1024**2  # 1 GiB (ru_maxrss is in KiB on Linux)

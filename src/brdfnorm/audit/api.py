@@ -28,6 +28,7 @@ from ..inputs.limits import MAX_AUDIT_GRID_AXES, MAX_AUDIT_VALUES, MAX_CHANNELS
 from ..models.base import Model
 from . import quality
 from .conventions import parse_pins, stored_axis_values
+from .fresnel_average import AverageConvention, infer_average, requested
 from .infer import Hypothesis, Inference, infer
 from .readers import DTYPES, Source, read_table
 from .reference import Reference
@@ -197,6 +198,25 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
             "convention": h.convention.text(), "channels": [
                 {"channel": c.channel, "approximates": c.meaning, "max": c.max, "median": c.median, "rms": c.rms,
                  "worst_cell": list(c.worst), "worst_at": c.worst_at} for c in h.channels]}
+
+
+def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen: list[int] | None,
+           explicit: dict, tolerance: float | None) -> tuple[Inference, dict | None]:
+    """The microfacet conventions (:func:`.infer.infer`), or the F_avg ones (:mod:`.fresnel_average`) when the pins
+    ask for them or when no microfacet convention fits a 1-D or 2-D table whose parts are not pinned (with the
+    fitted formula the table is, if any)."""
+    if requested(pins):
+        return infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
+    inference = infer(source.values, source.channel_names, reference, pins, step, chosen, explicit=explicit,
+                      tolerance=tolerance)
+    if (inference.fits or len(source.grid_shape) > 2 or set(pins) - {"flip"}
+            or set(explicit) - {"eta", "f0"}):
+        return inference, None
+    try:
+        other, fit = infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
+    except ArgumentError:  # the table's axes are none of an F_avg table's: the microfacet result stands
+        return inference, None
+    return (other, fit) if other.fits or fit is not None else (inference, None)
 
 
 def _count(n: int) -> str:
@@ -375,15 +395,18 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
         step = written[0]
         source.notes.append(f"numbers written to about {step:.2g} (half their last digit): that is the storage "
                             "step")
-    inference = infer(source.values, source.channel_names, reference, pins, step, chosen,
-                      explicit=explicit, tolerance=tolerance)
+    inference, average_fit = _infer(source, reference, pins, step, chosen, explicit, tolerance)
     result = AuditResult(source, inference, _bad_cells(source, inference, m), model=m.name,
                          wrong_cells=wrong_cells(source, inference.best), tolerance_given=tolerance, step=step)
     best = inference.best
     grid = source.grid_shape
-    if not result.passes and "channels" not in pins:
+    averages = isinstance(best.convention, AverageConvention)  # an F_avg table: no lobe, no GPU lookups measured
+    if averages:
+        result.model = "none (the average of a Fresnel factor)"
+        result.approximation = average_fit
+    elif not result.passes and "channels" not in pins:
         result.approximation = _approximation(source, reference, pins, explicit, step, m.name)
-    if dense or sweep:
+    if (dense or sweep) and not averages:
         # the channels that fit (or, when none does, the closest): a renderer's error for a meaning it has
         measured = [f for f in best.channels if f.fits] or sorted(best.channels, key=lambda f: f.max)[:1]
         for fit in measured:

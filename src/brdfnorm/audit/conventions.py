@@ -39,6 +39,14 @@ F0_POSITIONS = ("f0-node", "f0-texel")
 #: F0 = clamp(t, 1e-4, 0.99)⁴, η = (1 + √F0)/(1 − √F0), light entering the denser medium), the same seen from inside
 #: (``eta-cycles-exiting``: 1/η), or values given with ``--axis eta=…`` (``eta-explicit``).
 ETA_AXES = ("eta-cycles", "eta-cycles-exiting")
+#: η layouts taken when pinned (``--as f0=eta-moonray``), not searched: MoonRay's ``TransmissionAlbedo`` accessor
+#: (``netaRange``: η = 1.05 + 2t at nodes t = z/(n − 1), entering; ``-exiting``: 1/η, its ``mEExit`` table), and
+#: appleseed's glass tables (``AlbedoTable3D``, ``glassbsdf.cpp``: η = lerp(1.01, 3, t), light entering,
+#: ``g_glass_ggx_albedo_table``; ``eta-appleseed-exiting``: η = lerp(1/3, 1/1.01, t) — linear in η, not 1/η of the
+#: entering nodes — ``g_glass_ggx_rcp_eta_albedo_table``).
+PINNED_ETA_AXES = ("eta-moonray", "eta-moonray-exiting", "eta-appleseed", "eta-appleseed-exiting")
+#: appleseed's η range (``MinEta``, ``MaxEta`` of glassbsdf.cpp).
+APPLESEED_ETA = (1.01, 3.0)
 #: For rough dielectrics (a model with ``refraction_shadowing``) the refraction's G2 is searched too: Heitz's Beta
 #: form (``height-correlated``, brdfnorm's default), G1·G1 for both (``separable``: OpenPBR, Mitsuba), and
 #: height-correlated reflection with the refraction's G2 as the reflection's 1/(1 + Λ_V + Λ_L) (Blender Cycles'
@@ -50,9 +58,10 @@ DIELECTRIC_SHADOWING = SHADOWING + ("height-correlated/refraction=reflection-for
 #: 1-E_avg (the form Kulla–Conty's compensation divides by);
 #: E_dielectric = ∫ f cos F(η, V·H) with the exact dielectric Fresnel factor (Walter et al. 2007, eq. 22) at the
 #: convention's η, and E_f0_dielectric the same over an f0 axis at η = (1 + √f0)/(1 − √f0); DFG_cloth =
-#: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`).
+#: ∫ D_charlie V_neubelt cos, the cloth channel engines store beside the split-sum pair (:mod:`brdfnorm.lut.cloth`);
+#: F_avg = 2∫ F μ dμ of a Fresnel factor over its own axes, no lobe (:mod:`.fresnel_average`).
 MEANINGS = ("E", "1-E", DFG_F0, DFG_F90, "E_f0", "E_avg", "1-E_avg", "E_dielectric", "E_f0_dielectric",
-            "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass")
+            "DFG_cloth", "E_schlick", "E_conductor", "E_glass", "R_glass", "T_glass", "F_avg")
 #: Meanings of a rough-glass table over an η axis: R + T, R and T of the lobe at each cell's η.
 GLASS_MEANINGS = ("E_glass", "R_glass", "T_glass")
 #: Meanings with the exact dielectric Fresnel factor (searched only where nothing else fits, or pinned).
@@ -192,6 +201,14 @@ def role_value(c: Convention, role: str, t: np.ndarray) -> np.ndarray:
         return mu_of(c.direction, t)
     if role == "alpha":
         return alpha_of(c.roughness, t)
+    if role == "eta" and c.f0.startswith("eta-appleseed"):
+        lo, hi = APPLESEED_ETA
+        if c.f0.endswith("exiting"):
+            lo, hi = 1.0 / hi, 1.0 / lo
+        return lo + t * (hi - lo)
+    if role == "eta" and c.f0.startswith("eta-moonray"):
+        eta = 1.05 + 2.0 * t
+        return 1.0 / eta if c.f0.endswith("exiting") else eta
     if role == "eta":
         f0 = np.clip(t, 1e-4, 0.99) ** 4
         # an index-matched interface does not scatter: η is kept 2e-6 from 1 (R there is ~1e-13, T ~1)
@@ -256,7 +273,8 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
             first = pinned["axes"].split(",")[d].strip()
             directions = [x for x in directions if x.startswith("theta") == (first == "theta")]
         roughness = _pinned(pinned, "roughness", ROUGHNESS)
-        f0s = [None] if f is None else _pinned(pinned, "f0", third)
+        f0s = [None] if f is None else _pinned(pinned, "f0", third,
+                                                 PINNED_ETA_AXES if third == ETA_AXES else ())
         flip_sets = list(itertools.product((False, True), repeat=grid_ndim))
         if "flip" in pinned:
             flip_sets = [tuple(bool(int(x)) for x in pinned["flip"].split(","))]
@@ -293,11 +311,12 @@ def geometries(grid_ndim: int, pinned: dict[str, str], explicit: dict[str, np.nd
     return out
 
 
-def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...]) -> list[str]:
+def _pinned(pinned: dict[str, str], key: str, known: tuple[str, ...], also: tuple[str, ...] = ()) -> list[str]:
+    """The values of ``key`` searched (``known``), or the one pinned (among ``known`` and ``also``)."""
     if key not in pinned:
         return list(known)
-    if pinned[key] not in known:
-        raise ArgumentError(f"{key}={pinned[key]}: known values are {', '.join(known)}", where="pins")
+    if pinned[key] not in known + also:
+        raise ArgumentError(f"{key}={pinned[key]}: known values are {', '.join(known + also)}", where="pins")
     return [pinned[key]]
 
 
@@ -372,6 +391,8 @@ def stored_axis_values(c: Convention, shape: tuple[int, ...], index: list[np.nda
     """Each axis's value at the samples ``index`` in the variable the table itself is indexed by, before any
     clamp: μ (or θ in degrees for the θ conventions), r for the r² roughness conventions (α = r²) or α, f0, or the
     values given outright with ``--axis``. This is what a bad cell's position is reported in."""
+    if not isinstance(c, Convention):  # an F_avg table's convention (:mod:`.fresnel_average`) knows its axes
+        return c.stored_values(shape, index)
     out = {}
     for axis, role in sorted(axis_roles(c).items()):  # in array-axis order
         i = np.asarray(index[axis])

@@ -206,7 +206,7 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
     A wrong η shifts the whole table by a smooth amount, so the true geometry ranks among the first few at
     η = 1.5: first or second for 16×16 tables made at η = 1.2, 1.33, 1.5, 1.8, 2.4 and 3 (measured when this was
-    written; tests/test_audit_fresnel.py keeps η = 1.33 and 1.5). Schlick's factor with a free f0, or an
+    written; tests/audit/test_fresnel_tables.py keeps η = 1.33 and 1.5). Schlick's factor with a free f0, or an
     interpolation in f0 between two exact η, ranked it 5th to 60th: they are several per cent off at grazing cells,
     as much as a wrong sample position."""
     grid = values.shape[:-1]
@@ -373,6 +373,10 @@ def _fit(data: np.ndarray, exact: np.ndarray, error: np.ndarray, name: str, mean
                       float(np.median(magnitude)), worst, tolerance, sigma, residual, exact,
                       float(np.std(exact[ok])), cells=int(residual.size), bad=bad, within=int(np.sum(~bad)),
                       bulk=bulk, base=base, factor=factor)
+
+
+#: One channel's residuals judged against the tolerance (the F_avg tables of :mod:`.fresnel_average` too).
+fit_channel = _fit
 
 
 def full_hypothesis(values, c: Convention, reference, names, precision, chosen, index=None) -> Hypothesis:

@@ -6,7 +6,7 @@ integral, the normalization grid — becomes one :class:`~brdfnorm.parallel.Cell
 per-case parameter values travel as the job's per-cell values, the model as its source), computed by
 :func:`~brdfnorm.parallel.run_job` on one :class:`~brdfnorm.parallel.Workers` held open for the whole check: a
 batch of one chunk runs in the calling process, a larger one on the pool or the cluster. A cell's albedo does not
-depend on its batch (``tests/test_parallel.py``), so the values are bit for bit those of the in-process
+depend on its batch (``tests/parallel/test_parallel.py``), so the values are bit for bit those of the in-process
 integrals, the search takes the same path and the report says the same. That holds under a budget of
 evaluations; under a budget of seconds which integrals a search asks for depends on the clock — in one process
 as on many — and more workers buy more coverage in the same seconds. Without ``chunk_cells`` a batch of more than

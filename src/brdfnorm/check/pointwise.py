@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..brdffile import random_hemisphere
+from ..engine.machinery.directions import random_hemisphere
 from .core import CheckResult, count_text, direction_text, direction_tuple, params_text, values_text
 from .space import Points, bind_case, params_at
 

@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..engine.routes.series import adaptive_gauss_legendre, blinn_phong_albedo_series
+from ..engine.machinery.interval import adaptive_gauss_legendre
+from ..engine.routes.series import blinn_phong_albedo_series
 from ..models import closed_forms
 from . import PREMISE_EXPONENTS, PREMISE_THETA, SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
@@ -89,7 +90,7 @@ def phong_energy(original: bool, n: np.ndarray, theta: np.ndarray) -> np.ndarray
             azimuth = np.where(inside, TWO_PI * A, 2.0 * (A * beta0 + B * np.sin(beta0)))
         return np.exp(nc[index, None] * np.log(np.cos(alpha))) * np.sin(alpha) * azimuth
 
-    value, *_ = adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], nc.size, rtol=1e-12)
+    value = adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], nc.size, rtol=1e-12).value
     return value.reshape(n.shape)
 
 

@@ -9,7 +9,7 @@ import mpmath as mp
 import numpy as np
 from scipy.special import gammaln, roots_legendre
 
-from ..engine.routes.series import adaptive_gauss_legendre
+from ..engine.machinery.interval import adaptive_gauss_legendre
 from . import SOURCES, TWO_PI, Claim, parametric, quadrature_albedo, rel_error
 
 
@@ -55,7 +55,7 @@ def _equation_1(n: np.ndarray, theta: float, rtol: float = 1e-12) -> np.ndarray:
             base = np.log(co + ci) - 0.5 * np.log(2.0 * (so * si * np.cos(d) + co * ci + 1.0))
             return np.exp(nn[index, None] * base)
 
-        value, *_ = adaptive_gauss_legendre(f, a[keep], b[keep], case[keep], pp.size, rtol=rtol * 0.1)
+        value = adaptive_gauss_legendre(f, a[keep], b[keep], case[keep], pp.size, rtol=rtol * 0.1).value
         return 2.0 * value.reshape(phi.shape) * np.cos(phi) * np.sin(phi)
 
     width = np.minimum(np.pi / 2, 3.0 / np.sqrt(n + 1.0))
@@ -64,7 +64,7 @@ def _equation_1(n: np.ndarray, theta: float, rtol: float = 1e-12) -> np.ndarray:
     a, b = points[:, :-1].ravel(), points[:, 1:].ravel()
     case = np.repeat(np.arange(n.size), points.shape[1] - 1)
     keep = b > a
-    value, *_ = adaptive_gauss_legendre(inner, a[keep], b[keep], case[keep], n.size, rtol=rtol)
+    value = adaptive_gauss_legendre(inner, a[keep], b[keep], case[keep], n.size, rtol=rtol).value
     return value
 
 
@@ -177,7 +177,7 @@ def weierstrass(n: np.ndarray) -> Claim:
         a, b = points[:, :-1].ravel(), points[:, 1:].ravel()
         case = np.repeat(np.arange(nn.size), points.shape[1] - 1)
         keep = b > a
-        return adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], nn.size, rtol=1e-13)[0]
+        return adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], nn.size, rtol=1e-13).value
 
     def polar_log(p, d):
         ci, si = np.cos(p), np.sin(p)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..engine.routes.series import adaptive_gauss_legendre
+from ..engine.machinery.interval import adaptive_gauss_legendre
 from ..models import closed_forms
 from . import GAUSSIAN_RANGE, SOURCES, TWO_PI, Claim, rel_error
 
@@ -30,7 +30,7 @@ def gaussian_factor(n: np.ndarray) -> np.ndarray:
         x = (np.cos(0.5 * theta) - 1.0) / (c[index, None] - 1.0)
         return np.exp(-x * x) * np.cos(theta) * np.sin(theta)
 
-    value, *_ = adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], n.size, rtol=1e-13)
+    value = adaptive_gauss_legendre(integrand, a[keep], b[keep], case[keep], n.size, rtol=1e-13).value
     return 1.0 / (TWO_PI * value)
 
 

@@ -52,7 +52,7 @@ def audit_command(
         "reflection-form or separable)",
         "mu_floor=1e-4, alpha_floor=1e-8",
         "channels=DFG_f0,DFG_f90, each a meaning: E, 1-E, DFG_f0, DFG_f90, E_f0, E_avg, 1-E_avg, E_dielectric, "
-        "E_f0_dielectric, DFG_cloth, E_schlick or E_conductor",
+        "E_f0_dielectric, DFG_cloth, E_schlick, E_conductor, or F_avg (a Fresnel average over r,g, f0 or eta)",
         "eta=1.5 (of E_dielectric), schlick_f0=0.04 (of E_schlick)",
         "eta=0.2 and k=3.9 (a conductor's eta + ik, of E_conductor)"])),
     axis: list[str] = typer.Option([], "--axis", metavar="NAME=SPEC", help="Give an axis's values outright, as in "

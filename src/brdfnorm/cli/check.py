@@ -133,7 +133,7 @@ def check_command(
             try:
                 report = run_check(m, checks=checks, sweep=sweeps, fixed=held, tolerance=tolerance, at=at.value,
                                    over=over.value, budget=share, points=points, workers=spread.workers,
-                                   scheduler=spread.scheduler, checkpoint=spread.checkpoint,
+                                   scheduler=spread.dask_scheduler(), checkpoint=spread.checkpoint,
                                    chunk_cells=spread.chunk_cells)
             except ArgumentError as error:
                 flags = {"sweep": "--sweep", "checks": "--only", "budget": "--budget", "points": "--points"}

@@ -17,6 +17,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import astuple, dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 import typer
@@ -29,6 +30,9 @@ from ..models.base import Model
 from ..normalization import AT
 from ..output import STDOUT, write_file
 from ..output.formats import render
+
+if TYPE_CHECKING:
+    from ..parallel.executors import Scheduler
 
 #: Help panels of the options every computing command shares (typer's rich_help_panel), so that a long --help
 #: reads as groups: what to compute (Options), where the result goes, where the work runs.
@@ -67,11 +71,14 @@ class Spread:
     checkpoint: str | None = None
     chunk_cells: int | None = None
 
-    def __post_init__(self) -> None:
-        if self.connect_timeout is not None:  # one command per process: its deadline for every Dask connection
-            from ..parallel import executors
+    def dask_scheduler(self) -> str | Scheduler | None:
+        """``scheduler=`` as the library takes it: the address, with --connect-timeout's deadline where given (a
+        :class:`brdfnorm.parallel.executors.Scheduler`; nothing global is set)."""
+        if self.scheduler is None or self.connect_timeout is None:
+            return self.scheduler
+        from ..parallel.executors import Scheduler
 
-            executors.DASK_CONNECT_TIMEOUT = self.connect_timeout
+        return Scheduler(self.scheduler, self.connect_timeout)
 
     def given(self) -> bool:
         return any(value is not None for value in astuple(self))
@@ -404,8 +411,8 @@ def compute_cells(job, label: str, spread: Spread):
     from ..parallel import albedo_cells
 
     with progress_bar(label, enabled=job.size > 1) as on_progress:
-        record = albedo_cells(job, workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint,
-                              on_progress=on_progress)
+        record = albedo_cells(job, workers=spread.workers, scheduler=spread.dask_scheduler(),
+                              checkpoint=spread.checkpoint, on_progress=on_progress)
     if job.size > 1:
         reused = record.chunks - record.chunks_computed
         typer.echo(f"{label}: {job.size} cells in {_count(record.chunks, 'chunk')} ({reused} from the checkpoint) "

@@ -224,7 +224,7 @@ def lut_command(
                     raise ArgumentError("anisotropic tables are not checkpointed", where="--checkpoint")
                 result = anisotropic_tables.compute(m, axes, anisotropy=anisotropy, clamp=clamps, rtol=rtol,
                                                     average=not no_average, grid=grid, source=model,
-                                                    workers=spread.workers, scheduler=spread.scheduler)
+                                                    workers=spread.workers, scheduler=spread.dask_scheduler())
             elif method == "certified":
                 if spread.given():
                     raise ArgumentError("certified tables are computed in this process", where="--workers")
@@ -234,7 +234,8 @@ def lut_command(
             else:
                 result = compute(m, axes, clamp=clamps, rtol=rtol, method=method, channels=channels,
                                  average=not no_average, grid=grid, source=model, progress=progress,
-                                 workers=spread.workers, scheduler=spread.scheduler, checkpoint=spread.checkpoint)
+                                 workers=spread.workers, scheduler=spread.dask_scheduler(),
+                                 checkpoint=spread.checkpoint)
         if "theta" in axes:  # the file's θ axis in the degrees it was given in (the API's is in radians)
             result = in_degrees(result, degrees, clamp_degrees)
         if azimuth_degrees is not None:

@@ -5,13 +5,16 @@ fixed (``over="light"``, the default). ``over="view"`` is the other reading: the
 ∫_H f(L, V)(N·V) dV; the two differ for non-reciprocal lobes such as the original Phong (2π/(n+1) against
 2π/(n+2) at normal incidence).
 
-Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.engine.routes.hemisphere`, any model),
+Methods (a registry, colour-science style): ``"quadrature"`` (:mod:`brdfnorm.engine.routes.quadrature`, any model),
 ``"closed-form"`` (only where the model declares one — e.g. normal incidence — and an error elsewhere, never
-substituted silently), and those registered by other modules (``"series"`` for Blinn-Phong, seed 002's
-hypergeometric form). ``"auto"`` takes the first applicable of :data:`AUTO_ORDER`.
+substituted silently), the exact routes of particular lobes (:mod:`brdfnorm.engine.routes`), ``"material"`` for
+OpenPBR (declared by where it lives, :class:`brdfnorm.registry.Reference`: :mod:`brdfnorm.materials` lies above
+the engine), and those a user adds with :func:`register_method`. ``"auto"`` takes the first applicable of
+:data:`AUTO_ORDER`.
 
-A BRDF whose values are finite but near float64's limit (2e307) is integrated divided by a power of two, so
-that the sums do not overflow; a BRDF that is NaN or infinite is reported at a real (L, V) pair.
+This module is the front door only: it turns angles and parameter values into a :class:`Problem`, picks the
+method, and builds the public :class:`AlbedoResult` from the route's
+:class:`brdfnorm.engine.machinery.result.RouteResult` (:func:`albedo_result`).
 
 (The module is ``brdfnorm.engine.methods`` so that the function ``brdfnorm.albedo`` does not shadow it.)
 """
@@ -22,30 +25,23 @@ import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
-from functools import partial
 
 import numpy as np
 
 from .. import validate
-from ..brdffile import random_hemisphere, rotation_about_normal
-from ..errors import ArgumentError, ArgumentTypeError, EvaluationError
-from ..models.base import Lobe, Model, Over, mirror
+from ..errors import ArgumentError, ArgumentTypeError
+from ..models.base import Model, Over
 from ..models.blinn_phong import BlinnPhong
 from ..models.dielectric import MicrofacetDielectric
 from ..models.microfacet import MicrofacetModel
 from ..output.formats import Column, Records, channel_value, degrees, format_value
-from ..registry import Registry
+from ..registry import Reference, Registry
 from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from .compiled import backend as compiled_backend
-from .routes import azimuthal, certified, halfvector_generic
+from .machinery.result import RouteResult
+from .routes import azimuthal, certified, quadrature
 from .routes.dielectric import albedo_method as _dielectric
-from .routes.hemisphere import (
-    NonFiniteIntegrand,
-    NonFinitePolicy,
-    estimate_lobe,
-    fibonacci_hemisphere,
-    integrate_hemisphere,
-)
+from .routes.hemisphere import NonFinitePolicy
 from .routes.microfacet import azimuthal_method as _azimuthal_method
 from .routes.microfacet import halfvector_method as _microfacet
 from .routes.series import albedo_method as _series
@@ -233,183 +229,14 @@ class Method:
 
     name: str
     applies: Callable[[Model, Over], bool]
-    #: (value, error, evaluations, converged, nonfinite share[, extra]): ``extra`` maps further result fields
-    #: to arrays — ``reason`` (K,) (without one an unconverged point's reason is "budget"), or the certified
-    #: ``lower``/``upper`` bounds (K, C).
-    run: Callable[..., tuple]
+    #: ``run(problem, rtol=, atol=, nonfinite=, max_evaluations=, **options)`` -> a :class:`RouteResult` of the
+    #: K cases, value and error (K, C); its ``reason`` None where it gives none ("budget" where unconverged), and
+    #: its extras further result fields: ``nonfinite_fraction`` (K,), ``reflected``/``transmitted`` (K, C), the
+    #: certified ``lower``/``upper`` bounds (K, C).
+    run: Callable[..., RouteResult]
     description: str = ""
     #: Keyword options of :func:`albedo` this method takes besides the tolerances (e.g. ``digits``).
     options: tuple[str, ...] = ()
-
-
-#: An integrand whose sampled values exceed this is integrated divided by a power of two (the sums of values near
-#: float64's limit, such as a BRDF of 2e307, overflow although the albedo itself is finite).
-LARGE_VALUE = 1e150
-#: Directions per case sampled to find that power of two (only after an overflow), as many as the lobe search.
-SCALE_SAMPLES = 1024
-
-
-def _quadrature(problem: Problem, *, rtol: float, atol: float, nonfinite: NonFinitePolicy,
-                max_evaluations: int):
-    options = dict(rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations)
-    upper = _quadrature_hemisphere(problem, False, options)
-    if not getattr(problem.model, "transmits", False):
-        return upper
-    # A BSDF: the lower hemisphere as a second hemisphere integral, mirrored into the upper one (ω_z → −ω_z),
-    # about its own peak, the refraction direction.
-    lower = _quadrature_hemisphere(problem, True, options)
-    reason = np.where(upper[5]["reason"] != "", upper[5]["reason"], lower[5]["reason"])
-    bad = None if upper[4] is None else upper[4] + lower[4]
-    return (upper[0] + lower[0], upper[1] + lower[1], upper[2] + lower[2], upper[3] & lower[3], bad,
-            {"reason": reason, "reflected": upper[0], "transmitted": lower[0]})
-
-
-#: ω_z → −ω_z: the lower hemisphere of a BSDF integrated as an upper one.
-FLIP = np.array([1.0, 1.0, -1.0])
-
-
-def _quadrature_hemisphere(problem: Problem, lower: bool, options: dict):
-    where = problem.model.source_path or problem.model.name
-    # Overflow in the lobe search or the sums is handled here, never shown as numpy's warning.
-    with np.errstate(all="ignore"):
-        try:
-            outcome = _integrate(problem, None, lower, **options)
-            overflowed = not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1])))
-        except NonFiniteIntegrand as bad:
-            if np.all(np.isfinite(bad.direction)):  # the BRDF itself is NaN or infinite there
-                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
-            overflowed = True
-        if overflowed:
-            try:
-                scale = _scales(problem, options["nonfinite"])  # raises where the BRDF is not finite
-                if not np.any(scale > 1.0):
-                    raise EvaluationError("the integration overflowed, yet no sampled BRDF value is large",
-                                          where=where)
-                outcome = _integrate(problem, scale, lower, **options)
-            except NonFiniteIntegrand as bad:
-                raise EvaluationError(_nonfinite_message(problem, bad), where=where) from None
-            if not (np.all(np.isfinite(outcome[0])) and np.all(np.isfinite(outcome[1]))):
-                raise EvaluationError("the albedo or its error estimate exceeds float64's range", where=where)
-    return outcome
-
-
-def _integrate(problem: Problem, scale: np.ndarray | None, lower: bool = False, *, rtol: float, atol: float,
-               nonfinite: NonFinitePolicy, max_evaluations: int):
-    """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case; with
-    ``lower``, of the lower hemisphere mirrored into the upper one."""
-    K = problem.fixed.shape[0]
-    side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
-    if scale is None:
-        # the compiled integrand itself where there is one: the routes then run their fused kernels on it
-        integrand, scale = (problem.native if problem.native is not None and not lower else side), np.ones(K)
-    else:
-        def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
-            return side(omega, case) / scale[case, None]
-    if lower:
-        refracted = problem.model.transmission_lobe(problem.fixed, problem.case_params(np.arange(K)))
-        lobe = Lobe(refracted.direction * FLIP, refracted.width, refracted.support)
-    else:
-        lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
-    if lobe is None:
-        normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
-        candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
-        poles, widths, supports = estimate_lobe(integrand, K, candidates=candidates)
-    else:
-        poles = np.broadcast_to(lobe.direction, (K, 3))
-        widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-    # The half-vector route first, on the upper hemisphere (brdfnorm.engine.routes.halfvector_generic says which lobes
-    # it takes);
-    # isotropy decides that and the global rule's azimuth estimate.
-    isotropic = _isotropic_cases(problem, rtol)
-    first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
-    result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
-                                  nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first,
-                                  anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None))
-    # Each case is charged the isotropy test as if it had run alone: counts do not depend on how cases are batched.
-    evaluations = result.evaluations + 3 * ISOTROPY_PAIRS
-    return (result.value * scale[:, None], result.error * scale[:, None], evaluations, result.converged,
-            result.nonfinite_fraction, {"reason": result.reason})
-
-
-#: Random direction pairs per parameter set for the isotropy test.
-ISOTROPY_PAIRS = 48
-
-
-def _isotropic_cases(problem: Problem, rtol: float) -> np.ndarray:
-    """Per case (K,): :func:`rotation_invariant` at its parameter values, tested once per distinct set."""
-    K = problem.fixed.shape[0]
-    if problem.per_case:
-        values = np.column_stack([np.asarray(problem.params[name], dtype=float).reshape(K, -1)
-                                  for name in sorted(problem.per_case)])
-        _, first, label = np.unique(values, axis=0, return_index=True, return_inverse=True)
-    else:
-        first, label = np.zeros(1, dtype=np.intp), np.zeros(K, dtype=np.intp)
-
-    def brdf(L: np.ndarray, V: np.ndarray, case: np.ndarray) -> np.ndarray:
-        return problem.model.evaluate(L, V, problem.case_params(case))
-
-    return rotation_invariant(brdf, first, rtol)[label.reshape(K)]
-
-
-def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.ndarray:
-    """Per case of ``cases``: f(R L, R V) = f(L, V) to rtol/64 of max |f| on random pairs, R rotations about N.
-    ``brdf(L, V, case)`` evaluates f for (M, 3) directions and the case index (M,) of each.
-
-    An anisotropic lobe is an ellipse, a wedge thinner than the azimuths of either route's polar coordinates
-    where it is long (Ashikhmin-Shirley, n_u = 1.6, n_v = 5112: 1.37 times the estimate at rtol 1e-9 over the half
-    vector; n_u = 1407, n_v = 2.3: 1.42 times at rtol 1e-5 in the lobe-aligned global rule). Such lobes skip the
-    half-vector route, and the global rule bounds its azimuthal Fourier tail for them."""
-    rng = np.random.default_rng(7)
-    L, V = random_hemisphere(rng, ISOTROPY_PAIRS), random_hemisphere(rng, ISOTROPY_PAIRS)
-    index = np.repeat(cases, ISOTROPY_PAIRS)
-    with np.errstate(all="ignore"):
-        reference = np.asarray(brdf(np.tile(L, (cases.size, 1)), np.tile(V, (cases.size, 1)), index), dtype=float)
-        scale = np.abs(reference).reshape(cases.size, -1).max(axis=1)
-        change = np.zeros(cases.size)
-        for angle in (0.7, 2.1):
-            rotation = rotation_about_normal(angle)
-            turned = [np.tile(d @ rotation.T, (cases.size, 1)) for d in (L, V)]
-            rotated = np.asarray(brdf(*turned, index), dtype=float)
-            change = np.maximum(change, np.abs(rotated - reference).reshape(cases.size, -1).max(axis=1))
-    return np.isfinite(scale) & np.isfinite(change) & (change <= rtol / 64 * scale)
-
-
-def _scales(problem: Problem, nonfinite: NonFinitePolicy) -> np.ndarray:
-    """Per case, 2^k ≥ the largest |integrand| on a Fibonacci lattice where that exceeds :data:`LARGE_VALUE`,
-    else 1 (a power of two: dividing by it is exact). With ``nonfinite="raise"``, a lattice direction where the
-    integrand is not finite raises :class:`NonFiniteIntegrand` there."""
-    K = problem.fixed.shape[0]
-    probe = fibonacci_hemisphere(SCALE_SAMPLES)
-    peak = np.zeros(K)
-    step = max(1, 1_000_000 // SCALE_SAMPLES)  # bounded memory whatever the number of cases
-    for start in range(0, K, step):
-        cases = np.repeat(np.arange(start, min(K, start + step)), SCALE_SAMPLES)
-        omega = np.tile(probe, (cases.size // SCALE_SAMPLES, 1))
-        values = problem.integrand(omega, cases)
-        finite = np.all(np.isfinite(values), axis=-1)
-        if nonfinite == "raise" and not finite.all():
-            first = int(np.argmin(finite))
-            raise NonFiniteIntegrand(int(cases[first]), omega[first], values[first])
-        magnitude = np.where(finite, np.abs(values).max(axis=-1), 0.0).reshape(-1, SCALE_SAMPLES)
-        peak[start:start + magnitude.shape[0]] = magnitude.max(axis=1)
-    return np.where(peak > LARGE_VALUE, np.exp2(np.ceil(np.log2(np.maximum(peak, 1.0)))), 1.0)
-
-
-def _nonfinite_message(problem: Problem, bad: NonFiniteIntegrand) -> str:
-    """Where the BRDF was not finite: its value and the (L, V) pair — or, where the direction itself is not (the
-    lobe search's sums overflowed even after scaling), that the values are too large to integrate."""
-    fixed = problem.fixed[bad.case]
-    hint = "pass nonfinite='zero' (--nonfinite zero) to count such values as 0"
-    if not np.all(np.isfinite(bad.direction)):
-        return f"BRDF values at V={_fmt(fixed)} are too large to integrate in float64 (their sums overflow)"
-    L, V = (bad.direction, fixed) if problem.over == "light" else (fixed, bad.direction)
-    # Python's formatting, not numpy's: numpy pads a NaN whose sign bit is set ("[ nan]"), as compiled code makes it.
-    value = "[" + " ".join(f"{v:.6g}" for v in np.ravel(bad.value)) + "]"
-    return f"BRDF is not finite (value {value}) at L={_fmt(L)}, V={_fmt(V)}; {hint}"
-
-
-def _fmt(direction: np.ndarray) -> str:
-    return "(" + ", ".join(f"{c:.9g}" for c in direction) + ")"
 
 
 def _closed_form(problem: Problem, **_: object):
@@ -421,7 +248,7 @@ def _closed_form(problem: Problem, **_: object):
             f"no closed form for {problem.model.name} (over the {problem.over}) at the requested directions; "
             "closed forms hold at normal incidence (theta 0) — use method 'quadrature'", where="method")
     error = 4.0 * np.finfo(float).eps * np.abs(value)  # a few roundings in the formula
-    return value, error, np.zeros(K, dtype=np.int64), np.ones(K, dtype=bool), None
+    return RouteResult(value, error, np.zeros(K, dtype=np.int64), np.ones(K, dtype=bool))
 
 
 def _has_closed_form(model: Model, over: Over) -> bool:
@@ -442,7 +269,7 @@ def _reciprocal_microfacet(applies):
 #: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
 #: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
 METHODS: Registry[Method] = Registry("method", "method", {
-    "quadrature": Method("quadrature", lambda model, over: True, _quadrature,
+    "quadrature": Method("quadrature", lambda model, over: True, quadrature.albedo_method,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
     "closed-form": Method("closed-form", _has_closed_form, _closed_form, "exact formula, normal incidence"),
     "series": Method("series", lambda model, over: type(model) is BlinnPhong, _series,
@@ -456,9 +283,13 @@ METHODS: Registry[Method] = Registry("method", "method", {
                          "reflection + refraction over the facet normal, the slope distribution as measure"),
     "certified": Method("certified", certified.applies, certified.albedo_method,
                         "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)),
+    # brdfnorm.materials lies above the engine: its method is declared by where it lives, imported on first use
+    "material": Method("material", Reference("brdfnorm.materials.route:applies").call(),
+                       Reference("brdfnorm.materials.route:albedo_method").call(),
+                       "a material term by term: its lobes' exact albedos through the layering factors"),
 })
 #: What ``method="auto"`` tries, in order (the first applicable wins); closed forms are never chosen silently.
-AUTO_ORDER: list[str] = ["series", "azimuthal", "microfacet", "dielectric", "quadrature"]
+AUTO_ORDER: list[str] = ["material", "series", "azimuthal", "microfacet", "dielectric", "quadrature"]
 
 
 def register_method(method: Method, *, auto_priority: int | None = None) -> None:
@@ -495,6 +326,29 @@ def warn_about(name: str, rtol: float, converged: np.ndarray, reason: np.ndarray
                       "of the hemisphere's solid angle", stacklevel=stacklevel)
 
 
+def check_settings(model: Model, *, over: Over = "light", rtol: float = DEFAULT_RTOL, atol: float = 0.0,
+                   method: str = "auto", nonfinite: NonFinitePolicy = "raise",
+                   max_evaluations: int = DEFAULT_MAX_EVALUATIONS, digits: int | None = None
+                   ) -> tuple[float, float, Method]:
+    """The settings of an albedo computation checked once, for :func:`albedo` and for a table job before its work
+    is sent out (:class:`brdfnorm.parallel.job.AlbedoSettings`): (rtol, atol) as floats and the method chosen
+    (``"auto"`` resolved for this model and ``over``). Raises :class:`ArgumentError` naming the API argument."""
+    rtol, atol = validate.tolerances(rtol, atol)
+    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
+    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
+    check_model(model)
+    validate.choice(over, ("light", "view"), "over")
+    if over == "view" and getattr(model, "transmits", False):
+        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
+                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
+                            where="over")
+    chosen = resolve_method(model, over, method)
+    for name, given in {"digits": digits}.items():
+        if given is not None and name not in chosen.options:
+            raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
+    return rtol, atol, chosen
+
+
 def albedo(
     model: Model,
     theta,
@@ -519,38 +373,37 @@ def albedo(
     ``$BRDFNORM_BACKEND``, else "compiled" where Numba imports) chooses how the integrand and the cubature's inner
     loops run (:mod:`brdfnorm.engine.compiled`); the answers agree within their error estimates.
     """
-    rtol, atol = validate.tolerances(rtol, atol)
-    validate.count(max_evaluations, "max_evaluations", maximum=10**12)
-    validate.choice(nonfinite, ("raise", "zero"), "nonfinite")
+    rtol, atol, chosen = check_settings(model, over=over, rtol=rtol, atol=atol, method=method, nonfinite=nonfinite,
+                                        max_evaluations=max_evaluations, digits=digits)
+    options = {"digits": digits}
     problem = make_problem(model, theta, phi, over)
     backend = compiled_backend.requested(backend)
-    if over == "view" and getattr(model, "transmits", False):
-        raise ArgumentError(f"{model.name} transmits: its albedo is defined over the light (the view fixed), "
-                            "as the energy form of the BSDF states; over='view' is not implemented for BSDFs",
-                            where="over")
-    chosen = resolve_method(model, over, method)
-    options = {"digits": digits}
-    for name, given in options.items():
-        if given is not None and name not in chosen.options:
-            raise ArgumentError(f"{name} applies to method 'certified' only, not {chosen.name!r}", where=name)
     if chosen.name == "quadrature":  # the only method that samples the model's own lobe
         problem = with_native(problem, backend)
     problem = replace(problem, compiled=backend == "compiled")
-    value, error, evaluations, converged, bad, *extra = chosen.run(
-        problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
-        **{name: given for name, given in options.items() if given is not None})
-    if chosen.name != "certified":  # a certified error is the enclosure's radius: it bounds the rounding already
+    result = chosen.run(problem, rtol=rtol, atol=atol, nonfinite=nonfinite, max_evaluations=max_evaluations,
+                        **{name: given for name, given in options.items() if given is not None})
+    return albedo_result(result, problem, chosen.name, rtol)
+
+
+def albedo_result(result: RouteResult, problem: Problem, method: str, rtol: float) -> AlbedoResult:
+    """The public :class:`AlbedoResult` of a method's :class:`RouteResult` over ``problem``'s batch: reshaped to
+    the batch's shape, every estimate at least the final rounding (:func:`with_final_rounding`), the batch's
+    warnings given once."""
+    value, error = result.value, result.error
+    if method != "certified":  # a certified error is the enclosure's radius: it bounds the rounding already
         error = with_final_rounding(value, error)
-    extra = dict(extra[0]) if extra else {}
-    reason = np.asarray(extra.pop("reason", np.where(converged, "", "budget")), dtype=str)
+    extras = dict(result.extras)
+    bad = extras.pop("nonfinite_fraction", None)
+    reason = result.reasons()
     S, C = problem.shape, value.shape[-1]
-    warn_about(model.name, rtol, converged, reason, bad, stacklevel=3)
+    warn_about(problem.model.name, rtol, result.converged, reason, bad, stacklevel=4)
     return AlbedoResult(
-        value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=evaluations.reshape(S),
-        converged=converged.reshape(S), method=chosen.name, theta=problem.theta, phi=problem.phi, over=over,
-        params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
-        reason=reason.reshape(S), **{name: bound.reshape(S + (C,)) for name, bound in extra.items()},
-        model=model.name, bound=model.params, rtol=rtol,
+        value=value.reshape(S + (C,)), error=error.reshape(S + (C,)), evaluations=result.evaluations.reshape(S),
+        converged=result.converged.reshape(S), method=method, theta=problem.theta, phi=problem.phi,
+        over=problem.over, params=problem.broadcast_params, nonfinite_fraction=None if bad is None else bad.reshape(S),
+        reason=reason.reshape(S), **{name: part.reshape(S + (C,)) for name, part in extras.items()},
+        model=problem.model.name, bound=problem.model.params, rtol=rtol,
     )
 
 

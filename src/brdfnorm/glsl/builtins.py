@@ -3,7 +3,7 @@
 Each built-in is resolved from its argument types to a result type and an implementation taking the
 arguments' component tuples (see :mod:`.types`). Where the specification leaves a result undefined,
 the implementation does what Mesa 22.3's llvmpipe returns, as measured with compute shaders over the
-special values ±0, ±1, ±2, ±0.5, ±inf and NaN (tests/test_glsl_compiler.py re-measures them when an EGL
+special values ±0, ±1, ±2, ±0.5, ±inf and NaN (tests/glsl/test_compiler.py re-measures them when an EGL
 context can be created):
 
 * ``pow(x, y)`` is evaluated as ``exp2(y·log2(x))`` with ``x == 0 → 0``: NaN for x < 0 (any y), 0 for

@@ -8,7 +8,6 @@ formats engines load (:mod:`.formats`).
 (['1-E', 'E', 'E_avg', 'E_avg_error', 'E_error'], ['mu', 'n'])
 """
 
-from . import glass  # noqa: F401 — registers the glass tables' E_avg route with .table
 from .formats import FORMATS, dumps, load, save
 from .table import Lut, compute, compute_cells, grid_values
 

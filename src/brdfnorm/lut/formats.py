@@ -45,8 +45,8 @@ import numpy as np
 from ..errors import ArgumentError
 from ..output import write_file
 from . import layout as layouts
-from .images import WriteOptions, _write_exr, _write_png
-from .layout import MAGIC, _check_finite, _subset_meta
+from .images import WriteOptions, write_exr, write_png
+from .layout import MAGIC, check_finite, subset_meta
 from .readers import READERS, read
 from .table import Lut
 
@@ -92,30 +92,30 @@ def _write_npz(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
                             where="tables")
     buffer = io.BytesIO()
     arrays = {name: lut[name] for name in tables} | dict(lut.axes)
-    np.savez_compressed(buffer, meta=np.array(json.dumps(_subset_meta(lut, tables))), **arrays)
+    np.savez_compressed(buffer, meta=np.array(json.dumps(subset_meta(lut, tables))), **arrays)
     return buffer.getvalue()
 
 
 # -- json --------------------------------------------------------------------------------------------------
 
 def _write_json(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
-    _check_finite(lut, tables, "JSON")
+    check_finite(lut, tables, "JSON")
     document = {"format": MAGIC, "axes": {n: v.tolist() for n, v in lut.axes.items()},
-                "tables": {n: lut[n].tolist() for n in tables}, "meta": _subset_meta(lut, tables)}
+                "tables": {n: lut[n].tolist() for n in tables}, "meta": subset_meta(lut, tables)}
     return json.dumps(document, indent=1, allow_nan=False) + "\n"
 
 
 # -- csv ---------------------------------------------------------------------------------------------------
 
 def _write_csv(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
-    _check_finite(lut, tables, "CSV")
+    check_finite(lut, tables, "CSV")
     names = list(lut.axes)
     grids = np.meshgrid(*lut.axes.values(), indexing="ij")
     columns = [g.ravel() for g in grids] + [np.asarray(lut.full(n)).ravel() for n in tables]
     header = [*names, *tables]
     if any("," in h or '"' in h for h in header):
         raise ArgumentError("axis and table names may not contain commas or quotes in CSV", where="tables")
-    lines = [f"# {MAGIC} {json.dumps(_subset_meta(lut, tables), ensure_ascii=True, separators=(',', ':'))}",
+    lines = [f"# {MAGIC} {json.dumps(subset_meta(lut, tables), ensure_ascii=True, separators=(',', ':'))}",
              ",".join(header)]
     stacked = np.stack(columns, axis=1)
     lines.extend(",".join(repr(float(v)) for v in row) for row in stacked)
@@ -145,7 +145,7 @@ def _c_nested(array: np.ndarray) -> str:
 
 def _write_code(language: str) -> Callable[[Lut, Sequence[str], WriteOptions], str]:
     def write(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> str:
-        _check_finite(lut, tables, language)
+        check_finite(lut, tables, language)
         ids = _identifiers(lut, tables, opts.prefix)
         lines = _axes_comment(lut, "//")
         lines.append(f"// {MAGIC} " + _meta_json(_SubsetLut(lut, tables), {"identifiers": ids}))
@@ -176,7 +176,7 @@ class _SubsetLut:
     """A view of a lut with only some tables in its meta (for the code writers' meta comment)."""
 
     def __init__(self, lut: Lut, tables: Sequence[str]) -> None:
-        self.meta = _subset_meta(lut, tables)
+        self.meta = subset_meta(lut, tables)
         self.meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
 
 
@@ -187,11 +187,11 @@ FORMATS: dict[str, tuple[Callable, Callable[[bytes, str], Lut], str]] = {
     "npz": (_write_npz, READERS["npz"], "float64"),
     "json": (_write_json, READERS["json"], "float64"),
     "csv": (_write_csv, READERS["csv"], "float64"),
-    "exr": (_write_exr, READERS["exr"], "float32 (float16 with half)"),
+    "exr": (write_exr, READERS["exr"], "float32 (float16 with half)"),
     "h": (_write_code("c"), READERS["h"], "float32"),
     "glsl": (_write_code("glsl"), READERS["h"], "float32"),
     "hlsl": (_write_code("hlsl"), READERS["h"], "float32"),
-    "png": (_write_png, READERS["png"], "16-bit fixed point over [min, max]"),
+    "png": (write_png, READERS["png"], "16-bit fixed point over [min, max]"),
 }
 
 

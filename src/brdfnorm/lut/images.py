@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..inputs import png
-from .layout import MAGIC, WriteOptions, _check_finite, _subset_meta
+from .layout import MAGIC, WriteOptions, check_finite, subset_meta
 from .table import Lut
 
 CHANNEL_NAMINGS = ("rgba", "brdfnorm")
@@ -62,7 +62,8 @@ def _image_parts(lut: Lut, tables: Sequence[str], opts: WriteOptions, fmt: str) 
     return parts
 
 
-def _write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
+def write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
+    """``tables`` as an OpenEXR file's bytes (the ``exr`` writer of :data:`brdfnorm.lut.formats.FORMATS`)."""
     OpenEXR = _openexr()  # noqa: N806 - the module, by its own name
 
     dtype = np.float16 if opts.half else np.float32
@@ -71,7 +72,7 @@ def _write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
         if big:
             raise ArgumentError(f"table {big[0]} exceeds the float16 range", where="half")
     parts = _image_parts(lut, tables, opts, "EXR")
-    meta = _subset_meta(lut, tables)
+    meta = subset_meta(lut, tables)
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["exr"] = {"parts": parts}
     images = []
@@ -102,7 +103,8 @@ def _write_exr(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
 
 # -- PNG -------------------------------------------------------------------------------------------------------
 
-def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
+def write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
+    """``tables`` as a 16-bit PNG file's bytes (the ``png`` writer of :data:`brdfnorm.lut.formats.FORMATS`)."""
     parts = _image_parts(lut, tables, opts, "PNG")
     if len(parts) != 1:
         other, first = (", ".join(p["channels"].values()) for p in parts[:2])
@@ -112,7 +114,7 @@ def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
     if len(part["axes"]) > 2:
         raise ArgumentError(f"a PNG image holds a table of one or two axes; {', '.join(tables)} has "
                             f"{len(part['axes'])} (use .exr or .npz)", where="tables")
-    _check_finite(lut, tables, "PNG")
+    check_finite(lut, tables, "PNG")
     shape = _image_shape(tuple(len(lut.axes[a]) for a in part["axes"]))
     samples, mapping = [], {}
     for channel, name in zip(RGBA, part["channels"].values(), strict=False):  # PNG channels are R, G, B, A by place
@@ -125,7 +127,7 @@ def _write_png(lut: Lut, tables: Sequence[str], opts: WriteOptions) -> bytes:
         samples.append(np.zeros(shape, dtype=np.int64))
     colour = {1: 0, 3: 2, 4: 6}[len(samples)]  # greyscale, RGB, RGBA
     codes = np.stack(samples, axis=-1)
-    meta = _subset_meta(lut, tables)
+    meta = subset_meta(lut, tables)
     meta["axis_values"] = {n: v.tolist() for n, v in lut.axes.items()}
     meta["png"] = {"axes": part["axes"], "channels": mapping, "value": "lo + code / 65535 * (hi - lo)",
                    "colour": {0: "greyscale (read as R)", 2: "RGB", 6: "RGBA"}[colour]}

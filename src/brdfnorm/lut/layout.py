@@ -155,13 +155,15 @@ class WriteOptions:
     broadcast_average: bool = False
 
 
-def _check_finite(lut: Lut, tables: Sequence[str], fmt: str) -> None:
+def check_finite(lut: Lut, tables: Sequence[str], fmt: str) -> None:
+    """Refuse ``tables`` holding a non-finite value for a format ``fmt`` that cannot store one (every writer's)."""
     for name in tables:
         if not np.all(np.isfinite(lut[name])):
             raise ArgumentError(f"table {name} has non-finite values, which {fmt} cannot hold", where="tables")
 
 
-def _subset_meta(lut: Lut, tables: Sequence[str]) -> dict:
+def subset_meta(lut: Lut, tables: Sequence[str]) -> dict:
+    """The table file's metadata for the written ``tables`` only (every writer's header)."""
     meta = dict(lut.meta)
     meta["tables"] = {name: list(lut.table_axes[name]) for name in tables}
     return meta

@@ -33,6 +33,7 @@ import numpy as np
 
 from .. import validate
 from ..engine.compiled.backend import scope as backend_scope
+from ..engine.machinery.interval import adaptive_unit_interval
 from ..engine.machinery.kronrod import GAUSS as GAUSS_WEIGHTS
 from ..engine.machinery.kronrod import KRONROD as KRONROD_WEIGHTS
 from ..engine.machinery.kronrod import NODES as KRONROD_NODES
@@ -40,7 +41,7 @@ from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..validate import DEFAULT_RTOL
-from .adaptive import adaptive_unit_interval
+from . import glass
 from .axes import axis_parameter, checked_axes, per_cell
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
 from .cloth import cloth_model
@@ -51,8 +52,6 @@ CHANNELS = ("dfg",)
 #: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
 #: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
 CHUNK_CELLS = 256
-#: E_avg routes for kinds of model, registered by the modules that provide them (``transmits``: lut.glass).
-AVERAGE_ROUTES: dict[str, Callable] = {}
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
@@ -307,7 +306,8 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         difference = np.abs(kronrod - half * (g @ GAUSS_WEIGHTS))
         return kronrod, difference + half * (g_error @ np.abs(KRONROD_WEIGHTS))
 
-    total, total_error = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    averaged = adaptive_unit_interval(evaluate, M, rtol=rtol, max_panels=max_panels)
+    total, total_error = averaged.value, averaged.error
     floor_error = MU_FLOOR**2 * largest_e
     total_error = total_error + floor_error
     converged = albedo_converged & (total_error <= rtol * np.abs(total) + floor_error)
@@ -360,9 +360,9 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     if average:
         combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
                       for n in others)
-        if getattr(model, "transmits", False) and "transmits" in AVERAGE_ROUTES:  # spread like the cells
-            avg, avg_error, avg_converged, _ = AVERAGE_ROUTES["transmits"](model, combos, rtol=rtol, method=method,
-                                                                           spread=spread)
+        if getattr(model, "transmits", False):  # glass: the 3-D route of lut.glass, spread like the cells
+            avg, avg_error, avg_converged, _ = glass.average(model, combos, rtol=rtol, generic=average_over_mu,
+                                                             method=method, spread=spread)
         else:
             avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)

@@ -184,7 +184,11 @@ CACHE = AlbedoCache()
 
 
 def top_albedo(component: Component, mu: np.ndarray, source: str, size: int) -> np.ndarray:
-    """E_top(μ) (…, 3) as the material's ``albedo_source`` reads it (see the module docstring)."""
+    """E_top(μ) (…, 3) as the material's ``albedo_source`` reads it (see the module docstring); a closed form
+    (:attr:`Component.closed_form`) is read exactly whatever the source."""
+    if component.closed_form:
+        mu = np.asarray(mu, dtype=float)
+        return component.albedo(mu.ravel())[0].reshape(mu.shape + (3,))
     if source == "table":
         return CACHE.table(component, size)(mu)
     mu = np.asarray(mu, dtype=float)

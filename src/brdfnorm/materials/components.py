@@ -11,6 +11,13 @@ with brdfnorm's engine, so that the layering rules (:mod:`brdfnorm.materials.com
 * :class:`Diffuse` — Lambert ρ/π (E = ρ exactly) or EON (Portsmouth et al. 2025, the ``eon`` lobe, whose albedo is
   exact in closed form).
 * :class:`Sheen` — the ``charlie`` lobe (Estevez & Kulla 2017) as the fuzz; E(μ) by the engine's quadrature.
+* :class:`Transmission` — the refraction of brdfnorm's ``ggx-dielectric`` lobe (Walter et al. 2007, energy form,
+  its exact Fresnel 1 − F kept), the translucent base's f^T; E_T(μ) by the dielectric route
+  (:mod:`brdfnorm.engine.routes.dielectric`), exact from rough to smooth.
+* :class:`Darkening` — not a lobe: OpenPBR's coat darkening factor lerp(1, Δ(μ_o), δ) as a view-side layering
+  factor (its "albedo" is δ(1 − Δ), so that 1 − E is the factor), exact in closed form.
+* :class:`LTCSheen` — the ``zeltner`` lobe (Zeltner et al. 2022's LTC sheen, OpenPBR's recommended fuzz); E(μ) is
+  the fit R(μ, r) in closed form (the LTC integrates to 1: :mod:`brdfnorm.models.zeltner`).
 """
 
 from __future__ import annotations
@@ -26,7 +33,9 @@ from ..engine.routes.azimuthal import white_albedo
 from ..models.charlie import Charlie
 from ..models.eon import EnergyPreservingOrenNayar
 from ..models.fresnel import Fresnel
+from ..models.ggx_dielectric import GGXDielectric
 from ..models.microfacet import GGXDistribution, shadowing_masking, smith_a2
+from ..models.zeltner import albedo_fit, ltc_density
 from ..validate import DEFAULT_MAX_EVALUATIONS
 
 #: Tolerance of every exact component albedo (the layering's E(μ) inside the integrand).
@@ -60,6 +69,11 @@ class Component:
     def key(self) -> tuple:
         """What identifies the lobe's values (for caches of its albedo)."""
         raise NotImplementedError
+
+    #: An albedo in closed form, read as is by every ``albedo_source`` (no curve, no table).
+    closed_form = False
+    #: Scatters into the lower hemisphere (light from inside the object): the refraction of a translucent base.
+    transmits = False
 
     #: The table axis an engine tabulates this lobe over (its roughness; a dataclass field of each lobe).
     roughness = None
@@ -206,3 +220,113 @@ class Sheen(Component):
             warnings.simplefilter("ignore", UserWarning)
             result = engine_albedo(self._model(), np.arccos(fixed[:, 2]), rtol=SHEEN_RTOL)
         return result.value.reshape(-1, 3), result.error.reshape(-1, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class LTCSheen(Component):
+    """The ``zeltner`` LTC sheen with colour and roughness r ∈ [0.01, 1]; E(μ) = colour·R(μ, r) exactly."""
+
+    color: tuple = (1.0, 1.0, 1.0)
+    roughness: float = 0.5
+
+    @property
+    def key(self) -> tuple:
+        return ("ltc-sheen", tuple(self.color), self.roughness)
+
+    def with_roughness(self, roughness: float) -> LTCSheen:
+        # an engine's table row at roughness 0 is read at the fit's smallest roughness
+        return LTCSheen(self.label, self.color, max(roughness, 0.01))
+
+    def projected(self, L, V):
+        white = albedo_fit(np.clip(V[..., 2], 0.0, 1.0), self.roughness) * ltc_density(L, V, self.roughness)
+        return white[..., None] * np.asarray(self.color, dtype=float)
+
+    def albedo(self, mu):
+        mu = np.clip(np.asarray(mu, dtype=float).ravel(), 0.0, 1.0)
+        value = albedo_fit(mu, self.roughness)[:, None] * np.asarray(self.color, dtype=float)
+        return value, 8 * np.finfo(float).eps * np.abs(value)
+
+
+@dataclass(frozen=True, eq=False)
+class Darkening(Component):
+    """OpenPBR's coat darkening (*Coat* → *Darkening*) as a factor of the coated base, at view cosine μ_o:
+
+    Δ(μ_o) = (1 − K)/(1 − E_b K)  (eq. [general_darkening_formula]),  K = lerp(K_s, K_r, r_b)
+    (eq. [internal_diffuse_reflection_coefficient_for_general_base]), K_s = F_c(μ_o) (eq. [..._smooth_base]),
+    K_r = 1 − (1 − E_F)/η_c² (eq. [..._rough_base]) with E_F the coat Fresnel's exact hemispherical average;
+    the coated base is multiplied by B(δ) Δ = lerp(1, Δ, δ) (eq. [boost_factor], B_0 = 1/Δ). E_b (per channel) is
+    the base's albedo at normal incidence, Δ = 1 where E_b K = 1 (E_b = K = 1: no energy is lost). With
+    ``reciprocal`` (the symmetric and reciprocal layering rules) K_s is its hemispherical average E_F, so that the
+    factor is a constant and the material stays reciprocal (brdfnorm's choice; the specification gives the view-side
+    form only)."""
+
+    eta: float = 1.6
+    base_albedo: tuple = (1.0, 1.0, 1.0)
+    base_roughness: float = 1.0
+    darkening: float = 1.0
+    #: K_s averaged over the hemisphere (E_F): a constant factor, for the reciprocal layering rules.
+    reciprocal: bool = False
+    closed_form = True
+
+    @property
+    def key(self) -> tuple:
+        return ("darkening", self.eta, tuple(self.base_albedo), self.base_roughness, self.darkening, self.reciprocal)
+
+    def with_roughness(self, roughness: float) -> Darkening:
+        return self
+
+    @property
+    def roughness(self) -> float:  # the table axis: none (the factor is read exactly)
+        return 0.0
+
+    def factor(self, mu: np.ndarray) -> np.ndarray:
+        """lerp(1, Δ(μ), δ): (n, 3) at view cosines μ (n,)."""
+        mu = np.clip(np.asarray(mu, dtype=float).ravel(), 0.0, 1.0)
+        coat = Fresnel("dielectric", eta=self.eta)
+        e_f = float(np.ravel(coat.average()[0])[0])
+        k_rough = 1.0 - (1.0 - e_f) / self.eta**2
+        k_smooth = np.full((mu.size, 1), e_f) if self.reciprocal else np.asarray(coat(mu[:, None]), dtype=float)[:, :1]
+        K = k_smooth + (k_rough - k_smooth) * self.base_roughness
+        e_b = np.asarray(self.base_albedo, dtype=float)
+        lost = 1.0 - e_b * K
+        with np.errstate(divide="ignore", invalid="ignore"):
+            delta = np.where(lost > 0, (1.0 - K) / np.where(lost > 0, lost, 1.0), 1.0)
+        return 1.0 + self.darkening * (delta - 1.0)
+
+    def albedo(self, mu):
+        value = 1.0 - self.factor(mu)
+        return value, 8 * np.finfo(float).eps * (1.0 + np.abs(value))
+
+
+@dataclass(frozen=True, eq=False)
+class Transmission(Component):
+    """The refraction of the ``ggx-dielectric`` lobe (roughness r, α = r², at least the lobe's α_min; interior index
+    ``eta``), times a tint: f·|N·L| for L below the surface and V above, 0 elsewhere."""
+
+    roughness: float = 0.5
+    eta: float = 1.5
+    tint: tuple = (1.0, 1.0, 1.0)
+    transmits = True
+
+    @property
+    def key(self) -> tuple:
+        return ("transmission", self.roughness, self.eta, tuple(self.tint))
+
+    def with_roughness(self, roughness: float) -> Transmission:
+        return Transmission(self.label, roughness, self.eta, self.tint)
+
+    def model(self) -> GGXDielectric:
+        return GGXDielectric(alpha=max(self.roughness * self.roughness, 1e-12), eta=self.eta)
+
+    def projected(self, L, V):
+        model = self.model()
+        value = model.projected(L, V, model.params)
+        below = np.broadcast_to(L[..., 2:3] < 0, value.shape)
+        return np.where(below, value, 0.0) * np.asarray(self.tint, dtype=float)
+
+    def albedo(self, mu):
+        fixed = _view(mu)
+        result = engine_albedo(self.model(), np.arccos(fixed[:, 2]), method="dielectric", rtol=ALBEDO_RTOL)
+        tint = np.asarray(self.tint, dtype=float)
+        # the route's estimate covers reflection plus refraction: a bound on the refraction's own error
+        return result.transmitted.reshape(-1, 1) * tint, result.error.reshape(-1, 1) * tint

@@ -23,6 +23,10 @@ subsections *Layering* and *Mixing*, and its *Model* sections):
 * **diffuse under a specular interface**: ``albedo-scaling`` — OpenPBR *Glossy-diffuse* f_dielectric +
   (1 − E_dielectric) f_diffuse, by the ``layering`` rule above; ``filament`` — Filament's standard model, the
   diffuse lobe added unattenuated (f_spec + f_diffuse; Filament #10140 discusses attenuating it).
+* A lobe that **transmits** (the translucent base's refraction, :class:`brdfnorm.materials.components.Transmission`)
+  takes every layer's view-side factor only: its light arrives from inside the object and crosses the layers above
+  once, on the way to the view, so neither a light-side factor nor the reciprocal form's 1/(1 − E_avg) applies, nor
+  the coat's darkening (which assumes that what the base does not reflect it absorbs).
 * **F0 blend** (``base_mix = "f0-blend"``): the engines' shortcut — one Schlick specular lobe whose F0 is
   lerp(F0_dielectric, base colour, metalness), over (1 − metalness) × diffuse by the ``layering`` rule — for
   comparison with the BRDF mix (bevy #24246, three.js #32190).
@@ -65,20 +69,26 @@ def mix(a: Sequence[Term], b: Sequence[Term], w: float) -> list[Term]:
 
 
 def layer(top: Sequence[Term], sub: Sequence[Term], attenuator: Component, rule: str, *, coverage: float = 1.0,
-          tint=1.0, source: str = "exact", size: int = 32) -> list[Term]:
-    """C·top + lerp(1, T·A, C)·sub with A the rule's albedo-scaling factor of ``attenuator`` (see the module
-    docstring); the reciprocal form's 1/(1 − E_avg) is folded into the weight."""
+          tint=1.0, source: str = "exact", size: int = 32, darkening: Component | None = None) -> list[Term]:
+    """C·top + lerp(1, T·A·B, C)·sub with A the rule's albedo-scaling factor of ``attenuator`` (see the module
+    docstring) and B = 1 − E_darkening(μ_o) a further view-side factor of the covered part (the coat's darkening,
+    :class:`brdfnorm.materials.components.Darkening`); the reciprocal form's 1/(1 − E_avg) is folded into the
+    weight."""
     if coverage <= 0:
         return list(sub)
     out = [t.scaled(coverage) for t in top]
     if coverage < 1:
         out += [t.scaled(1.0 - coverage) for t in sub]
-    factor = coverage * np.broadcast_to(np.asarray(tint, dtype=float), (3,))
+    plain = coverage * np.broadcast_to(np.asarray(tint, dtype=float), (3,))
+    factor = plain
     if rule == "reciprocal":
         lost = 1.0 - top_average(attenuator, source, size)
         factor = factor * np.where(lost > 0, 1.0 / np.where(lost > 0, lost, 1.0), 0.0)
     for t in sub:
-        view = t.view + (attenuator,)
+        if t.component.transmits:  # light from the other side crosses the layer once, on the view's side
+            out.append(replace(t.scaled(plain), view=t.view + (attenuator,)))
+            continue
+        view = t.view + (attenuator,) + ((darkening,) if darkening is not None else ())
         light = t.light + ((attenuator,) if rule != "view" else ())
         out.append(replace(t.scaled(factor), view=view, light=light))
     return out

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..brdffile import random_hemisphere
+from ..engine.machinery.directions import random_hemisphere
 from ..engine.methods import albedo
 from ..models.base import Model
 from ..validate import DEFAULT_RTOL
@@ -104,8 +104,9 @@ def coat_study(load, roughness=(0.1, 0.3, 0.5, 0.8), ior=(1.3, 1.5, 1.6, 2.0), *
         for eta in ior:
             values = {}
             for rule in ("view", "symmetric", "reciprocal"):
+                # coat_adjustments none: the rule alone (the darkening and roughening would change the metal base)
                 model = load("openpbr", coat_weight=1.0, coat_roughness=r, coat_ior=eta, layering=rule,
-                             **WHITE_BASES[base])
+                             coat_adjustments="none", **WHITE_BASES[base])
                 values[rule] = albedo(model, theta, rtol=rtol).value[:, 0]
             for rule in ("view", "symmetric", "reciprocal"):
                 loss = values["view"] - values[rule]

@@ -18,7 +18,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import ParameterError
-from ..models.base import Lobe, Model, mirror
+from ..models.base import Lobe, Model, mirror, normal_lobe
+from ..models.zeltner import ROUGHNESS_MIN as ZELTNER_MIN
 from ..parameters import Parameter
 from . import openpbr
 from .compose import Term, evaluate_terms
@@ -77,29 +78,46 @@ class OpenPBR(Model):
     material = True
     formula = ("f = F f_fuzz + lerp(1, 1−E_fuzz, F)[C f_coat + lerp(1, T(1−E_coat), C) mix(f_spec + (1−E_spec) "
                "f_diffuse, f_metal, M)]  (OpenPBR Surface, albedo-scaling layering; rules selectable)")
-    energy = ("layered by albedo scaling: E ≤ 1 where every lobe's is (view-side rule); the charlie fuzz gains "
-              "energy at grazing views at low roughness")
+    energy = ("layered by albedo scaling: E ≤ 1 where every lobe's is (view-side rule); the charlie fuzz "
+              "(fuzz_lobe=charlie) gains energy at grazing views at low roughness")
     closed_form_domain = "none"
     parameters = openpbr.PARAMETERS
     channels = 3
 
     def _check(self) -> None:
         p = self._params
+        weight = np.asarray(p["transmission_weight"], dtype=float)
+        #: Scatters into the lower hemisphere where a translucent base is present (the engine then integrates both).
+        self.transmits = bool(np.any(weight > 0))
+        if self.transmits and all(np.ndim(p[q.name]) == (1 if q.per_channel else 0) for q in self.parameters
+                                  if q.kind not in ("choice", "bool")):
+            openpbr.check_transmission(dict(p))
         fuzz = np.asarray(p["fuzz_roughness"], dtype=float)
-        if np.any((np.asarray(p["fuzz_weight"]) > 0) & (fuzz * fuzz < 1e-3 * (1 - 1e-12))):
+        on = np.asarray(p["fuzz_weight"]) > 0
+        if p["fuzz_lobe"] == "zeltner" and np.any(on & (fuzz < ZELTNER_MIN)):
+            raise ParameterError(f"the fuzz (zeltner LTC sheen) needs fuzz_roughness ≥ {ZELTNER_MIN:g} (the fit's "
+                                 "range)", where="parameter fuzz_roughness")
+        if p["fuzz_lobe"] == "charlie" and np.any(on & (fuzz * fuzz < 1e-3 * (1 - 1e-12))):
             raise ParameterError("the fuzz (charlie sheen) needs fuzz_roughness ≥ 0.0317 (α ≥ 1e-3)",
                                  where="parameter fuzz_roughness")
 
     def search_space(self) -> dict[str, tuple[float, float] | None]:
-        """``check`` holds the table size, the conductor's index unless it is used, and the weights of layers
-        that are off (their parameters then do nothing)."""
+        """``check`` holds the table size, the conductor's index unless it is used, the parameters of layers that
+        are off (they then do nothing; the translucent base unless transmission_weight > 0) and thin-walled mode."""
         p = self._params
         space: dict[str, tuple[float, float] | None] = {"albedo_table": None}
         if p["metal_fresnel"] != "conductor":
             space.update(metal_eta=None, metal_k=None)
         if p["fuzz_weight"] == 0:
             space.update(fuzz_roughness=None)
-        space.update(specular_weight=(0.0, 1.0))
+        else:  # the lobe's own range of roughness
+            low = ZELTNER_MIN if p["fuzz_lobe"] == "zeltner" else float(np.sqrt(1e-3))
+            space.update(fuzz_roughness=(low, 1.0))
+        space.update(specular_weight=(0.0, 1.0), geometry_thin_walled=None)
+        if np.all(np.asarray(p["transmission_weight"]) == 0):  # opaque as given: the translucent base stays off
+            space.update(transmission_weight=None, transmission_color=None, transmission_depth=None)
+        else:  # an index-matched interface (specular_weight 0) refracts into a delta, refused
+            space.update(specular_weight=(1e-3, 1.0))
         return space
 
     def projected(self, L, V, params):
@@ -117,8 +135,18 @@ class OpenPBR(Model):
 
     def evaluate(self, L, V, params):
         with np.errstate(divide="ignore", invalid="ignore"):
-            value = self.projected(L, V, params) / L[..., 2:3]
-        return np.where(L[..., 2:3] > 0, value, 0.0)
+            value = self.projected(L, V, params) / np.abs(L[..., 2:3])
+        return np.where(L[..., 2:3] != 0, value, 0.0)
+
+    def transmission_lobe(self, fixed, params) -> Lobe:
+        """The refraction lobe of the translucent base (its ``ggx-dielectric`` lobe's hint, for the first parameter
+        set: a hint only)."""
+        first = next(parameter_sets(self.parameters, params, np.shape(fixed)[:-1]))[1]
+        component = next((t.component for t in terms_of(first) if t.component.transmits), None)
+        if component is None:
+            return normal_lobe(fixed)
+        model = component.model()
+        return model.transmission_lobe(fixed, model.params)
 
     def lobe(self, fixed, params, over):
         """The mirror direction, as wide as the sharper of the specular and (present) coat lobes (the diffuse part is

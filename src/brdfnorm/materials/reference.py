@@ -4,7 +4,8 @@ grid, as JSON or CSV, with the material, the conventions and brdfnorm's version 
 JSON: ``{"format": "brdfnorm-material-reference", "brdfnorm": VERSION, "material": {...}, "conventions": {...},
 "mu": [...], "grid": {NAME: [...]}, "points": [{"params": {...}, "E": [[R, G, B] per μ], "E_error": ...,
 "E_avg": [...], "E_avg_error": [...], "furnace_residual": [[E − 1] per μ], "max_residual": r,
-"argmax_mu": μ}]}``. CSV: one row per (grid point, μ) with the same quantities, the metadata as ``#`` lines first.
+"argmax_mu": μ}]}`` (with "E_R" and "E_T", reflected and transmitted, for a material that transmits). CSV: one
+row per (grid point, μ) with the same quantities, the metadata as ``#`` lines first.
 """
 
 from __future__ import annotations
@@ -60,6 +61,9 @@ def reference(model: Model, grid: Mapping[str, Sequence[float]], mu: Sequence[fl
                        "E_avg": average.tolist(), "E_avg_error": average_error.tolist(),
                        "furnace_residual": residual.tolist(),
                        "max_residual": float(residual.flat[np.argmax(np.abs(residual))]), "argmax_mu": float(mu[i])})
+        if result.transmitted is not None:  # a translucent base: the reflected and transmitted shares apart
+            points[-1].update(E_R=result.reflected.reshape(mu.size, -1).tolist(),
+                              E_T=result.transmitted.reshape(mu.size, -1).tolist())
     params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in model.params.items()}
     return {"format": FORMAT, "brdfnorm": __version__,
             "material": {"model": model.name, "source": model.source_path,

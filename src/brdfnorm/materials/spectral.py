@@ -2,7 +2,7 @@
 reduced to linear sRGB with colour-science (the ``spectral`` extra).
 
 The reduction is of the *reflectance*, not of η and k: F(μ, λ) is the exact unpolarized conductor Fresnel at each
-wavelength (:func:`brdfnorm.models.microfacet.fresnel_conductor`), and its colour is the linear-sRGB value of that
+wavelength (:func:`brdfnorm.models.fresnel.fresnel_conductor`), and its colour is the linear-sRGB value of that
 reflectance spectrum under CIE D65 for the CIE 1931 2° observer,
 
     RGB_c(μ) = Σ_λ w_c(λ) F(μ, λ),   w(λ) = M_XYZ→sRGB · (x̄, ȳ, z̄)(λ) S_D65(λ) Δλ / Σ_λ ȳ(λ) S_D65(λ) Δλ,
@@ -22,8 +22,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..extras import require
-from ..models.fresnel import Fresnel
-from ..models.microfacet import fresnel_conductor
+from ..models.fresnel import Fresnel, fresnel_conductor
 
 WAVELENGTHS = np.arange(380.0, 781.0, 1.0)
 #: The wavelengths (nm) engines commonly sample η and k at for R, G, B.

@@ -45,9 +45,11 @@ from collections.abc import Callable, Mapping
 import numpy as np
 from scipy.special import erfcx
 
-from ..errors import EvaluationError, ParameterError
+from ..errors import ParameterError
 from ..parameters import Parameter
+from ..registry import Reference
 from .base import Lobe, Model, mirror
+from .fresnel import MICROFACET_KINDS, fresnel_conductor, fresnel_dielectric, fresnel_schlick
 
 #: The largest Kulla–Conty table ``ms_table`` may ask for: what is computed within 1 GB and ~10 s.
 MAX_MS_TABLE = 256
@@ -58,14 +60,9 @@ ALPHA_MIN = 1e-12
 
 
 class Distribution:
-    """A slope distribution P22 with its Smith Λ and the radial coordinates the half-vector integral uses.
-
-    The half-vector integral (:mod:`brdfnorm.engine.routes.halfvector`) runs over the distribution's radial CDF u(s) of
-    the
-    standardized slope radius s in three pieces, each in its own coordinate t: ``pole(t)`` and ``tail(t)``
-    return (s, du/dt), ``pole_coordinate(s)`` and ``tail_coordinate(s)`` invert them; the piece next to the
-    horizon is linear in s with du/ds = ``slope_density(s)``.
-    """
+    """A slope distribution: its standardized slope density P22, its Smith Λ and the radial density du/ds of the
+    standardized slope radius s. The coordinates an integrator runs in over it are the engine's
+    (:mod:`brdfnorm.engine.machinery.slope_coordinates`)."""
 
     name = ""
 
@@ -77,38 +74,12 @@ class Distribution:
         raise NotImplementedError
 
     def slope_density(self, s: np.ndarray) -> np.ndarray:
+        """du/ds of the radial CDF u(s) of the standardized slope radius."""
         raise NotImplementedError
-
-    def pole_coordinate(self, s: np.ndarray) -> np.ndarray:
-        return s
-
-    def pole(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return t, self.slope_density(t)
-
-    def tail_coordinate(self, s: np.ndarray) -> np.ndarray:
-        return s
-
-    def tail(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return t, self.slope_density(t)
-
-    def cap(self, s: np.ndarray) -> np.ndarray:
-        """Slope radii beyond which the mass is dropped (bounded by ``truncated_moments``); none by default."""
-        return s
-
-    def truncated_moments(self) -> tuple[float, float]:
-        """(∫ dP, ∫ s dP) over the slope radii dropped by ``cap``: what bounds the dropped part of the integral."""
-        return 0.0, 0.0
 
 
 class GGXDistribution(Distribution):
-    """Trowbridge-Reitz: u(s) = s²/(1 + s²).
-
-    Pole piece (s ≤ 1): t = atan s, u = sin²t, du/dt = sin 2t — flat, and analytic at the pole (in u itself
-    the slope would be √u). Tail piece: t = asinh s, u = tanh²t, du/dt = 2 tanh t/cosh²t — the heavy tail
-    decays like e^{−2t}, and the integrand, analytic in the real slope α s within a radius R ~ 1, stays
-    analytic in a strip of half-width ~π/2 about the whole half-line (α sinh t = ±iR at t ≈ ln(2R/α) ± iπ/2),
-    so the region where the reflected direction changes is an O(1)-wide bump in t whatever α is.
-    """
+    """Trowbridge-Reitz: u(s) = s²/(1 + s²)."""
 
     name = "ggx"
 
@@ -121,26 +92,11 @@ class GGXDistribution(Distribution):
     def slope_density(self, s):
         return 2.0 * s / (1.0 + s * s) ** 2
 
-    def pole_coordinate(self, s):
-        return np.arctan(s)
-
-    def pole(self, t):
-        return np.tan(t), np.sin(2.0 * t)
-
-    def tail_coordinate(self, s):
-        return np.arcsinh(s)
-
-    def tail(self, t):
-        e2 = np.exp(-2.0 * t)  # 2 tanh t / cosh²t = 8e^{−2t}(1 − e^{−2t})/(1 + e^{−2t})³, without overflow
-        return np.sinh(t), 8.0 * e2 * (1.0 - e2) / (1.0 + e2) ** 3
-
 
 class BeckmannDistribution(Distribution):
-    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²) — linear s in every piece (the Gaussian has no
-    heavy tail), truncated at s = 8 (dropped mass e⁻⁶⁴ ≈ 1.6e-28, bounded in the error estimate)."""
+    """Beckmann: u(s) = 1 − exp(−s²), du/ds = 2s·exp(−s²)."""
 
     name = "beckmann"
-    CAP = 8.0
 
     def density(self, r2):
         return np.exp(-r2) / np.pi
@@ -155,74 +111,23 @@ class BeckmannDistribution(Distribution):
     def slope_density(self, s):
         return 2.0 * s * np.exp(-s * s)
 
-    def cap(self, s):
-        return np.minimum(s, self.CAP)
-
-    def truncated_moments(self):
-        # ∫_S^∞ 2s e^{−s²} ds = e^{−S²};  ∫_S^∞ 2s² e^{−s²} ds = S e^{−S²} + (√π/2) erfc S ≤ (S + 1) e^{−S²}.
-        mass = float(np.exp(-self.CAP**2))
-        return mass, (self.CAP + 1.0) * mass
-
-
-# -- Fresnel -----------------------------------------------------------------------------------------------
-
-def fresnel_schlick(cos: np.ndarray, f0: np.ndarray, f90: np.ndarray) -> np.ndarray:
-    return f0 + (f90 - f0) * (1.0 - cos) ** 5
-
-
-def fresnel_dielectric(cos: np.ndarray, eta: np.ndarray) -> np.ndarray:
-    """Exact unpolarized reflectance of a dielectric interface (Walter et al. 2007 eq. 22); 1 under TIR."""
-    g2 = eta * eta - 1.0 + cos * cos
-    g = np.sqrt(np.maximum(g2, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = (g - cos) / (g + cos)
-        b = (cos * (g + cos) - 1.0) / (cos * (g - cos) + 1.0)
-        value = 0.5 * a * a * (1.0 + b * b)
-    return np.where(g2 <= 0.0, 1.0, value)
-
-
-def fresnel_conductor(cos: np.ndarray, eta: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Exact unpolarized reflectance for the complex index η + ik: (R_s + R_p)/2 with a² + b² = |n̂² − sin²θ|."""
-    c2 = cos * cos
-    s2 = 1.0 - c2
-    t = eta * eta - k * k - s2
-    a2b2 = np.sqrt(t * t + 4.0 * eta * eta * k * k)
-    a = np.sqrt(np.maximum(0.5 * (a2b2 + t), 0.0))
-    rs = (a2b2 - 2.0 * a * cos + c2) / (a2b2 + 2.0 * a * cos + c2)
-    rp = rs * (c2 * a2b2 - 2.0 * a * cos * s2 + s2 * s2) / (c2 * a2b2 + 2.0 * a * cos * s2 + s2 * s2)
-    return 0.5 * (rs + rp)
-
 
 # -- the model ---------------------------------------------------------------------------------------------
 
-#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer
-#: (brdfnorm.engine.routes.microfacet), which registers its provider here when it is imported:
+#: Kulla & Conty's tables are the lobe's own albedo, computed by the integrator layer: declared here by where they
+#: live and imported on first use (models stay below the integrator in the import graph):
 #: ``provider(distribution, shadowing, size)`` -> an object with ``energies(mu_l, mu_v, alpha)``.
-#: Models stay below the integrator in the import graph.
-_COMPENSATION: Callable | None = None
-
-
-def register_compensation(provider: Callable) -> None:
-    global _COMPENSATION
-    _COMPENSATION = provider
-
-
-#: The anisotropic lobes' compensation (brdfnorm.engine.routes.anisotropic_compensation registers it):
+COMPENSATION = Reference("brdfnorm.engine.routes.microfacet:compensation")
+#: The anisotropic lobes' compensation, likewise:
 #: ``provider(distribution_name, shadowing, size, alpha_x, alpha_y)`` -> an object with ``albedo(mu, phi)``,
 #: ``average`` (E_avg) and ``missing`` ((1/π)∫(1 − E) cos dω of E as read).
-_ANISOTROPIC_COMPENSATION: Callable | None = None
+ANISOTROPIC_COMPENSATION = Reference("brdfnorm.engine.routes.anisotropic_compensation:anisotropic_compensation")
 #: Anisotropic compensation tables cover lobes up to this width and down to this aspect α_y/α_x.
 ANISOTROPIC_ALPHA_MAX = 10.0
 ANISOTROPIC_ASPECT_MIN = 0.01
 
 
-def register_anisotropic_compensation(provider: Callable) -> None:
-    global _ANISOTROPIC_COMPENSATION
-    _ANISOTROPIC_COMPENSATION = provider
-
-
 SHADOWING = ("height-correlated", "separable")
-FRESNEL = ("none", "schlick", "dielectric", "conductor")
 MULTIPLE_SCATTERING = ("none", "kulla-conty", "turquin")
 
 
@@ -233,7 +138,7 @@ def microfacet_parameters(default_alpha: float) -> tuple[Parameter, ...]:
         Parameter("alpha_y", "float", 0.0, 0.0, 100.0, "roughness along Y (0: alpha)"),
         Parameter("shadowing", "choice", "height-correlated", choices=SHADOWING,
                   description="Smith G2: 1/(1+Λ(L)+Λ(V)) or G1(L)G1(V)"),
-        Parameter("fresnel", "choice", "none", choices=FRESNEL, description="F(V·H); none is F = 1"),
+        Parameter("fresnel", "choice", "none", choices=MICROFACET_KINDS, description="F(V·H); none is F = 1"),
         Parameter("f0", "spectrum", (0.04, 0.04, 0.04), 0.0, 1.0, "Schlick reflectance at normal incidence"),
         Parameter("f90", "spectrum", (1.0, 1.0, 1.0), 0.0, 1.0, "Schlick reflectance at grazing incidence"),
         Parameter("eta", "spectrum", (1.5, 1.5, 1.5), 1e-3, 1e3, "index of refraction (dielectric, conductor)"),
@@ -427,21 +332,15 @@ class MicrofacetModel(Model):
         return value
 
     def _table(self, params):
-        if _COMPENSATION is None:
-            raise EvaluationError(f"ms={params['ms']} needs the half-vector integrator (import brdfnorm)",
-                                  where=self.name)
-        return _COMPENSATION(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
+        return COMPENSATION.resolve()(self.distribution, params["shadowing"], int(np.asarray(params["ms_table"])))
 
     def anisotropic_table(self, params: Mapping[str, object]):
         """The compensation of this anisotropic lobe: E(μ, φ), E_avg (engine.routes.anisotropic_compensation)."""
-        if _ANISOTROPIC_COMPENSATION is None:
-            raise EvaluationError(f"ms={params['ms']} needs the anisotropic integrator (import brdfnorm)",
-                                  where=self.name)
         ax, ay = (np.unique(np.ravel(a)) for a in roughness(params))  # one lobe, however broadcast
         if ax.size != 1 or ay.size != 1:
             raise ParameterError(f"ms={params['ms']} with alpha_x/alpha_y takes one lobe", where="parameter ms")
-        return _ANISOTROPIC_COMPENSATION(self.distribution.name, params["shadowing"],
-                                         int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
+        return ANISOTROPIC_COMPENSATION.resolve()(self.distribution.name, params["shadowing"],
+                                                  int(np.ravel(params["ms_table"])[0]), float(ax[0]), float(ay[0]))
 
     def _anisotropic(self, params: Mapping[str, object]) -> bool:
         return bool(np.any(np.asarray(params["alpha_x"]) > 0) or np.any(np.asarray(params["alpha_y"]) > 0))

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from .base import Model, NativeKernel
+from .fresnel import KERNEL_CODES
 
 _PI = math.pi
 _SQRT_PI = math.sqrt(math.pi)
@@ -299,9 +300,6 @@ def _floats(*names: str) -> Callable[[Mapping[str, object]], np.ndarray]:
     return pack
 
 
-_FRESNEL_KINDS = {"none": 0, "schlick": 1, "dielectric": 2, "conductor": 3}
-
-
 def _pack_microfacet(params: Mapping[str, object]) -> np.ndarray:
     def scalar(name: str) -> float:
         return float(np.asarray(params[name], dtype=float).reshape(-1)[0])
@@ -312,7 +310,7 @@ def _pack_microfacet(params: Mapping[str, object]) -> np.ndarray:
                ("f0", "f90", "eta", "k")]
     return np.concatenate([[ax if ax > 0 else alpha, ay if ay > 0 else alpha,
                             1.0 if params["shadowing"] == "separable" else 0.0,
-                            float(_FRESNEL_KINDS[params["fresnel"]])], *colours])
+                            float(KERNEL_CODES[params["fresnel"]])], *colours])
 
 
 _SIMPLE = {

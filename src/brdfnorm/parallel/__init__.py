@@ -34,11 +34,11 @@ import numpy as np
 
 from ..engine.methods import warn_about
 from .checkpoint import Checkpoint
-from .executors import OPTIONAL_FIELDS, ChunkResult, Workers, local_cores, run_chunk
+from .executors import OPTIONAL_FIELDS, ChunkResult, Scheduler, Workers, local_cores, run_chunk
 from .job import AlbedoSettings, CellsJob, ChunkPlan, ModelSource, chunk_plan
 
-__all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "Workers",
-           "albedo_cells", "chunk_plan", "local_cores", "run_chunk", "run_job", "sigterm_as_interrupt"]
+__all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResult", "ModelSource", "Scheduler",
+           "Workers", "albedo_cells", "chunk_plan", "local_cores", "run_chunk", "run_job", "sigterm_as_interrupt"]
 
 
 @dataclass(frozen=True)
@@ -67,13 +67,14 @@ class CellsResult:
     transmitted: np.ndarray | None = None
 
 
-def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | None = None,
+def albedo_cells(job: CellsJob, *, workers: int | None = None, scheduler: str | Scheduler | None = None,
                  checkpoint: str | Path | None = None,
                  on_progress: Callable[[int, int], None] | None = None) -> CellsResult:
     """Compute every cell of ``job``.
 
     ``workers``: local processes (default: all cores of this machine; 1 computes in this process);
-    ``scheduler``: a Dask scheduler address (then the cluster's workers compute, and ``workers`` must be None);
+    ``scheduler``: a Dask scheduler address, or a :class:`Scheduler` with its own connection deadline (then the
+    cluster's workers compute, and ``workers`` must be None);
     ``checkpoint``: a directory to save finished chunks in and resume from; ``on_progress(done, total)`` is
     called with cell counts as chunks finish (anywhere). SIGTERM stops the run like Ctrl-C
     (:class:`KeyboardInterrupt`), losing at most the chunks in flight. A caller with many jobs holds one

@@ -46,14 +46,34 @@ from .job import CellsJob, ChunkPlan, ModelSource, canonical_json
 
 #: Dask re-runs a chunk task that raised this many more times (an unexpected failure on one worker).
 DASK_RETRIES = 2
-#: Seconds to reach a Dask scheduler, all in all: the TCP connection, its handshake and the client's start (the
-#: command line's ``--connect-timeout`` sets it).
+#: Seconds to reach a Dask scheduler, all in all: the TCP connection, its handshake and the client's start, unless
+#: a :class:`Scheduler` says otherwise (the command line's ``--connect-timeout``).
 DASK_CONNECT_TIMEOUT = 10.0
 #: Largest first message a Dask scheduler's handshake may announce (it is a few hundred bytes; an HTTP server's
 #: "HTTP/1.1" read as a length is 3.5·10¹⁸).
 HANDSHAKE_BYTES = 1024**2
 _SCHEMES = ("tcp", "tls")
 _HOST = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9.-]{0,252}[A-Za-z0-9])?\Z")
+
+
+@dataclass(frozen=True)
+class Scheduler:
+    """A Dask scheduler's address with its own deadline for being reached: ``scheduler=`` takes one wherever it takes
+    a plain address (which gets :data:`DASK_CONNECT_TIMEOUT`). Each value carries its deadline, so two runs in one
+    process with different deadlines never share one."""
+
+    address: str
+    connect_timeout: float = DASK_CONNECT_TIMEOUT
+
+    def __post_init__(self) -> None:
+        timeout = self.connect_timeout
+        if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0 < timeout < float("inf"):
+            raise ArgumentError(f"connect_timeout must be a number of seconds > 0, got {timeout!r}",
+                                where="connect_timeout")
+        object.__setattr__(self, "address", scheduler_address(self.address))
+
+    def __str__(self) -> str:
+        return self.address
 
 
 @dataclass(frozen=True)
@@ -152,13 +172,15 @@ class Workers:
     client.
     """
 
-    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+    def __init__(self, workers: int | None = None, scheduler: str | Scheduler | None = None) -> None:
         if scheduler is not None and workers is not None:
             raise ArgumentError("give either workers (a local process pool) or a Dask scheduler (on the command "
                                 "line also taken from DASK_SCHEDULER_ADDRESS), not both", where="workers")
         if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
             raise ArgumentError(f"workers must be a whole number ≥ 1, got {workers!r}", where="workers")
-        self.scheduler = None if scheduler is None else scheduler_address(scheduler)
+        target = scheduler if isinstance(scheduler, Scheduler) or scheduler is None else Scheduler(scheduler)
+        self.scheduler = None if target is None else target.address
+        self.connect_timeout = DASK_CONNECT_TIMEOUT if target is None else target.connect_timeout
         self.count = int(workers) if workers is not None else local_cores()
         self._pool: ProcessPoolExecutor | None = None
         self._client = None
@@ -172,7 +194,7 @@ class Workers:
     def start(self) -> None:
         """Connect to the Dask scheduler (once) and count its workers."""
         if self.scheduler is not None and self._client is None:
-            self._client = dask_client(self.scheduler)
+            self._client = dask_client(self.scheduler, self.connect_timeout)
             self.count = len(self._client.scheduler_info().get("workers", {}))
 
     def placement(self, chunks: int) -> tuple[str, int]:
@@ -311,7 +333,7 @@ def scheduler_address(address: object) -> str:
     return f"{scheme.lower()}://{host}:{int(port)}"
 
 
-def _preflight(address: str, deadline: float) -> None:
+def _preflight(address: str, deadline: float, timeout: float) -> None:
     """Connect to the scheduler and, for ``tcp://``, wait for the first bytes of its handshake (a Dask scheduler
     speaks first: a frame length), all before ``deadline``: a server that accepts and never answers, or answers in
     another protocol, is refused here, not left to the client (which would wait forever, or allocate what an
@@ -339,7 +361,7 @@ def _preflight(address: str, deadline: float) -> None:
                                         where="scheduler")
                 first += data
     except TimeoutError:
-        raise ArgumentError(f"no Dask scheduler answered at {address} within {DASK_CONNECT_TIMEOUT:g} s "
+        raise ArgumentError(f"no Dask scheduler answered at {address} within {timeout:g} s "
                             "(--connect-timeout)", where="scheduler") from None
     except OSError as error:
         raise ArgumentError(f"cannot reach the Dask scheduler at {address}: {error.strerror or error}",
@@ -350,15 +372,15 @@ def _preflight(address: str, deadline: float) -> None:
                             f"{first[:8]!r})", where="scheduler")
 
 
-def dask_client(scheduler: str):
-    """A ``distributed.Client`` connected to ``scheduler`` within :data:`DASK_CONNECT_TIMEOUT` seconds in all, or a
-    one-line error naming the address; a client that failed to start is closed here, never by its destructor."""
+def dask_client(scheduler: str, connect_timeout: float = DASK_CONNECT_TIMEOUT):
+    """A ``distributed.Client`` connected to ``scheduler`` within ``connect_timeout`` seconds in all, or a one-line
+    error naming the address; a client that failed to start is closed here, never by its destructor."""
     from ..extras import require
 
     Client = require("distributed", "dask", where="scheduler").Client  # noqa: N806 - the class, by its own name
     scheduler = scheduler_address(scheduler)
-    deadline = time.monotonic() + DASK_CONNECT_TIMEOUT
-    _preflight(scheduler, deadline)
+    deadline = time.monotonic() + connect_timeout
+    _preflight(scheduler, deadline, connect_timeout)
     remaining = max(deadline - time.monotonic(), 0.5)
     hook = sys.unraisablehook
     try:

@@ -36,7 +36,7 @@ import numpy as np
 
 from .. import validate
 from ..engine.methods import albedo as compute_albedo
-from ..engine.methods import resolve_method
+from ..engine.methods import check_settings
 from ..errors import ArgumentError
 from ..models import REGISTRY, Model
 from ..validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
@@ -134,14 +134,10 @@ class AlbedoSettings:
                 "digits": None if self.digits is None else int(self.digits)}
 
     def validate(self, model: Model) -> None:
-        """Refuse bad settings in the calling process, before any work is sent out."""
-        validate.tolerances(self.rtol, self.atol)
-        validate.count(self.max_evaluations, "max_evaluations", maximum=10**12)
-        validate.choice(self.nonfinite, ("raise", "zero"), "nonfinite")
-        validate.choice(self.over, ("light", "view"), "over")
-        chosen = resolve_method(model, self.over, self.method)  # type: ignore[arg-type]
-        if self.digits is not None and "digits" not in chosen.options:
-            raise ArgumentError(f"digits applies to method 'certified' only, not {chosen.name!r}", where="digits")
+        """Refuse bad settings in the calling process, before any work is sent out (the checks of
+        :func:`brdfnorm.albedo` itself: :func:`brdfnorm.engine.methods.check_settings`)."""
+        check_settings(model, over=self.over, rtol=self.rtol, atol=self.atol, method=self.method,
+                       nonfinite=self.nonfinite, max_evaluations=self.max_evaluations, digits=self.digits)
 
 
 @dataclass(frozen=True, eq=False)

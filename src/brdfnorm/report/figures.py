@@ -48,7 +48,8 @@ class Image:
     alt: str
 
 
-def _new(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
+    """A matplotlib figure of ``width`` × ``height`` inches on the Agg canvas (no pyplot state), for every figure."""
     figure = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(figure)
     return figure
@@ -56,7 +57,7 @@ def _new(width: float, height: float) -> Figure:
 
 def _side_by_side(width: float, height: float):
     """A figure with two axes side by side: (figure, left, right)."""
-    figure = _new(width, height)
+    figure = new_figure(width, height)
     left, right = figure.subplots(1, 2)
     return figure, left, right
 
@@ -144,7 +145,7 @@ def albedo_figure(curves: AlbedoCurves, name: str) -> Image:
     degrees = np.degrees(curves.theta)
 
     def draw() -> Figure:
-        figure = _new(max(3.6 * len(keys), 5.0), 6.2)
+        figure = new_figure(max(3.6 * len(keys), 5.0), 6.2)
         axes = figure.subplots(2, len(keys), squeeze=False, sharex=True)
         for j, key in enumerate(keys):
             top, bottom = axes[0, j], axes[1, j]
@@ -223,7 +224,7 @@ def polar_figure(panels: list[PolarPanel], name: str) -> Image:
     """One half-disc per panel: N up, L on the left of N when it lies opposite V; V drawn as a thin ray."""
 
     def draw() -> Figure:
-        figure = _new(max(3.2 * len(panels), 5.0), 2.3)
+        figure = new_figure(max(3.2 * len(panels), 5.0), 2.3)
         axes = figure.subplots(1, len(panels), subplot_kw={"projection": "polar"}, squeeze=False)[0]
         for ax, panel in zip(axes, panels, strict=True):
             ax.set_theta_zero_location("N")

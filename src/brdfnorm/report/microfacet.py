@@ -36,7 +36,7 @@ def available() -> bool:
 
 def _image_panels(name: str, alt: str, mu: np.ndarray, alpha: np.ndarray, panels: list[tuple[str, np.ndarray]]):
     def draw():
-        fig = figures._new(3.3 * len(panels), 3.0)
+        fig = figures.new_figure(3.3 * len(panels), 3.0)
         for index, (title, values) in enumerate(panels, start=1):
             axis = fig.add_subplot(1, len(panels), index)
             shown = axis.imshow(values.T, origin="lower", aspect="auto", cmap="viridis",
@@ -53,7 +53,7 @@ def _image_panels(name: str, alt: str, mu: np.ndarray, alpha: np.ndarray, panels
 
 def _avg_figure(alpha: np.ndarray, avg: np.ndarray):
     def draw():
-        fig = figures._new(4.2, 3.0)
+        fig = figures.new_figure(4.2, 3.0)
         axis = fig.add_subplot(1, 1, 1)
         axis.plot(alpha, avg, "-o", ms=3, label="E_avg(α)")
         axis.plot(alpha, 1.0 - avg, "--", label="1 − E_avg(α)")

@@ -15,10 +15,11 @@ import math
 import numpy as np
 from numba import njit
 
+from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
 
 _OPTIONS = dict(cache=True, error_model="numpy")
-#: Beckmann's slope radius cap (``BeckmannDistribution.CAP``).
+#: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
 CAP = 8.0
 
 
@@ -162,7 +163,7 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
     vx = np.ascontiguousarray(g.V[:, 0], dtype=float)
     lambda_v = np.ascontiguousarray(np.broadcast_to(g.lambda_v, (K,)), dtype=float)
-    kind = {"none": 0, "schlick": 1, "dielectric": 2, "conductor": 3}[g.fresnel_params["fresnel"]]
+    kind = KERNEL_CODES[g.fresnel_params["fresnel"]]
     fresnel = np.zeros((K, 16))
     for column, name in ((4, "f0"), (7, "f90"), (10, "eta"), (13, "k")):
         value = np.asarray(g.fresnel_params[name], dtype=float)

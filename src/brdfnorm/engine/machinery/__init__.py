@@ -1,8 +1,17 @@
-"""Machinery the engine's routes share.
+"""The one integration machinery the engine's routes share (no route re-implements it).
 
+- :mod:`.result` — :class:`~.result.RouteResult`, what every route and rule returns;
+- :mod:`.panels` — the one panel pool of the adaptive 2-D routes, the K15/G7 rule pair on a panel, the check on
+  halves, and the rectangle driver of the half-vector and dielectric routes;
+- :mod:`.kronrod` — the G7/K15 Gauss–Kronrod rule of every adaptive panel (the engine's and the tables' μ-average);
+- :mod:`.kinks` — the Gauss–Lobatto edge nodes of the panels' checks and the floor under a panel that converges
+  algebraically;
+- :mod:`.rounding` — float64 rounding noise of an integrand near its peak, and the floor it sets on an estimate;
+- :mod:`.grazing_panels` — the adaptive panels' starting grid at grazing views, and the ladder of panel edges;
+- :mod:`.interval` — the 1-D adaptive integration (the 1-D routes, the claims, the tables' μ-average);
 - :mod:`.tensor_rule` — lobe-aligned coordinates of the hemisphere and a global tensor rule with degree doubling
   on them (the hemisphere and half-vector routes try it before adaptive panels);
-- :mod:`.kronrod` — the G7/K15 Gauss–Kronrod rule of every adaptive panel (the engine's and the tables' μ-average);
-- :mod:`.grazing_panels` — the adaptive panels' starting grid at grazing views, and the ladder of panel edges;
-- :mod:`.rounding` — float64 rounding noise of an integrand near its peak, and the floor it sets on an estimate.
+- :mod:`.slope_coordinates` — the radial coordinates (pole, tail, cap) the half-vector routes run in over each
+  microfacet slope distribution;
+- :mod:`.directions` — random hemisphere directions and rotations about the normal.
 """

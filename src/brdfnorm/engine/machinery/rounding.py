@@ -109,10 +109,10 @@ def noise_bound(amplitude: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
 
 #: Bias allowed per unit of noise amplitude — a calibration, and a tight one: at Blinn-Phong n = 1e9 the
 #: true error is 0.87 of the estimate, while a margin above ~1.3 would charge (N·H)^1e4 at 86° more than
-#: the rtol 1e-12 it honours (tests/test_series.py). The tests' probe cases stay within 0.8 of it.
+#: the rtol 1e-12 it honours (tests/engine/test_series.py). The tests' probe cases stay within 0.8 of it.
 _NOISE_MARGIN = 1.25
 
 #: Least relative noise charged to a model evaluated in lower precision, in units of its declared epsilon: a
-#: calibration on Mitsuba's float32 BSDFs (tests/test_mitsuba.py), whose values differ from a float64 evaluation of
-#: the same formulas by up to ~60 units at grazing directions and whose albedos by a few units.
+#: calibration on Mitsuba's float32 BSDFs (tests/models/test_mitsuba.py), whose values differ from a float64
+#: evaluation of the same formulas by up to ~60 units at grazing directions and whose albedos by a few units.
 EVALUATION_ULPS = 16.0

@@ -63,6 +63,8 @@ from functools import cache
 
 import numpy as np
 
+from .result import RouteResult
+
 _EPS = np.finfo(float).eps
 
 #: Starting levels: M = 2^3 azimuths × N − 1 = 2^4 − 1 radial nodes (120 evaluations).
@@ -219,16 +221,6 @@ def radial_width_scale(dbeta: np.ndarray, lam: np.ndarray) -> np.ndarray:
     return np.sqrt(lam / dbeta)
 
 
-@dataclass(frozen=True)
-class GlobalResult:
-    """Per case: value and error (K, C), evaluations spent (K,), and whether the rule settled it (K,)."""
-
-    value: np.ndarray
-    error: np.ndarray
-    evaluations: np.ndarray
-    settled: np.ndarray
-
-
 @dataclass
 class _Group:
     """Cases at the same levels, their grids of weighted integrand values F (n, M, N − 1, C), per case the
@@ -247,10 +239,11 @@ class _Group:
 
 def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, noise_amplitude: np.ndarray, *,
                      rtol: float, atol: float, noise_bound, max_nodes: int = MAX_NODES,
-                     max_nodes_per_call: int = 1_500_000, azimuthal_tail: np.ndarray | None = None) -> GlobalResult:
-    """The global tensor rule (module docstring) for ``cases`` (indices into the frame); unsettled cases keep
-    their evaluation count and are left to the caller. Where ``azimuthal_tail`` (K,) is True (lobes that are not
-    rotation-invariant), the β estimate is at least :func:`_azimuthal_tail`."""
+                     max_nodes_per_call: int = 1_500_000, azimuthal_tail: np.ndarray | None = None) -> RouteResult:
+    """The global tensor rule (module docstring) for ``cases`` (indices into the frame): ``converged`` says which
+    cases it settled; unsettled cases keep their evaluation count and are left to the caller. Where
+    ``azimuthal_tail`` (K,) is True (lobes that are not rotation-invariant), the β estimate is at least
+    :func:`_azimuthal_tail`."""
     K = frame[0].shape[0]
     lam = clustering(frame, widths)
     grading = np.full(K, 2)
@@ -268,7 +261,7 @@ def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, nois
                                         rtol, atol, noise_bound, max_nodes, max_nodes_per_call, value, error,
                                         evaluations, settled, np.zeros(K, dtype=bool) if azimuthal_tail is None
                                         else azimuthal_tail)
-    return GlobalResult(value, error, evaluations, settled)
+    return RouteResult(value, error, evaluations, settled)
 
 
 def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_amplitude, rtol, atol, noise_bound,

@@ -2,7 +2,9 @@
 
 Generic (any model):
 
-- :mod:`.hemisphere` — adaptive hemisphere quadrature in lobe-aligned coordinates (method ``"quadrature"``);
+- :mod:`.quadrature` — method ``"quadrature"``: the lobe's hint or search, overflow scaling, a BSDF's two
+  hemispheres, over the two routes below;
+- :mod:`.hemisphere` — adaptive hemisphere quadrature in lobe-aligned coordinates;
 - :mod:`.halfvector_generic` — the same method's half-vector route for isotropic lobes centred on the mirror
   direction, tried first.
 

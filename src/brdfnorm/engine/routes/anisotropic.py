@@ -50,10 +50,10 @@ import numba
 import numpy as np
 
 from ...errors import ArgumentError
+from ...models.microfacet import SHADOWING
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
 
 DISTRIBUTIONS = ("ggx", "beckmann")
-SHADOWING = ("height-correlated", "separable")
 #: Panels per case before the 2-D cubature gives up (reported as not converged).
 MAX_PANELS = 4000
 #: Nested trapezoid levels of the view-azimuth average: M = 2 … 2**MAX_LEVEL intervals on [0, π/2].

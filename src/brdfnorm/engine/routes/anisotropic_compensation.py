@@ -23,7 +23,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from ...models.microfacet import register_anisotropic_compensation
 from . import anisotropic as kernel
 
 MU_CLAMP = 1e-4
@@ -103,6 +102,3 @@ def anisotropic_compensation(distribution: str, shadowing: str, size: int, alpha
                              alpha_y: float) -> AnisotropicCompensation:
     """The (cached) compensation of one anisotropic lobe; ``size`` 0 for exact values."""
     return _compensation(distribution, shadowing, int(size), float(alpha_x), float(alpha_y))
-
-
-register_anisotropic_compensation(anisotropic_compensation)

@@ -7,7 +7,7 @@ E(V) = ∫ f(L, V)(N·L) dL for f = D(H) G2(L, V) / (4 N·L N·V) — the single
 D(H) = α² / (π (1 + (α² − 1) cos²θ_H)²), and isotropic Beckmann (eq. 25): D(H) = e^{−tan²θ_H/α²}/(π α²
 cos⁴θ_H). The same integral as :mod:`brdfnorm.engine.routes.halfvector`, by another route; the tests compare the two,
 and
-both with the reference of ``tests/microfacet_reference.py``.
+both with the reference of ``tests/helpers/microfacet_reference.py``.
 
 The reduction (GGX)
 -------------------
@@ -77,10 +77,9 @@ relative to E by ~1/μ_V, see the tests' reach check), and G2's horizon layer ge
 Angles are carried both as θ and as elevations π/2 − θ (θ_L = θ_V + 2 atan d, e_L = e_V − 2 atan d), sin θ
 from the one and cos θ from the other, so that both keep their relative accuracy (at a normal view the peak
 lies at θ_L ~ α: sin θ_L from π/2 − e_L was 1e-11 off there at α = 6e-6). G2's boundary layer at the horizon
-(Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels
-of its own; the rest is :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
-bisected
-while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
+(Λ(L) turns on where α tan θ_L ~ 1, a band of width ~α in θ_L, ~α/d in t, for both distributions) gets panels of its
+own; the rest is :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` (15-point Gauss–Legendre panels
+bisected while their case misses its tolerance; a panel's error is the difference between the rule on it and on its
 halves, the error of the coarser value, while the finer one is kept).
 """
 
@@ -94,8 +93,9 @@ from scipy.special import hyp1f1
 
 from ...models.microfacet import Distribution, MicrofacetModel, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS
-from .halfvector import CubatureResult, single_scattering_albedo
-from .series import adaptive_gauss_legendre
+from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.result import RouteResult
+from .halfvector import single_scattering_albedo
 
 _HALF_PI = 0.5 * np.pi
 #: Rounding of the sum of positive node values, relative (as the half-vector rules' floor).
@@ -141,7 +141,7 @@ def applies(model, over) -> bool:
 
 
 def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, alpha: np.ndarray, *, rtol: float,
-                 atol: float | np.ndarray = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                 atol: float | np.ndarray = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """E(V) of the isotropic single-scattering lobe with F = 1 at fixed directions (K, 3) and roughness (K,):
     by this module's 1-D integral where it has the distribution, else by the half-vector cubature (H1), which
     also takes any case the 1-D route does not settle (none is known). ``atol`` scalar or (K,)."""
@@ -162,7 +162,7 @@ def white_albedo(distribution: Distribution, shadowing: str, fixed: np.ndarray, 
                                          atol=atol[rest, None], max_evaluations=max_evaluations)
         value[rest], error[rest], converged[rest] = again.value, again.error, again.converged
         evaluations[rest] += again.evaluations
-    return CubatureResult(value, error, evaluations, converged)
+    return RouteResult(value, error, evaluations, converged)
 
 
 def cosine_moments(kappa) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -219,8 +219,8 @@ def albedo(distribution, shadowing: str, cos_view: np.ndarray, alpha: np.ndarray
 
     scale = 1.0 / mu
     atol_scaled = np.broadcast_to(np.asarray(atol, dtype=float), (K,)) / scale
-    value, error, evaluations, converged = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol,
-                                                                   atol=atol_scaled)
+    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol, atol=atol_scaled)
+    value, error, evaluations, converged = result.value, result.error, result.evaluations, result.converged
     # The integrand is positive, so its rounding (a few ulps a node, summed over the nodes) is bounded by
     # ROUNDING_FLOOR · E, which the panel differences cannot see.
     error = error + ROUNDING_FLOOR * np.abs(value)

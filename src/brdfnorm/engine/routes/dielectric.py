@@ -34,8 +34,11 @@ from ...models.dielectric import MicrofacetDielectric, refraction_kind, refracti
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..machinery.grazing_panels import ladder
+from ..machinery.panels import Panels, adaptive_rectangles
+from ..machinery.result import RouteResult
+from ..machinery.slope_coordinates import slope_coordinates
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, _Panels, adaptive_rectangles, fill_pieces, single_scattering_albedo
+from .halfvector import MU_MIN, fill_pieces, single_scattering_albedo
 
 #: Slope radius at which a ray that refracts up to the horizontal facet is cut (its dropped share is bounded).
 _S_CAP = 1e16
@@ -202,7 +205,7 @@ def _switches(distribution: Distribution, V, alpha, eta, angle, part) -> np.ndar
         functions += [_scattered_z(part, w, vz, eta, lo), _scattered_z(part, w, vz, eta, hi)]
     _, _, s_lo, s_middle, s_split, s_hi, none = _ray_parts(V, alpha, eta, angle, part)
     functions.append(s_lo - s_split / (1.0 + s_split))  # the pole part emptying (the clip of s_middle)
-    cap = getattr(distribution, "CAP", None)
+    cap = slope_coordinates(distribution).CAP
     if cap is not None:
         functions += [q - cap for q in (s_lo, s_middle, s_split, s_hi)]
     values = np.stack(np.broadcast_arrays(*functions), axis=-1)
@@ -218,12 +221,13 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
     cubature bisected towards both: 16 μ × 16 α inside cells took 25.2 M evaluations with the openings graded, 31.0
     M with neither, 21.4 M with both."""
     lam = distribution.smith_lambda
+    coords = slope_coordinates(distribution)
     lambda_v = lam(alpha**2 * (V[:, 0] ** 2 + V[:, 1] ** 2) / V[:, 2] ** 2)
     refraction = part == "refraction"
     # The far coordinate for the tail part where rays reach the horizontal facet: refraction with a heavy tail (a
     # capped distribution's rays end at its cap, and reflected rays never reach it); elsewhere the distribution's
     # own tail coordinate, which measured a little cheaper there (GGX reflection loss 1.1×, Beckmann 1.05×).
-    far = refraction and getattr(distribution, "CAP", None) is None
+    far = refraction and coords.CAP is None
 
     def integrand(case, x, v, piece):
         k = case[:, None, None]
@@ -245,15 +249,15 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
                          phi[unique, :, 0], part)
         dx, dy, s_lo, s_middle, s_split, s_hi, none = (q[inverse.ravel()][..., None] for q in ray)
         # Beckmann's truncation (its dropped mass is bounded below); GGX has none.
-        s_lo, s_middle, s_split, s_hi = (distribution.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
+        s_lo, s_middle, s_split, s_hi = (coords.cap(q) for q in (s_lo, s_middle, s_split, s_hi))
         local = v - piece[:, None, None]
         # Grading: quadratic towards s_lo in the first part (1 − F ~ √ at the critical angle), towards the start
         # of the second (which is s_lo where the first is empty) and towards s_hi in the last part (the boundary
         # layer and the square root alike). Each part on its own panels only.
         def piece_nodes(kind, rows, at):
             if kind == 0:
-                t_lo, t_mid = distribution.pole_coordinate(s_lo[rows]), distribution.pole_coordinate(s_middle[rows])
-                radius, density = distribution.pole(t_lo + at * at * (t_mid - t_lo))
+                t_lo, t_mid = coords.pole_coordinate(s_lo[rows]), coords.pole_coordinate(s_middle[rows])
+                radius, density = coords.pole(t_lo + at * at * (t_mid - t_lo))
                 return radius, density, (t_mid - t_lo) * (2.0 * at)
             if kind == 1 and far:
                 t_start, t_stop = _far_coordinate(s_middle[rows], a[rows]), _far_coordinate(s_split[rows], a[rows])
@@ -263,9 +267,9 @@ def _part_integrand(distribution: Distribution, shadowing: str, V: np.ndarray, a
                     density = distribution.slope_density(radius) * (a[rows] * np.exp(-t)) * radius ** 2
                     return radius, density, (t_stop - t_start) * (2.0 * at)
             if kind == 1:
-                t_start = distribution.tail_coordinate(s_middle[rows])
-                t_stop = distribution.tail_coordinate(s_split[rows])
-                radius, density = distribution.tail(t_start + at * at * (t_stop - t_start))
+                t_start = coords.tail_coordinate(s_middle[rows])
+                t_stop = coords.tail_coordinate(s_split[rows])
+                radius, density = coords.tail(t_start + at * at * (t_stop - t_start))
                 return radius, density, (t_stop - t_start) * (2.0 * at)
             near = s_split[rows] + (1.0 - (1.0 - at) ** 2) * (s_hi[rows] - s_split[rows])
             return near, distribution.slope_density(near), (s_hi[rows] - s_split[rows]) * (2.0 * (1.0 - at))
@@ -356,7 +360,7 @@ def _kinks(distribution: Distribution, fixed: np.ndarray, alpha, eta, part: str,
 
 def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shadowing: str, part: str, *,
                 rtol: float = DEFAULT_RTOL, atol: float = 0.0,
-                max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """One part (:data:`PARTS`) of E(V) for fixed directions (K, 3) (upper hemisphere) and per-case α, η."""
     fixed = np.atleast_2d(np.asarray(fixed, dtype=float))
     K = fixed.shape[0]
@@ -372,21 +376,21 @@ def part_albedo(distribution: Distribution, fixed: np.ndarray, alpha, eta, shado
     a0 = np.concatenate([np.arange(n, dtype=float) for n in counts])
     cases, a0 = np.repeat(cases, 3), np.repeat(a0, 3)
     b0 = np.tile([0.0, 1.0, 2.0], a0.size // 3)
-    initial = _Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
+    initial = Panels(cases, a0, a0 + 1.0, b0, b0 + 1.0)
     integrand = _part_integrand(distribution, shadowing, fixed, alpha, eta, part, table, graded)
     result = adaptive_rectangles(integrand, initial, K, rtol=rtol, atol=atol, max_evaluations=max_evaluations,
                                  chunk=_PANELS_PER_CHUNK)
     # Dropped: rays cut at s = 1e16 (GGX's tail beyond carries ≤ 1/S² + 2|p|/S of weight, p = |c|α), and
     # Beckmann's cap, where the weight (1 − F) G2 (1 + c·x) ≤ 1 + |c| α s over the dropped slope radii.
     p = alpha * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2]
-    mass, moment = distribution.truncated_moments()
+    mass, moment = slope_coordinates(distribution).truncated_moments()
     dropped = 1.0 / _S_CAP**2 + 2.0 * p / _S_CAP + mass + moment * p
-    return CubatureResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
+    return RouteResult(result.value, result.error + dropped[:, None], result.evaluations, result.converged)
 
 
 def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.ndarray, eta: np.ndarray,
                       shadowing: str, *, rtol: float, atol: float | np.ndarray = 0.0,
-                      max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> CubatureResult:
+                      max_evaluations: int = DEFAULT_MAX_EVALUATIONS) -> RouteResult:
     """R(V) per case (``atol`` scalar or (K,)). From the rarer side (η > 1) F is analytic over every facet, so R is
     the microfacet BRDF's albedo with the exact dielectric Fresnel, by the half-vector route of
     :mod:`brdfnorm.engine.routes.halfvector` (GGX, 16 μ × 16 α at η = 1.5, rtol 1e-9: 1.56 M evaluations against 4.67 M
@@ -414,7 +418,7 @@ def reflection_albedo(distribution: Distribution, fixed: np.ndarray, alpha: np.n
         value[rest], error[rest] = white.value - loss.value, white.error + loss.error
         evaluations[rest] = white.evaluations + loss.evaluations
         converged[rest] = white.converged & loss.converged
-    return CubatureResult(value, error, evaluations, converged)
+    return RouteResult(value, error, evaluations, converged)
 
 
 def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: int = DEFAULT_MAX_EVALUATIONS,
@@ -432,7 +436,7 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
     # the refraction part takes the refraction's G2 kind (its integrand uses ``shadowing`` for nothing else)
     refraction = refraction_kind(str(params["shadowing"]), str(params.get("refraction_shadowing", "auto")))
 
-    def parts(rows: np.ndarray, relative: float, absolute: np.ndarray) -> tuple[CubatureResult, CubatureResult]:
+    def parts(rows: np.ndarray, relative: float, absolute: np.ndarray) -> tuple[RouteResult, RouteResult]:
         fixed, a, e = problem.fixed[rows], alpha[rows], eta[rows]
         return (reflection_albedo(model.distribution, fixed, a, e, params["shadowing"], rtol=relative,
                                   atol=absolute, max_evaluations=budget),
@@ -452,4 +456,4 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, max_evaluations: i
         r[over], t[over], error[over] = again_r.value, again_t.value, again_r.error + again_t.error
         evaluations[over] += again_r.evaluations + again_t.evaluations
         converged[over] = again_r.converged & again_t.converged
-    return r + t, error, evaluations, converged, None, {"reflected": r, "transmitted": t}
+    return RouteResult(r + t, error, evaluations, converged, extras={"reflected": r, "transmitted": t})

@@ -27,20 +27,21 @@ and the first Q_n within tolerance is kept. Combinations not settled by the last
 then fall back to the μ-average of albedos, :mod:`brdfnorm.lut.glass`).
 
 Measured against that μ-average (rtol 1e-10): GGX α = 0.3, η = 1/1.5 to 1.4e-14 in 0.5 s where the μ-average took
-454 albedos and 23.5 s (tests/test_glass_average.py); the 256 (α, η) of a 16³ glass table at rtol 1e-9 in 20 s on two
-cores (benchmarks/results/glass.md).
+454 albedos and 23.5 s (tests/engine/test_dielectric_average.py); the 256 (α, η) of a 16³ glass table at rtol
+1e-9 in 20 s on two cores (benchmarks/results/glass.md).
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 
 import numpy as np
 
 from ...models.dielectric import refraction_kind, refraction_shadowing
 from ...models.microfacet import Distribution, fresnel_dielectric, shadowing_masking
 from ...validate import DEFAULT_RTOL
+from ..machinery.result import RouteResult
+from ..machinery.slope_coordinates import slope_coordinates
 
 #: Gauss–Legendre orders per panel and dimension, tried in turn.
 ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)
@@ -48,15 +49,6 @@ ORDERS = (16, 20, 24, 28, 32, 40, 48, 56, 64, 80, 96)
 _LAYER = 4.0
 #: Slope-radius nodes per array pass (memory: this times the θ' and φ' nodes of one order).
 _CHUNK = 16
-
-
-@dataclass
-class AverageResult:
-    value: np.ndarray  # (M,) E_avg
-    error: np.ndarray
-    converged: np.ndarray
-    reflected: np.ndarray  # the R and T parts of E_avg
-    transmitted: np.ndarray
 
 
 @functools.cache
@@ -77,15 +69,16 @@ def _slope_nodes(distribution: Distribution, alpha: float, n: int, cuts: list[fl
     """Slope radii s and weights du over panels between ``cuts`` (0, 1, 1/α, the cap and any kink): the pole
     coordinate on [0, min(1, 1/α)], log s up to 1/α, c = 1/(αs) beyond."""
     x, w = _legendre(n)
-    cap = float(distribution.cap(np.array(np.inf)))
+    coords = slope_coordinates(distribution)
+    cap = float(coords.cap(np.array(np.inf)))
     knee, far = min(1.0, 1.0 / alpha), 1.0 / alpha
     edges = sorted({0.0, knee, far, cap, *(c for c in cuts if 0.0 < c < cap)})
     edges = [e for e in edges if e <= cap]
     radii, weights = [], []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
         if hi <= knee:
-            t0, t1 = distribution.pole_coordinate(np.array(lo)), distribution.pole_coordinate(np.array(hi))
-            s, density = distribution.pole(t0 + (t1 - t0) * x)
+            t0, t1 = coords.pole_coordinate(np.array(lo)), coords.pole_coordinate(np.array(hi))
+            s, density = coords.pole(t0 + (t1 - t0) * x)
             weights.append(w * (t1 - t0) * density)
         elif hi <= far:
             l0, l1 = np.log(lo), np.log(hi)
@@ -101,8 +94,9 @@ def _slope_nodes(distribution: Distribution, alpha: float, n: int, cuts: list[fl
 
 
 def _inner(part: str, distribution: Distribution, alpha: float, eta: float, shadowing: str, s: np.ndarray,
-           n: int, refraction: str = "auto") -> np.ndarray:
-    """∫ w (V·m) dV over the views about each facet of slope radius s (the inner two integrals of (A1))."""
+           n: int, refraction: str = "auto") -> tuple[np.ndarray, int]:
+    """∫ w (V·m) dV over the views about each facet of slope radius s (the inner two integrals of (A1)), and the
+    number of integrand nodes it took."""
     mz = 1.0 / np.sqrt(1.0 + (alpha * s) ** 2)
     sin_b = alpha * s * mz
     cot_b = 1.0 / (alpha * s)
@@ -154,40 +148,46 @@ def _inner(part: str, distribution: Distribution, alpha: float, eta: float, shad
             G2 = refraction_shadowing(refraction_kind(shadowing, refraction), lambda_l, lambda_v)
         g = np.where(side & (vz > 0.0) & np.isfinite(G2), G2, 0.0)
     # φ' over [0, π] counted twice (the views mirror about the plane of m and N).
-    return 2.0 * np.einsum("skij,skij,ski,ski->s", g, w_phi, weight * st * ct, w_theta)
+    return 2.0 * np.einsum("skij,skij,ski,ski->s", g, w_phi, weight * st * ct, w_theta), g.size
 
 
 def _quadrature(distribution: Distribution, alpha: float, eta: float, shadowing: str, n: int,
-                refraction: str = "auto") -> tuple[float, float]:
-    """(R̄, T̄) of (A1) by the order-n rules."""
+                refraction: str = "auto") -> tuple[float, float, int]:
+    """(R̄, T̄) of (A1) by the order-n rules, and the integrand nodes they took."""
     kink = [np.sqrt(1.0 - eta * eta) / (eta * alpha)] if eta < 1.0 else []
     s, du = _slope_nodes(distribution, alpha, n, kink)
     mz = 1.0 / np.sqrt(1.0 + (alpha * s) ** 2)
-    parts = []
+    parts, nodes = [], 0
     for part in ("R", "T"):
-        inner = np.concatenate([_inner(part, distribution, alpha, eta, shadowing, s[i:i + _CHUNK], n, refraction)
-                                for i in range(0, s.size, _CHUNK)])
+        chunks = [_inner(part, distribution, alpha, eta, shadowing, s[i:i + _CHUNK], n, refraction)
+                  for i in range(0, s.size, _CHUNK)]
+        inner = np.concatenate([values for values, _ in chunks])
+        nodes += sum(count for _, count in chunks)
         parts.append(float(np.sum(du / mz * inner)) / np.pi)
-    return parts[0], parts[1]
+    return parts[0], parts[1], nodes
 
 
 def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "height-correlated",
-                   refraction: str = "auto", *, rtol: float = DEFAULT_RTOL, atol: float = 0.0) -> AverageResult:
+                   refraction: str = "auto", *, rtol: float = DEFAULT_RTOL, atol: float = 0.0) -> RouteResult:
     """E_avg = R̄ + T̄ of the rough dielectric for each (α, η) (arrays broadcast to (M,)); ``refraction`` the
-    refraction's G2 (the model's ``refraction_shadowing``)."""
+    refraction's G2 (the model's ``refraction_shadowing``). The result's arrays are (M,), its extras
+    ``reflected`` and ``transmitted`` the R̄ and T̄ parts."""
     alpha, eta = (np.atleast_1d(np.asarray(q, dtype=float)) for q in (alpha, eta))
     alpha, eta = np.broadcast_arrays(alpha, eta)
     M = alpha.size
     value, error = np.zeros(M), np.full(M, np.inf)
     reflected, transmitted = np.zeros(M), np.zeros(M)
     converged = np.zeros(M, dtype=bool)
+    evaluations = np.zeros(M, dtype=np.int64)
     # Beckmann's truncation: the dropped facets carry ≤ ∫ du/m_z = ∫ √(1 + α²s²) dP ≤ mass + α·moment (the inner
     # integral of (A1) is at most π).
-    mass, moment = distribution.truncated_moments()
+    mass, moment = slope_coordinates(distribution).truncated_moments()
     for k in range(M):
         history = []
         for n in ORDERS:
-            r, t = _quadrature(distribution, float(alpha.flat[k]), float(eta.flat[k]), shadowing, n, refraction)
+            r, t, nodes = _quadrature(distribution, float(alpha.flat[k]), float(eta.flat[k]), shadowing, n,
+                                      refraction)
+            evaluations[k] += nodes
             history.append(r + t)
             if len(history) >= 3:
                 estimate = abs(history[-1] - history[-2]) + abs(history[-2] - history[-3])
@@ -199,4 +199,5 @@ def average_albedo(distribution: Distribution, alpha, eta, shadowing: str = "hei
                 if estimate <= max(atol, rtol * abs(r + t)):
                     converged[k] = True
                     break
-    return AverageResult(value, error, converged, reflected, transmitted)
+    return RouteResult(value, error, evaluations, converged,
+                       extras={"reflected": reflected, "transmitted": transmitted})

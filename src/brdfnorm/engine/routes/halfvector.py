@@ -41,12 +41,13 @@ Cubature. First a global tensor rule per case and piece (:mod:`brdfnorm.engine.r
 trapezoid
 in φ × Fejér in v, degree doubling with node reuse), which settles most views with half the evaluations; the
 cases it does not settle (grazing views, μ ≲ 0.01) start afresh on the panels below.
-Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case): a
-tensor K15 ⊗ K15 rule per panel (225 nodes), its error the plain |KK − GK| + |KK − KG| of the embedded G7
-rules (not QUADPACK's rescaling); panels are bisected along their worse direction while their case misses
-max(atol, rtol·|E|). When a case first meets the tolerance, every panel not yet checked is re-integrated on
-its four quarters with G7 ⊗ G7 (new nodes) and the difference joins its error before the case may stop (taking
-the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6: kept as a sum).
+Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case), by the engine's
+rectangle driver (:func:`brdfnorm.engine.machinery.panels.adaptive_rectangles`): a tensor K15 ⊗ K15 rule per
+panel (225 nodes), its error the plain |KK − GK| + |KK − KG| of the embedded G7 rules (not QUADPACK's
+rescaling); panels are bisected along their worse direction while their case misses max(atol, rtol·|E|). When a
+case first meets the tolerance, every panel not yet checked is re-integrated on its four quarters with
+Lobatto7 ⊗ Lobatto7 (new nodes, the edges among them) and the difference joins its error before the case may
+stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6: kept as a sum).
 The tests check estimate ≥ true error against an independent reference on every case they compute.
 """
 
@@ -60,191 +61,23 @@ import numpy as np
 from ...errors import ArgumentError
 from ...models.microfacet import Distribution, fresnel, roughness, shadowing_masking
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
-from ..machinery.kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
-from ..machinery.kronrod import GAUSS, KRONROD, NODES
+from ..machinery.panels import PANELS_PER_CHUNK, Panels, RectangleIntegrand, adaptive_rectangles
+from ..machinery.result import RouteResult
+from ..machinery.slope_coordinates import slope_coordinates
 from . import halfvector_global as global_rule
 
-_EPS = np.finfo(float).eps
 #: Roughness floor inside the integral (α = 0 is a mirror; 1e-150 differs from it by ~1e-300).
 _ALPHA_FLOOR = 1e-150
 #: The horizon piece spans N·L ∈ [0, LAYER·α] (linearized), where G2's boundary layer lives.
 _LAYER = 4.0
-#: Panels per integrand call: arrays of 64 × 225 nodes stay in cache (1000 was ~1.5x slower); an integrand with
-#: much work per azimuth node (transmission's ray search) asks for more, to amortize numpy's per-call overhead.
-PANELS_PER_CHUNK = 64
 _TWO_PI = 2.0 * np.pi
 
-#: Rectangle integrand: (case (R,), φ (R, n, 1), v (R, 1, n), piece floor(v) (R,)) -> (R, n, n, C).
-RectangleIntegrand = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class CubatureResult:
-    value: np.ndarray  # (K, C)
-    error: np.ndarray  # (K, C)
-    evaluations: np.ndarray  # (K,)
-    converged: np.ndarray  # (K,)
-
-
-@dataclass
-class _Panels:
-    case: np.ndarray
-    a0: np.ndarray
-    a1: np.ndarray
-    b0: np.ndarray
-    b1: np.ndarray
-    value: np.ndarray | None = None
-    err_a: np.ndarray | None = None
-    err_b: np.ndarray | None = None
-    checked: np.ndarray | None = None  # (R, C) |K15⊗K15 − quarters by Lobatto7⊗Lobatto7| once confirmed, else NaN
-    floor: np.ndarray | None = None  # (R, C) where its ancestors converged algebraically (hemisphere.algebraic_floor)
-
-    FIELDS = ("case", "a0", "a1", "b0", "b1", "value", "err_a", "err_b", "checked", "floor")
-
-    def take(self, index) -> _Panels:
-        return _Panels(*(None if (x := getattr(self, f)) is None else x[index] for f in self.FIELDS))
-
-    @staticmethod
-    def join(first: _Panels | None, second: _Panels) -> _Panels:
-        if first is None:
-            return second
-        return _Panels(*(np.concatenate([getattr(first, f), getattr(second, f)]) for f in _Panels.FIELDS))
-
-    def error(self) -> np.ndarray:
-        return self.err_a + self.err_b + np.nan_to_num(self.checked, nan=0.0) + self.floor
-
-
-def _rule_on(integrand: RectangleIntegrand, panels: _Panels, nodes: np.ndarray, sl: slice):
-    """Integrand values times the panel's area factor on a tensor grid of ``nodes`` (R, n, n, C)."""
-    ha = (panels.a1[sl] - panels.a0[sl]) / 2
-    hb = (panels.b1[sl] - panels.b0[sl]) / 2
-    a = ((panels.a0[sl] + panels.a1[sl]) / 2)[:, None] + ha[:, None] * nodes
-    b = ((panels.b0[sl] + panels.b1[sl]) / 2)[:, None] + hb[:, None] * nodes
-    # A node on a panel's upper edge (Lobatto's) takes the limit from inside: the integrands pick their piece
-    # by floor(coordinate), and the last edge has no piece beyond it.
-    a = np.minimum(a, np.nextafter(panels.a1[sl], -np.inf)[:, None])
-    b = np.minimum(b, np.nextafter(panels.b1[sl], -np.inf)[:, None])
-    piece = np.floor(panels.b0[sl]).astype(int)
-    values = integrand(panels.case[sl], a[:, :, None], b[:, None, :], piece)
-    return values * (ha * hb)[:, None, None, None]
-
-
-def _evaluate(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> None:
-    R = panels.case.size
-    value = err_a = err_b = None
-    for start in range(0, R, chunk):
-        sl = slice(start, start + chunk)
-        f = _rule_on(integrand, panels, NODES, sl)
-        over_b_k = np.einsum("rabc,b->rac", f, KRONROD)
-        over_b_g = np.einsum("rabc,b->rac", f, GAUSS)
-        kk = np.einsum("rac,a->rc", over_b_k, KRONROD)
-        gk = np.einsum("rac,a->rc", over_b_k, GAUSS)
-        kg = np.einsum("rac,a->rc", over_b_g, KRONROD)
-        floor = 50.0 * _EPS * np.einsum("rabc,a,b->rc", np.abs(f), KRONROD, KRONROD)
-        if value is None:
-            C = f.shape[-1]
-            value, err_a, err_b = np.empty((R, C)), np.empty((R, C)), np.empty((R, C))
-        value[sl] = kk
-        err_a[sl] = np.maximum(np.abs(kk - gk), floor)
-        err_b[sl] = np.maximum(np.abs(kk - kg), floor)
-    panels.value, panels.err_a, panels.err_b = value, err_a, err_b
-    panels.checked = np.full_like(value, np.nan)
-    panels.floor = np.zeros_like(value)
-
-
-def _quarters(integrand: RectangleIntegrand, panels: _Panels, chunk: int) -> np.ndarray:
-    """The four quarters of every panel by Lobatto7 ⊗ Lobatto7, summed: (R, C). Lobatto's nodes on the quarters'
-    edges see a kink or jump in the sliver next to a panel's edge, where no Gauss or Kronrod node lies
-    (:func:`brdfnorm.engine.routes.hemisphere._check_by_halves`); non-finite values there count as 0."""
-    total = np.zeros_like(panels.value)
-    for qa in (0, 1):
-        for qb in (0, 1):
-            ma, mb = (panels.a0 + panels.a1) / 2, (panels.b0 + panels.b1) / 2
-            quarter = _Panels(panels.case, np.where(qa, ma, panels.a0), np.where(qa, panels.a1, ma),
-                              np.where(qb, mb, panels.b0), np.where(qb, panels.b1, mb))
-            for start in range(0, quarter.case.size, chunk):
-                sl = slice(start, start + chunk)
-                with np.errstate(all="ignore"):
-                    f = _rule_on(integrand, quarter, QUARTER_NODES, sl)
-                f = np.where(np.isfinite(f), f, 0.0)
-                total[sl] += np.einsum("rabc,a,b->rc", f, QUARTER_WEIGHTS, QUARTER_WEIGHTS)
-    return total
-
-
-def _per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
-    out = np.zeros((K, values.shape[1]))
-    np.add.at(out, case, values)
-    return out
-
-
-def adaptive_rectangles(integrand: RectangleIntegrand, initial: _Panels, K: int, *, rtol: float | np.ndarray,
-                        atol: float | np.ndarray, max_evaluations: int,
-                        chunk: int = PANELS_PER_CHUNK) -> CubatureResult:
-    """Integrate every case over the union of its initial panels, adaptively and all cases at once (``rtol`` and
-    ``atol`` scalars or per case, (K, 1))."""
-    value = error = None
-    evaluations = np.zeros(K, dtype=np.int64)
-    converged = np.zeros(K, dtype=bool)
-    active = np.ones(K, dtype=bool)
-    pool: _Panels | None = None
-    fresh = initial
-    per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
-    parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
-    while True:
-        _evaluate(integrand, fresh, chunk)
-        np.add.at(evaluations, fresh.case, per_panel)
-        if parent_error is not None:
-            # Where a split converged algebraically (a kink or a jump), the parent's estimate stays as a floor.
-            fresh.floor = algebraic_floor(parent_error, fresh.err_a + fresh.err_b)
-        pool = _Panels.join(pool, fresh)
-        if value is None:
-            value = np.zeros((K, pool.value.shape[1]))
-            error = np.zeros_like(value)
-        total = _per_case(K, pool.case, pool.value)
-        tolerance = np.maximum(atol, rtol * np.abs(total))
-        meets = np.all(_per_case(K, pool.case, pool.error()) <= tolerance, axis=1) & active
-        # Confirmation: the unchecked panels of cases that meet the tolerance, on new nodes.
-        check = meets[pool.case] & np.isnan(pool.checked[:, 0])
-        if np.any(check):
-            subset = pool.take(check)
-            difference = np.abs(subset.value - _quarters(integrand, subset, chunk))
-            pool.checked[check] = np.maximum(difference, 50.0 * _EPS * np.abs(subset.value))
-            np.add.at(evaluations, subset.case, per_check)
-        total_error = _per_case(K, pool.case, pool.error())
-        done = np.all(total_error <= tolerance, axis=1) & active
-        out_of_budget = active & ~done & (evaluations + 2 * per_panel > max_evaluations)
-        finished = done | out_of_budget
-        value[finished], error[finished] = total[finished], total_error[finished]
-        converged[done] = True
-        active &= ~finished
-        pool = pool.take(active[pool.case])
-        if not pool.case.size:
-            break
-        # Split the panels carrying more than their share of their case's tolerance, and each case's worst.
-        badness = np.max(pool.error() / np.maximum(tolerance[pool.case], 1e-300), axis=1)
-        count = np.bincount(pool.case, minlength=K)
-        worst = np.zeros(K)
-        np.maximum.at(worst, pool.case, badness)
-        split = (badness > 1.0 / count[pool.case]) | (badness >= worst[pool.case])
-        parents = pool.take(split)
-        pool = pool.take(~split)
-        along_a = np.max(parents.err_a, axis=1) >= np.max(parents.err_b, axis=1)
-        parent_error = parents.err_a + parents.err_b
-        ma, mb = (parents.a0 + parents.a1) / 2, (parents.b0 + parents.b1) / 2
-        fresh = _Panels(
-            np.concatenate([parents.case, parents.case]),
-            np.concatenate([parents.a0, np.where(along_a, ma, parents.a0)]),
-            np.concatenate([np.where(along_a, ma, parents.a1), parents.a1]),
-            np.concatenate([parents.b0, np.where(along_a, parents.b0, mb)]),
-            np.concatenate([np.where(along_a, parents.b1, mb), parents.b1]),
-        )
-    return CubatureResult(value, error, evaluations, converged)
 
 
 # -- the microfacet integrand (H1) -------------------------------------------------------------------------
 
 @dataclass
-class _Geometry:
+class SlopeGeometry:
     """Per-case quantities of (H1): the fixed direction, roughness, Λ(V), Fresnel parameters."""
 
     distribution: Distribution
@@ -257,7 +90,7 @@ class _Geometry:
     multiplicity: np.ndarray | None = None  # (K,) 2 where only half of a symmetric azimuth range is integrated
 
 
-def slope_geometry(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object]) -> _Geometry:
+def slope_geometry(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object]) -> SlopeGeometry:
     K = fixed.shape[0]
     ax, ay = roughness(params)
     ax = np.maximum(np.broadcast_to(ax, (K,)), _ALPHA_FLOOR)
@@ -268,7 +101,7 @@ def slope_geometry(distribution: Distribution, fixed: np.ndarray, params: Mappin
     for name in ("f0", "f90", "eta", "k"):
         value = np.asarray(params[name], dtype=float)
         colours[name] = value if value.ndim <= 1 else np.broadcast_to(value, (K, value.shape[-1]))  # (K, 3) or (K, 1)
-    return _Geometry(distribution, params["shadowing"], fixed, ax, ay, lambda_v, colours)
+    return SlopeGeometry(distribution, params["shadowing"], fixed, ax, ay, lambda_v, colours)
 
 
 def _case_slice(params: dict, case: np.ndarray) -> dict:
@@ -276,7 +109,7 @@ def _case_slice(params: dict, case: np.ndarray) -> dict:
             for k, v in params.items()}
 
 
-def _grading_width(g: _Geometry) -> np.ndarray:
+def _grading_width(g: SlopeGeometry) -> np.ndarray:
     """δ per case: the azimuthal width of the grazing feature next to the zeros of p(φ) (1 where none)."""
     Vz = g.V[:, 2]
     cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
@@ -316,7 +149,7 @@ class SlopeNodes:
 SlopeWeight = Callable[[SlopeNodes], np.ndarray]
 
 
-def microfacet_weight(g: _Geometry) -> SlopeWeight:
+def microfacet_weight(g: SlopeGeometry) -> SlopeWeight:
     """w = G2(L, V) F(V·H) (1 + c·x) of the microfacet lobe (H1)."""
     dist = g.distribution
 
@@ -343,7 +176,7 @@ def microfacet_weight(g: _Geometry) -> SlopeWeight:
     return weight_of
 
 
-def slope_map(g: _Geometry) -> dict[str, np.ndarray]:
+def slope_map(g: SlopeGeometry) -> dict[str, np.ndarray]:
     """Per case, the constants of the slope map of (H1) that :func:`slope_integrand` uses (and the compiled
     backend's kernel, :func:`brdfnorm.engine.compiled.kernels.slope_grid`)."""
     Vz = g.V[:, 2]
@@ -356,7 +189,7 @@ def slope_map(g: _Geometry) -> dict[str, np.ndarray]:
             "multiplicity": g.multiplicity}
 
 
-def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
+def slope_integrand(g: SlopeGeometry, weight_of: SlopeWeight, linear: bool = False) -> RectangleIntegrand:
     """The rectangle (φ, v) of (H1) with the weight ``weight_of``; ``linear``: φ is the azimuth from the offset
     itself (no φ-map), for the global rule (:mod:`brdfnorm.engine.routes.halfvector_global`), which clusters its own
     nodes."""
@@ -367,6 +200,7 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
     cos_offset, sin_offset = np.cos(offset), np.sin(offset)
     layer = _LAYER * np.maximum(g.ax, g.ay)
     dist = g.distribution
+    coords = slope_coordinates(dist)
     delta = _grading_width(g)
     kappa = np.arcsinh(0.5 * np.pi / delta)
     log_horizon = linear and dist.name in global_rule.GRADED
@@ -403,18 +237,18 @@ def slope_integrand(g: _Geometry, weight_of: SlopeWeight, linear: bool = False) 
         gap = layer[k] * (1.0 + r_h2) / (2.0 * q * vz)
         s_split = s_h / (1.0 + gap / s_h)
         s_middle = s_split / (1.0 + s_split)  # ≈ min(1, s_split), smooth in φ
-        s_end, s_split, s_middle = dist.cap(s_h), dist.cap(s_split), dist.cap(s_middle)
+        s_end, s_split, s_middle = coords.cap(s_h), coords.cap(s_split), coords.cap(s_middle)
         local = v - piece[:, None, None]  # position in the piece, [0, 1], (R, 1, n)
         # Pole piece [0, s_middle] in the pole coordinate, tail piece [s_middle, s_split] in the tail
         # coordinate, horizon piece [s_split, s_h] linear in s; each computed on its own panels only.
         def piece_nodes(kind, rows, at):
             if kind == 0:
-                length = dist.pole_coordinate(s_middle[rows])
-                radius, density = dist.pole(at * length)
+                length = coords.pole_coordinate(s_middle[rows])
+                radius, density = coords.pole(at * length)
             elif kind == 1:
-                start = dist.tail_coordinate(s_middle[rows])
-                length = dist.tail_coordinate(s_split[rows]) - start
-                radius, density = dist.tail(start + at * length)
+                start = coords.tail_coordinate(s_middle[rows])
+                length = coords.tail_coordinate(s_split[rows]) - start
+                radius, density = coords.tail(start + at * length)
             elif log_horizon:  # ln s linear: a layer wider than the horizon radius spans decades (global rule)
                 log_ratio = np.log(s_end[rows] / s_split[rows])
                 radius = s_end[rows] * np.exp((at - 1.0) * log_ratio)
@@ -458,7 +292,7 @@ def fill_pieces(piece: np.ndarray, local: np.ndarray, shape: tuple[int, ...],
 def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, params: Mapping[str, object], *,
                              rtol: float = DEFAULT_RTOL, atol: float | np.ndarray = 0.0,
                              max_evaluations: int = DEFAULT_MAX_EVALUATIONS, use_global: bool = True,
-                             compiled: bool = False) -> CubatureResult:
+                             compiled: bool = False) -> RouteResult:
     """E(V) of the single-scattering microfacet lobe for fixed directions (K, 3) and per-case parameters.
 
     Views below cos θ = :data:`GRAZING_MU` (9e-5) are integrated to min(rtol, :data:`GRAZING_RTOL`): there the
@@ -480,15 +314,15 @@ def single_scattering_albedo(distribution: Distribution, fixed: np.ndarray, para
     result = integrate_slopes(g, microfacet_weight(g), g.ax == g.ay, rtol=rtol, atol=atol,
                               max_evaluations=max_evaluations, use_global=use_global, rectangle=rectangle)
     # Beckmann's truncation: w = G2 F (1 + c·x) ≤ 1 + |c| α_max s (G2, F ≤ 1) over the dropped slope radii.
-    mass, moment = distribution.truncated_moments()
+    mass, moment = slope_coordinates(distribution).truncated_moments()
     truncated = mass + moment * np.hypot(fixed[:, 0], fixed[:, 1]) / fixed[:, 2] * np.maximum(g.ax, g.ay)
-    return CubatureResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
+    return RouteResult(result.value, result.error + truncated[:, None], result.evaluations, result.converged)
 
 
-def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
+def integrate_slopes(g: SlopeGeometry, weight_of: SlopeWeight, symmetric: np.ndarray, *, rtol: float | np.ndarray,
                      atol: float | np.ndarray, max_evaluations: int, use_global: bool = True,
                      max_nodes: int = global_rule.MAX_NODES, chunk: int = PANELS_PER_CHUNK,
-                     rectangle: Callable[[bool], RectangleIntegrand] | None = None) -> CubatureResult:
+                     rectangle: Callable[[bool], RectangleIntegrand] | None = None) -> RouteResult:
     """∫∫ w du dφ/2π over the rectangle of (H1) for every case of ``g``: the global rule first (``max_nodes`` per
     radial piece), then the adaptive panels for the cases it does not settle. ``symmetric`` (K,): w is symmetric
     about the plane of N and V, so half the azimuth range, counted twice, is the whole integral (the azimuth map's
@@ -515,7 +349,7 @@ def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray
     value, error, evaluations, settled = global_rule.integrate_global(
         rectangle(True), K, tried, lam, symmetric, 1.0 / g.multiplicity, rtol=rtol,
         atol=atol, max_nodes=max_nodes, width=global_rule.grading_width(g.V[:, 2], g.distribution.name))
-    initial = _Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
+    initial = Panels(np.concatenate(cases), *(np.concatenate([b[i] for b in bounds]) for i in range(4)))
     initial = initial.take(~settled[initial.case])
     if initial.case.size:
         panels = adaptive_rectangles(rectangle(False), initial, K, rtol=rtol, atol=atol,
@@ -526,7 +360,7 @@ def integrate_slopes(g: _Geometry, weight_of: SlopeWeight, symmetric: np.ndarray
         error[~settled] = np.broadcast_to(panels.error, shape)[~settled]
         evaluations = evaluations + np.where(settled, 0, panels.evaluations)
         settled = settled | panels.converged
-    return CubatureResult(value, error, evaluations, settled)
+    return RouteResult(value, error, evaluations, settled)
 
 
 # -- limits ---------------------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ azimuthal features next to the zeros of p are ~μ wide, with structure out to O(
 + gap)) over which the slope density falls as a power: linear in s, Fejér's rule needed > 1000 radial nodes (μ ≲
 3e-3) or never converged (μ ≲ 3e-4). So for these lobes the horizon piece runs linear in ln s at every view (see
 ``slope_integrand``; linear in s where its ends are close; analytic in a wide strip for a power-law tail, not
-for Beckmann's e^{−s²}, where the sweep of ``tests/test_halfvector_global.py`` found estimates 10³× too small,
+for Beckmann's e^{−s²}, where the sweep of ``tests/engine/test_halfvector_global.py`` found estimates 10³× too small,
 hence GGX only), and below μ = :data:`GRADED_BELOW` the azimuth takes a periodic analogue of the panels' sinh
 grading: tan φ = δ sinh(κ sin t)/cos t, δ = μ, κ = arsinh(1/δ) — dφ/dt = δκ at the zeros, distances δ … 1 spread
 log-evenly over sin t, period π and the mirror symmetry kept (κ → 0 with δκ = λ is the Möbius map). The map
@@ -126,6 +126,7 @@ class _Group:
 def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u):
     """Weighted values (n, len(index), len(u), C) at t = 2π·index/M and v = piece + u (sharing mirror nodes)."""
     out = None
+    fresh = getattr(integrand, "compiled", False)
     for mirrored in (False, True):
         rows = np.flatnonzero(symmetric[case] == mirrored)
         if not rows.size:
@@ -142,7 +143,14 @@ def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u)
             r = rows[start:start + chunk]
             k = case[r]
             values = integrand(k, phi[start:start + chunk, :, None], (piece[r][:, None] + u)[:, None, :], piece[r])
-            values = values * (dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None])
+            factor = dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None]
+            if fresh:  # (a compiled integrand's output is its own: scaled in place, and kept where it is all)
+                values *= factor
+                if not mirrored and r.size == case.size:
+                    out = values
+                    continue
+            else:
+                values = values * factor
             if out is None:
                 out = np.empty((case.size, index.size, u.size, values.shape[-1]))
             out[r] = values[:, back] if mirrored else values  # (index is sorted: back is the identity)

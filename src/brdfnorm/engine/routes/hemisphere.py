@@ -63,7 +63,6 @@ where the speed comes from (see benchmarks/).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -71,23 +70,23 @@ import numpy as np
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
-from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
-from ..machinery.kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
+from ..machinery.kinks import LOBATTO_NODES, algebraic_floor, refinement_change
+from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
+from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
+from ..machinery.result import RouteResult
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from ..machinery.tensor_rule import START_NODES, GlobalResult, integrate_global, map_grid, neck_u
+from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u
 
 NonFinitePolicy = Literal["raise", "zero"]
 
 #: Nodes per case the global tensor rule may spend before a case goes to the adaptive panels.
 GLOBAL_NODES = 65_536
 
-_EPS = np.finfo(float).eps
-
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
-#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> GlobalResult (``settled``:
+#: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> RouteResult (``converged``:
 #: the cases it keeps): a route tried before the others (``integrate_hemisphere``'s first_route).
-FirstRoute = Callable[..., GlobalResult]
+FirstRoute = Callable[..., RouteResult]
 
 
 class NonFiniteIntegrand(ArithmeticError):
@@ -98,67 +97,6 @@ class NonFiniteIntegrand(ArithmeticError):
         self.case = case
         self.direction = direction
         self.value = value
-
-
-@dataclass(frozen=True)
-class HemisphereResult:
-    """Result of :func:`integrate_hemisphere`, one row per case (scipy.integrate style)."""
-
-    value: np.ndarray  # (K, C)
-    error: np.ndarray  # (K, C) error estimate
-    evaluations: np.ndarray  # (K,) integrand evaluations
-    converged: np.ndarray  # (K,) bool
-    nonfinite_fraction: np.ndarray  # (K,) share of the hemisphere's solid angle zeroed (nonfinite="zero")
-    reason: np.ndarray  # (K,) str: "" where converged, else why not (one of :data:`REASONS`)
-
-
-#: Why a case ends unconverged: its integrand's float64 rounding noise exceeds the tolerance
-#: ("rounding-limited"), its estimate stopped improving ("stalled"), or the evaluation budget ran out ("budget").
-REASONS = ("rounding-limited", "stalled", "budget")
-
-
-@dataclass
-class _Panels:
-    """Panels: case index, (β, u) bounds, and — once evaluated — their estimates."""
-
-    case: np.ndarray
-    b0: np.ndarray
-    b1: np.ndarray
-    u0: np.ndarray
-    u1: np.ndarray
-    value: np.ndarray | None = None  # (R, C)
-    err_b: np.ndarray | None = None  # (R, C)
-    err_u: np.ndarray | None = None  # (R, C)
-    bad: np.ndarray | None = None  # (R,) solid angle where the integrand was non-finite
-    magnitude: np.ndarray | None = None  # (R, C) K15⊗K15 integral of |g| (the scale of rounding noise)
-    inherited: np.ndarray | None = None  # (R, C) share of |parent − children| from the split that made it
-    checked: np.ndarray | None = None  # (R,) bool: confirmed by _check_by_halves (its change is in ``inherited``)
-    floor: np.ndarray | None = None  # (R, C) where its ancestors converged algebraically: see algebraic_floor
-
-    FIELDS = ("case", "b0", "b1", "u0", "u1", "value", "err_b", "err_u", "bad", "magnitude", "inherited", "checked",
-              "floor")
-
-    def take(self, index) -> _Panels:
-        return _Panels(*(None if (a := getattr(self, f)) is None else a[index] for f in self.FIELDS))
-
-    @staticmethod
-    def join(a: _Panels, b: _Panels) -> _Panels:
-        return _Panels(*(np.concatenate([getattr(a, f), getattr(b, f)]) for f in _Panels.FIELDS))
-
-    def error(self) -> np.ndarray:
-        return self.err_b + self.err_u + self.inherited + self.floor
-
-    def halves(self, along_beta: np.ndarray) -> _Panels:
-        """The two halves of every panel (first halves, then second halves), split along β or u."""
-        b_mid = (self.b0 + self.b1) / 2
-        u_mid = (self.u0 + self.u1) / 2
-        return _Panels(
-            np.concatenate([self.case, self.case]),
-            np.concatenate([self.b0, np.where(along_beta, b_mid, self.b0)]),
-            np.concatenate([np.where(along_beta, b_mid, self.b1), self.b1]),
-            np.concatenate([self.u0, np.where(along_beta, self.u0, u_mid)]),
-            np.concatenate([np.where(along_beta, self.u1, u_mid), self.u1]),
-        )
 
 
 def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -177,26 +115,13 @@ def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return P, T, B
 
 
-def _map_nodes(panels: _Panels, frame, widths, supports, nodes: np.ndarray = NODES, nodes_u: np.ndarray | None = None):
+def _map_nodes(panels: Panels, frame, widths, supports, nodes: np.ndarray = NODES, nodes_u: np.ndarray | None = None):
     """Directions (R, n, m, 3) and Jacobians (R, n, m) at the tensor ``nodes`` (β) ⊗ ``nodes_u`` (u; or ``nodes``)."""
-    beta_half = (panels.b1 - panels.b0) / 2
-    u_half = (panels.u1 - panels.u0) / 2
-    beta = ((panels.b0 + panels.b1) / 2)[:, None] + beta_half[:, None] * nodes  # (R, n)
-    u = ((panels.u0 + panels.u1) / 2)[:, None] + u_half[:, None] * (nodes if nodes_u is None else nodes_u)
+    beta_half = (panels.a1 - panels.a0) / 2
+    u_half = (panels.b1 - panels.b0) / 2
+    beta = ((panels.a0 + panels.a1) / 2)[:, None] + beta_half[:, None] * nodes  # (R, n)
+    u = ((panels.b0 + panels.b1) / 2)[:, None] + u_half[:, None] * (nodes if nodes_u is None else nodes_u)
     return map_grid(panels.case, beta, u, (beta_half * u_half)[:, None], frame, widths, supports)
-
-
-def _estimate(values: np.ndarray, jacobian: np.ndarray):
-    """K15⊗K15 value and the directional errors |KK − GK| (β) and |KK − KG| (u) per panel and channel."""
-    weighted = values * jacobian[..., None]  # (R, 15, 15, C)
-    over_u_k = np.einsum("rbuc,u->rbc", weighted, KRONROD)
-    over_u_g = np.einsum("rbuc,u->rbc", weighted, GAUSS)
-    kk = np.einsum("rbc,b->rc", over_u_k, KRONROD)
-    gk = np.einsum("rbc,b->rc", over_u_k, GAUSS)
-    kg = np.einsum("rbc,b->rc", over_u_g, KRONROD)
-    magnitude = np.einsum("rbuc,b,u->rc", np.abs(weighted), KRONROD, KRONROD)
-    floor = 50.0 * _EPS * magnitude  # rounding noise: QUADPACK's floor on |K − G|
-    return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor), magnitude
 
 
 def integrate_hemisphere(
@@ -214,7 +139,7 @@ def integrate_hemisphere(
     first_route: FirstRoute | None = None,
     anisotropic: np.ndarray | None = None,
     epsilon: float | None = None,
-) -> HemisphereResult:
+) -> RouteResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
     Parameters
@@ -266,17 +191,18 @@ def integrate_hemisphere(
     quiet = np.flatnonzero((rtol == 0) | np.all(noise_bound(noise_amplitude, 1.0) < rtol / 16, axis=-1))
     first = None
     if first_route is not None and rtol > 0:
-        first = first_route(integrand, poles, widths, quiet, noise_amplitude, rtol=rtol, atol=atol,
+        # (every case: the first route chooses by the noise itself, halfvector_generic.HOPEFUL)
+        first = first_route(integrand, poles, widths, np.arange(K), noise_amplitude, rtol=rtol, atol=atol,
                             max_evaluations=max_evaluations // 4)
         evaluations += first.evaluations
-        quiet = quiet[~first.settled[quiet]]
+        quiet = quiet[~first.converged[quiet]]
     tried = integrate_global(integrand, frame, widths, supports, quiet if global_nodes >= START_NODES else quiet[:0],
                              noise_amplitude, rtol=rtol, atol=atol, noise_bound=noise_bound, max_nodes=global_nodes,
                              max_nodes_per_call=max_nodes_per_call, azimuthal_tail=anisotropic)
     evaluations += tried.evaluations
     routes = [tried] + ([first] if first else [])
-    remaining = np.flatnonzero(~np.any([route.settled for route in routes], axis=0))
-    panels = _Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
+    remaining = np.flatnonzero(~np.any([route.converged for route in routes], axis=0))
+    panels = Panels(*starting_panels(remaining, edges_b, edges_u, neck_u(frame, widths, supports)[remaining],
                                       frame[0][remaining, 2], widths[remaining], supports[remaining]))
     history = []  # total error estimate per case and round (for the stall check)
     # The stall check's budget grows with the initial panels: a graded start (starting_panels) holds up to a few
@@ -295,15 +221,15 @@ def integrate_hemisphere(
         fresh.checked = np.zeros(fresh.case.size, dtype=bool)
         fresh.floor = np.zeros_like(fresh.value)
         if parent_value is None:
-            fresh.inherited = np.zeros_like(fresh.value)
+            fresh.change = np.zeros_like(fresh.value)
         else:
             # What one more level of refinement changed: a check that both embedded rules can pass together
             # when a feature falls between all their nodes.
             half = parent_value.shape[0]
             change = refinement_change(parent_value, fresh.value[:half], fresh.value[half:]) / 2
-            fresh.inherited = np.concatenate([change, change])
-            fresh.floor = algebraic_floor(parent_error, fresh.err_b + fresh.err_u)
-        pool = fresh if pool is None else _Panels.join(pool, fresh)
+            fresh.change = np.concatenate([change, change])
+            fresh.floor = algebraic_floor(parent_error, fresh.err_a + fresh.err_b)
+        pool = fresh if pool is None else Panels.join(pool, fresh)
         if value.shape[1] != pool.value.shape[1]:
             value = np.zeros((K, pool.value.shape[1]))
             error = np.zeros_like(value)
@@ -329,7 +255,7 @@ def integrate_hemisphere(
             # where the check found it wanting), less the panel's rounding-noise bound (charged to the case apart).
             checked = pool.take(confirming)
             own_noise = 2.0 * noise_bound(noise_amplitude[checked.case], checked.magnitude)
-            for along_beta, err in ((True, pool.err_b), (False, pool.err_u)):
+            for along_beta, err in ((True, pool.err_a), (False, pool.err_b)):
                 change = _check_by_halves(checked, along_beta, integrand, frame, widths, supports, max_nodes_per_call)
                 err[confirming] = np.maximum(err[confirming], change - own_noise)
             np.add.at(evaluations, pool.case[confirming], 4 * LOBATTO_NODES.size * GAUSS_NODES.size)
@@ -363,7 +289,7 @@ def integrate_hemisphere(
         split = np.zeros(pool.case.size, dtype=bool)
         split[order] = (cumulative - before_case > 0.5) & active[sorted_case]
         # Panels too thin to split further stay as they are (their error stays in the estimate).
-        split &= np.minimum(pool.b1 - pool.b0, (pool.u1 - pool.u0) * 2 * np.pi) > 1e-12
+        split &= np.minimum(pool.a1 - pool.a0, (pool.b1 - pool.b0) * 2 * np.pi) > 1e-12
 
         finished = ~active[pool.case]
         done = present & ~active
@@ -373,8 +299,8 @@ def integrate_hemisphere(
         error[done] += noise[done]
         parents = pool.take(split)
         pool = pool.take(~split & ~finished)
-        fresh = parents.halves(parents.err_b.max(axis=1) >= parents.err_u.max(axis=1))
-        parent_value, parent_error = parents.value, parents.err_b + parents.err_u
+        fresh = parents.halves(parents.err_a.max(axis=1) >= parents.err_b.max(axis=1))
+        parent_value, parent_error = parents.value, parents.err_a + parents.err_b
         if not fresh.case.size and pool.case.size:
             # Active cases whose every panel is too thin to split: finish them unconverged.
             left = np.zeros(K, dtype=bool)
@@ -389,13 +315,14 @@ def integrate_hemisphere(
         value = np.zeros((K, max(route.value.shape[1] for route in routes)))
         error = np.zeros_like(value)
     for route in routes:
-        value[route.settled], error[route.settled] = route.value[route.settled], route.error[route.settled]
-        converged |= route.settled
+        value[route.converged], error[route.converged] = route.value[route.converged], route.error[route.converged]
+        converged |= route.converged
     reason[converged] = ""
-    return HemisphereResult(value, error, evaluations, converged, bad_total / (2.0 * np.pi), reason.astype(str))
+    return RouteResult(value, error, evaluations, converged, reason.astype(str),
+                       {"nonfinite_fraction": bad_total / (2.0 * np.pi)})
 
 
-def _case_errors(pool: _Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):
+def _case_errors(pool: Panels, present: np.ndarray, noise: np.ndarray, tolerance: np.ndarray):
     """Panel errors (R, C), their sums per case (K, C), and which present cases meet the tolerance with the
     rounding-noise bound added."""
     panel_error = pool.error()
@@ -424,7 +351,7 @@ def _stalled(history: list[tuple[np.ndarray, np.ndarray]], evaluations: np.ndarr
     return stalled & (evaluations > after)
 
 
-def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int,
+def _node_values(panels: Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int,
                  nodes_u: np.ndarray | None = None):
     """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, m, C))."""
     chunk = max(1, max_nodes_per_call // (nodes.size * (nodes.size if nodes_u is None else nodes_u.size)))
@@ -436,30 +363,23 @@ def _node_values(panels: _Panels, integrand, frame, widths, supports, nodes: np.
         yield part, omega, jacobian, values.reshape(jacobian.shape + (-1,))
 
 
-def _check_by_halves(panels: _Panels, along_beta: bool, integrand, frame, widths, supports,
+def _check_by_halves(panels: Panels, along_beta: bool, integrand, frame, widths, supports,
                      max_nodes_per_call) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum over its two halves (split along β or u) by Gauss-Lobatto in the split
-    direction ⊗ G7 across. Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an edge, beyond
-    all Gauss-Kronrod nodes (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and a jump J in
-    slope, the error J δ²/2 is below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9). G7 across,
-    as Lobatto was weaker than G7 on steep integrands (Phong n = 1e4, rtol 1e-12). docs/kinks.md has the details."""
-    halves = panels.halves(np.full(panels.case.size, along_beta))
-    nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
-    if not along_beta:
-        nodes, weights = nodes[::-1], weights[::-1]
-    half = panels.case.size
-    if hasattr(integrand, "kernels"):  # the compiled backend: map, shader, Jacobian and sums in one kernel
-        total = native.hemisphere_sums(integrand, halves.case, halves.b0, halves.b1, halves.u0, halves.u1, frame,
-                                       widths, supports, *nodes, *weights)
-        return refinement_change(panels.value, total[:half], total[half:])
-    sums = []
-    with np.errstate(all="ignore"):
-        for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
-                                                   max_nodes_per_call, nodes[1]):
-            values = np.where(np.isfinite(values), values, 0.0)
-            sums.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
-    total = np.concatenate(sums)
-    return refinement_change(panels.value, total[:half], total[half:])
+    """:func:`brdfnorm.engine.machinery.panels.check_by_halves` of each panel, split along β or u, with this
+    route's node map (or, under the compiled backend, one fused kernel: map, shader, Jacobian and sums)."""
+    def sums(halves: Panels, nodes: tuple, weights: tuple) -> np.ndarray:
+        if hasattr(integrand, "kernels"):
+            return native.hemisphere_sums(integrand, halves.case, halves.a0, halves.a1, halves.b0, halves.b1, frame,
+                                          widths, supports, *nodes, *weights)
+        parts = []
+        with np.errstate(all="ignore"):
+            for _, _, jacobian, values in _node_values(halves, integrand, frame, widths, supports, nodes[0],
+                                                       max_nodes_per_call, nodes[1]):
+                values = np.where(np.isfinite(values), values, 0.0)
+                parts.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
+        return np.concatenate(parts)
+
+    return check_by_halves(panels, along_beta, sums)
 
 
 def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
@@ -468,12 +388,12 @@ def _normalized(error: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
         return np.where(tolerance > 0, error / tolerance, np.where(error > 0, np.inf, 0.0))
 
 
-def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
+def _evaluate(panels: Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
     """Fill in the estimates of ``panels``, calling the integrand on bounded chunks of nodes (or, under the compiled
     backend, one fused kernel over all panels)."""
     if hasattr(integrand, "kernels"):
-        value, err_b, err_u, magnitude, bad, first_bad = native.hemisphere_panels(
-            integrand, panels.case, panels.b0, panels.b1, panels.u0, panels.u1, frame, widths, supports, NODES,
+        value, err_a, err_b, magnitude, bad, first_bad = native.hemisphere_panels(
+            integrand, panels.case, panels.a0, panels.a1, panels.b0, panels.b1, frame, widths, supports, NODES,
             KRONROD, GAUSS)
         if nonfinite == "raise" and np.any(first_bad >= 0):
             r = int(np.argmax(first_bad >= 0))
@@ -481,7 +401,7 @@ def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, ma
             omega, _ = _map_nodes(panels.take(slice(r, r + 1)), frame, widths, supports)
             raise NonFiniteIntegrand(int(panels.case[r]), omega[0, b, u],
                                      integrand(omega[0, b, u][None], panels.case[r:r + 1])[0])
-        panels.value, panels.err_b, panels.err_u, panels.magnitude, panels.bad = value, err_b, err_u, magnitude, bad
+        panels.value, panels.err_a, panels.err_b, panels.magnitude, panels.bad = value, err_a, err_b, magnitude, bad
         return
     parts = []
     for part, omega, jacobian, values in _node_values(panels, integrand, frame, widths, supports, NODES,
@@ -494,8 +414,8 @@ def _evaluate(panels: _Panels, integrand, frame, widths, supports, nonfinite, ma
                 raise NonFiniteIntegrand(int(part.case[r]), omega[r, b, u], values[r, b, u])
             values = np.where(finite[..., None], values, 0.0)
             bad = np.einsum("rbu,b,u->r", jacobian * ~finite, KRONROD, KRONROD)
-        parts.append((*_estimate(values, jacobian), bad))
-    panels.value, panels.err_b, panels.err_u, panels.magnitude, panels.bad = (
+        parts.append((*kronrod_estimate(values * jacobian[..., None]), bad))
+    panels.value, panels.err_a, panels.err_b, panels.magnitude, panels.bad = (
         np.concatenate(p) for p in zip(*parts, strict=True))
 
 

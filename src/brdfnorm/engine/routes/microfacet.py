@@ -25,14 +25,13 @@ from ...models.microfacet import (
     MicrofacetModel,
     fresnel_multiple_scattering,
     fresnel_normal,
-    register_compensation,
 )
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import backend as compiled_backend
-from . import anisotropic_compensation  # noqa: F401 — registers the anisotropic lobes' compensation
+from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.result import RouteResult
 from .azimuthal import white_albedo
-from .halfvector import MU_MIN, CubatureResult, require_mu_min, single_scattering_albedo
-from .series import adaptive_gauss_legendre
+from .halfvector import MU_MIN, require_mu_min, single_scattering_albedo
 
 #: The μ = 0 row of a table is evaluated here (a renderer clamps μ there too).
 MU_CLAMP = 1e-4
@@ -57,7 +56,7 @@ def _albedo_method(single_scattering, compiles: bool = False):
         result = single_scattering(model.distribution, problem.fixed, params, rtol=rtol, atol=atol,
                                    max_evaluations=max_evaluations, **options)
         value, error = with_compensation(model, problem.fixed, params, result.value, result.error)
-        return value, error, result.evaluations, result.converged, None
+        return result.with_(value=value, error=error)
     return run
 
 
@@ -124,7 +123,7 @@ def _anisotropic_compensation(model, fixed, params, value, error):
 # -- Kulla & Conty's compensation tables -------------------------------------------------------------------
 
 def _albedo_grid(distribution: Distribution, shadowing: str, mu: np.ndarray, alpha: np.ndarray,
-                 rtol: float = _TABLE_RTOL, atol=0.0) -> CubatureResult:
+                 rtol: float = _TABLE_RTOL, atol=0.0) -> RouteResult:
     """Single-scattering E (F = 1, isotropic) at the pairs (μ, α) of two equal-shape arrays, flattened."""
     mu = np.clip(np.ravel(mu), MU_MIN, 1.0)
     fixed = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=-1)
@@ -139,7 +138,7 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
     """E_avg(α) = 2∫₀¹ E(μ, α) μ dμ, every E by the half-vector integral; returns (value, error) arrays.
 
     In x = ln μ the integrand 2μ²E(e^x) is smooth at every scale (E has a boundary layer at grazing μ, of
-    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.routes.series.adaptive_gauss_legendre` over
+    width ~α) and negligible towards μ → 0, so :func:`brdfnorm.engine.machinery.interval.adaptive_gauss_legendre` over
     x ∈ [ln 1e-6, 0] converges fast; each node's E is computed to an absolute accuracy scaled by its weight,
     and the nodes' errors are added to the outer estimate (bounded by max(2μ²·err_E) times the x-range).
     """
@@ -160,9 +159,9 @@ def average_albedo(distribution: Distribution, shadowing: str, alpha, *, rtol: f
         np.maximum.at(inner_error, index, np.max(weight * result.error[:, 0].reshape(mu.shape), axis=1))
         return weight * result.value[:, 0].reshape(mu.shape)
 
-    value, error, _, converged = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
+    result = adaptive_gauss_legendre(integrand, a, b, case, K, rtol=rtol)
     dropped = _AVERAGE_MU_MIN**2 / 2
-    return value + dropped, error + span * inner_error + dropped
+    return result.value + dropped, result.error + span * inner_error + dropped
 
 
 @dataclass(frozen=True)
@@ -244,6 +243,3 @@ def _compensation(distribution_name: str, shadowing: str, size: int) -> Compensa
 def compensation(distribution: Distribution, shadowing: str, size: int) -> Compensation:
     """The (cached) Kulla-Conty tables of a lobe; ``size`` 0 for exact values."""
     return _compensation(distribution.name, shadowing, int(size))
-
-
-register_compensation(compensation)

@@ -65,27 +65,22 @@ At θ_o = 0, λ = 1 and G = 1, and (S5) reduces to seed 000's Eq. 3, 8π(2^(−n
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.special import roots_legendre
 
 from ... import validate
 from ...errors import ParameterError, ParameterTypeError
+from ..machinery.interval import adaptive_gauss_legendre
+from ..machinery.result import RouteResult
 
 #: Gauss–Legendre order for G_m (S4) and for one outer panel (S5).
 _INNER_ORDER = 24
-_OUTER_ORDER = 15
 #: Cut of the Gaussian e^{−(m−¾)s²} in (S4) and of cos^n(δ/2) in (S5), as exponents.
 _INNER_CUT = 45.0
 _OUTER_CUT = 60.0
-#: Panels are evaluated in blocks of this many, to bound the size of temporaries (panels × 30 × 24 floats).
-_BLOCK = 4096
-_MAX_ROUNDS = 60
-#: Rounding in the estimate, relative to E: G_m by (S4) is good to 5e-15 (tests/test_series.py checks it against
+#: Rounding in the estimate, relative to E: G_m by (S4) is good to 5e-15 (tests/engine/test_series.py checks it against
 #: mpmath's 2F1 at 30 digits), and the sums of nodes and panels and the cos^n factor round a few ulps each.
-#: Measured against mpmath at 25 digits (tests/test_error_bounds.py): errors up to 1.7e-15 relative; at n = 270,
+#: Measured against mpmath at 25 digits (tests/engine/test_error_bounds.py): errors up to 1.7e-15 relative; at n = 270,
 #: theta = 36 degrees an error of 8.3e-17 where the difference of the two rules alone said 1.2e-17.
 _G_RTOL = 5e-15
 _SUM_ULPS = 8.0
@@ -93,21 +88,7 @@ _EPS = np.finfo(float).eps
 _HALF_PI = 0.5 * np.pi
 
 _S_NODES, _S_WEIGHTS = roots_legendre(_INNER_ORDER)
-_P_NODES, _P_WEIGHTS = roots_legendre(_OUTER_ORDER)
 
-#: A batch integrand: (case indices (P,), abscissae (P, N)) -> values (P, N).
-Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class SeriesResult:
-    """Albedo by seed 002's form: ``value`` and ``error`` (estimate) arrays of the broadcast shape of (n, θ),
-    ``evaluations`` the number of outer nodes used (each one Legendre-function evaluation of 24 terms)."""
-
-    value: np.ndarray
-    error: np.ndarray
-    evaluations: np.ndarray
-    converged: np.ndarray
 
 
 def legendre_ratio(m: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -150,68 +131,6 @@ def _integrand(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return power * legendre_ratio(0.5 * n, xi) * np.cos(phi) * np.sin(phi)
 
 
-def _panel_values(func: Integrand, case: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """15-point Gauss–Legendre of ``func`` on each panel [a, b]; blocks of panels bound the temporaries."""
-    out = np.empty(a.shape)
-    for start in range(0, a.size, _BLOCK):
-        sl = slice(start, start + _BLOCK)
-        half = 0.5 * (b[sl] - a[sl])
-        x = 0.5 * (a[sl] + b[sl])[:, None] + half[:, None] * _P_NODES
-        # A row sum, not a matrix-vector product: BLAS's gemv rounds a row differently with the number of rows
-        # (measured: 524 of 1 003 rows differ from the same rows one at a time), which made a cell's value depend
-        # on which other cells shared its call, and tables differ in the last bits between one process and
-        # several (tests/test_lut_parallel.py).
-        out[sl] = half * (func(case[sl], x) * _P_WEIGHTS).sum(axis=1)
-    return out
-
-
-def adaptive_gauss_legendre(
-    func: Integrand, a: np.ndarray, b: np.ndarray, case: np.ndarray, cases: int, *, rtol: float, atol: float = 0.0
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate many one-dimensional integrals at once by adaptive bisection of Gauss–Legendre panels.
-
-    Case ``k`` is the sum of ∫ func over its initial panels [a[i], b[i]] with case[i] = k; ``func(case, x)``
-    takes case indices (P,) and abscissae (P, N) and returns (P, N). A panel's error estimate is the difference
-    between the 15-point rule on it and on its two halves (the finer value is kept); a case is done when its
-    summed estimate is at most max(rtol·|value|, atol). Returns (value, error, evaluations, converged), (cases,).
-    """
-    coarse = _panel_values(func, case, a, b)
-    done_value = np.zeros(cases)
-    done_error = np.zeros(cases)
-    evaluations = np.bincount(case, minlength=cases) * _OUTER_ORDER
-    converged = np.ones(cases, dtype=bool)
-    for round_ in range(_MAX_ROUNDS + 1):
-        mid = 0.5 * (a + b)
-        left = _panel_values(func, case, a, mid)
-        right = _panel_values(func, case, mid, b)
-        count = np.bincount(case, minlength=cases)
-        evaluations += 2 * _OUTER_ORDER * count
-        fine = left + right
-        err = np.abs(fine - coarse)
-        # Current estimate and error per case: accepted panels plus the live ones at their finer value.
-        total = done_value + np.bincount(case, weights=fine, minlength=cases)
-        total_err = done_error + np.bincount(case, weights=err, minlength=cases)
-        target = np.maximum(rtol * np.abs(total), atol)
-        unsettled = total_err > target
-        # Split a live panel only while its case misses the target and the panel carries more than its share
-        # of the error and more than rounding (a panel at rounding level cannot get better by splitting).
-        share = target[case] / np.maximum(count[case], 1)
-        split = unsettled[case] & (err > share) & (err > 64.0 * _EPS * np.abs(fine)) & (b - a > 1e-12)
-        if round_ == _MAX_ROUNDS:
-            converged &= np.bincount(case, weights=split, minlength=cases) == 0
-            split[:] = False
-        keep = ~split
-        done_value += np.bincount(case[keep], weights=fine[keep], minlength=cases)
-        done_error += np.bincount(case[keep], weights=err[keep], minlength=cases)
-        if not split.any():
-            break
-        a = np.concatenate([a[split], mid[split]])
-        b = np.concatenate([mid[split], b[split]])
-        coarse = np.concatenate([left[split], right[split]])
-        case = np.concatenate([case[split], case[split]])
-    return done_value, done_error, evaluations, converged
-
-
 def _initial_panels(n: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Breakpoints at the peak φ = θ and at ±1, 3, 8 widths from it, inside the range where cos^n matters."""
     width = 2.0 * np.sqrt(2.0) / np.sqrt(n + 1.0)
@@ -236,12 +155,14 @@ def _check(n: object, theta: object, rtol: object, atol: object) -> tuple[np.nda
     return n_arr, validate.polar_angles(theta, horizon=True)
 
 
-def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.0) -> SeriesResult:
+def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.0) -> RouteResult:
     """Albedo ∫ max(0,N·H)^n (N·L) dL of Blinn-Phong at view angle ``theta`` (radians) by seed 002's form.
 
     ``n`` and ``theta`` broadcast together; a case is done when its error estimate is at most
     max(rtol·|E|, atol). The error estimate is an upper bound in practice: the difference of a 15-point rule on
-    a panel and on its halves (the finer of which is kept), plus the rounding of G_m and of the sums.
+    a panel and on its halves (the finer of which is kept), plus the rounding of G_m and of the sums. The result's
+    arrays have the broadcast shape of (n, θ); ``evaluations`` counts outer nodes (each one Legendre-function
+    evaluation of 24 terms).
     """
     n_arr, theta_arr = _check(n, theta, rtol, atol)
     shape = np.broadcast_shapes(n_arr.shape, theta_arr.shape)
@@ -253,18 +174,17 @@ def blinn_phong_albedo_series(n, theta, *, rtol: float = 1e-12, atol: float = 0.
     def integrand(index: np.ndarray, phi: np.ndarray) -> np.ndarray:
         return _integrand(nc[index, None], tc[index, None], phi)
 
-    value, error, evaluations, converged = adaptive_gauss_legendre(
-        integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi)
-    )
+    result = adaptive_gauss_legendre(integrand, a, b, case, nc.size, rtol=rtol, atol=atol / (2.0 * np.pi))
+    value, error = result.value, result.error
     scale = 2.0 * np.pi
     # The quadrature's estimate sees only the truncation; the rounding of G (where it is not exactly 1: theta > 0
     # and n > 0) and of the sums is added, so the estimate bounds the error to the last bits.
     rounding = np.abs(value) * (_SUM_ULPS * _EPS + np.where((tc > 0) & (nc > 0), _G_RTOL, 0.0))
-    return SeriesResult(
+    return RouteResult(
         value=(scale * value).reshape(shape),
         error=(scale * (error + rounding)).reshape(shape),
-        evaluations=evaluations.reshape(shape),
-        converged=converged.reshape(shape),
+        evaluations=result.evaluations.reshape(shape),
+        converged=result.converged.reshape(shape),
     )
 
 
@@ -272,7 +192,7 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     """``brdfnorm.engine.methods`` method adapter: a :class:`brdfnorm.engine.methods.Problem` batch for ``blinn-phong``.
 
     The lobe is reciprocal, so the light and view integrals coincide and both are (S5) at the fixed direction's
-    polar angle. Returns (value (K, 1), error (K, 1), evaluations (K,), converged (K,), None).
+    polar angle. Returns value and error (K, 1).
     """
     fixed = np.asarray(problem.fixed, dtype=float)
     count = fixed.shape[0]
@@ -280,4 +200,4 @@ def albedo_method(problem, *, rtol: float, atol: float = 0.0, **_: object):
     n = np.asarray(problem.case_params(np.arange(count))["n"], dtype=float)
     n = n.reshape(-1) if n.size == count else np.broadcast_to(n.reshape(-1)[:1], (count,))
     result = blinn_phong_albedo_series(n, theta, rtol=rtol, atol=atol)
-    return result.value[:, None], result.error[:, None], result.evaluations, result.converged, None
+    return result.with_(value=result.value[:, None], error=result.error[:, None])

@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ....errors import ArgumentError, EvaluationError
+from ...machinery.result import RouteResult
 from .core import (
     DEFAULT_DIGITS,
     EVAL_LIMIT,
@@ -64,17 +65,17 @@ from .core import (
     MAX_DIGITS,
     PRECISION_ATTEMPTS,
     Enclosure,
-    _Integrator,
+    Integrator,
     require_flint,
     starting_bits,
     validate_digits,
 )
-from .microfacet import _microfacet, _microfacet_route, white_albedo
-from .seeds import _blinn_phong, _blinn_phong_gaussian, _phong
+from .microfacet import microfacet_normal_albedo, microfacet_reduction, white_albedo
+from .seeds import blinn_phong_albedo, blinn_phong_gaussian_albedo, phong_albedo
 
 __all__ = ["DEFAULT_DIGITS", "EVAL_LIMIT", "GUARD_DIGITS", "MAX_DIGITS", "Enclosure", "REDUCTIONS",
            "Reduction", "albedo_method", "applies", "closed_form_inside", "enclose", "require_flint", "route",
-           "starting_bits", "validate_digits", "white_albedo", "_Integrator", "_microfacet"]
+           "starting_bits", "validate_digits", "white_albedo", "Integrator", "microfacet_normal_albedo"]
 
 
 @dataclass(frozen=True)
@@ -99,8 +100,8 @@ def _phong_route(original: bool):
     def compute(work, theta, params, over):
         n = _scalar(params, "n", work.arb)
         if original and over == "view":  # ∫(R·V)^n (N·V) dV / (N·L): the modified integral over cos θ_L
-            return [_phong(work, theta, n, original=False) / theta.cos()]
-        return [_phong(work, theta, n, original)]
+            return [phong_albedo(work, theta, n, original=False) / theta.cos()]
+        return [phong_albedo(work, theta, n, original)]
     return compute
 
 
@@ -109,14 +110,14 @@ REDUCTIONS: dict[str, Reduction] = {
     "phong": Reduction(_phong_route(True), "1-D in cos α about the mirror direction (seed 000's form)"),
     "modified-phong": Reduction(_phong_route(False), "1-D in cos α about the mirror direction"),
     "blinn-phong": Reduction(
-        lambda work, theta, params, over: [_blinn_phong(work, theta, _scalar(params, "n", work.arb))],
+        lambda work, theta, params, over: [blinn_phong_albedo(work, theta, _scalar(params, "n", work.arb))],
         "1-D in the half-vector angle (seed 002's double integral, inner integral in closed form)"),
     "blinn-phong-gaussian": Reduction(
-        lambda work, theta, params, over: [_blinn_phong_gaussian(work, theta, _scalar(params, "n", work.arb))],
+        lambda work, theta, params, over: [blinn_phong_gaussian_albedo(work, theta, _scalar(params, "n", work.arb))],
         "1-D in the half-vector angle (any lobe of N·H)"),
-    "ggx": Reduction(_microfacet_route("ggx"), "any view with F = 1: 1-D with the azimuth in closed form; normal "
+    "ggx": Reduction(microfacet_reduction("ggx"), "any view with F = 1: 1-D with the azimuth in closed form; normal "
                      "incidence with Fresnel: 1-D in the distribution's CDF", takes_mu=True),
-    "beckmann": Reduction(_microfacet_route("beckmann"), "any view with F = 1: 1-D with the azimuth in closed "
+    "beckmann": Reduction(microfacet_reduction("beckmann"), "any view with F = 1: 1-D with the azimuth in closed "
                           "form; normal incidence with Fresnel: 1-D in the distribution's CDF", takes_mu=True),
 }
 
@@ -173,7 +174,7 @@ def enclose(model, theta: float, params: dict, over: str = "light", digits: int 
     bits, evaluations = starting_bits(digits), 0
     try:
         for _ in range(PRECISION_ATTEMPTS):
-            work = _Integrator(digits, bits)
+            work = Integrator(digits, bits)
             flint.ctx.prec = work.bits
             extra = {} if mu is None else {"view_mu": float(mu)}
             angle = flint.arb(float(theta)) if mu is None else flint.arb(0)
@@ -194,7 +195,7 @@ def enclose(model, theta: float, params: dict, over: str = "light", digits: int 
 
 
 def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
-    """The ``certified`` albedo method: per case, Arb enclosures; returns the albedo module's tuple + bounds."""
+    """The ``certified`` albedo method: per case, Arb enclosures; the result's extras are the bounds."""
     route(problem.model)  # the model's reason for having no certified route, before any work
     K = problem.fixed.shape[0]
     C = problem.model.channels
@@ -213,7 +214,7 @@ def albedo_method(problem, *, digits: int = DEFAULT_DIGITS, **_: object):
         evaluations[k] = enclosures[0].evaluations
         reached[k] = all(e.reached for e in enclosures)
     # An enclosure is always valid; "converged" says whether it is as narrow as the digits asked for.
-    return value, error, evaluations, reached, None, {"lower": lower, "upper": upper}
+    return RouteResult(value, error, evaluations, reached, extras={"lower": lower, "upper": upper})
 
 
 def applies(model, over) -> bool:

@@ -114,7 +114,7 @@ def _decimal(endpoint, digits: int, rounding: str) -> str:
     return str(Context(prec=digits, rounding=rounding).plus(exact))
 
 
-class _Integrator:
+class Integrator:
     """Arb integrals at a working precision (``bits``, by default :func:`starting_bits`), counting integrand
     evaluations."""
 
@@ -164,7 +164,7 @@ class _Integrator:
         arb, acb = self.arb, self.acb
 
         def integrand(x, analytic):
-            return _power(base(x), n, analytic, acb, arb) * rest(x, analytic)
+            return power_ball(base(x), n, analytic, acb, arb) * rest(x, analytic)
 
         exponent = float(n.mid())
         if exponent.is_integer() or not base(acb(a)).is_zero():  # no branch point at a: Arb alone suffices
@@ -177,19 +177,19 @@ class _Integrator:
         return arb(0, float(bound.upper())) + self.integral(integrand, a + eps, b)
 
 
-def _nan(acb):
+def nan_ball(acb):
     return acb("nan")
 
 
-def _atan(z, analytic: bool, acb):
+def atan_ball(z, analytic: bool, acb):
     """atan z, analytic off its cuts i·[1, ∞) and −i·[1, ∞): under the analytic check a ball whose imaginary part
     may reach ±1 is refused (a non-finite ball), so Arb bisects instead of integrating across a cut."""
     if analytic and not abs(z.imag).upper() < 1:
-        return _nan(acb)
+        return nan_ball(acb)
     return z.atan()
 
 
-def _power(x, n, analytic: bool, acb, arb):
+def power_ball(x, n, analytic: bool, acb, arb):
     """x^n (n ≥ 0 real) on a ball around a piece of the path, where x ≥ 0.
 
     Off the cut (−∞, 0] of the power this is Arb's power. A ball that reaches the cut is non-analytic there: under
@@ -199,7 +199,7 @@ def _power(x, n, analytic: bool, acb, arb):
     if x.real.lower() > 0:
         return x.pow(n, analytic=analytic)
     if analytic:
-        return _nan(acb)
+        return nan_ball(acb)
     bound = arb(x.abs_upper()) ** n
     return acb(arb(0, bound), arb(0, bound))
 

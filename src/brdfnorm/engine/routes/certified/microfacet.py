@@ -35,13 +35,14 @@ and Arb's error bounds apply (its analytic flag is honoured: ``atan`` off its cu
   1 + d² ≤ 2 (|θ_L − θ_V| ≤ π/2), b/m² ≤ 2/μ² (m ≥ μ), 0 ≤ J_k ≤ 2^k, so the integrand is at most
   e^{−s²}(4 + 16/μ² + 16/μ⁴)/α and the cut-off part at most (4 + 16/μ² + 16/μ⁴)e^{−S²}/(αS) (both tails), with
   S² = (bits + 20) ln 2 + ln((4 + 16/μ² + 16/μ⁴)/(μα)).
-* The endpoints (θ_L = 0 and the horizon in t or s) depend on μ through balls; :meth:`_Integrator.segment`
+* The endpoints (θ_L = 0 and the horizon in t or s) depend on μ through balls; :meth:`Integrator.segment`
   integrates between their exact midpoints and encloses the two end pieces.
 
 μ is taken as given (an exact float64 for a table's μ axis; cos θ in Arb for an angle θ). Fresnel other than
 ``none`` away from normal incidence, anisotropic α and ``ms=kulla-conty`` have no reduction here and are refused.
 
-Normal incidence (:func:`_microfacet`): see that function (the distribution's CDF as the variable; Fresnel too).
+Normal incidence (:func:`microfacet_normal_albedo`): see that function (the distribution's CDF as the variable;
+Fresnel too).
 """
 
 from __future__ import annotations
@@ -51,11 +52,11 @@ from collections.abc import Callable
 import numpy as np
 
 from ....errors import ArgumentError
-from .core import _atan, _Integrator, _nan
+from ....models.microfacet import SHADOWING
+from .core import Integrator, atan_ball, nan_ball
 
-SHADOWINGS = ("height-correlated", "separable")
 
-def _microfacet(work: _Integrator, alpha, distribution: str, fresnel: Callable, critical_cos=None):
+def microfacet_normal_albedo(work: Integrator, alpha, distribution: str, fresnel: Callable, critical_cos=None):
     """E at normal incidence of a microfacet lobe D·G2·F/(4 N·L N·V) (Walter et al. 2007; Heitz 2014's Smith Λ).
 
     With V = N the half vector's polar angle is θ_h = θ_L/2, dω_L = 4 cos θ_h dω_h and Λ(V) = 0, so both the
@@ -109,7 +110,7 @@ def _microfacet(work: _Integrator, alpha, distribution: str, fresnel: Callable, 
     return total
 
 
-def _dielectric(work: _Integrator, alpha, distribution: str, eta):
+def _dielectric(work: Integrator, alpha, distribution: str, eta):
     critical = (1 - eta * eta).sqrt() if eta < 1 else None
 
     def exact(c, analytic, beyond):  # Walter et al. 2007, Eq. 22; beyond the critical angle F = 1
@@ -119,10 +120,10 @@ def _dielectric(work: _Integrator, alpha, distribution: str, eta):
         ratio = (c * (g + c) - 1) / (c * (g - c) + 1)
         return (g - c) ** 2 / (2 * (g + c) ** 2) * (1 + ratio * ratio)
 
-    return _microfacet(work, alpha, distribution, exact, critical)
+    return microfacet_normal_albedo(work, alpha, distribution, exact, critical)
 
 
-def _microfacet_route(distribution: str):
+def microfacet_reduction(distribution: str):
     def compute(work, theta, params, over, view_mu=None):
         arb = work.arb
         alpha = float(params["alpha"])
@@ -143,8 +144,8 @@ def _microfacet_route(distribution: str):
                                 "only (theta 0, where the lobe is axisymmetric); any view needs fresnel=none",
                                 where="theta")
         if kind == "schlick":  # F = f0 + (f90 − f0)(1 − cos θ_d)⁵ is linear in (f0, f90): two integrals
-            weight = _microfacet(work, alpha, distribution, lambda c, analytic, beyond: (1 - c) ** 5)
-            whole = _microfacet(work, alpha, distribution, lambda c, analytic, beyond: 1)
+            weight = microfacet_normal_albedo(work, alpha, distribution, lambda c, analytic, beyond: (1 - c) ** 5)
+            whole = microfacet_normal_albedo(work, alpha, distribution, lambda c, analytic, beyond: 1)
             f0, f90 = (np.broadcast_to(np.asarray(params[name], dtype=float), (3,)) for name in ("f0", "f90"))
             return [arb(float(a)) * (whole - weight) + arb(float(b)) * weight for a, b in zip(f0, f90, strict=True)]
         if kind == "dielectric":
@@ -159,7 +160,7 @@ def _microfacet_route(distribution: str):
 def _sqrt(z, analytic: bool, acb):
     """√z off its cut (−∞, 0]: under the analytic check a ball whose real part may reach 0 is refused."""
     if analytic and not z.real.lower() > 0:
-        return _nan(acb)
+        return nan_ball(acb)
     return z.sqrt()
 
 
@@ -181,10 +182,10 @@ def _lambda_beckmann_numerator(b):
     return (-(b * b)).exp() / type(b).pi().sqrt() - b * b.erfc()
 
 
-def white_albedo(work: _Integrator, view: tuple, alpha, distribution: str, shadowing: str):
+def white_albedo(work: Integrator, view: tuple, alpha, distribution: str, shadowing: str):
     """An arb ball enclosing E(μ) of the isotropic lobe with F = 1; ``view`` from :func:`view_from_mu` or
     :func:`view_from_theta`, ``alpha`` > 0 an arb (the reduction in the module docstring)."""
-    if shadowing not in SHADOWINGS:
+    if shadowing not in SHADOWING:
         raise ArgumentError(f"unknown shadowing {shadowing!r}", where="shadowing")
     if distribution == "ggx":
         return _ggx(work, view, alpha, shadowing)
@@ -213,13 +214,13 @@ def ggx_kernel(alpha, correlated: bool, t, sl, cl, sv, mu, analytic: bool, acb):
     return g2 * sl / (1 + d * d) * bracket
 
 
-def _ggx(work: _Integrator, view: tuple, alpha, shadowing: str):
+def _ggx(work: Integrator, view: tuple, alpha, shadowing: str):
     arb, acb = work.arb, work.acb
     mu, sv, thv = view
     correlated = shadowing == "height-correlated"
 
     def f(t, analytic):
-        thl = thv + 2 * _atan(alpha * t.sinh(), analytic, acb)
+        thl = thv + 2 * atan_ball(alpha * t.sinh(), analytic, acb)
         return ggx_kernel(alpha, correlated, t, thl.sin(), thl.cos(), sv, mu, analytic, acb)
 
     start = -((thv / 2).tan() / alpha).asinh()
@@ -227,7 +228,7 @@ def _ggx(work: _Integrator, view: tuple, alpha, shadowing: str):
     return work.segment(f, start, end) / mu
 
 
-def _beckmann(work: _Integrator, view: tuple, alpha, shadowing: str):
+def _beckmann(work: Integrator, view: tuple, alpha, shadowing: str):
     arb, acb = work.arb, work.acb
     mu, sv, thv = view
     a2 = alpha * alpha
@@ -238,7 +239,7 @@ def _beckmann(work: _Integrator, view: tuple, alpha, shadowing: str):
 
     def rest(s, analytic):  # everything but G2
         d = alpha * s
-        thl = thv + 2 * _atan(d, analytic, acb)
+        thl = thv + 2 * atan_ball(d, analytic, acb)
         sl, cl = thl.sin(), thl.cos()
         m = cl + mu
         ratio = 2 * sl * sv / (m * m)
@@ -262,13 +263,13 @@ def _beckmann(work: _Integrator, view: tuple, alpha, shadowing: str):
         value, thl = rest(s, analytic)
         if thl.real.lower() < theta_eps:
             if analytic or not s.imag == 0:
-                return _nan(acb)
+                return nan_ball(acb)
             top = thl.real.upper()
             if not top < arb.pi() / 2:  # c increases up to the horizon, where G2 = 0: c ≤ G2⁰ on the whole path
                 c = g1v
             else:
                 c = shadow_loss(acb(top)).real if top > 0 else arb(0)
-            return value * acb(arb(0, c.upper())) if c.is_finite() else _nan(acb)
+            return value * acb(arb(0, c.upper())) if c.is_finite() else nan_ball(acb)
         return value * shadow_loss(thl)
 
     scale = (4 + 16 / mu**2 + 16 / mu**4) / (mu * alpha)

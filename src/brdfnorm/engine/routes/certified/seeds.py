@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from .core import _atan, _Integrator, _nan, _power
+from .core import Integrator, atan_ball, nan_ball, power_ball
 
 
-def _phong(work: _Integrator, theta, n, original: bool):
+def phong_albedo(work: Integrator, theta, n, original: bool):
     arb, acb = work.arb, work.acb
     if n == 0:  # max(0, x)^0 = 1 everywhere: the constant lobe
         return arb.pi() * (2 if original else 1)
@@ -34,14 +34,14 @@ def _phong(work: _Integrator, theta, n, original: bool):
     def base(phi):
         return s * phi.sin()
 
-    near = rest(lambda phi, analytic: pi / 2 + _atan(c * phi.tan(), analytic, acb))  # β₀ for φ ∈ [0, π/4]
-    far = rest(lambda phi, analytic: pi - _atan(phi.cot() / c, analytic, acb))  # the same for φ ∈ [π/4, π/2]
+    near = rest(lambda phi, analytic: pi / 2 + atan_ball(c * phi.tan(), analytic, acb))  # β₀ for φ ∈ [0, π/4]
+    far = rest(lambda phi, analytic: pi - atan_ball(phi.cot() / c, analytic, acb))  # the same for φ ∈ [π/4, π/2]
     return (head + work.integral_of_power(base, n, near, arb(0), pi / 4, s)
-            + work.integral(lambda phi, analytic: _power(base(phi), n, analytic, acb, arb) * far(phi, analytic),
+            + work.integral(lambda phi, analytic: power_ball(base(phi), n, analytic, acb, arb) * far(phi, analytic),
                             pi / 4, pi / 2))
 
 
-def _half_vector_lobe(work: _Integrator, theta, h: Callable):
+def _half_vector_lobe(work: Integrator, theta, h: Callable):
     """E for a lobe h(N·H) at view angle θ_o (the half-vector reduction in the module docstring)."""
     arb, acb = work.arb, work.acb
     pi = arb.pi()
@@ -65,11 +65,11 @@ def _half_vector_lobe(work: _Integrator, theta, h: Callable):
                 s1 = (2 * theta * sh * sh).sinc()
                 s2 = (2 * theta * ch * ch).sinc()
                 if analytic and not (s1.real.lower() > 0 and s2.real.lower() > 0):
-                    return _nan(acb)
+                    return nan_ball(acb)
                 if upper_half:   # ψ ∈ [π/2, π]: tan(ψ/2) ≥ 1
-                    phi1 = 2 * _atan(half.cot() * (s2 / s1).sqrt(analytic=analytic), analytic, acb)
+                    phi1 = 2 * atan_ball(half.cot() * (s2 / s1).sqrt(analytic=analytic), analytic, acb)
                 else:
-                    phi1 = pi - 2 * _atan(half.tan() * (s1 / s2).sqrt(analytic=analytic), analytic, acb)
+                    phi1 = pi - 2 * atan_ball(half.tan() * (s1 / s2).sqrt(analytic=analytic), analytic, acb)
                 sin_phi1 = theta * psi.sin() * (s1 * s2).sqrt(analytic=analytic) / (so * (2 * t).sin())
                 cos_phi1 = -co * (2 * t).cos() / (so * (2 * t).sin())
                 p, q = co * c, so * s
@@ -86,16 +86,16 @@ def _half_vector_lobe(work: _Integrator, theta, h: Callable):
     return total
 
 
-def _blinn_phong(work: _Integrator, theta, n):
+def blinn_phong_albedo(work: Integrator, theta, n):
     acb, arb = work.acb, work.arb
 
     def h(c, analytic):
-        return _power(c, n, analytic, acb, arb)
+        return power_ball(c, n, analytic, acb, arb)
 
     return _half_vector_lobe(work, theta, h)
 
 
-def _blinn_phong_gaussian(work: _Integrator, theta, n):
+def blinn_phong_gaussian_albedo(work: Integrator, theta, n):
     arb = work.arb
     # c = 0.04^(1/n) with seed 003's threshold as the decimal 0.04 it is written as; c = 0 at n = 0.
     k = arb("0.04") ** (1 / n) if n > 0 else arb(0)
