@@ -200,6 +200,11 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
                  "worst_cell": list(c.worst), "worst_at": c.worst_at} for c in h.channels]}
 
 
+#: Tables of more cells are tried as F_avg tables only when the pins ask (the search computes the exact F_avg of
+#: every geometry on every cell: 2 s of CPU for a 64² table, 8 s for 128²); engines tabulate F_avg at 16² to 64².
+MAX_AVERAGE_FALLBACK = 64 * 64
+
+
 def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen: list[int] | None,
            explicit: dict, tolerance: float | None) -> tuple[Inference, dict | None]:
     """The microfacet conventions (:func:`.infer.infer`), or the F_avg ones (:mod:`.fresnel_average`) when the pins
@@ -211,6 +216,10 @@ def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen
                       tolerance=tolerance)
     if (inference.fits or len(source.grid_shape) > 2 or set(pins) - {"flip"}
             or set(explicit) - {"eta", "f0"}):
+        return inference, None
+    if math.prod(source.grid_shape) > MAX_AVERAGE_FALLBACK:  # every geometry's exact F_avg on every cell
+        source.notes.append(f"not tried as an F_avg table: more than {MAX_AVERAGE_FALLBACK} cells (--as "
+                            "channels=F_avg tries it)")
         return inference, None
     try:
         other, fit = infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
