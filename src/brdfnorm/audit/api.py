@@ -78,6 +78,12 @@ class AuditResult:
         return [c.channel for c in self.best.channels if not c.fits]
 
     @property
+    def unfixable(self) -> list[str]:
+        """Channels with cells outside the tolerance whose exact value was interpolated, not computed (a large
+        table past the audit's budget of exact cells): ``--fix`` refuses to write them."""
+        return [c.channel for c in self.best.channels if c.estimated is not None and c.estimated.any()]
+
+    @property
     def headline(self) -> str:
         """One sentence: the convention and how many cells it fits, or that none fits most cells."""
         h = self.best
@@ -157,6 +163,11 @@ def _bad_cells(source: Source, inference: Inference, model: Model, limit: int = 
     return out
 
 
+#: Tables of more cells are not compared with the fitted approximations (each geometry's formula over every cell:
+#: ~18 s for a 1024² table); engines tabulate those formulas at 16² to 64².
+MAX_RECOGNISED = 256 * 256
+
+
 def _approximation(source: Source, reference: Reference, pins: dict, explicit: dict, step: float,
                    model: str) -> dict | None:
     """A fitted approximation (:mod:`.approximations`) the table is a tabulation of, with its error against the exact
@@ -169,6 +180,9 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
 
     grid = source.grid_shape
     if len(grid) != 2:
+        return None
+    if math.prod(grid) > MAX_RECOGNISED:
+        source.notes.append(f"not compared with fitted approximations: more than {MAX_RECOGNISED} cells")
         return None
     found = recognise(source.values, source.channel_names, geometries(2, pins, explicit, grid, reference.shadowings),
                       step, model)
@@ -186,6 +200,11 @@ def _approximation(source: Source, reference: Reference, pins: dict, explicit: d
                  "worst_cell": list(c.worst), "worst_at": c.worst_at} for c in h.channels]}
 
 
+#: Tables of more cells are tried as F_avg tables only when the pins ask (the search computes the exact F_avg of
+#: every geometry on every cell: 2 s of CPU for a 64² table, 8 s for 128²); engines tabulate F_avg at 16² to 64².
+MAX_AVERAGE_FALLBACK = 64 * 64
+
+
 def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen: list[int] | None,
            explicit: dict, tolerance: float | None) -> tuple[Inference, dict | None]:
     """The microfacet conventions (:func:`.infer.infer`), or the F_avg ones (:mod:`.fresnel_average`) when the pins
@@ -197,6 +216,10 @@ def _infer(source: Source, reference: Reference, pins: dict, step: float, chosen
                       tolerance=tolerance)
     if (inference.fits or len(source.grid_shape) > 2 or set(pins) - {"flip"}
             or set(explicit) - {"eta", "f0"}):
+        return inference, None
+    if math.prod(source.grid_shape) > MAX_AVERAGE_FALLBACK:  # every geometry's exact F_avg on every cell
+        source.notes.append(f"not tried as an F_avg table: more than {MAX_AVERAGE_FALLBACK} cells (--as "
+                            "channels=F_avg tries it)")
         return inference, None
     try:
         other, fit = infer_average(source.values, source.channel_names, pins, step, chosen, explicit, tolerance)
@@ -408,7 +431,7 @@ def audit(table, model: Model | str = "ggx", *, channel: str | int | None = None
             if sweep:
                 result.resolution[fit.channel] = quality.sweep(best.convention, fit.meaning, reference, points,
                                                                len(grid))
-    if fix and not result.unnamed:
+    if fix and not result.unnamed and not result.unfixable:
         fixed = np.array(source.values, dtype=float)
         # only the wrong cells change: a cell within the tolerance is kept as read (a minimal diff)
         for fit in best.channels:

@@ -42,7 +42,7 @@ class ChannelFit:
     spread: float = 0.0  # standard deviation of the exact values over the table
     worst_at: dict = field(default_factory=dict)  # μ, α (f0) of the worst cell
     cells: int = 0  # cells measured
-    sampled: bool = False  # measured on a strided subgrid of the table, not on every cell
+    sampled: bool = False  # measured on a subgrid of the table (infer.inference_index), not on every cell
     bad: np.ndarray | None = None  # cells outside the tolerance or not finite (over the cells measured)
     within: int = 0  # cells within the tolerance
     #: How this channel alone is laid out when it is not laid out as the others ("transposed", "reversed along
@@ -54,6 +54,10 @@ class ChannelFit:
     bulk: float = float("inf")
     base: float = 0.0  # the tolerance before the noise term: storage step × max|exact| + the reference's error
     factor: float = 5.0  # k of the noise term k σ̂
+    #: Bad cells whose exact value is interpolated, not computed (a large table past the audit's budget of exact
+    #: cells, :mod:`.interpolated`): ``--fix`` refuses to write them. None when every value was computed.
+    estimated: np.ndarray | None = None
+    interpolation: dict | None = None  # how the exact values of a large table were had (:mod:`.interpolated`)
 
     def judged(self, sigma: float, given: float | None = None) -> None:
         """Judge every cell again with the table's noise ``sigma`` (the smallest σ̂ any hypothesis saw: a misfit adds
@@ -89,7 +93,8 @@ class ChannelFit:
                 "within": self.within, "cells": self.cells, "bad": self.cells - self.within, "max": self.max,
                 "rms": self.rms, "median": self.median, "worst_cell": list(self.worst),
                 "worst_at": self.worst_at, "tolerance": self.tolerance, "noise_sigma": self.noise,
-                "too_noisy": self.too_noisy, "sampled": self.sampled, "layout": self.layout}
+                "too_noisy": self.too_noisy, "sampled": self.sampled, "layout": self.layout,
+                "interpolated_reference": self.interpolation}
 
 
 @dataclass

@@ -10,10 +10,13 @@ Two stages, both against exact values (:mod:`.reference`):
    if no cheaper meaning fits the subset.
 2. The best geometries are evaluated on every cell, the endpoint clamps searched where the grid reaches μ = 0 or
    α = 0, and ranked by the share of cells within the tolerance, then their median residual, then their maximum
-   (:attr:`Hypothesis.rank`): a few wrong cells never decide the convention of the rest. Where the meanings
-   need F90 (or the exact Fresnel) and the table has more than SUBGRID_CELLS cells, they are ranked on a strided
-   subgrid of about RANK_CELLS interior cells (no endpoint clamp reaches them) and only the best is then
-   measured on every cell, its clamps searched; the runners-up's statistics say they were sampled.
+   (:attr:`Hypothesis.rank`): a few wrong cells never decide the convention of the rest. A table of more than
+   SUBGRID_CELLS cells is ranked (clamps searched, channels retried) on a fixed subgrid of at most INFER_CELLS
+   cells (RANK_CELLS where the meanings need F90) that holds the first and last three indices of every axis
+   (:func:`inference_index`): the inference's work is bounded whatever the table's size. Only the best is then
+   measured on every cell (:func:`_complete`; the runners-up's statistics say they were sampled), exactly up to
+   EXACT_CELLS cells and above that from a bounded coarse subgrid interpolated with an error estimate, every
+   cell whose verdict that estimate leaves open computed exactly (:mod:`.interpolated`).
 
 Every cell is judged against the tolerance (or the one given, ``--tolerance``)
 
@@ -57,6 +60,7 @@ from .conventions import (
     stored_axis_values,
 )
 from .fits import MAJORITY, MAX_NOISE_SHARE, ChannelFit, Hypothesis, Inference, Precision
+from .interpolated import coarse_index, measured, per_axis
 from .reference import Reference
 
 __all__ = ["MAJORITY", "MAX_NOISE_SHARE", "ChannelFit", "Hypothesis", "Inference", "Precision", "infer",
@@ -68,10 +72,20 @@ STAGE2_F90 = 2
 #: Interior samples per axis in stage 1 (before symmetrizing), for cheap meanings and for F90 meanings.
 SUBSET = 6
 SUBSET_F90 = 3
-#: Above this many cells, candidates whose meanings need F90 are ranked on a strided subgrid of about this size.
+#: Above this many cells, stage 2 (and the channel retries) run on a fixed subgrid (:func:`inference_index`) of at
+#: most INFER_CELLS cells, or RANK_CELLS where the meanings need F90; only the best hypothesis is then measured
+#: on every cell (:func:`_complete`). The runners-up's statistics are on the subgrid.
 SUBGRID_CELLS = 1024
-#: Cells of the interior subgrid those candidates are ranked on (the runners-up's statistics are on it).
+INFER_CELLS = 1024
 RANK_CELLS = 256
+#: A hypothesis is measured on every cell of a table of up to so many cells exactly (by kind of meaning: cheap,
+#: or a quadrature per cell); above, from a coarse subgrid of at most NODE_CELLS exact cells interpolated
+#: (:mod:`.interpolated`), with up to RESOLVE_CELLS more computed exactly where a verdict or a fix needs them.
+EXACT_CELLS = {"cheap": 16384, "expensive": 1024}
+NODE_CELLS = {"cheap": 65536, "expensive": 2048}
+#: The coarse subgrid of a first probe (a table no convention fits stops there).
+PROBE_CELLS = {"cheap": 4096, "expensive": 256}
+RESOLVE_CELLS = {"cheap": 262144, "expensive": 40000}
 NOISE_FACTOR = 5.0
 #: The exact-dielectric-Fresnel meaning a table of so many axes may carry.
 DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
@@ -79,6 +93,9 @@ DIELECTRIC_BY_NDIM = {1: [], 2: ["E_dielectric"], 3: ["E_f0_dielectric"]}
 SCHLICK_ENDS = 5e-3
 #: Geometries a 2-D table's exact-Fresnel round fits η for and searches (ranked at η = ETA).
 DIELECTRIC_GEOMETRIES = 16
+#: Geometries a 3-D table's exact-Fresnel round searches: the first of Schlick's ranking (a 32³ table made with the
+#: exact factor ranked its true geometry first under Schlick's when this was written).
+DIELECTRIC_GEOMETRIES_3D = 64
 
 
 def _subset(n: int, k: int) -> np.ndarray:
@@ -86,6 +103,13 @@ def _subset(n: int, k: int) -> np.ndarray:
         return np.arange(n)
     picks = np.unique(np.rint(np.linspace(1, n - 2, min(k, n - 2))).astype(int))
     return np.unique(np.concatenate([picks, n - 1 - picks]))
+
+
+def inference_index(grid: tuple[int, ...], cells: int) -> list[np.ndarray]:
+    """The fixed subgrid a large table's hypotheses are ranked on: at most ``cells`` cells (and at least 6 indices
+    per axis, or all), the first and last three indices of every axis (where the endpoint clamps act) and evenly
+    spaced ones between."""
+    return [coarse_index(n, k) for n, k in zip(grid, per_axis(grid, cells), strict=True)]
 
 
 def noise_sigma(residual: np.ndarray) -> float:
@@ -153,14 +177,26 @@ def infer(values: np.ndarray, names: list[str], reference: Reference, pins: dict
     dielectric_pinned = any(m == "E_dielectric" for ms in meanings for m in ms)
     if dielectric_pinned and "eta" not in pins:  # the table's index of refraction is found, not assumed
         candidates = _with_fitted_eta(values, candidates, reference, chosen)
-    best, runners, _ = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    best, runners, order = _measured(values, names, reference, pins, precision, chosen, candidates, meanings)
     extra = [m for m in DIELECTRIC_BY_NDIM[ndim] if reference.supports(m)]
     if extra and not best.fits and "channels" not in pins and "eta" not in pins:
-        wider = candidates if ndim != 2 else _with_fitted_eta(values, candidates, reference, chosen)
-        second = _rounds(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
+        # a 3-D table's exact-Fresnel round ranks the geometries Schlick's E_f0 ranked first (each of its cells is a
+        # quadrature at its own η): the two factors differ by a few per cent, a wrong geometry by far more
+        wider = (_with_fitted_eta(values, candidates, reference, chosen) if ndim == 2
+                 else order[:DIELECTRIC_GEOMETRIES_3D] if ndim == 3 else candidates)
+        second = _measured(values, names, reference, pins, precision, chosen, wider, [ms + extra for ms in meanings])
         if second[0].fits or second[0].rank < best.rank:
             best, runners, _ = second
     return Inference(best, runners[:keep_runners], len(candidates), dict(reference.computed))
+
+
+def _measured(values, names, reference, pins, precision, chosen, candidates, meanings):
+    """:func:`_rounds`, its best measured on every cell where the rounds ranked on a subgrid: whether it fits is
+    decided there (on a coarse subgrid a smooth misfit's curvature passes for noise and widens the tolerance)."""
+    best, runners, index, order = _rounds(values, names, reference, pins, precision, chosen, candidates, meanings)
+    if index is not None:
+        best = _complete(values, names, best, reference, precision)
+    return best, runners, order
 
 
 def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
@@ -209,9 +245,10 @@ def _with_fitted_eta(values, candidates, reference, chosen) -> list[Convention]:
 
 
 def _rounds(values, names, reference, pins, precision, chosen, candidates,
-            meanings) -> tuple[Hypothesis, list[Hypothesis], list[Convention]]:
+            meanings) -> tuple[Hypothesis, list[Hypothesis], list[np.ndarray] | None, list[Convention]]:
     """Stage 1 (cheap meanings first, the expensive ones only if no cheap one fits loosely) and stage 2: the
-    best hypothesis, the runners-up, and the candidates in stage 1's order."""
+    best hypothesis, the runners-up, the subgrid they were measured on (None: every cell), and the candidates in
+    stage 1's order."""
     grid = values.shape[:-1]
     cheap = [[m for m in meanings[k] if not Reference.expensive(m)] for k in range(values.shape[-1])]
     scored = _stage1(values, candidates, reference, cheap, chosen, SUBSET)
@@ -223,25 +260,32 @@ def _rounds(values, names, reference, pins, precision, chosen, candidates,
     keep = STAGE2_F90 if any(Reference.expensive(m) for _, c in scored[:STAGE2] for m in c.meanings if m) else STAGE2
     search = ("mu_floor" not in pins, "alpha_floor" not in pins)
     top = [c for _, c in scored[:max(keep, 2)]]
-    if keep == STAGE2_F90 and int(np.prod(grid)) > SUBGRID_CELLS:
-        # an expensive meaning costs ~1-3 ms a cell: the candidates are ranked on a strided subgrid of interior
-        # cells (no endpoint clamp reaches them, so no clamp search is needed: it cost ~10 boundary rows per
-        # candidate), and only the best is measured on every cell with its clamps searched; the runners-up say
-        # that they were sampled
-        per_axis = max(3, int(RANK_CELLS ** (1.0 / len(grid))))
-        index = [np.unique(np.rint(np.linspace(1, n - 2, min(n - 2, per_axis))).astype(int)) if n > 4
-                 else np.arange(n) for n in grid]
-        ranked = sorted(((_stage2(values, names, c, reference, precision, chosen, (False, False), index), c)
-                         for c in top), key=lambda pair: pair[0].rank)
-        finals = ([_stage2(values, names, ranked[0][1], reference, precision, chosen, search)]
-                  + [h for h, _ in ranked[1:]])
-    else:
-        finals = [_stage2(values, names, c, reference, precision, chosen, search) for c in top]
+    # a large table's candidates are ranked on a fixed subgrid (its size, not the table's, bounds the work of the
+    # inference), clamps searched on its boundary rows; only the best is then measured on every cell
+    index = (inference_index(grid, RANK_CELLS if keep == STAGE2_F90 else INFER_CELLS)
+             if int(np.prod(grid)) > SUBGRID_CELLS else None)
+    finals = [_stage2(values, names, c, reference, precision, chosen, search, index) for c in top]
     _same_noise(finals, precision)
     finals.sort(key=lambda h: h.rank)
-    finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings)
-    finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings)
-    return finals[0], finals[1:], [c for _, c in scored]
+    finals[0] = _retry_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
+    finals[0] = _relayout_channels(values, names, finals[0], reference, precision, chosen, meanings, index)
+    return finals[0], finals[1:], index, [c for _, c in scored]
+
+
+def _complete(values, names, best: Hypothesis, reference, precision) -> Hypothesis:
+    """``best`` (found on a subgrid) measured on every cell, channel by channel; a channel stored in another
+    layout (:func:`_relayout_channels`) is judged at the tolerance its own layout had on the subgrid."""
+    c = best.convention
+    fits = []
+    for fit in best.channels:
+        k = names.index(fit.channel)
+        alone = replace(c, meanings=tuple(fit.meaning if j == k else None for j in range(len(names))))
+        judged = Precision(precision.step, fit.tolerance) if fit.layout else precision
+        full = full_hypothesis(values, alone, reference, names, judged, [k]).channels[0]
+        if fit.layout:
+            full.layout, full.noise = fit.layout, fit.noise
+        fits.append(full)
+    return Hypothesis(c, fits)
 
 
 def _same_noise(hypotheses: list[Hypothesis], precision: Precision) -> None:
@@ -347,8 +391,13 @@ def full_hypothesis(values, c: Convention, reference, names, precision, chosen, 
     for channel, meaning in enumerate(c.meanings):
         if channel not in chosen or meaning is None:
             continue
-        exact, error = _exact(reference, c, meaning, coords)
-        fit = _fit(data[..., channel], exact, error, names[channel], meaning, precision)
+        # E_avg is a quadrature over μ per α (~1 ms a cell): a large 1-D table's budget is the expensive one
+        kind = "expensive" if Reference.expensive(meaning) or meaning in ("E_avg", "1-E_avg") else "cheap"
+        if sampled or int(np.prod(grid)) <= EXACT_CELLS[kind]:
+            exact, error = _exact(reference, c, meaning, coords)
+            fit = _fit(data[..., channel], exact, error, names[channel], meaning, precision)
+        else:
+            fit = _interpolated_fit(data[..., channel], c, meaning, reference, names[channel], precision, kind)
         if fit.worst:
             stored = stored_axis_values(c, grid, [np.asarray([index[a][w]]) for a, w in enumerate(fit.worst)])
             fit.worst_at = {k: float(np.ravel(v)[0]) for k, v in stored.items()}
@@ -356,6 +405,18 @@ def full_hypothesis(values, c: Convention, reference, names, precision, chosen, 
         fit.sampled = sampled
         fits.append(fit)
     return Hypothesis(c, fits)
+
+
+def _interpolated_fit(data: np.ndarray, c: Convention, meaning: str, reference, name: str, precision: Precision,
+                      kind: str) -> ChannelFit:
+    """A channel of a large table against an interpolated reference (:func:`.interpolated.measured`)."""
+    grid = data.shape
+
+    def evaluate(index: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        return _exact(reference, c, meaning, coordinates(c, grid, index))
+
+    return measured(data, evaluate, lambda value, error: _fit(data, value, error, name, meaning, precision),
+                    PROBE_CELLS[kind], NODE_CELLS[kind], RESOLVE_CELLS[kind])
 
 
 def _stage2(values, names, c: Convention, reference, precision, chosen, search=(True, True), index=None) -> Hypothesis:
@@ -390,7 +451,8 @@ def _clamp_choice(default: Hypothesis, trials: list[Hypothesis]) -> Hypothesis:
     return challenger if challenger.within == default.within and challenger.score < 0.5 * default.score else default
 
 
-def _retry_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
+def _retry_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings,
+                    cells=None) -> Hypothesis:
     """Channels the best geometry leaves unfitted with cheap meanings try the F90 ones (an LTC table's Fresnel
     channel beside its albedo): first on the stage-1 subset, in full only where that beats the current meaning."""
     c = best.convention
@@ -413,7 +475,7 @@ def _retry_channels(values, names, best: Hypothesis, reference, precision, chose
             if ok.any() and float(np.median(np.abs(data[ok] - exact[ok]))) < fit.median:
                 candidate = full_hypothesis(values, replace(c, meanings=tuple(
                     meaning if k == channel else m for k, m in enumerate(picks))), reference, names, precision,
-                    [channel])
+                    [channel], cells)
                 new, old = candidate.channels[0], current[names[channel]]
                 if (-new.within, new.median, new.max) < (-old.within, old.median, old.max):
                     current[names[channel]] = candidate.channels[0]
@@ -442,7 +504,8 @@ def _layouts(c: Convention, grid: tuple[int, ...]) -> list[tuple[str, Convention
     return out
 
 
-def _relayout_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings) -> Hypothesis:
+def _relayout_channels(values, names, best: Hypothesis, reference, precision, chosen, meanings,
+                       cells=None) -> Hypothesis:
     """A channel the best convention leaves unnamed while it names another is tried in the other layouts
     (:func:`_layouts`): ranked on the stage-1 subset by the median residual, the best one measured on every cell.
     If that names the channel's meaning, the channel is reported as stored in that layout and measured in the
@@ -480,12 +543,12 @@ def _relayout_channels(values, names, best: Hypothesis, reference, precision, ch
         _, label, alt, meaning = min(trials, key=lambda item: item[0])
         trial = full_hypothesis(values, replace(alt, meanings=tuple(meaning if k == channel else None
                                                           for k in range(len(picks)))),
-                      reference, names, precision, [channel]).channels[0]
+                      reference, names, precision, [channel], cells).channels[0]
         if not trial.fits:
             continue
         placed = full_hypothesis(values, replace(c, meanings=tuple(meaning if k == channel else None
                                                          for k in range(len(picks)))),
-                       reference, names, precision, [channel]).channels[0]
+                       reference, names, precision, [channel], cells).channels[0]
         # judged at the tolerance of the channel in its own layout: the misplaced residual is no noise estimate
         magnitude = np.where(np.isfinite(placed.residual), np.abs(placed.residual), np.inf)
         placed.tolerance, placed.noise, placed.layout = trial.tolerance, trial.noise, label

@@ -121,8 +121,9 @@ def sweep(c: Convention, meaning: str, reference: Reference, points: tuple[list[
     plain = replace(c, flips=(False,) * ndim)
     budget = MAX_SWEEP_CELLS["f90" if Reference.expensive(meaning) else "cheap"]
     out = []
-    # an f0 axis adds no new reference cells (E_f0 is linear in f0); an η axis does
-    pairs_axes = ndim - (c.f0_axis is not None and not c.f0.startswith("eta"))
+    # an f0 axis adds no new reference cells (E_f0 is linear in f0); an η axis does, and so does f0 under the exact
+    # dielectric factor (a quadrature at each f0's η)
+    pairs_axes = ndim - (c.f0_axis is not None and not c.f0.startswith("eta") and meaning != "E_f0_dielectric")
     for size in sizes:
         if size ** pairs_axes > budget:
             out.append({"size": size, "skipped": f"more than {budget} exact cells"})

@@ -120,7 +120,9 @@ def audit_command(
             if result.unnamed or result.fixed is None:  # never a half-fixed file
                 refused = (f"--fix: nothing written: the meaning of channel{'s' if len(result.unnamed) > 1 else ''} "
                            f"{', '.join(result.unnamed)} cannot be named (pin it with --as channels=..., '-' "
-                           "keeps a channel as read)")
+                           "keeps a channel as read)" if result.unnamed else
+                           f"--fix: nothing written: channel {', '.join(result.unfixable)} has more wrong cells "
+                           "than an audit computes exactly (their exact values were interpolated)")
             else:
                 from ..audit.fix import write
 
