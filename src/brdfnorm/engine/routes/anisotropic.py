@@ -77,6 +77,8 @@ MAX_LEVEL = 7
 INNER_SHARE = 0.5
 #: The largest ratio |T_2M − T_M| / |T_M − T_{M/2}| read as geometric convergence (module docstring).
 RATIO_MAX = 0.25
+#: Ratio of the graded v edges of the first radial piece towards the horizon (module docstring).
+GRADING = 8.0
 #: E_avg: smallest μ evaluated, and panels of its μ integral.
 MU_FLOOR = 1e-7
 MAX_AVG_PANELS = 200
@@ -117,11 +119,9 @@ def _unstretch(phi: float, k: float) -> float:
 
 
 @numba.njit(cache=True)
-def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, ay: float, dist: int, sep: int,
-           lam_v: float, k: float, weight: int) -> float:
-    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E), times the
-    split-sum weight of ``weight`` (:data:`WEIGHTS`: 1, 1 − (1 − V·H)⁵ or (1 − V·H)⁵)."""
-    cphi, sphi, dphi = _stretch(theta, k)
+def _ray(cphi, sphi, vx, vy, vz, ax, ay):
+    """The ray at φ: d = (d_x, d_y), |d|², p, q, the horizon s_h and the radial pieces' ends t_split, t_h = atan s_h
+    (the split where the linearized N·L reaches 4·max(α_x, α_y))."""
     dx, dy = ax * cphi, ay * sphi
     dd = dx * dx + dy * dy
     p = (vx * dx + vy * dy) / vz
@@ -129,7 +129,16 @@ def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, a
     s_h = (q + p) / dd
     delta = 4.0 * max(ax, ay) * (1.0 + s_h * s_h * dd) / (2.0 * q * vz)
     s_split = s_h / (1.0 + delta / s_h)
-    t_split, t_h = math.atan(s_split), math.atan(s_h)
+    return dx, dy, dd, p, q, s_h, math.atan(s_split), math.atan(s_h)
+
+
+@numba.njit(cache=True)
+def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, ay: float, dist: int, sep: int,
+           lam_v: float, k: float, weight: int) -> float:
+    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E), times the
+    split-sum weight of ``weight`` (:data:`WEIGHTS`: 1, 1 − (1 − V·H)⁵ or (1 − V·H)⁵)."""
+    cphi, sphi, dphi = _stretch(theta, k)
+    dx, dy, dd, p, q, s_h, t_split, t_h = _ray(cphi, sphi, vx, vy, vz, ax, ay)
     if v < 1.0:
         t, jac = v * t_split, t_split
     else:
@@ -207,6 +216,7 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
     ea = np.empty(max_panels)
     eb = np.empty(max_panels)
     ab = np.empty(max_panels)
+    cuts = np.empty(24)
     # The azimuth θ of the standardized slopes' angle φ = atan2(k sin θ, cos θ), k = √(α_x/α_y): in φ the real
     # slope direction turns within a width α_y/α_x about φ = ±π/2 (α_x > α_y), in θ within √(α_y/α_x) only.
     k = math.sqrt(ax / ay)
@@ -250,9 +260,28 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
         lo, hi = _unstretch(edges[e], k), _unstretch(edges[e + 1], k)
         if hi <= lo:
             continue
-        for piece in range(2):
+        # The first radial piece's v edges graded towards v = 1 (module docstring, "radial grading"): the
+        # horizon's singularities lie about (t_h − t_split)/t_split beyond its end, in units of its length.
+        gap = 1.0
+        for i in range(17):
+            theta = lo + (hi - lo) * i / 16.0
+            cphi, sphi, _ = _stretch(theta, k)
+            t_split, t_h = _ray(cphi, sphi, vx, vy, vz, ax, ay)[6:]
+            if t_split > 0.0:
+                gap = min(gap, (t_h - t_split) / t_split)
+        cuts[0] = 0.0
+        c = 1
+        width = GRADING * gap
+        while width < 1.0 / GRADING and c < cuts.size - 2:
+            cuts[c] = 1.0 - width
+            c += 1
+            width *= GRADING
+        cuts[c:c + 2] = np.array([1.0, 2.0])
+        if n + c + 1 >= max_panels:
+            return 0.0, math.inf, 225 * n, False
+        for piece in range(c + 1):
             a0[n], a1[n] = lo, hi
-            b0[n], b1[n] = float(piece), float(piece + 1)
+            b0[n], b1[n] = cuts[piece], cuts[piece + 1]
             val[n], ea[n], eb[n], ab[n] = _panel(a0[n], a1[n], b0[n], b1[n], vx, vy, vz, ax, ay, dist, sep,
                                                   lam_v, k, weight, x, wk, wg)
             n += 1
