@@ -269,14 +269,17 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
             t_split, t_h = _ray(cphi, sphi, vx, vy, vz, ax, ay)[6:]
             if t_split > 0.0:
                 gap = min(gap, (t_h - t_split) / t_split)
-        cuts[0] = 0.0
-        c = 1
+        c = 0  # graded edges 1 − 8·gap, 1 − 64·gap, … while below 1 − 1/8, then in increasing order
         width = GRADING * gap
-        while width < 1.0 / GRADING and c < cuts.size - 2:
+        while width < 1.0 / GRADING and c < cuts.size - 3:
             cuts[c] = 1.0 - width
             c += 1
             width *= GRADING
-        cuts[c:c + 2] = np.array([1.0, 2.0])
+        cuts[:c] = cuts[:c][::-1].copy()
+        cuts[1:c + 1] = cuts[:c].copy()
+        cuts[0] = 0.0
+        c += 1
+        cuts[c], cuts[c + 1] = 1.0, 2.0
         if n + c + 1 >= max_panels:
             return 0.0, math.inf, 225 * n, False
         for piece in range(c + 1):
