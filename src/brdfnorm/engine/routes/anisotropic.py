@@ -18,8 +18,16 @@ inside a panel, and at μ = 1e-3, α = 1 the cubature settled 7.9e-7 off with an
 smooth. Each ray is split where the linearized N·L reaches 4·max(α_x, α_y) (Smith's boundary layer
 at the horizon gets a piece of its own, as in the half-vector route), the two pieces mapped to v ∈ [0, 1] and
 [1, 2]; the φ panels start at the extrema and zeros of p(φ) and at the lobe's principal directions (where |d|²
-is extreme and the horizon peaks). A view in a principal plane (φ_v = 0 or π/2) mirrors the integrand: half the
-azimuth is integrated and doubled.
+is extreme and the horizon peaks). Radial grading: the first piece's v edges start graded by 8 (:data:`GRADING`)
+towards v = 1, from 1 − 8·g up to 1 − 1/8, g = min over the φ panel of (t_h − t_split)/t_split. Why: at grazing views
+of narrow lobes the horizon slope s_h ~ 2 tan θ_V/α is large, t_h = atan s_h lies 1/s_h below π/2, and the
+integrand, a function of s/s_h near the horizon (N·L, Λ(L)) with (1 + s·p) du → 2p there, has its singularities
+(the zero of N·L, the pole of tan at π/2, Λ's branch points) within about t_h − t_split beyond the piece's end — at
+μ = α = 1/64 about 1e-4 of the piece's length. Neither K15 nor the embedded G7 resolves such a near-singular
+panel, and their difference was about 3 times below the K15 error (3.0e-6 off, estimate 1.6e-6 at rtol 2.5e-6); a
+check by halves did not see it either (the halves' discrepancy 3.4e-7 on a panel 1.3e-6 off). With panels no
+longer than 8 times their distance to the singularities both rules converge and |K15 − G7| bounds the K15 error.
+A view in a principal plane (φ_v = 0 or π/2) mirrors the integrand: half the azimuth is integrated and doubled.
 
 Cubature: globally adaptive G7/K15 ⊗ G7/K15 over (φ, v) panels per case (225 nodes a panel), compiled with Numba.
 A panel's error is |KK − GK| + |KK − KG| (the embedded Gauss rule in each direction: the coarser rule's error,
@@ -41,10 +49,7 @@ coefficients decay as ρ^{-n}, d_M is T_{M/2}'s error ~ ρ^{-cM/2}, and T_2M's e
 factor of the ratio keeps a margin of 1/ratio ≥ 4 (checked against 129-view references with views at rtol 1e-11,
 ``tests/test_anisotropy_azimuth.py``: at rtol 1e-5 and 1e-7 over 192 cells of GGX and Beckmann, μ from 1e-4 to 1,
 α_y/α_x down to 0.01, the error was at most 0.13 of the estimate). This stops one doubling earlier than
-|T_2M − T_M| alone (9 views instead of 17 for most anisotropic cells). Known defect (strict xfail in that file): at
-grazing views of narrow lobes (μ = α = 1/64) the view cubature's initial panels are accepted with a radial
-estimate about 3 times too small (3.0e-6 off, estimate 1.6e-6 at rtol 2.5e-6; the kernel before this averaging
-had it too), which can leave such a cell's average about 1.2 times its estimate off.
+|T_2M − T_M| alone (9 views instead of 17 for most anisotropic cells).
 
 E_avg = 2∫₀¹ Ē(μ) μ dμ = ∫₀¹ 4x³ Ē(x²) dx (x = √μ; the weight vanishes where E has its grazing boundary layer):
 one K15 panel over [0, 1] when its |K15 − G7| meets the tolerance (E(μ) of a white microfacet lobe is analytic on
@@ -77,6 +82,8 @@ MAX_LEVEL = 7
 INNER_SHARE = 0.5
 #: The largest ratio |T_2M − T_M| / |T_M − T_{M/2}| read as geometric convergence (module docstring).
 RATIO_MAX = 0.25
+#: Ratio of the graded v edges of the first radial piece towards the horizon (module docstring).
+GRADING = 8.0
 #: E_avg: smallest μ evaluated, and panels of its μ integral.
 MU_FLOOR = 1e-7
 MAX_AVG_PANELS = 200
@@ -117,11 +124,9 @@ def _unstretch(phi: float, k: float) -> float:
 
 
 @numba.njit(cache=True)
-def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, ay: float, dist: int, sep: int,
-           lam_v: float, k: float, weight: int) -> float:
-    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E), times the
-    split-sum weight of ``weight`` (:data:`WEIGHTS`: 1, 1 − (1 − V·H)⁵ or (1 − V·H)⁵)."""
-    cphi, sphi, dphi = _stretch(theta, k)
+def _ray(cphi, sphi, vx, vy, vz, ax, ay):
+    """The ray at φ: d = (d_x, d_y), |d|², p, q, the horizon s_h and the radial pieces' ends t_split, t_h = atan s_h
+    (the split where the linearized N·L reaches 4·max(α_x, α_y))."""
     dx, dy = ax * cphi, ay * sphi
     dd = dx * dx + dy * dy
     p = (vx * dx + vy * dy) / vz
@@ -129,7 +134,16 @@ def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, a
     s_h = (q + p) / dd
     delta = 4.0 * max(ax, ay) * (1.0 + s_h * s_h * dd) / (2.0 * q * vz)
     s_split = s_h / (1.0 + delta / s_h)
-    t_split, t_h = math.atan(s_split), math.atan(s_h)
+    return dx, dy, dd, p, q, s_h, math.atan(s_split), math.atan(s_h)
+
+
+@numba.njit(cache=True)
+def _point(theta: float, v: float, vx: float, vy: float, vz: float, ax: float, ay: float, dist: int, sep: int,
+           lam_v: float, k: float, weight: int) -> float:
+    """The integrand at (θ, v) times dφ/dθ · dt/dv, over 2π (so that the (θ, v) integral is E), times the
+    split-sum weight of ``weight`` (:data:`WEIGHTS`: 1, 1 − (1 − V·H)⁵ or (1 − V·H)⁵)."""
+    cphi, sphi, dphi = _stretch(theta, k)
+    dx, dy, dd, p, q, s_h, t_split, t_h = _ray(cphi, sphi, vx, vy, vz, ax, ay)
     if v < 1.0:
         t, jac = v * t_split, t_split
     else:
@@ -207,6 +221,7 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
     ea = np.empty(max_panels)
     eb = np.empty(max_panels)
     ab = np.empty(max_panels)
+    cuts = np.empty(24)
     # The azimuth θ of the standardized slopes' angle φ = atan2(k sin θ, cos θ), k = √(α_x/α_y): in φ the real
     # slope direction turns within a width α_y/α_x about φ = ±π/2 (α_x > α_y), in θ within √(α_y/α_x) only.
     k = math.sqrt(ax / ay)
@@ -250,9 +265,31 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
         lo, hi = _unstretch(edges[e], k), _unstretch(edges[e + 1], k)
         if hi <= lo:
             continue
-        for piece in range(2):
+        # The first radial piece's v edges graded towards v = 1 (module docstring, "radial grading"): the
+        # horizon's singularities lie about (t_h − t_split)/t_split beyond its end, in units of its length.
+        gap = 1.0
+        for i in range(17):
+            theta = lo + (hi - lo) * i / 16.0
+            cphi, sphi, _ = _stretch(theta, k)
+            t_split, t_h = _ray(cphi, sphi, vx, vy, vz, ax, ay)[6:]
+            if t_split > 0.0:
+                gap = min(gap, (t_h - t_split) / t_split)
+        c = 0  # graded edges 1 − 8·gap, 1 − 64·gap, … while below 1 − 1/8, then in increasing order
+        width = GRADING * gap
+        while width < 1.0 / GRADING and c < cuts.size - 3:
+            cuts[c] = 1.0 - width
+            c += 1
+            width *= GRADING
+        cuts[:c] = cuts[:c][::-1].copy()
+        cuts[1:c + 1] = cuts[:c].copy()
+        cuts[0] = 0.0
+        c += 1
+        cuts[c], cuts[c + 1] = 1.0, 2.0
+        if n + c + 1 >= max_panels:
+            return 0.0, math.inf, 225 * n, False
+        for piece in range(c + 1):
             a0[n], a1[n] = lo, hi
-            b0[n], b1[n] = float(piece), float(piece + 1)
+            b0[n], b1[n] = cuts[piece], cuts[piece + 1]
             val[n], ea[n], eb[n], ab[n] = _panel(a0[n], a1[n], b0[n], b1[n], vx, vy, vz, ax, ay, dist, sep,
                                                   lam_v, k, weight, x, wk, wg)
             n += 1
