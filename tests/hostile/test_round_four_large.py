@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.limited import PEAK_RSS_KIB, run_limited
 
 import brdfnorm as bn
 from brdfnorm import lut
@@ -24,7 +25,6 @@ from brdfnorm.audit.conventions import coordinates, geometries
 from brdfnorm.audit.infer import EXACT_CELLS, INFER_CELLS, NODE_CELLS, RANK_CELLS, inference_index
 from brdfnorm.audit.interpolated import coarse_index, on_grid, per_axis
 from brdfnorm.audit.reference import Reference
-from hostile.test_hostile_cases import PEAK_RSS_KIB, run_limited
 
 
 def _npz(path: Path, **arrays: np.ndarray) -> Path:
