@@ -13,8 +13,6 @@ import pytest
 
 import brdfnorm as bn
 from brdfnorm.engine.compiled import global_rule, slopes
-from brdfnorm.engine.machinery.result import RouteResult
-from brdfnorm.engine.routes import halfvector
 
 # (the stand-in's unconverged cases are announced)
 pytestmark = pytest.mark.filterwarnings("ignore:.*did not reach rtol")
@@ -29,16 +27,6 @@ LOBES = [
     ("ggx", {"alpha_x": 0.08, "alpha_y": 0.5, "fresnel": "schlick", "f0": 0.04}, 1e-5),
     ("ggx", {"fresnel": "conductor", "eta": (0.2, 0.9, 1.1), "k": (3.0, 2.5, 2.2)}, 1e-9),
 ]
-
-
-@pytest.fixture
-def global_only(monkeypatch):
-    """Replace the adaptive panels by a stand-in that leaves every case it gets unconverged (NaN)."""
-    def no_panels(integrand, initial, K, **_):
-        return RouteResult(np.full((K, 1), np.nan), np.full((K, 1), np.inf), np.zeros(K, dtype=np.int64),
-                           np.zeros(K, dtype=bool))
-
-    monkeypatch.setattr(halfvector, "adaptive_rectangles", no_panels)
 
 
 @pytest.fixture

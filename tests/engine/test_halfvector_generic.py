@@ -16,21 +16,6 @@ from brdfnorm.engine.routes import halfvector_generic
 from brdfnorm.engine.routes.quadrature import rotation_invariant
 
 
-@pytest.fixture
-def kept(monkeypatch):
-    """The cases the route kept, per call of the engine."""
-    calls = []
-    original = halfvector_generic.route
-
-    def spy(*args, **kwargs):
-        out = original(*args, **kwargs)
-        calls.append(out.converged)
-        return out
-
-    monkeypatch.setattr(halfvector_generic, "route", spy)
-    return calls
-
-
 @pytest.mark.parametrize("roughness", [0.05, 0.3, 1.0])
 def test_ggx_brdf_agrees_with_the_one_dimensional_integral(kept, roughness):
     # examples/ggx.brdf with f0 = 1 is GGX with separable Smith shadowing and F = 1, whose albedo brdfnorm also

@@ -14,21 +14,6 @@ import brdfnorm as bn
 from brdfnorm.engine.routes import halfvector_generic
 
 
-@pytest.fixture
-def kept(monkeypatch):
-    """The cases the route kept, per call of the engine."""
-    calls = []
-    original = halfvector_generic.route
-
-    def spy(*args, **kwargs):
-        out = original(*args, **kwargs)
-        calls.append(getattr(out, "converged", getattr(out, "settled", None)))  # (the result's name for "kept")
-        return out
-
-    monkeypatch.setattr(halfvector_generic, "route", spy)
-    return calls
-
-
 @pytest.mark.parametrize("rtol", [1e-6, 1e-9, 1e-10])
 def test_estimates_cover_the_one_dimensional_integral_at_grazing_views(kept, rtol):
     # examples/ggx.brdf, F = 1 (GGX with separable Smith shadowing), random roughness 0.05…0.6 (α ≤ 0.36: narrow

@@ -18,23 +18,11 @@ import pytest
 from helpers.microfacet_reference import FRESNEL_LOBES, reference_albedo
 
 import brdfnorm as bn
-from brdfnorm.engine.machinery.result import RouteResult
-from brdfnorm.engine.routes import halfvector
 from brdfnorm.engine.routes.halfvector_global import azimuth_map, clustering
 
 MUS = np.array([1e-4, 2e-3, 0.04, 0.15, 0.3, 0.55, 0.75, 1.0])
 ALPHAS = np.array([1e-8, 1e-4, 0.01, 0.07, 0.35, 1.0])
 RTOLS = (1e-3, 1e-5, 1e-7, 1e-9)
-
-
-@pytest.fixture
-def global_only(monkeypatch):
-    """Replace the adaptive panels by a stand-in that leaves every case it gets unconverged (NaN)."""
-    def no_panels(integrand, initial, K, **_):
-        return RouteResult(np.full((K, 1), np.nan), np.full((K, 1), np.inf), np.zeros(K, dtype=np.int64),
-                           np.zeros(K, dtype=bool))
-
-    monkeypatch.setattr(halfvector, "adaptive_rectangles", no_panels)
 
 
 @pytest.fixture(scope="module")

@@ -15,17 +15,6 @@ from brdfnorm.errors import ArgumentError
 from brdfnorm.lut import anisotropy, formats
 
 
-def run(capsys, *argv: str) -> tuple[int, str]:
-    from brdfnorm.cli import main
-
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as done:
-        code = done.code or 0
-    return code, capsys.readouterr().err
-
-
 @pytest.mark.parametrize(("mu", "phi_v", "ax", "ay"), [(0.5, 0.7, 1.0, 0.1), (0.2, 1.3, 0.2, 0.6),
                                                        (1.0, 0.0, 0.3, 0.05)])
 def test_split_sum_terms_at_views_match_the_generic_route(mu, phi_v, ax, ay):
@@ -113,10 +102,10 @@ def test_layouts_and_channel_names(dfg_table, tmp_path):
         assert back["E_avg"].shape == dfg_table["E_avg"].shape
 
 
-def test_cli_dfg_channels(capsys, tmp_path):
+def test_cli_dfg_channels(run_cli, tmp_path):
     out = tmp_path / "dfg.exr"
     pytest.importorskip("OpenEXR")
-    code, err = run(capsys, "lut", "ggx", "--anisotropy", "aspect", "--axis", "mu=0.5,1", "--axis", "alpha=0.4",
+    code, _, err = run_cli("lut", "ggx", "--anisotropy", "aspect", "--axis", "mu=0.5,1", "--axis", "alpha=0.4",
                     "--axis", "aspect=0.5,1", "--channels", "dfg", "--rtol", "1e-5", "-o", str(out))
     assert code == 0, err
     back = lut.load(out)

@@ -87,26 +87,16 @@ def test_refusals(small_chunks, tmp_path):
                            rtol=1e-5, checkpoint=other, average=False)
 
 
-def run(capsys, *argv: str) -> tuple[int, str]:
-    from brdfnorm.cli import main
 
-    try:
-        main(list(argv))
-        code = 0
-    except SystemExit as done:
-        code = done.code or 0
-    return code, capsys.readouterr().err
-
-
-def test_cli_checkpoint(capsys, tmp_path):
+def test_cli_checkpoint(run_cli, tmp_path):
     args = ["lut", "ggx", "--anisotropy", "burley", "--axis", "mu=0.5,1", "--axis", "alpha=0.3", "--axis",
             "anisotropy=0.5", "--rtol", "1e-5", "--no-average", "--checkpoint", str(tmp_path / "ck")]
     for name in ("a.npz", "b.npz"):
-        code, err = run(capsys, *args, "-o", str(tmp_path / name))
+        code, _, err = run_cli(*args, "-o", str(tmp_path / name))
         assert code == 0, err
     assert (tmp_path / "ck" / "E" / "job.json").is_file()
     assert np.array_equal(lut.load(tmp_path / "a.npz")["E"], lut.load(tmp_path / "b.npz")["E"])
-    code, err = run(capsys, *[a if a != "alpha=0.3" else "alpha=0.4" for a in args], "-o", str(tmp_path / "c.npz"))
+    code, _, err = run_cli(*[a if a != "alpha=0.3" else "alpha=0.4" for a in args], "-o", str(tmp_path / "c.npz"))
     assert code == 2 and err.startswith("error:") and "different table" in err and "Traceback" not in err
     assert not (tmp_path / "c.npz").exists()
 
