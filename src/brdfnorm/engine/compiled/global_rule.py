@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS, fejer
+from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_weight, piece_extent
 
 _OPTIONS = dict(cache=True, error_model="numpy")
@@ -140,34 +141,13 @@ def _doublings(ratio, last):  # pragma: no cover - compiled
 @njit(**_OPTIONS)
 def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
     """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid (M, 2^level_u − 1, C), as
-    compiled.rules._tensor_sums and tensor_rule.compiled_sums."""
-    N1, C = grid.shape[1], grid.shape[2]
+    compiled.rules.grid_sums."""
+    C = grid.shape[2]
     w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
     n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
     step = 2 * np.pi / M
     for c in range(C):
-        q = q_b = q_bb = q_u = q_uu = magnitude = 0.0
-        for i in range(M):
-            s = 0.0
-            s_abs = 0.0
-            for j in range(N1):
-                x = grid[i, j, c]
-                s += x * w[j]
-                s_abs += abs(x) * w[j]
-            s_u = 0.0
-            for j in range(n_half):
-                s_u += grid[i, 2 * j + 1, c] * w_half[j]
-            s_uu = 0.0
-            for j in range(n_quarter):
-                s_uu += grid[i, 4 * j + 3, c] * w_quarter[j]
-            q += s
-            if i % 2 == 0:
-                q_b += s
-            if i % 4 == 0:
-                q_bb += s
-            q_u += s_u
-            q_uu += s_uu
-            magnitude += s_abs
+        q, q_b, q_bb, q_u, q_uu, magnitude = grid_sums(grid, c, w, w_half, w_quarter, n_half, n_quarter)
         q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
         q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
         sums[0, c] = q
