@@ -24,6 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import anisotropic as kernel
+from .microfacet import bilinear
 
 MU_CLAMP = 1e-4
 _TABLE_RTOL = 1e-8
@@ -57,19 +58,8 @@ class AnisotropicCompensation:
             value = kernel.albedo(self.distribution, self.shadowing, np.clip(mu, MU_CLAMP, 1.0), self.alpha_x,
                                   self.alpha_y, phi, rtol=_EXACT_RTOL)[0]
             return value.reshape(mu.shape)
-        return _bilinear(self.table, self.mu, self.phi, mu, phi)
+        return bilinear(self.table, self.mu, self.phi, mu, phi)
 
-
-def _bilinear(table, mu_nodes, phi_nodes, mu, phi):
-    def locate(nodes, x):
-        x = np.clip(x, nodes[0], nodes[-1])
-        i = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2)
-        return i, (x - nodes[i]) / (nodes[i + 1] - nodes[i])
-
-    i, fu = locate(mu_nodes, mu)
-    j, fp = locate(phi_nodes, phi)
-    return ((1 - fu) * (1 - fp) * table[i, j] + fu * (1 - fp) * table[i + 1, j]
-            + (1 - fu) * fp * table[i, j + 1] + fu * fp * table[i + 1, j + 1])
 
 
 def _missing(table: np.ndarray, mu: np.ndarray) -> float:

@@ -183,7 +183,7 @@ class Compensation:
         if self.size == 0:
             exact = _albedo_grid(self.distribution, self.shadowing, mu, alpha, rtol=_EXACT_RTOL)
             return exact.value[:, 0].reshape(mu.shape)
-        return _bilinear(self.table, self.mu, self.alpha, mu, alpha)
+        return bilinear(self.table, self.mu, self.alpha, mu, alpha)
 
     def average_albedo(self, alpha: np.ndarray) -> np.ndarray:
         alpha = np.asarray(alpha, dtype=float)
@@ -208,12 +208,13 @@ class Compensation:
         lo, hi = self.mu[:-1], self.mu[1:]
         nodes = (lo + hi)[:, None] / 2 + (hi - lo)[:, None] / 2 * np.array([-1.0, 1.0]) / np.sqrt(3.0)
         weights = (hi - lo)[:, None] / 2
-        e = _bilinear(self.table, self.mu, self.alpha, nodes[None], alpha[..., None, None])
+        e = bilinear(self.table, self.mu, self.alpha, nodes[None], alpha[..., None, None])
         return np.sum(weights * 2.0 * nodes * (1.0 - e), axis=(-2, -1))
 
 
-def _bilinear(table, mu_nodes, alpha_nodes, mu, alpha):
-    """Bilinear interpolation on a node grid (clamped to its edges), as a GPU samples a texture."""
+def bilinear(table, mu_nodes, alpha_nodes, mu, alpha):
+    """Bilinear interpolation on a node grid (clamped to its edges), as a GPU samples a texture: ``table``
+    (μ nodes, second-axis nodes) read at (mu, alpha) — α for the isotropic tables, φ_v for the anisotropic ones."""
     def locate(nodes, x):
         x = np.clip(x, nodes[0], nodes[-1])
         i = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2)
