@@ -34,6 +34,9 @@ SOURCES = {
 GROUP = "published numbers"
 #: The furnace numbers as printed: (roughness, N·V) -> albedo.
 FURNACE_NUMBERS = {(0.5, 0.5): 0.857, (1.0, 1.0): 0.307}
+#: The lobes whose albedos these checks compute by quadrature, as (name, parameters) in the order of CHECKS (a
+#: report compiles their kernels ahead, :mod:`brdfnorm.parallel.warm`).
+LOBES = (("fon", {}), ("eon", {"fon_albedo": "approx"}), ("ggx", {}))
 
 
 def _quadrature(model, theta) -> np.ndarray:

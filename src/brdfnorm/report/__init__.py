@@ -24,14 +24,16 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, load
+from ..claims import published
 from ..claims.verify import verify
 from ..errors import ArgumentError
 from ..fit import fit
 from ..models.base import Model
 from ..output.directories import check_target, staged
+from ..parallel import warm
 from . import microfacet, sections
 from .html import page
-from .study import StudyConfig
+from .study import SEED_LOBES, StudyConfig
 
 __all__ = ["StudyConfig", "build_report", "plan"]
 
@@ -41,8 +43,9 @@ OnStep = Callable[[str, float, int], None]
 
 
 def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[str, np.ndarray] | None = None,
-         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step]]:
-    """The configuration and the steps of the page."""
+         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step], list[Model]]:
+    """The configuration, the steps of the page, and the models it computes albedos of in the order it first needs
+    them (whose kernels compile ahead, :mod:`brdfnorm.parallel.warm`)."""
     config = config or StudyConfig()
     if not models:
         if sweep is not None:
@@ -52,6 +55,7 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
             if np.any(np.asarray(values) <= 0):
                 raise ArgumentError("the default study needs exponents n > 0", where="sweep")
             config = dataclasses.replace(config, table_n=tuple(float(v) for v in values))
+        lobes = [(name, {}) for name in SEED_LOBES]
         steps: list[sections.Step] = [
             ("factors at L = N: closed form vs quadrature; search for the maximum", sections.factor_section),
             ("albedo curves E(θ_o)", sections.albedo_section),
@@ -62,20 +66,23 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
         steps.append(("polar plots of the lobes", sections.polar_section))
         if microfacet.available():
             steps.append(("microfacet energy: GGX's compensation tables", microfacet.section))
+            lobes += microfacet.LOBES
         if config.extras:
             steps.append(("verifying the seeds' claims", sections.verify_section(verify)))
-        return config, steps
-    steps = []
+            lobes += published.LOBES
+        return config, steps, [load(name, **params) for name, params in lobes]
+    steps, loaded = [], []
     for index, item in enumerate(models, start=1):
         if isinstance(item, tuple):
             label, model = item
         else:
             model, label = (item, item.name) if isinstance(item, Model) else (load(item), str(item))
+        loaded.append(model)
         if sweep is not None:
             model.parameter(sweep[0])  # an unknown name fails now, before any work
         steps.append((f"{label}: factors, albedo curves, polar plots",
                       sections.model_section(model, label, sweep, index)))
-    return config, steps
+    return config, steps, loaded
 
 
 def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, Model]] = (), *,
@@ -86,13 +93,13 @@ def build_report(out_dir: str | Path, models: Sequence[Model | str | tuple[str, 
     ``audit``: ``.brdf`` files or directories to audit with ``brdfnorm check`` (:mod:`.audit`), one row each.
     """
     check_target(out_dir)  # a bad -o fails before minutes of work
-    config, steps = plan(models, sweep, config)
+    config, steps, lobes = plan(models, sweep, config)
     if audit:
         from .audit import audit_section
 
         steps.append(("auditing the .brdf files (brdfnorm check)", audit_section(audit)))
     report = (lambda *args: None) if on_step is None else on_step
-    with staged(out_dir, f"brdfnorm {__version__}\n") as stage:
+    with staged(out_dir, f"brdfnorm {__version__}\n") as stage, warm.ahead(lobes):
         ctx = sections.Context(config, stage)
         built = []
         for index, (description, step) in enumerate(steps):

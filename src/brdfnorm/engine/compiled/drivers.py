@@ -46,22 +46,35 @@ def _version() -> str:
         return "source"
 
 
-@cache
-def _module(key: str, numba_version: str) -> tuple[ModuleType, Path]:
+def kernels_file(key: str, numba_version: str) -> Path:
+    """The path of the kernels' copy for shader ``key`` (Numba's cache of it lies beside it)."""
     source = _TEMPLATE.read_text(encoding="utf-8")
     # the helpers the kernels inline are part of their machine code: a change there is a new copy too
     helpers = _TEMPLATE.with_name("slopes.py").read_text(encoding="utf-8")
     digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
-    path = cache_directory() / f"brdfnorm_kernels_{digest}.py"
+    return cache_directory() / f"brdfnorm_kernels_{digest}.py"
+
+
+def kernels_compiled(key: str) -> bool:
+    """Whether every kernel of shader ``key`` was compiled into the disk cache by an earlier run (the mark
+    :func:`_warm` leaves once they all are)."""
+    import numba
+
+    return kernels_file(key, numba.__version__).with_suffix(".compiled").exists()
+
+
+@cache
+def _module(key: str, numba_version: str) -> tuple[ModuleType, Path]:
+    source = _TEMPLATE.read_text(encoding="utf-8")
+    path = kernels_file(key, numba_version)
     if not path.exists():
         temporary = path.with_suffix(f".{os.getpid()}.tmp")
         temporary.write_text(f"# brdfnorm compiled kernels for shader key {key!r} (generated; safe to delete)\n"
                              + source, encoding="utf-8")
         os.replace(temporary, path)
-    name = f"brdfnorm_kernels_{digest}"
-    spec = importlib.util.spec_from_file_location(name, path)
+    spec = importlib.util.spec_from_file_location(path.stem, path)
     module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
+    sys.modules[path.stem] = module
     spec.loader.exec_module(module)
     return module, path
 
@@ -122,6 +135,9 @@ def _warm(native: NativeIntegrand, key: str) -> None:
     rectangle(one, np.full((1, 1, 1), 0.5), np.full((1, 1, 1), 0.5), one)
     tensor_sums(np.zeros((1, 4, 3, native.channels)), np.ones(3), np.ones(1), np.zeros(0))
     _WARM.add(key)
+    import numba
+
+    kernels_file(key, numba.__version__).with_suffix(".compiled").touch()
 
 
 def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[np.ndarray],
