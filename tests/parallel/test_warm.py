@@ -19,12 +19,18 @@ def _key(model) -> str:
     return model.native_kernel().key
 
 
+@pytest.fixture
+def compiled(monkeypatch):
+    """The compiled backend, whatever $BRDFNORM_BACKEND the suite runs under."""
+    monkeypatch.setenv("BRDFNORM_BACKEND", "compiled")
+
+
 def test_nothing_pending_on_the_numpy_backend(monkeypatch):
     monkeypatch.setenv("BRDFNORM_BACKEND", "numpy")
     assert warm.pending([bn.load("phong"), bn.load("ggx")]) == []
 
 
-def test_pending_skips_compiled_kernels_and_repeats(monkeypatch, tmp_path):
+def test_pending_skips_compiled_kernels_and_repeats(compiled, monkeypatch, tmp_path):
     monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path))
     phong, ggx = bn.load("phong", n=10.0), bn.load("ggx", alpha=0.3)
     sources = warm.pending([phong, bn.load("phong", n=50.0), ggx])
@@ -36,7 +42,7 @@ def test_pending_skips_compiled_kernels_and_repeats(monkeypatch, tmp_path):
 
 
 @pytest.mark.slow
-def test_the_child_compiles_the_last_needed_kernels_first(monkeypatch, tmp_path):
+def test_the_child_compiles_the_last_needed_kernels_first(compiled, monkeypatch, tmp_path):
     monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path))
     first, last = bn.load("phong"), bn.load("blinn-phong")
     with warm.ahead([first, last]) as given:
@@ -57,14 +63,14 @@ def _compiled_during(monkeypatch, tmp_path, config: StudyConfig) -> set[str]:
     return set(drivers._WARM)
 
 
-def test_the_quick_report_declares_every_lobe_it_compiles(monkeypatch, tmp_path):
+def test_the_quick_report_declares_every_lobe_it_compiles(compiled, monkeypatch, tmp_path):
     declared = {_key(m) for m in plan(config=StudyConfig.quick())[2] if m.native_kernel() is not None}
     used = _compiled_during(monkeypatch, tmp_path, StudyConfig.quick())
     assert used and used <= declared
 
 
 @pytest.mark.slow
-def test_the_default_report_declares_every_lobe_it_compiles(monkeypatch, tmp_path):
+def test_the_default_report_declares_every_lobe_it_compiles(compiled, monkeypatch, tmp_path):
     declared = {_key(m) for m in plan()[2] if m.native_kernel() is not None}
     used = _compiled_during(monkeypatch, tmp_path, StudyConfig())
     assert used <= declared and {"builtin:fon", "builtin:charlie"} <= used
