@@ -53,7 +53,7 @@ CHUNK_CELLS = 256
 MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
 CC_FIRST = 16
-CC_MAX = 128
+CC_MAX = 64
 #: E_avg's error estimate of the finer rule from two successive differences (see rule_error).
 RULE_CONVERGING = 16.0
 RULE_SAFETY = 2.0
