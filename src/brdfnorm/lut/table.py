@@ -10,7 +10,8 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
   against θ), :func:`compute_cells` — a pure function of (model, directions, parameter values, settings), so a
   process pool or a cluster can compute any chunk.
 * E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
-  table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|), and for what that does not
+  table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|, or 2|Q₂ₙ − Qₙ|²/|Qₙ − Qₙ/₂|
+  where the differences fall at least 16-fold, :func:`rule_error`), and for what that does not
   settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
   pessimistic bound for the K15 value that is used, and at least half the parent panel's bisection discrepancy); both
   add the albedo error estimates through |weights|.
@@ -233,11 +234,19 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     """E_avg = 2∫₀¹ E(μ) μ dμ = ∫₀¹ 4x³ E(x²) dx (x = √μ) for M parameter combinations (name -> (M,)).
 
     First nested Clenshaw–Curtis in x with CC_FIRST, 2·CC_FIRST, … CC_MAX intervals: a combination is settled
-    when |Q_2n − Q_n| plus the albedo error estimates through |weights| is within rtol·|Q_2n| (Q_2n is kept;
-    the difference is the error of Q_n, pessimistic for Q_2n when the rule converges). In x the weight 4x³
-    vanishes where E has its boundary layer (μ ≲ α), so a smooth E needs 33–65 albedos. Combinations not settled
-    by CC_MAX (kinks, e.g. a critical angle) go to :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR
-    as there. Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
+    when the rule's error estimate (:func:`rule_error`: |Q_2n − Q_n|, the error of Q_n, or less where two
+    successive differences show the rule converging) plus the albedo error estimates through |weights| is within
+    rtol·|Q_2n| (Q_2n is kept). In x the weight 4x³ vanishes where E has its boundary layer (μ ≲ α), so a smooth
+    E needs 32–64 albedos. Combinations not settled by CC_MAX (kinks, e.g. a critical angle) go to
+    :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR as there.
+
+    The node at μ = 1 goes first: where it comes back "rounding-limited" (the shader's float64 noise above its
+    tolerance, e.g. examples/ggx.brdf at roughness 0.05) its relative estimate becomes its combination's floor,
+    below which no later node is asked (NOISE_FLOOR_FACTOR) — the noise bound is then in every node's estimate,
+    and the combination converges where their sum through the weights is within rtol. A node's estimate counts
+    whether it converged or stopped rounding-limited; a combination with a node stopped otherwise (budget,
+    stalled) is reported unconverged. Returns (value (M,), error estimate (M,), converged (M,), albedo integrals
+    computed).
     """
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
@@ -334,7 +343,8 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
     discrepancy (a kink inside a panel can give K15 and G7 one shared error); albedos are computed to rtol/4,
     looser where the weight 4x³ is below 1 (rtol/(4·4x³), at most NODE_RTOL_MAX). Nodes
     below μ = MU_FLOOR are evaluated at MU_FLOOR (a lobe may refuse grazing directions); that changes the
-    integral by at most MU_FLOOR²·max|E|, which is added to the error.
+    integral by at most MU_FLOOR²·max|E|, which is added to the error. ``noise`` (M,): the combinations' noise
+    floors as far as :func:`average_over_mu` learned them (rounding-limited nodes as there).
     Returns (value (M,), error estimate (M,), converged (M,), albedo integrals computed).
     """
     M = len(next(iter(params.values()))) if params else 1
