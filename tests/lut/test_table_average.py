@@ -125,5 +125,5 @@ def test_rule_error_covers_the_true_error(f, exact):
 def test_rule_error_keeps_the_difference_where_the_rule_does_not_converge():
     d2, d1 = np.array([1e-3, 1e-6, 1e-9, 0.0]), np.array([2e-3, 1e-6, 1e-5, 0.0])
     assert np.array_equal(rule_error(d2, d1)[:2], d2[:2])  # not falling by RULE_CONVERGING: d_2n
-    assert rule_error(d2, d1)[2] == pytest.approx(table.RULE_SAFETY * 1e-18 / 1e-5)
+    assert rule_error(d2, d1)[2] == pytest.approx(table.RULE_SAFETY * 1e-9 * 1e-4**table.RULE_POWER)
     assert rule_error(d2, d1)[3] == 0.0
