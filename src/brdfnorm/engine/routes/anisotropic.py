@@ -334,10 +334,18 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
 
 
 @numba.njit(cache=True)
+def view_stretch(mu: float, ax: float, ay: float) -> float:
+    """k of the view-azimuth stretch ψ = atan2(k sin χ, cos χ): ((μ² + (1 − μ²)α_x²)/(μ² + (1 − μ²)α_y²))^{1/4}
+    (module docstring, "view-azimuth stretch"); √(α_x/α_y) at grazing views, 1 at normal view."""
+    s2 = 1.0 - mu * mu
+    return math.sqrt(math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay)))
+
+
+@numba.njit(cache=True)
 def _stretched_view(mu, chi, ax, ay, dist, sep, rtol, atol, weight, x, wk, wg):
-    """E(μ, ψ(χ))·ψ'(χ) with ψ = atan2(k sin χ, cos χ), k = √(α_x/α_y) (E turns within α_y/α_x of ψ = π/2 in
-    ψ, within √(α_y/α_x) in χ); the tolerance is E's, scaled by ψ'."""
-    cpsi, spsi, dpsi = _stretch(chi, math.sqrt(ax / ay))
+    """E(μ, ψ(χ))·ψ'(χ) with ψ = atan2(k sin χ, cos χ), k = :func:`view_stretch`; the tolerance is E's, scaled by
+    ψ'."""
+    cpsi, spsi, dpsi = _stretch(chi, view_stretch(mu, ax, ay))
     v, e, ev, c = view_albedo(mu, math.atan2(spsi, cpsi), ax, ay, dist, sep, rtol, atol / dpsi, MAX_PANELS,
                               weight, x, wk, wg)
     return v * dpsi, e * dpsi, ev, c
