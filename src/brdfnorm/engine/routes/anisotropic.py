@@ -335,10 +335,11 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
 
 @numba.njit(cache=True)
 def view_stretch(mu: float, ax: float, ay: float) -> float:
-    """k of the view-azimuth stretch ψ = atan2(k sin χ, cos χ): ((μ² + (1 − μ²)α_x²)/(μ² + (1 − μ²)α_y²))^{1/4}
-    (module docstring, "view-azimuth stretch"); √(α_x/α_y) at grazing views, 1 at normal view."""
+    """k of the view-azimuth stretch ψ = atan2(k sin χ, cos χ): the geometric mean of √(α_x/α_y) (the grazing
+    limit) and ((μ² + (1 − μ²)α_x²)/(μ² + (1 − μ²)α_y²))^{1/4} (the balance for Λ(V)'s branch point alone) —
+    module docstring, "view-azimuth stretch"."""
     s2 = 1.0 - mu * mu
-    return math.sqrt(math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay)))
+    return math.sqrt(math.sqrt(math.sqrt(ax / ay) * math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay))))
 
 
 @numba.njit(cache=True)
