@@ -438,9 +438,16 @@ def _average_panel(left, width, ax, ay, dist, sep, rtol, scale, x, wk, wg):
         # A node's albedo needs rtol·share·scale/weight absolutely (scale ~ the integral): looser where weight is
         # small; the nodes' errors take that share of the tolerance, |K15 − G7| the rest.
         atol = rtol * INNER_SHARE * scale / max(weight, 1e-300)
-        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol * INNER_SHARE, atol, 0, x, wk, wg)
-        evaluations += ev
-        ok = ok and c
+        if atol >= 0.5:
+            # A white lobe's albedo lies in [0, 1] (G2 ≤ G1: E is at most the visible normals' mass): ½ ± ½ meets
+            # the node's tolerance without a view (the first node of a panel at x = 0, weight ~1e-7); its
+            # uncertainty enters the G7 value too.
+            v, e = 0.5, 0.5
+            prop += abs(wk[i] - wg[i]) * weight * e
+        else:
+            v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol * INNER_SHARE, atol, 0, x, wk, wg)
+            evaluations += ev
+            ok = ok and c
         kron += wk[i] * weight * v
         gauss += wg[i] * weight * v
         prop += wk[i] * weight * e
