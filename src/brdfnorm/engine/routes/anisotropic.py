@@ -339,7 +339,7 @@ def view_stretch(mu: float, ax: float, ay: float) -> float:
     limit) and ((μ² + (1 − μ²)α_x²)/(μ² + (1 − μ²)α_y²))^{1/4} (the balance for Λ(V)'s branch point alone) —
     module docstring, "view-azimuth stretch"."""
     s2 = 1.0 - mu * mu
-    return math.sqrt(math.sqrt(math.sqrt(ax / ay) * math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay))))
+    return math.sqrt(math.sqrt(ax / ay) * math.sqrt(math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay))))
 
 
 @numba.njit(cache=True)
