@@ -235,9 +235,11 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
     radius = math.hypot(vx * ax, vy * ay) / vz
     edges = np.empty(100)
     m = 0
+    base = phi0 if mirrored else phi0 - 0.5 * math.pi
     for quarter in range(4):
-        edges[m] = phi0 + quarter * 0.5 * math.pi
-        m += 1
+        if mirrored or quarter % 2 == 1:
+            edges[m] = phi0 + quarter * 0.5 * math.pi
+            m += 1
     # and the lobe's principal directions φ = 0, π/2, π, 3π/2 (θ the same), where |d|² is extreme and the
     # horizon s_h(φ) peaks: at (α_x, α_y) = (2.82, 0.282), μ = 0.734, φ_v = 1.363 a band of θ within 0.03 of π/2
     # fell between the nodes of a quarter panel (4.2e-5 missed at rtol 5e-6 with an estimate of 6e-7). Only for a
@@ -255,10 +257,10 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
             edges[m], edges[m + 1] = zero - width, zero + width
             m += 2
             width *= 8.0
-    for i in range(m):  # into [phi0, phi0 + 2π)
-        edges[i] = phi0 + (edges[i] - phi0) % (2.0 * math.pi)
+    for i in range(m):  # into [base, base + 2π)
+        edges[i] = base + (edges[i] - base) % (2.0 * math.pi)
     edges[:m] = np.sort(edges[:m])
-    edges[m] = phi0 + 2.0 * math.pi
+    edges[m] = base + 2.0 * math.pi
     if mirrored:  # the edges are symmetric about φ0 and φ0 + π (extrema and zeros of p): keep the first half
         half = 1
         while half < m and edges[half] < phi0 + math.pi:
