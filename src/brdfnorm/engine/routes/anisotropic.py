@@ -17,10 +17,12 @@ the heavy tail's inverse slope; Beckmann: du = 2s(1 + s²)e^{−s²} dt). A cut 
 inside a panel, and at μ = 1e-3, α = 1 the cubature settled 7.9e-7 off with an estimate of 1e-10; atan s_h(φ) is
 smooth. Each ray is split where the linearized N·L reaches 4·max(α_x, α_y) (Smith's boundary layer
 at the horizon gets a piece of its own, as in the half-vector route), the two pieces mapped to v ∈ [0, 1] and
-[1, 2]; the φ panels start at the extrema and zeros of p(φ) and at the lobe's principal directions (where |d|²
-is extreme and the horizon peaks). Radial grading: the first piece's v edges start graded by 8 (:data:`GRADING`)
-towards v = 1, from 1 − 8·g up to 1 − 1/8, g = min over the φ panel of (t_h − t_split)/t_split. Why: at grazing views
-of narrow lobes the horizon slope s_h ~ 2 tan θ_V/α is large, t_h = atan s_h lies 1/s_h below π/2, and the
+[1, 2]; the φ panels start at the zeros of p(φ) (and its extrema φ0, φ0 + π in a principal plane, where they end
+the mirrored half) and, for lobes flatter than α_y/α_x = 1/4 (:data:`PRINCIPAL_EDGES`), at the lobe's principal
+directions (where |d|² is extreme and the horizon peaks). Radial grading: the first piece's v edges start
+graded by 8 (:data:`GRADING`) towards v = 1, from 1 − 8·g up to 1 − 1/8, g = min over the φ panel of
+(t_h − t_split)/t_split. Why: at grazing views of narrow lobes the horizon slope s_h ~ 2 tan θ_V/α is large,
+t_h = atan s_h lies 1/s_h below π/2, and the
 integrand, a function of s/s_h near the horizon (N·L, Λ(L)) with (1 + s·p) du → 2p there, has its singularities
 (the zero of N·L, the pole of tan at π/2, Λ's branch points) within about t_h − t_split beyond the piece's end — at
 μ = α = 1/64 about 1e-4 of the piece's length. Neither K15 nor the embedded G7 resolves such a near-singular
@@ -51,12 +53,23 @@ factor of the ratio keeps a margin of 1/ratio ≥ 4 (checked against 129-view re
 α_y/α_x down to 0.01, the error was at most 0.13 of the estimate). This stops one doubling earlier than
 |T_2M − T_M| alone (9 views instead of 17 for most anisotropic cells).
 
+View-azimuth stretch: the average runs over χ, φ_v = atan2(k sin χ, cos χ), k = :func:`view_stretch`. E(φ_v) is
+singular off the real axis near φ_v = π/2 (α_x > α_y): at Λ(V)'s branch point, a distance η with
+tanh²η = (μ² + (1 − μ²)α_y²)/(μ² + (1 − μ²)α_x²), whose image balanced against the stretch's own
+poles gives k_Λ = (tanh η)^{-1/2}; and at a distance ~α_y/α_x at every μ (the standardized view's azimuth enters
+through the reflection), which k = √(α_x/α_y) balances. k_Λ alone failed for narrow, very flat lobes at mid views
+(μ = 0.4, (α_x, α_y) = (0.2, 0.002): stopped at M = 4, 6.1e-7 off, estimate 4.8e-8); the geometric mean
+√(√(α_x/α_y)·k_Λ) held on 32 random cells at three rtols (at most 0.57 of the estimate off; √(α_x/α_y): 0.56)
+with 16% fewer views (``tests/lut/test_anisotropy_speed.py``, ``tests/lut/test_anisotropy_azimuth.py``).
+
 E_avg = 2∫₀¹ Ē(μ) μ dμ = ∫₀¹ 4x³ Ē(x²) dx (x = √μ; the weight vanishes where E has its grazing boundary layer):
 one K15 panel over [0, 1] when its |K15 − G7| meets the tolerance (E(μ) of a white microfacet lobe is analytic on
 (0, 1]: no kink for a shared error of both rules to hide), else globally adaptive G7/K15 with the
 parent-discrepancy floor of :mod:`brdfnorm.engine.machinery.interval`, node albedos to
-tolerances loosened where the weight 4x³ is small (≤ rtol/2 of the integral in all, :data:`INNER_SHARE`); nodes
-below μ = 1e-7 are evaluated there (a change ≤ 1e-14 · max E, added).
+tolerances loosened where the weight 4x³ is small (≤ rtol/2 of the integral in all, :data:`INNER_SHARE`); a node
+whose tolerance is ≥ ½ takes the white lobe's bound E ∈ [0, 1] as ½ ± ½ (no view; the first K15 node at x = 0);
+nodes below μ = 1e-7 are evaluated there (a change ≤ 1e-14 · max E, added). Narrow (max α ≤ 0.1) and very wide
+(max α ≥ 2.2) lobes start from the two halves of [0, 1] instead of the whole (:data:`HALVES_NARROW`).
 """
 
 from __future__ import annotations
