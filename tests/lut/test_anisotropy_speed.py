@@ -121,10 +121,13 @@ def generic_average(name: str, ax: float, ay: float, x_edges, order: int, views:
     pytest.param("ggx", 0.3 / 0.6, 0.3 * 0.6, [0.0, 0.1, 0.25, 0.5, 1.0], 32, marks=pytest.mark.slow),
     pytest.param("beckmann", 0.8 / 0.55, 0.8 * 0.55, [0.0, 0.15, 0.35, 0.6, 1.0], 32, marks=pytest.mark.slow),
     pytest.param("ggx", 0.03 / 0.8, 0.03 * 0.8, [0.0, 0.02, 0.05, 0.1, 0.2, 0.4, 1.0], 16,
-                 marks=pytest.mark.slow)])
+                 marks=pytest.mark.slow),  # narrow: E_avg starts from two halves
+    pytest.param("ggx", 1.2 / 0.5, 1.2 * 0.5, [0.0, 0.1, 0.25, 0.5, 0.75, 1.0], 64,
+                 marks=pytest.mark.slow)])  # very wide: from two halves too
 def test_average_albedo_against_the_generic_route(name, ax, ay, edges, views):
-    """E_avg with the weight-loosened node tolerances and the bound E ∈ [0, 1] at the x = 0 end: the error never
-    above the estimate, against the generic route integrated over μ and φ_v by other rules."""
+    """E_avg with the weight-loosened node tolerances, the bound E ∈ [0, 1] at the x = 0 end and (narrow and very
+    wide lobes) the two halves as the first level: the error never above the estimate, against the generic route
+    integrated over μ and φ_v by other rules."""
     exact, own = generic_average(name, ax, ay, edges, 10, views)
     assert own < 2e-6, own
     value, error, evaluations, converged = kernel.average_albedo(name, "height-correlated", ax, ay, rtol=1e-5)
