@@ -5,7 +5,8 @@ local workers and on a 2-worker Dask cluster, compared bit for bit.
 
 Usage: ``python benchmarks/bench_anisotropy.py [--size 32] [--workers 2] [--rtol 1e-5]`` or
 ``benchmarks/run.py --only anisotropy``; ``--quarter``: every fourth α only, in one process (CPU seconds and
-evaluations). Goal (this 2-core machine): the 32 × 32 × 16 table within 60 s. The wall
+evaluations); ``--profile``: that quarter by stage, μ band, α and aspect. Goal (this 2-core machine): the
+32 × 32 × 16 table within 60 s. The wall
 time and the CPU time (this process and its workers) are both reported: on a shared machine the wall time is what
 the neighbours left.
 """
@@ -88,6 +89,38 @@ def w_anisotropy(cfg, refs=None, size: int = 32, workers: int = 2, rtol: float =
             "methods": methods}
 
 
+def profile(size: int, rtol: float) -> None:
+    """The quarter table by stage, in this process: E cells and E_avg (evaluations, CPU seconds), the cells'
+    evaluations per μ band and per aspect, E_avg's per α and per aspect (× 4 for the whole table)."""
+    from brdfnorm.engine.routes import anisotropic as kernel
+
+    axes = _axes(size, size, max(2, size // 2))
+    mu, alpha, aspect = axes["mu"], axes["alpha"][::4], axes["aspect"]
+    kernel.albedo("ggx", "height-correlated", [0.5], [0.5], [0.2], rtol=rtol)  # compile before the clock
+    kernel.average_albedo("ggx", "height-correlated", [0.5], [0.3], rtol=rtol)
+    a, s = np.meshgrid(alpha, aspect, indexing="ij")
+    ax, ay = (np.broadcast_to(w[..., None], a.shape + (mu.size,)) for w in (a / s, a * s))
+    cpu = _cpu()
+    _, error, cells, _ = kernel.albedo("ggx", "height-correlated", np.broadcast_to(mu, ax.shape).ravel(), ax.ravel(),
+                                       ay.ravel(), rtol=rtol)
+    cells_cpu, cpu = _cpu() - cpu, _cpu()
+    _, average_error, averages, _ = kernel.average_albedo("ggx", "height-correlated", (a / s).ravel(),
+                                                          (a * s).ravel(), rtol=rtol)
+    averages_cpu = _cpu() - cpu
+    cells, averages = cells.reshape(ax.shape), averages.reshape(a.shape)
+    print(f"quarter table ({alpha.size} α × {mu.size} μ × {aspect.size} aspect; × 4 for the whole), one process:")
+    print(f"  E cells {cells.sum():.4g} evaluations, {cells_cpu:.1f} s CPU (max estimate {error.max():.2g}); "
+          f"E_avg {averages.sum():.4g}, {averages_cpu:.1f} s CPU (max estimate {average_error.max():.2g})")
+    bands = np.array_split(np.arange(mu.size), 8)
+    print("  cells by μ band: " + ", ".join(f"{mu[b[0]]:.3g}–{mu[b[-1]]:.3g} {cells[..., b].sum():.3g}"
+                                          for b in bands))
+    print("  cells by aspect: " + ", ".join(f"{v:.3g} {n:.3g}" for v, n in zip(aspect, cells.sum(axis=(0, 2)),
+                                                                                strict=True)))
+    print("  E_avg by α: " + ", ".join(f"{v:.3g} {n:.3g}" for v, n in zip(alpha, averages.sum(axis=1), strict=True)))
+    print("  E_avg by aspect: " + ", ".join(f"{v:.3g} {n:.3g}" for v, n in zip(aspect, averages.sum(axis=0),
+                                                                              strict=True)))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=32)
@@ -97,7 +130,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quarter", action="store_true",
                         help="only every fourth α of the table, in this process (CPU seconds and evaluations: the "
                              "before/after measure of a kernel change)")
+    parser.add_argument("--profile", action="store_true",
+                        help="the quarter table by stage (E cells, E_avg), μ band, α and aspect, in this process")
     args = parser.parse_args(argv)
+    if args.profile:
+        profile(args.size, args.rtol)
+        return 0
     if args.quarter:
         axes = _axes(args.size, args.size, max(2, args.size // 2))
         axes["alpha"] = axes["alpha"][::4]

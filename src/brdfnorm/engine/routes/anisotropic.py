@@ -17,10 +17,12 @@ the heavy tail's inverse slope; Beckmann: du = 2s(1 + s²)e^{−s²} dt). A cut 
 inside a panel, and at μ = 1e-3, α = 1 the cubature settled 7.9e-7 off with an estimate of 1e-10; atan s_h(φ) is
 smooth. Each ray is split where the linearized N·L reaches 4·max(α_x, α_y) (Smith's boundary layer
 at the horizon gets a piece of its own, as in the half-vector route), the two pieces mapped to v ∈ [0, 1] and
-[1, 2]; the φ panels start at the extrema and zeros of p(φ) and at the lobe's principal directions (where |d|²
-is extreme and the horizon peaks). Radial grading: the first piece's v edges start graded by 8 (:data:`GRADING`)
-towards v = 1, from 1 − 8·g up to 1 − 1/8, g = min over the φ panel of (t_h − t_split)/t_split. Why: at grazing views
-of narrow lobes the horizon slope s_h ~ 2 tan θ_V/α is large, t_h = atan s_h lies 1/s_h below π/2, and the
+[1, 2]; the φ panels start at the zeros of p(φ) (and its extrema φ0, φ0 + π in a principal plane, where they end
+the mirrored half) and, for lobes flatter than α_y/α_x = 1/4 (:data:`PRINCIPAL_EDGES`), at the lobe's principal
+directions (where |d|² is extreme and the horizon peaks). Radial grading: the first piece's v edges start
+graded by 8 (:data:`GRADING`) towards v = 1, from 1 − 8·g up to 1 − 1/8, g = min over the φ panel of
+(t_h − t_split)/t_split. Why: at grazing views of narrow lobes the horizon slope s_h ~ 2 tan θ_V/α is large,
+t_h = atan s_h lies 1/s_h below π/2, and the
 integrand, a function of s/s_h near the horizon (N·L, Λ(L)) with (1 + s·p) du → 2p there, has its singularities
 (the zero of N·L, the pole of tan at π/2, Λ's branch points) within about t_h − t_split beyond the piece's end — at
 μ = α = 1/64 about 1e-4 of the piece's length. Neither K15 nor the embedded G7 resolves such a near-singular
@@ -51,12 +53,23 @@ factor of the ratio keeps a margin of 1/ratio ≥ 4 (checked against 129-view re
 α_y/α_x down to 0.01, the error was at most 0.13 of the estimate). This stops one doubling earlier than
 |T_2M − T_M| alone (9 views instead of 17 for most anisotropic cells).
 
+View-azimuth stretch: the average runs over χ, φ_v = atan2(k sin χ, cos χ), k = :func:`view_stretch`. E(φ_v) is
+singular off the real axis near φ_v = π/2 (α_x > α_y): at Λ(V)'s branch point, a distance η with
+tanh²η = (μ² + (1 − μ²)α_y²)/(μ² + (1 − μ²)α_x²), whose image balanced against the stretch's own
+poles gives k_Λ = (tanh η)^{-1/2}; and at a distance ~α_y/α_x at every μ (the standardized view's azimuth enters
+through the reflection), which k = √(α_x/α_y) balances. k_Λ alone failed for narrow, very flat lobes at mid views
+(μ = 0.4, (α_x, α_y) = (0.2, 0.002): stopped at M = 4, 6.1e-7 off, estimate 4.8e-8); the geometric mean
+√(√(α_x/α_y)·k_Λ) held on 32 random cells at three rtols (at most 0.57 of the estimate off; √(α_x/α_y): 0.56)
+with 16% fewer views (``tests/lut/test_anisotropy_speed.py``, ``tests/lut/test_anisotropy_azimuth.py``).
+
 E_avg = 2∫₀¹ Ē(μ) μ dμ = ∫₀¹ 4x³ Ē(x²) dx (x = √μ; the weight vanishes where E has its grazing boundary layer):
 one K15 panel over [0, 1] when its |K15 − G7| meets the tolerance (E(μ) of a white microfacet lobe is analytic on
 (0, 1]: no kink for a shared error of both rules to hide), else globally adaptive G7/K15 with the
 parent-discrepancy floor of :mod:`brdfnorm.engine.machinery.interval`, node albedos to
-tolerances loosened where the weight 4x³ is small (≤ rtol/2 of the integral in all, :data:`INNER_SHARE`); nodes
-below μ = 1e-7 are evaluated there (a change ≤ 1e-14 · max E, added).
+tolerances loosened where the weight 4x³ is small (≤ rtol/2 of the integral in all, :data:`INNER_SHARE`); a node
+whose tolerance is ≥ ½ takes the white lobe's bound E ∈ [0, 1] as ½ ± ½ (no view; the first K15 node at x = 0);
+nodes below μ = 1e-7 are evaluated there (a change ≤ 1e-14 · max E, added). Narrow (max α ≤ 0.1) and very wide
+(max α ≥ 2.2) lobes start from the two halves of [0, 1] instead of the whole (:data:`HALVES_NARROW`).
 """
 
 from __future__ import annotations
@@ -84,9 +97,14 @@ INNER_SHARE = 0.5
 RATIO_MAX = 0.25
 #: Ratio of the graded v edges of the first radial piece towards the horizon (module docstring).
 GRADING = 8.0
+#: The lobe's principal directions start φ panels of a view only where α_y/α_x (or α_x/α_y) is below this.
+PRINCIPAL_EDGES = 0.25
 #: E_avg: smallest μ evaluated, and panels of its μ integral.
 MU_FLOOR = 1e-7
 MAX_AVG_PANELS = 200
+#: E_avg starts from two halves of [0, 1] for lobes with max(α_x, α_y) at most / at least these.
+HALVES_NARROW = 0.1
+HALVES_WIDE = 2.2
 _EPS = float(np.finfo(float).eps)
 _SQRT_PI = math.sqrt(math.pi)
 _X = NODES.copy()
@@ -233,13 +251,18 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
     radius = math.hypot(vx * ax, vy * ay) / vz
     edges = np.empty(100)
     m = 0
+    base = phi0 if mirrored else phi0 - 0.5 * math.pi
     for quarter in range(4):
-        edges[m] = phi0 + quarter * 0.5 * math.pi
-        m += 1
+        if mirrored or quarter % 2 == 1:
+            edges[m] = phi0 + quarter * 0.5 * math.pi
+            m += 1
     # and the lobe's principal directions φ = 0, π/2, π, 3π/2 (θ the same), where |d|² is extreme and the
     # horizon s_h(φ) peaks: at (α_x, α_y) = (2.82, 0.282), μ = 0.734, φ_v = 1.363 a band of θ within 0.03 of π/2
-    # fell between the nodes of a quarter panel (4.2e-5 missed at rtol 5e-6 with an estimate of 6e-7)
-    if ax != ay:
+    # fell between the nodes of a quarter panel (4.2e-5 missed at rtol 5e-6 with an estimate of 6e-7). Only for a
+    # lobe flatter than PRINCIPAL_EDGES: for α_y/α_x ≥ 1/4 |d|² varies by at most 4 and the peak spans the whole
+    # quarter panel (150 random views with α_y/α_x in [0.25, 0.6], μ from 1e-4 to 1, α from 0.003 to 3, rtol 1e-7
+    # to 1e-4: at most 0.74 of the estimate off; tests/lut/test_anisotropy_speed.py)
+    if min(ax, ay) < PRINCIPAL_EDGES * max(ax, ay):
         for quarter in range(4):
             edges[m] = quarter * 0.5 * math.pi
             m += 1
@@ -250,10 +273,10 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
             edges[m], edges[m + 1] = zero - width, zero + width
             m += 2
             width *= 8.0
-    for i in range(m):  # into [phi0, phi0 + 2π)
-        edges[i] = phi0 + (edges[i] - phi0) % (2.0 * math.pi)
+    for i in range(m):  # into [base, base + 2π)
+        edges[i] = base + (edges[i] - base) % (2.0 * math.pi)
     edges[:m] = np.sort(edges[:m])
-    edges[m] = phi0 + 2.0 * math.pi
+    edges[m] = base + 2.0 * math.pi
     if mirrored:  # the edges are symmetric about φ0 and φ0 + π (extrema and zeros of p): keep the first half
         half = 1
         while half < m and edges[half] < phi0 + math.pi:
@@ -334,10 +357,19 @@ def view_albedo(mu: float, phi_v: float, ax: float, ay: float, dist: int, sep: i
 
 
 @numba.njit(cache=True)
+def view_stretch(mu: float, ax: float, ay: float) -> float:
+    """k of the view-azimuth stretch ψ = atan2(k sin χ, cos χ): the geometric mean of √(α_x/α_y) (the grazing
+    limit) and ((μ² + (1 − μ²)α_x²)/(μ² + (1 − μ²)α_y²))^{1/4} (the balance for Λ(V)'s branch point alone) —
+    module docstring, "view-azimuth stretch"."""
+    s2 = 1.0 - mu * mu
+    return math.sqrt(math.sqrt(ax / ay) * math.sqrt(math.sqrt((mu * mu + s2 * ax * ax) / (mu * mu + s2 * ay * ay))))
+
+
+@numba.njit(cache=True)
 def _stretched_view(mu, chi, ax, ay, dist, sep, rtol, atol, weight, x, wk, wg):
-    """E(μ, ψ(χ))·ψ'(χ) with ψ = atan2(k sin χ, cos χ), k = √(α_x/α_y) (E turns within α_y/α_x of ψ = π/2 in
-    ψ, within √(α_y/α_x) in χ); the tolerance is E's, scaled by ψ'."""
-    cpsi, spsi, dpsi = _stretch(chi, math.sqrt(ax / ay))
+    """E(μ, ψ(χ))·ψ'(χ) with ψ = atan2(k sin χ, cos χ), k = :func:`view_stretch`; the tolerance is E's, scaled by
+    ψ'."""
+    cpsi, spsi, dpsi = _stretch(chi, view_stretch(mu, ax, ay))
     v, e, ev, c = view_albedo(mu, math.atan2(spsi, cpsi), ax, ay, dist, sep, rtol, atol / dpsi, MAX_PANELS,
                               weight, x, wk, wg)
     return v * dpsi, e * dpsi, ev, c
@@ -429,9 +461,16 @@ def _average_panel(left, width, ax, ay, dist, sep, rtol, scale, x, wk, wg):
         # A node's albedo needs rtol·share·scale/weight absolutely (scale ~ the integral): looser where weight is
         # small; the nodes' errors take that share of the tolerance, |K15 − G7| the rest.
         atol = rtol * INNER_SHARE * scale / max(weight, 1e-300)
-        v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol * INNER_SHARE, atol, 0, x, wk, wg)
-        evaluations += ev
-        ok = ok and c
+        if atol >= 0.5:
+            # A white lobe's albedo lies in [0, 1] (G2 ≤ G1: E is at most the visible normals' mass): ½ ± ½ meets
+            # the node's tolerance without a view (the first node of a panel at x = 0, weight ~1e-7); its
+            # uncertainty enters the G7 value too.
+            v, e = 0.5, 0.5
+            prop += abs(wk[i] - wg[i]) * weight * e
+        else:
+            v, e, ev, c, _ = azimuth_average(mu, ax, ay, dist, sep, rtol * INNER_SHARE, atol, 0, x, wk, wg)
+            evaluations += ev
+            ok = ok and c
         kron += wk[i] * weight * v
         gauss += wg[i] * weight * v
         prop += wk[i] * weight * e
@@ -445,24 +484,35 @@ def hemispherical_average(ax, ay, dist, sep, rtol, x, wk, wg):
     width = np.empty(MAX_AVG_PANELS)
     val = np.empty(MAX_AVG_PANELS)
     err = np.empty(MAX_AVG_PANELS)
-    scale = 0.5  # E_avg of a white lobe is ≥ ~0.3 on the tables' domain; refined after the first pass
-    whole, whole_error, evaluations, ok = _average_panel(0.0, 1.0, ax, ay, dist, sep, rtol, scale, x, wk, wg)
-    floor = MU_FLOOR * MU_FLOOR
-    if whole_error + floor <= rtol * abs(whole) and abs(whole) >= scale / 2:
-        # E(μ) is analytic on (0, 1] for these white lobes (no kink for the parent discrepancy to guard against):
-        # one K15 panel whose G7 difference meets the tolerance is accepted.
-        return whole, whole_error + floor, evaluations, ok
-    scale = max(min(abs(whole), 1.0), 1e-3)
-    n = 0
-    parent = whole
+    widest = max(ax, ay)
+    halves = widest <= HALVES_NARROW or widest >= HALVES_WIDE
+    evaluations, ok, parent = 0, True, 0.0
+    if halves:
+        # the first level is the two halves of [0, 1] for narrow and very wide lobes: of 128 (α, aspect) pairs of
+        # the 32 × 32 × 16 table, one K15 panel's G7 difference was above rtol 1e-5 for 16, 14 of them in these
+        # ranges (the boundary layer at grazing μ ≲ α, the wide flat lobes' structure), 2 more here would have
+        # passed: a whole panel there is mostly work thrown away. E_avg ≳ 0.9 (narrow) and ≳ 0.15 (α_x up to 3.2)
+        # set the nodes' scale; it is refined from the sum once the halves are in.
+        scale = 0.5 if widest <= HALVES_NARROW else 0.15
+    else:
+        scale = 0.5  # E_avg of a white lobe is ≥ ~0.3 on the tables' domain; refined after the first pass
+        whole, whole_error, evaluations, ok = _average_panel(0.0, 1.0, ax, ay, dist, sep, rtol, scale, x, wk, wg)
+        floor = MU_FLOOR * MU_FLOOR
+        if whole_error + floor <= rtol * abs(whole) and abs(whole) >= scale / 2:
+            # E(μ) is analytic on (0, 1] for these white lobes (no kink for the parent discrepancy to guard
+            # against): one K15 panel whose G7 difference meets the tolerance is accepted.
+            return whole, whole_error + floor, evaluations, ok
+        scale = max(min(abs(whole), 1.0), 1e-3)
+        parent = whole
     for k in range(2):
         left[k], width[k] = 0.5 * k, 0.5
         val[k], err[k], ev, c = _average_panel(left[k], 0.5, ax, ay, dist, sep, rtol, scale, x, wk, wg)
         evaluations += ev
         ok = ok and c
     n = 2
-    discrepancy = 0.5 * abs(parent - val[0] - val[1])
-    err[0], err[1] = max(err[0], discrepancy), max(err[1], discrepancy)
+    if not halves:
+        discrepancy = 0.5 * abs(parent - val[0] - val[1])
+        err[0], err[1] = max(err[0], discrepancy), max(err[1], discrepancy)
     largest = 1.0
     while True:
         total = error = 0.0
@@ -475,6 +525,7 @@ def hemispherical_average(ax, ay, dist, sep, rtol, x, wk, wg):
         floor = MU_FLOOR * MU_FLOOR * largest
         if error + floor <= rtol * abs(total):
             return total, error + floor, evaluations, ok
+        scale = max(min(abs(total), 1.0), 1e-3)
         if n + 1 >= MAX_AVG_PANELS or width[worst] < 1e-12:
             return total, error + floor, evaluations, False
         i = worst
