@@ -30,7 +30,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brdfnorm.engine.compiled.slopes import azimuth_node, piece_extent, radial_node
+from brdfnorm.engine.compiled.slopes import slope_loop
 
 shader = None  # set per copy (drivers.py)
 
@@ -176,47 +176,42 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                         total[r, c] += x * weights_b[b] * weights_u[j]
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _slope_value(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay,
+                 extra):  # pragma: no cover - compiled
+    """The generic weight g·J of the reflected direction at one node of :func:`.slopes.slope_loop`: out[r, i, j]
+    the C weighted values and their largest |value|; a non-finite value above the horizon marks ``failed[q]``."""
+    F, rows, fixed, U, over_light, failed = extra
+    C = out.shape[3] - 1
+    root = math.sqrt(n2)
+    cos_fh = F[q, 2] * one_sp / root
+    ox = 2.0 * cos_fh * (s * dx / root) - F[q, 0]
+    oy = 2.0 * cos_fh * (s * dy / root) - F[q, 1]
+    g = _integrand(rows[q], ox, oy, Lz, fixed, U, over_light)
+    one_s2 = 1.0 + s * s
+    jacobian = 4.0 * cos_fh * math.pi * ax * ax * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
+    inside = Lz > 0
+    finite = True
+    for c in range(C):
+        if not math.isfinite(g[c] * Lz):
+            finite = False
+    if inside and not finite:
+        failed[q] = True
+    largest = 0.0
+    for c in range(C):
+        x = g[c] * Lz * jacobian if (inside and finite) else 0.0
+        out[r, i, j, c] = x
+        largest = max(largest, abs(x))
+    out[r, i, j, C] = largest
+
+
 @njit(cache=True, error_model="numpy")
 def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
                kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
     """The half-vector route's rectangle integrand (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for
     the GGX slope measure, with the generic weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`) on
-    grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,):
-    out (R, nφ, nv, C + 1), the weighted values and their largest |value|."""
-    C = out.shape[3] - 1
-    for r in range(k.size):
-        q = k[r]
-        kind = piece[r]
-        for i in range(phi.shape[1]):
-            dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
-                phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
-                kappa[q], multiplicity[q], vz[q], False)
-            start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, False)
-            for j in range(v.shape[1]):
-                s, weight_t, gap_h = radial_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end,
-                                                 log_horizon, False)
-                one_sp = 1.0 + s * p
-                n2 = 1.0 + s * s * d2
-                Lz = vz[q] * gap_h * (d2 * s + q_minus_p) / n2
-                # the generic weight: g·J of the reflected direction
-                root = math.sqrt(n2)
-                cos_fh = F[q, 2] * one_sp / root
-                ox = 2.0 * cos_fh * (s * dx / root) - F[q, 0]
-                oy = 2.0 * cos_fh * (s * dy / root) - F[q, 1]
-                g = _integrand(rows[q], ox, oy, Lz, fixed, U, over_light)
-                a = ax[q]
-                one_s2 = 1.0 + s * s
-                jacobian = 4.0 * cos_fh * math.pi * a * a * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
-                inside = Lz > 0
-                finite = True
-                for c in range(C):
-                    if not math.isfinite(g[c] * Lz):
-                        finite = False
-                if inside and not finite:
-                    failed[q] = True
-                largest = 0.0
-                for c in range(C):
-                    x = g[c] * Lz * jacobian if (inside and finite) else 0.0
-                    out[r, i, j, c] = x
-                    largest = max(largest, abs(x))
-                out[r, i, j, C] = largest
+    grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,)
+    (:func:`.slopes.slope_loop` with :func:`_slope_value`): out (R, nφ, nv, C + 1), the weighted values and their
+    largest |value|."""
+    slope_loop(_slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset, amplitude, ax,
+               ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light, failed), out)

@@ -109,16 +109,20 @@ def radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_hor
 
 
 @njit(**_OPTIONS, inline="always")
-def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
-                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
-                      out):  # pragma: no cover - compiled
-    """w = G2(L, V) F(V·H)(1 + c·x) times du/dt and the azimuth's Jacobian at position ``at`` of radial piece
-    ``kind``, for one azimuth (the results of :func:`azimuth_node` and :func:`piece_extent`) and one case's
-    parameters: out[:C] (C = 1 where ``fresnel_kind`` is 0, else 3)."""
+def slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p,
+               vz):  # pragma: no cover - compiled
+    """(s, du/dt · the piece's length, 1 + s p, 1 + s² d², N·L) at position ``at`` of radial piece ``kind`` of one
+    azimuth (:func:`radial_node`; N·L as the product that keeps its accuracy at the horizon)."""
     s, weight_t, gap_h = radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann)
-    one_sp = 1.0 + s * p
     n2 = 1.0 + s * s * d2
-    Lz = vz * gap_h * (d2 * s + q_minus_p) / n2
+    return s, weight_t, 1.0 + s * p, n2, vz * gap_h * (d2 * s + q_minus_p) / n2
+
+
+@njit(**_OPTIONS, inline="always")
+def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v, separable,
+                     fresnel_kind, fresnel, out):  # pragma: no cover - compiled
+    """w = G2(L, V) F(V·H)(1 + c·x) times du/dt and the azimuth's Jacobian at one node of :func:`slope_node`, for
+    one case's parameters: out[:C] (C = 1 where ``fresnel_kind`` is 0, else 3)."""
     C = 1 if fresnel_kind == 0 else 3
     if not Lz > 0:
         for c in range(C):
@@ -143,15 +147,30 @@ def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, l
             out[c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel, c)
 
 
-@njit(**_OPTIONS)
-def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
-                    ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
-                    out):  # pragma: no cover - compiled
-    """:func:`microfacet_weight` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
-    ``piece`` (R,): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16):
-    the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
-    C = out.shape[3]
-    node = np.empty(3)
+@njit(**_OPTIONS, inline="always")
+def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
+                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
+                      out):  # pragma: no cover - compiled
+    """:func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
+    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C]."""
+    s, weight_t, one_sp, n2, Lz = slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
+                                             beckmann, d2, p, q_minus_p, vz)
+    microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v, separable,
+                     fresnel_kind, fresnel, out)
+
+
+@njit(error_model="numpy", inline="always")
+def slope_loop(value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax, ay,
+               layer, delta, kappa, multiplicity, extra, out):  # pragma: no cover - compiled
+    """The one loop of the half-vector route's rectangle integrands on grids φ (R, nφ) × v (R, nv) of the panels of
+    cases ``k`` (R,) in radial ``piece`` (R,): per azimuth :func:`azimuth_node` and :func:`piece_extent`, per radial
+    node :func:`slope_node`, then ``value(out, r, i, j, q, s, du/dt, 1 + s p, 1 + s² d², N·L, azimuth Jacobian, dx,
+    dy, vz, ax, ay, extra)`` writes out[r, i, j]. The weights: :func:`microfacet_grid` (no shader) and
+    :func:`brdfnorm.engine.compiled.kernels.slope_grid` (a shader's).
+
+    Not cached and always inlined: ``value`` is a first-class function argument, whose type Numba's disk cache
+    cannot key across processes; inlined into each cached caller (whose signature holds no function), it is
+    compiled once with it and loaded from the cache with it."""
     for r in range(k.size):
         q = k[r]
         kind = piece[r]
@@ -161,11 +180,31 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
                 kappa[q], multiplicity[q], vz[q], beckmann)
             start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
             for j in range(v.shape[1]):
-                microfacet_weight(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
-                                  beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], vx[q], ax[q], ay[q], lambda_v[q],
-                                  separable, fresnel_kind, fresnel[q], node)
-                for c in range(C):
-                    out[r, i, j, c] = node[c]
+                s, weight_t, one_sp, n2, Lz = slope_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split,
+                                                         s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
+                value(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz[q], ax[q], ay[q], extra)
+
+
+@njit(**_OPTIONS, inline="always")
+def _microfacet(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay,
+                extra):  # pragma: no cover - compiled
+    beckmann, vx, lambda_v, separable, fresnel_kind, fresnel, node = extra
+    microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx[q], ax, ay, lambda_v[q], separable,
+                     fresnel_kind, fresnel[q], node)
+    for c in range(out.shape[3]):
+        out[r, i, j, c] = node[c]
+
+
+@njit(**_OPTIONS)
+def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
+                    ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
+                    out):  # pragma: no cover - compiled
+    """:func:`microfacet_weight` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
+    ``piece`` (R,) (:func:`slope_loop`): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3
+    (``fresnel`` (K, 16): the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
+    slope_loop(_microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude,
+               ax, ay, layer, delta, kappa, multiplicity,
+               (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel, np.empty(3)), out)
 
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
