@@ -177,32 +177,35 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _slope_value(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay,
-                 extra):  # pragma: no cover - compiled
-    """The generic weight g·J of the reflected direction at one node of :func:`.slopes.slope_loop`: out[r, i, j]
-    the C weighted values and their largest |value|; a non-finite value above the horizon marks ``failed[q]``."""
-    F, rows, fixed, U, over_light, failed = extra
-    C = out.shape[3] - 1
+def _slope_case(q, extra):  # pragma: no cover - compiled
+    """Per panel of :func:`.slopes.slope_loop`: F (the reflection's fixed direction), the fixed direction of the
+    shader and its parameters U of case q (extra: F, rows, fixed, U, over_light)."""
+    F, rows, fixed, U, over_light = extra
+    row = rows[q]
+    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _slope_value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    """The generic weight g·J of the reflected direction at one node of :func:`.slopes.slope_loop`: (g, N·L, J,
+    finite above the horizon, non-finite above the horizon)."""
+    fx, fy, fz, wx, wy, wz, u, over_light = case
     root = math.sqrt(n2)
-    cos_fh = F[q, 2] * one_sp / root
-    ox = 2.0 * cos_fh * (s * dx / root) - F[q, 0]
-    oy = 2.0 * cos_fh * (s * dy / root) - F[q, 1]
-    g = _integrand(rows[q], ox, oy, Lz, fixed, U, over_light)
+    cos_fh = fz * one_sp / root
+    ox = 2.0 * cos_fh * (s * dx / root) - fx
+    oy = 2.0 * cos_fh * (s * dy / root) - fy
+    if over_light:
+        g = shader(ox, oy, Lz, wx, wy, wz, u)
+    else:
+        g = shader(wx, wy, wz, ox, oy, Lz, u)
     one_s2 = 1.0 + s * s
     jacobian = 4.0 * cos_fh * math.pi * ax * ax * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
     inside = Lz > 0
     finite = True
-    for c in range(C):
+    for c in range(len(g)):
         if not math.isfinite(g[c] * Lz):
             finite = False
-    if inside and not finite:
-        failed[q] = True
-    largest = 0.0
-    for c in range(C):
-        x = g[c] * Lz * jacobian if (inside and finite) else 0.0
-        out[r, i, j, c] = x
-        largest = max(largest, abs(x))
-    out[r, i, j, C] = largest
+    return g, Lz, jacobian, inside and finite, inside and not finite
 
 
 @njit(cache=True, error_model="numpy")
@@ -212,6 +215,6 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     the GGX slope measure, with the generic weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`) on
     grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,)
     (:func:`.slopes.slope_loop` with :func:`_slope_value`): out (R, nφ, nv, C + 1), the weighted values and their
-    largest |value|."""
-    slope_loop(_slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset, amplitude, ax,
-               ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light, failed), out)
+    largest |value|; ``failed[k]`` where a value above the horizon is not finite."""
+    slope_loop(_slope_case, _slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
+               amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light), True, out, failed)

@@ -120,14 +120,11 @@ def slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_hori
 
 @njit(**_OPTIONS, inline="always")
 def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v, separable,
-                     fresnel_kind, fresnel, out):  # pragma: no cover - compiled
-    """w = G2(L, V) F(V·H)(1 + c·x) times du/dt and the azimuth's Jacobian at one node of :func:`slope_node`, for
-    one case's parameters: out[:C] (C = 1 where ``fresnel_kind`` is 0, else 3)."""
-    C = 1 if fresnel_kind == 0 else 3
+                     fresnel_kind, fresnel):  # pragma: no cover - compiled
+    """(w, F) at one node of :func:`slope_node` for one case's parameters: w = G2(L, V)(1 + c·x) times du/dt and
+    the azimuth's Jacobian (0 below the horizon), F the three channels of F(V·H) (1 where ``fresnel_kind`` is 0)."""
     if not Lz > 0:
-        for c in range(C):
-            out[c] = 0.0
-        return
+        return 0.0, (1.0, 1.0, 1.0)
     tangent2 = max((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay * ay)
     if ax != ay:
         Lx = 2.0 * vz * one_sp * s * dx / n2 - vx
@@ -140,40 +137,48 @@ def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx,
         G2 = 1.0 / (1.0 + lambda_l + lambda_v)
     weight = G2 * one_sp * weight_t * azimuth
     if fresnel_kind == 0:
-        out[0] = weight
-    else:
-        cos_vh = vz * one_sp / math.sqrt(n2)
-        for c in range(C):
-            out[c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel, c)
+        return weight, (1.0, 1.0, 1.0)
+    cos_vh = vz * one_sp / math.sqrt(n2)
+    return weight, (fresnel_factor(fresnel_kind, cos_vh, fresnel, 0), fresnel_factor(fresnel_kind, cos_vh, fresnel, 1),
+                    fresnel_factor(fresnel_kind, cos_vh, fresnel, 2))
 
 
 @njit(**_OPTIONS, inline="always")
 def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
                       q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
                       out):  # pragma: no cover - compiled
-    """:func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
-    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C]."""
+    """w·F of :func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
+    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C] (C = 1 where ``fresnel_kind``
+    is 0, else 3)."""
     s, weight_t, one_sp, n2, Lz = slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
                                              beckmann, d2, p, q_minus_p, vz)
-    microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v, separable,
-                     fresnel_kind, fresnel, out)
+    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v,
+                                 separable, fresnel_kind, fresnel)
+    for c in range(1 if fresnel_kind == 0 else 3):
+        out[c] = weight * F[c]
 
 
 @njit(error_model="numpy", inline="always")
-def slope_loop(value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax, ay,
-               layer, delta, kappa, multiplicity, extra, out):  # pragma: no cover - compiled
+def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax,
+               ay, layer, delta, kappa, multiplicity, extra, largest, out, flags):  # pragma: no cover - compiled
     """The one loop of the half-vector route's rectangle integrands on grids φ (R, nφ) × v (R, nv) of the panels of
-    cases ``k`` (R,) in radial ``piece`` (R,): per azimuth :func:`azimuth_node` and :func:`piece_extent`, per radial
-    node :func:`slope_node`, then ``value(out, r, i, j, q, s, du/dt, 1 + s p, 1 + s² d², N·L, azimuth Jacobian, dx,
-    dy, vz, ax, ay, extra)`` writes out[r, i, j]. The weights: :func:`microfacet_grid` (no shader) and
+    cases ``k`` (R,) in radial ``piece`` (R,): per panel ``case(q, extra)`` -> the case's parameters, per azimuth
+    :func:`azimuth_node` and :func:`piece_extent`, per radial node :func:`slope_node`, then ``value(s, du/dt, 1 + s p,
+    1 + s² d², N·L, azimuth Jacobian, dx, dy, vz, ax, ay, parameters)`` -> (g, a, b, keep, flag):
+    out[r, i, j, c] = g[c]·a·b (0 where not ``keep``) for the channels of ``out``, the last of them |·|'s largest
+    where ``largest``; ``flag`` marks flags[q]. The weights: :func:`microfacet_grid` (no shader) and
     :func:`brdfnorm.engine.compiled.kernels.slope_grid` (a shader's).
 
-    Not cached and always inlined: ``value`` is a first-class function argument, whose type Numba's disk cache
-    cannot key across processes; inlined into each cached caller (whose signature holds no function), it is
-    compiled once with it and loaded from the cache with it."""
+    Not cached and always inlined: ``case`` and ``value`` are first-class function arguments, whose types Numba's
+    disk cache cannot key across processes; inlined into each cached caller (whose signature holds no function), the
+    loop is compiled with it and loaded from the cache with it. Why ``case`` apart and values returned, not written:
+    an array passed into a per-node function is reference-counted (an atomic add and subtract) at every node, 20-40 %
+    of a kernel's time when its arrays were passed so; per panel the count is paid once."""
+    C = out.shape[3] - 1 if largest else out.shape[3]
     for r in range(k.size):
         q = k[r]
         kind = piece[r]
+        parameters = case(q, extra)
         for i in range(phi.shape[1]):
             dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
                 phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
@@ -182,29 +187,43 @@ def slope_loop(value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_o
             for j in range(v.shape[1]):
                 s, weight_t, one_sp, n2, Lz = slope_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split,
                                                          s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
-                value(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz[q], ax[q], ay[q], extra)
+                g, a, b, keep, flag = value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz[q], ax[q], ay[q],
+                                            parameters)
+                if flag:
+                    flags[q] = True
+                most = 0.0
+                for c in range(C):
+                    x = g[c] * a * b if keep else 0.0
+                    out[r, i, j, c] = x
+                    most = max(most, abs(x))
+                if largest:
+                    out[r, i, j, C] = most
 
 
 @njit(**_OPTIONS, inline="always")
-def _microfacet(out, r, i, j, q, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay,
-                extra):  # pragma: no cover - compiled
-    beckmann, vx, lambda_v, separable, fresnel_kind, fresnel, node = extra
-    microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx[q], ax, ay, lambda_v[q], separable,
-                     fresnel_kind, fresnel[q], node)
-    for c in range(out.shape[3]):
-        out[r, i, j, c] = node[c]
+def _microfacet_case(q, extra):  # pragma: no cover - compiled
+    beckmann, vx, lambda_v, separable, fresnel_kind, fresnel = extra
+    return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, fresnel[q]
+
+
+@njit(**_OPTIONS, inline="always")
+def _microfacet(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    """(F, w, 1, True, False) of :func:`microfacet_value` (F·w·1 is w·F to the bit)."""
+    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, case[0], dx, vz, case[1], ax, ay, case[2],
+                                 case[3], case[4], case[5])
+    return F, weight, 1.0, True, False
 
 
 @njit(**_OPTIONS)
 def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
                     ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
                     out):  # pragma: no cover - compiled
-    """:func:`microfacet_weight` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
+    """w·F of :func:`microfacet_value` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
     ``piece`` (R,) (:func:`slope_loop`): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3
     (``fresnel`` (K, 16): the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
-    slope_loop(_microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude,
-               ax, ay, layer, delta, kappa, multiplicity,
-               (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel, np.empty(3)), out)
+    slope_loop(_microfacet_case, _microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
+               sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity,
+               (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel), False, out, np.zeros(0, dtype=np.bool_))
 
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
