@@ -17,6 +17,7 @@ from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
+from .drivers import rectangle_grids, slope_arrays
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
@@ -231,8 +232,7 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     half-vector geometry ``g`` (:class:`brdfnorm.engine.routes.halfvector.SlopeGeometry`) as the compiled kernel;
     ``geometry`` is ``halfvector.slope_map(g)``."""
     K = g.V.shape[0]
-    names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
-    per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
+    per_case = slope_arrays(geometry, K)
     vx = np.ascontiguousarray(g.V[:, 0], dtype=float)
     lambda_v = np.ascontiguousarray(np.broadcast_to(g.lambda_v, (K,)), dtype=float)
     kind = KERNEL_CODES[g.fresnel_params["fresnel"]]
@@ -246,10 +246,8 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     separable = g.shadowing == "separable"
 
     def integrand(case, phi, v, piece):
-        R = case.size
-        phi = np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1)
-        v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
-        out = np.empty((R, phi.shape[1], v.shape[1], channels))
+        phi, v = rectangle_grids(case, phi, v)
+        out = np.empty((case.size, phi.shape[1], v.shape[1], channels))
         microfacet_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v, np.ascontiguousarray(piece, dtype=np.int64),
                         linear, log_horizon, beckmann, per_case[0], vx, *per_case[1:], lambda_v, separable, kind,
                         fresnel, out)
