@@ -154,8 +154,9 @@ SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer",
 
 
 def slope_arrays(geometry: dict, cases: int) -> list[np.ndarray]:
-    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, contiguous float64."""
-    return [np.ascontiguousarray(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
+    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, as writeable contiguous float64
+    copies (a read-only broadcast view of one case would be another type to Numba: a second compilation)."""
+    return [np.array(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
 
 
 def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
