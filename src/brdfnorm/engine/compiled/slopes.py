@@ -3,8 +3,9 @@
 rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector.microfacet_weight``), which needs no
 shader and so is one cached kernel for every ggx/beckmann lobe.
 
-The shader kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) use the same two helpers. Term for term the
-numpy formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
+The loop over panels, azimuths and radial nodes is :func:`slope_loop` alone: :func:`microfacet_grid` and the shader
+kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) pass it their weights. Term for term the numpy
+formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
 three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps its accuracy at the horizon.
 """
 
