@@ -12,11 +12,11 @@ maps, or with the same helpers level by level as another function, is a second c
 from __future__ import annotations
 
 import ast
-from pathlib import Path
 
 import pytest
+from helpers.paths import SRC
 
-COMPILED = Path(__file__).resolve().parents[2] / "src" / "brdfnorm" / "engine" / "compiled"
+COMPILED = SRC / "brdfnorm" / "engine" / "compiled"
 #: Each map: (the helper of its azimuth level, the helper of its node level) and the one function that loops over
 #: them.
 MAPS = {"slope": (("slopes", "azimuth_node"), ("slopes", "radial_node"), ("slopes", "slope_loop")),
