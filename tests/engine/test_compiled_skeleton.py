@@ -6,8 +6,10 @@ lobes' ``microfacet_grid`` pass it their weights), and the one of the lobe-align
 their rules).
 
 Read from the source (ast): a function's loop nests, each level named by the helpers of ``engine/compiled`` it calls
-directly or through other helpers. A second function with a nest of three or more loops that evaluates one of the
-maps, or with the same helpers level by level as another function, is a second copy of a skeleton."""
+directly or through other helpers. A second function with a loop (over panels or cells) around a level that reaches
+a map's azimuth helper around one that reaches its node helper, or a nest of three or more loops with the same
+helpers level by level as another function's, is a second copy of a skeleton. (The fused global rule's grid fill,
+``global_rule._fill``, loops over one case's azimuths and nodes of the slope map: not a panel loop, not counted.)"""
 
 from __future__ import annotations
 
