@@ -128,8 +128,7 @@ def _warm(native: NativeIntegrand, key: str) -> None:
     bounds = (zero, unit, zero, unit)
     hemisphere_panels(native, one, *bounds, frame, unit, np.full(1, np.pi), NODES, KRONROD, GAUSS)
     hemisphere_sums(native, one, *bounds, frame, unit, np.full(1, np.pi), NODES[:1], NODES[:1], unit, unit)
-    geometry = dict.fromkeys(("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa",
-                              "multiplicity"), np.ones(1))
+    geometry = dict.fromkeys(SLOPE_MAP, np.ones(1))
     rectangle = slope_rectangle(native, geometry, np.array([[0.0, 0.0, 1.0]]), one, np.zeros(1, dtype=bool), True,
                                 True)
     rectangle(one, np.full((1, 1, 1), 0.5), np.full((1, 1, 1), 0.5), one)
@@ -163,6 +162,24 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
     finally:
         COMPILING["seconds"] += time.perf_counter() - start
     return native
+
+
+#: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
+#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
+SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
+
+
+def slope_arrays(geometry: dict, cases: int) -> list[np.ndarray]:
+    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, as writeable contiguous float64
+    copies (a read-only broadcast view of one case would be another type to Numba: a second compilation)."""
+    return [np.array(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
+
+
+def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A rectangle integrand's φ (R, n, 1) and v (R, 1, m) as the kernels' contiguous grids (R, n) and (R, m)."""
+    R = case.size
+    return (np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1),
+            np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1))
 
 
 def _flat(*arrays: np.ndarray) -> list[np.ndarray]:
@@ -202,16 +219,13 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
     as one kernel (:func:`.kernels.slope_grid`); ``geometry`` holds the per-case arrays of the slope map (vz,
     cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks
     non-finite values."""
-    names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
-    per_case = [np.ascontiguousarray(geometry[name], dtype=float) for name in names]
+    per_case = slope_arrays(geometry, len(rows))
     F = np.ascontiguousarray(F, dtype=float)
     rows = np.ascontiguousarray(rows, dtype=np.int64)
 
     def integrand(case, phi, v, piece):
-        R = case.size
-        phi = np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1)
-        v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
-        out = np.empty((R, phi.shape[1], v.shape[1], native.channels + 1))
+        phi, v = rectangle_grids(case, phi, v)
+        out = np.empty((case.size, phi.shape[1], v.shape[1], native.channels + 1))
         flags = np.zeros(failed.size, dtype=np.bool_)
         native.kernels.slope_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v,
                                   np.ascontiguousarray(piece, dtype=np.int64), linear, log_horizon, *per_case, F,

@@ -3,8 +3,9 @@
 rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector.microfacet_weight``), which needs no
 shader and so is one cached kernel for every ggx/beckmann lobe.
 
-The shader kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) use the same two helpers. Term for term the
-numpy formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
+The loop over panels, azimuths and radial nodes is :func:`slope_loop` alone: :func:`microfacet_grid` and the shader
+kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) pass it their weights. Term for term the numpy
+formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
 three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps its accuracy at the horizon.
 """
 
@@ -17,6 +18,7 @@ from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
+from .drivers import rectangle_grids, slope_arrays
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
@@ -109,21 +111,22 @@ def radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_hor
 
 
 @njit(**_OPTIONS, inline="always")
-def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
-                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
-                      out):  # pragma: no cover - compiled
-    """w = G2(L, V) F(V·H)(1 + c·x) times du/dt and the azimuth's Jacobian at position ``at`` of radial piece
-    ``kind``, for one azimuth (the results of :func:`azimuth_node` and :func:`piece_extent`) and one case's
-    parameters: out[:C] (C = 1 where ``fresnel_kind`` is 0, else 3)."""
+def slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p,
+               vz):  # pragma: no cover - compiled
+    """(s, du/dt · the piece's length, 1 + s p, 1 + s² d², N·L) at position ``at`` of radial piece ``kind`` of one
+    azimuth (:func:`radial_node`; N·L as the product that keeps its accuracy at the horizon)."""
     s, weight_t, gap_h = radial_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann)
-    one_sp = 1.0 + s * p
     n2 = 1.0 + s * s * d2
-    Lz = vz * gap_h * (d2 * s + q_minus_p) / n2
-    C = 1 if fresnel_kind == 0 else 3
+    return s, weight_t, 1.0 + s * p, n2, vz * gap_h * (d2 * s + q_minus_p) / n2
+
+
+@njit(**_OPTIONS, inline="always")
+def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v, separable,
+                     fresnel_kind, fresnel):  # pragma: no cover - compiled
+    """(w, F) at one node of :func:`slope_node` for one case's parameters: w = G2(L, V)(1 + c·x) times du/dt and
+    the azimuth's Jacobian (0 below the horizon), F the three channels of F(V·H) (1 where ``fresnel_kind`` is 0)."""
     if not Lz > 0:
-        for c in range(C):
-            out[c] = 0.0
-        return
+        return 0.0, (1.0, 1.0, 1.0)
     tangent2 = max((1.0 - Lz) * (1.0 + Lz), 0.0) * (ay * ay)
     if ax != ay:
         Lx = 2.0 * vz * one_sp * s * dx / n2 - vx
@@ -136,36 +139,93 @@ def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, l
         G2 = 1.0 / (1.0 + lambda_l + lambda_v)
     weight = G2 * one_sp * weight_t * azimuth
     if fresnel_kind == 0:
-        out[0] = weight
-    else:
-        cos_vh = vz * one_sp / math.sqrt(n2)
-        for c in range(C):
-            out[c] = weight * fresnel_factor(fresnel_kind, cos_vh, fresnel, c)
+        return weight, (1.0, 1.0, 1.0)
+    cos_vh = vz * one_sp / math.sqrt(n2)
+    return weight, (fresnel_factor(fresnel_kind, cos_vh, fresnel, 0), fresnel_factor(fresnel_kind, cos_vh, fresnel, 1),
+                    fresnel_factor(fresnel_kind, cos_vh, fresnel, 2))
 
 
-@njit(**_OPTIONS)
-def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
-                    ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
-                    out):  # pragma: no cover - compiled
-    """:func:`microfacet_weight` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
-    ``piece`` (R,): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3 (``fresnel`` (K, 16):
-    the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
-    C = out.shape[3]
-    node = np.empty(3)
+@njit(**_OPTIONS, inline="always")
+def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
+                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
+                      out):  # pragma: no cover - compiled
+    """w·F of :func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
+    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C] (C = 1 where ``fresnel_kind``
+    is 0, else 3)."""
+    s, weight_t, one_sp, n2, Lz = slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
+                                             beckmann, d2, p, q_minus_p, vz)
+    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v,
+                                 separable, fresnel_kind, fresnel)
+    for c in range(1 if fresnel_kind == 0 else 3):
+        out[c] = weight * F[c]
+
+
+@njit(error_model="numpy", inline="always")
+def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax,
+               ay, layer, delta, kappa, multiplicity, extra, largest, out, flags):  # pragma: no cover - compiled
+    """The one loop of the half-vector route's rectangle integrands on grids φ (R, nφ) × v (R, nv) of the panels of
+    cases ``k`` (R,) in radial ``piece`` (R,): per panel ``case(q, extra)`` -> the case's parameters, per azimuth
+    :func:`azimuth_node` and :func:`piece_extent`, per radial node :func:`slope_node`, then ``value(s, du/dt, 1 + s p,
+    1 + s² d², N·L, azimuth Jacobian, dx, dy, vz, ax, ay, parameters)`` -> (g, a, b, keep, flag):
+    out[r, i, j, c] = g[c]·a·b (0 where not ``keep``) for the channels of ``out``, the last of them |·|'s largest
+    where ``largest``; ``flag`` marks flags[q]. The weights: :func:`microfacet_grid` (no shader) and
+    :func:`brdfnorm.engine.compiled.kernels.slope_grid` (a shader's).
+
+    Not cached and always inlined: ``case`` and ``value`` are first-class function arguments, whose types Numba's
+    disk cache cannot key across processes; inlined into each cached caller (whose signature holds no function), the
+    loop is compiled with it and loaded from the cache with it. Why ``case`` apart and values returned, not written:
+    an array passed into a per-node function is reference-counted (an atomic add and subtract) at every node, 20-40 %
+    of a kernel's time when its arrays were passed so; per panel the count is paid once."""
+    C = out.shape[3] - 1 if largest else out.shape[3]
     for r in range(k.size):
         q = k[r]
         kind = piece[r]
+        parameters = case(q, extra)
         for i in range(phi.shape[1]):
             dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
                 phi[r, i], linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q],
                 kappa[q], multiplicity[q], vz[q], beckmann)
             start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
             for j in range(v.shape[1]):
-                microfacet_weight(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
-                                  beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], vx[q], ax[q], ay[q], lambda_v[q],
-                                  separable, fresnel_kind, fresnel[q], node)
+                s, weight_t, one_sp, n2, Lz = slope_node(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split,
+                                                         s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
+                g, a, b, keep, flag = value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz[q], ax[q], ay[q],
+                                            parameters)
+                if flag:
+                    flags[q] = True
+                most = 0.0
                 for c in range(C):
-                    out[r, i, j, c] = node[c]
+                    x = g[c] * a * b if keep else 0.0
+                    out[r, i, j, c] = x
+                    most = max(most, abs(x))
+                if largest:
+                    out[r, i, j, C] = most
+
+
+@njit(**_OPTIONS, inline="always")
+def _microfacet_case(q, extra):  # pragma: no cover - compiled
+    beckmann, vx, lambda_v, separable, fresnel_kind, fresnel = extra
+    return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, fresnel[q]
+
+
+@njit(**_OPTIONS, inline="always")
+def _microfacet(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    """(F, w, 1, True, False) of :func:`microfacet_value` (F·w·1 is w·F to the bit)."""
+    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, case[0], dx, vz, case[1], ax, ay, case[2],
+                                 case[3], case[4], case[5])
+    return F, weight, 1.0, True, False
+
+
+@njit(**_OPTIONS)
+def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos_offset, sin_offset, amplitude,
+                    ax, ay, layer, delta, kappa, multiplicity, lambda_v, separable, fresnel_kind, fresnel,
+                    out):  # pragma: no cover - compiled
+    """w·F of :func:`microfacet_value` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
+    ``piece`` (R,) (:func:`slope_loop`): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3
+    (``fresnel`` (K, 16): the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
+    slope_loop(_microfacet_case, _microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
+               sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity,
+               (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel), False, out, np.zeros(0, dtype=np.bool_))
 
 
 def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
@@ -173,8 +233,7 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     half-vector geometry ``g`` (:class:`brdfnorm.engine.routes.halfvector.SlopeGeometry`) as the compiled kernel;
     ``geometry`` is ``halfvector.slope_map(g)``."""
     K = g.V.shape[0]
-    names = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
-    per_case = [np.ascontiguousarray(np.broadcast_to(geometry[n], (K,)), dtype=float) for n in names]
+    per_case = slope_arrays(geometry, K)
     vx = np.ascontiguousarray(g.V[:, 0], dtype=float)
     lambda_v = np.ascontiguousarray(np.broadcast_to(g.lambda_v, (K,)), dtype=float)
     kind = KERNEL_CODES[g.fresnel_params["fresnel"]]
@@ -188,10 +247,8 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     separable = g.shadowing == "separable"
 
     def integrand(case, phi, v, piece):
-        R = case.size
-        phi = np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1)
-        v = np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1)
-        out = np.empty((R, phi.shape[1], v.shape[1], channels))
+        phi, v = rectangle_grids(case, phi, v)
+        out = np.empty((case.size, phi.shape[1], v.shape[1], channels))
         microfacet_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v, np.ascontiguousarray(piece, dtype=np.int64),
                         linear, log_horizon, beckmann, per_case[0], vx, *per_case[1:], lambda_v, separable, kind,
                         fresnel, out)
