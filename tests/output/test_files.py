@@ -152,9 +152,14 @@ def test_non_text_data_is_a_type_error(tmp_path):
         write_file(tmp_path / "x", 3.0)  # type: ignore[arg-type]
 
 
+#: Prefixed to each child's code: Python's own SIGINT handler, which a child inherits ignored where the suite was
+#: started as a background job of a non-interactive shell (``cmd &``); the tests interrupt it as a user would.
+_INTERRUPTIBLE = "import signal; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+
+
 def _python(code: str, cwd: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": SRC}
-    return subprocess.Popen([sys.executable, "-c", textwrap.dedent(code)], cwd=cwd, env=env,
+    return subprocess.Popen([sys.executable, "-c", _INTERRUPTIBLE + textwrap.dedent(code)], cwd=cwd, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
