@@ -22,3 +22,17 @@ def stretched_reference(name: str, mu: float, ax: float, ay: float, k: float | N
         return (0.5 * (g[0] + g[-1]) + g[step:-1:step].sum()) / (128 // step)
 
     return trapezoid(f, 1), abs(trapezoid(f, 1) - trapezoid(f, 2)) + trapezoid(fe, 1)
+
+
+def view_misses(names, mu, ax, ay, phi, rtol) -> list[tuple]:
+    """The views (arrays of one length) whose kernel albedo at ``rtol`` is farther from its rtol-1e-11 value than
+    both estimates together: (name, μ, α_x, α_y, φ_v, rtol, error / estimate) each. Every view must converge."""
+    misses = []
+    for case in zip(names, mu, ax, ay, phi, rtol, strict=True):
+        name, *view, tolerance = case
+        exact, exact_error, _, ok = kernel.albedo(str(name), "height-correlated", *view, rtol=1e-11)
+        value, error, _, converged = kernel.albedo(str(name), "height-correlated", *view, rtol=tolerance)
+        assert ok[0] and converged[0]
+        if abs(value[0] - exact[0]) > error[0] + exact_error[0]:
+            misses.append((*case, abs(value[0] - exact[0]) / error[0]))
+    return misses

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.anisotropy_reference import stretched_reference
+from helpers.anisotropy_reference import stretched_reference, view_misses
 
 from brdfnorm.engine.routes import anisotropic as kernel
 
@@ -50,16 +50,8 @@ def test_grazing_narrow_lobes_sweep():
     mu = np.exp(rng.uniform(np.log(1e-4), np.log(0.1), n))
     phi = rng.uniform(0.0, np.pi / 2, n)
     rtol = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), n))
-    misses = []
-    for i in range(n):
-        ax, ay = alpha[i] / aspect[i], alpha[i] * aspect[i]
-        exact, exact_error, _, ok = kernel.albedo(str(names[i]), "height-correlated", mu[i], ax, ay, phi[i],
-                                                  rtol=1e-11)
-        value, error, _, converged = kernel.albedo(str(names[i]), "height-correlated", mu[i], ax, ay, phi[i],
-                                                   rtol=rtol[i])
-        assert ok[0] and converged[0]
-        if abs(value[0] - exact[0]) > error[0] + exact_error[0]:
-            misses.append((names[i], mu[i], ax, ay, phi[i], rtol[i], abs(value[0] - exact[0]) / error[0]))
+    ax, ay = alpha / aspect, alpha * aspect
+    misses = view_misses(names, mu, ax, ay, phi, rtol)
     assert not misses, misses
 
 

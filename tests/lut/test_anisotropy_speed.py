@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.anisotropy_reference import stretched_reference
+from helpers.anisotropy_reference import stretched_reference, view_misses
 
 import brdfnorm as bn
 from brdfnorm.engine.routes import anisotropic as kernel
@@ -51,17 +51,8 @@ def principal_sweep(count: int, seed: int) -> list:
     mu = np.exp(rng.uniform(np.log(1e-4), 0.0, count))
     phi = rng.uniform(0.0, np.pi / 2, count)
     rtol = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), count))
-    misses = []
-    for i in range(count):
-        ax, ay = alpha[i] / np.sqrt(ratio[i]), alpha[i] * np.sqrt(ratio[i])
-        exact, exact_error, _, ok = kernel.albedo(str(names[i]), "height-correlated", mu[i], ax, ay, phi[i],
-                                                  rtol=1e-11)
-        value, error, _, converged = kernel.albedo(str(names[i]), "height-correlated", mu[i], ax, ay, phi[i],
-                                                   rtol=rtol[i])
-        assert ok[0] and converged[0]
-        if abs(value[0] - exact[0]) > error[0] + exact_error[0]:
-            misses.append((names[i], mu[i], ax, ay, phi[i], rtol[i], abs(value[0] - exact[0]) / error[0]))
-    return misses
+    ax, ay = alpha / np.sqrt(ratio), alpha * np.sqrt(ratio)
+    return view_misses(names, mu, ax, ay, phi, rtol)
 
 
 def test_lobes_without_principal_edges():
