@@ -56,6 +56,14 @@ inside the neck) — when its integrand is not finite
 at a node, or when its rounding noise is a visible share of its tolerance. The panels are thus paid for only where
 needed: narrow lobes near the horizon (Blinn-Phong n = 512 beyond θ_o ≈ 84°), kinks at a support edge, float64's
 limit.
+
+Structure
+---------
+The levels loop is :mod:`brdfnorm.engine.machinery.global_driver`'s, shared by every coordinate system of the rule;
+each is a :class:`GlobalGrid` (its methods say what a coordinate system adds to the plain rule). The lobe-aligned
+coordinates above are :class:`LobeAlignedGrid` (the hemisphere route calls it through
+:mod:`brdfnorm.engine.machinery.hemisphere_global`); the half-vector rectangle is
+:class:`brdfnorm.engine.routes.halfvector_global.HalfVectorGrid`.
 """
 
 from __future__ import annotations
