@@ -16,12 +16,13 @@ each step below). This module runs it, level by level, for many cases at once:
 4. the doublings (:func:`schedule_doublings`), the refined units merged into one group per pair of levels, and
    batches of cases bounded in memory.
 
-What differs between coordinate systems is a :class:`GlobalGrid` (the style of mpmath's quadrature classes: a
-class with a few methods to override): the weighted integrand at (cases, azimuth indices, radial nodes), the count
-of evaluations, the radial pieces, the sums' implementation, extra estimate terms, the minimum radial level, when
-the prediction may give a case up, and what happens once the start grid is in (a restart on another map). Two
-exist: :class:`brdfnorm.engine.machinery.lobe_grid.LobeAlignedGrid` (the hemisphere's lobe-aligned coordinates)
-and :class:`brdfnorm.engine.routes.halfvector_global.HalfVectorGrid` (the half-vector rectangle, three pieces).
+What differs between coordinate systems is a grid,
+:class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
+a few methods to override): the weighted integrand at (cases, azimuth indices, radial nodes), the count of
+evaluations, the radial pieces, the sums' implementation, extra estimate terms, the minimum radial level, when the
+prediction may give a case up, and what happens once the start grid is in (a restart on another map). Two exist:
+:class:`brdfnorm.engine.machinery.tensor_rule.LobeAlignedGrid` (the hemisphere's lobe-aligned coordinates) and
+:class:`brdfnorm.engine.routes.halfvector_global.HalfVectorGrid` (the half-vector rectangle, three pieces).
 """
 
 from __future__ import annotations

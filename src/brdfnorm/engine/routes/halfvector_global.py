@@ -3,11 +3,12 @@ panels.
 
 On the rectangle (φ, v) of (H1) each radial piece v ∈ [j, j + 1] (pole, tail, horizon layer) carries an integrand
 that is periodic and analytic in the azimuth φ and smooth in v. So each (case, piece) is first integrated by one
-tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule` does for the hemisphere engine and
-with its
-helpers: the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM Review 56, 2014) ×
-Fejér's second rule in v, both nested under doubling, error along each direction d₁ + min(d₂, 9 d₁) from the
-embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule.sums`), plus the rounding floor.
+tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule` does for the hemisphere engine,
+by the same driver (:mod:`brdfnorm.engine.machinery.global_driver`, this rectangle being its
+:class:`HalfVectorGrid`): the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM
+Review 56, 2014) × Fejér's second rule in v, both nested under doubling, error along each direction
+d₁ + min(d₂, 9 d₁) from the embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule.sums`), plus the
+rounding floor.
 
 Azimuth nodes. At grazing views the horizon radius s_h(φ) varies over an azimuthal width ~V_z next to the zeros
 of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.engine.routes.halfvector.slope_integrand`
