@@ -1,22 +1,21 @@
-"""The global tensor rules' drivers (issue 39, "one global-rule driver"): which modules run a levels loop of their
-own. Today two numpy drivers exist — the lobe-aligned one (``engine/machinery/tensor_rule.py``) and the half-vector
-one (``engine/routes/halfvector_global.py``) — beside the half-vector rule fused for the compiled backend
-(``engine/compiled/global_rule.py``, checked against its numpy driver by test_compiled_global_rule.py). The first
-test keeps a third from appearing; the second, a strict xfail, records the duplicate until the two numpy drivers
-are one (it then passes, and the strict marker must go)."""
+"""The global tensor rules' driver (issue 39, "one global-rule driver"): which modules run a levels loop of their
+own. One numpy driver exists (``engine/machinery/global_driver.py``); the lobe-aligned coordinates
+(``engine/machinery/lobe_grid.py``) and the half-vector rectangle (``engine/routes/halfvector_global.py``) are grids
+it runs, not loops of their own. Beside it, the half-vector rule fused for the compiled backend
+(``engine/compiled/global_rule.py``, checked against the numpy driver by test_compiled_global_rule.py) is a backend,
+not a numpy driver. The tests keep a second numpy driver from appearing."""
 
 from __future__ import annotations
 
 import ast
 from pathlib import Path
 
-import pytest
 from helpers.paths import SRC
 
 ENGINE = SRC / "brdfnorm" / "engine"
 #: What a global-rule driver defines: its entry point and its per-level refinement of the grid.
 DRIVER_FUNCTIONS = {"integrate_global", "_refine"}
-KNOWN_DRIVERS = {"machinery/tensor_rule.py", "routes/halfvector_global.py"}
+KNOWN_DRIVERS = {"machinery/global_driver.py"}
 
 
 def _drivers(root: Path) -> set[str]:
@@ -37,6 +36,5 @@ def test_no_third_global_rule_driver(tmp_path):
     assert _drivers(tmp_path) == {"extra.py"}
 
 
-@pytest.mark.xfail(strict=True, reason="two numpy global-rule drivers remain (issue 39): see the module docstring")
 def test_one_global_rule_driver():
-    assert len(_drivers(ENGINE)) == 1
+    assert _drivers(ENGINE) == KNOWN_DRIVERS

@@ -12,14 +12,8 @@ from helpers.paths import EXAMPLES, FIXTURES
 from helpers.references import ggx_albedo_reference, half_vector_gauss_legendre, phong_like_reference
 
 import brdfnorm as bn
-from brdfnorm.engine.machinery.tensor_rule import (
-    LAMBDA_MIN,
-    START_LEVELS,
-    beta_map,
-    fejer,
-    integrate_global,
-    radial_width_scale,
-)
+from brdfnorm.engine.machinery.hemisphere_global import integrate_global
+from brdfnorm.engine.machinery.tensor_rule import LAMBDA_MIN, START_LEVELS, beta_map, fejer, radial_width_scale
 from brdfnorm.engine.routes import hemisphere as engine
 from brdfnorm.engine.routes.hemisphere import integrate_hemisphere
 

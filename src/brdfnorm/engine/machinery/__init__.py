@@ -9,8 +9,10 @@
 - :mod:`.rounding` — float64 rounding noise of an integrand near its peak, and the floor it sets on an estimate;
 - :mod:`.grazing_panels` — the adaptive panels' starting grid at grazing views, and the ladder of panel edges;
 - :mod:`.interval` — the 1-D adaptive integration (the 1-D routes, the claims, the tables' μ-average);
-- :mod:`.tensor_rule` — lobe-aligned coordinates of the hemisphere and a global tensor rule with degree doubling
-  on them (the hemisphere and half-vector routes try it before adaptive panels);
+- :mod:`.tensor_rule` — a global tensor rule with degree doubling, the interface of the grids it runs on, and the
+  hemisphere's lobe-aligned coordinates as one (the hemisphere and half-vector routes try it before adaptive
+  panels); :mod:`.global_driver` — its one levels loop; :mod:`.hemisphere_global` — the hemisphere route's entry
+  point to it;
 - :mod:`.slope_coordinates` — the radial coordinates (pole, tail, cap) the half-vector routes run in over each
   microfacet slope distribution;
 - :mod:`.directions` — random hemisphere directions and rotations about the normal.

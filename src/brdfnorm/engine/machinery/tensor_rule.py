@@ -56,16 +56,21 @@ inside the neck) — when its integrand is not finite
 at a node, or when its rounding noise is a visible share of its tolerance. The panels are thus paid for only where
 needed: narrow lobes near the horizon (Blinn-Phong n = 512 beyond θ_o ≈ 84°), kinks at a support edge, float64's
 limit.
+
+Structure
+---------
+The levels loop is :mod:`brdfnorm.engine.machinery.global_driver`'s, shared by every coordinate system of the rule;
+each is a :class:`GlobalGrid` (its methods say what a coordinate system adds to the plain rule). The lobe-aligned
+coordinates above are :class:`LobeAlignedGrid` (the hemisphere route calls it through
+:mod:`brdfnorm.engine.machinery.hemisphere_global`); the half-vector rectangle is
+:class:`brdfnorm.engine.routes.halfvector_global.HalfVectorGrid`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
-
-from .result import RouteResult
 
 _EPS = np.finfo(float).eps
 
@@ -195,11 +200,6 @@ def fejer(level: int) -> tuple[np.ndarray, np.ndarray]:
     return (1.0 - np.cos(theta)) / 2.0, weights
 
 
-def _azimuths(level: int) -> np.ndarray:
-    """The trapezoid rule's 2^level parameters t_i = 2πi/2^level (those of a level are every other of the next)."""
-    return np.arange(2**level) * (2 * np.pi / 2**level)
-
-
 def beta_map(t: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """β(t) and dβ/dt of the periodic map with tan((β − π)/1) = λ tan(t − π): nodes 1/λ times denser at β = π
     (the horizon nearest the lobe) and at β = 0 (dβ/dt = λ at both), 1/λ times sparser at β = ±π/2 (module
@@ -232,155 +232,140 @@ def radial_width_scale(dbeta: np.ndarray, lam: np.ndarray) -> np.ndarray:
     return np.sqrt(lam / dbeta)
 
 
-@dataclass
-class _Group:
-    """Cases at the same levels, their grids of weighted integrand values F (n, M, N − 1, C), per case the
-    deviations e_β, e_u (relative to their share of the tolerance) before the last doubling along each direction
-    (inf where there was none), and the values Q of the last three levels, newest first (NaN before the start;
-    :func:`_stalled`)."""
+class GlobalGrid:
+    """The coordinates a global tensor rule runs on, for the one driver of
+    :mod:`brdfnorm.engine.machinery.global_driver` (which passes its groups of units (case, piece) at the same
+    levels). Override :meth:`evaluate` and :meth:`estimate` (and the others where the coordinates need more than
+    the plain rule)."""
 
-    case: np.ndarray
-    level_b: int
-    level_u: int
-    grid: np.ndarray
-    last_b: np.ndarray  # (n,)
-    last_u: np.ndarray  # (n,)
-    earlier: np.ndarray | None = None  # (n, 3, C)
+    #: Radial pieces per case, sharing the case's tolerance in equal parts; a case fails as a whole.
+    pieces = 1
+    #: Whether one direction may be doubled alone where the other is within the whole tolerance on its own.
+    lone = False
 
+    def evaluate(self, case: np.ndarray, piece: np.ndarray, index: np.ndarray, M: int, u: np.ndarray) -> np.ndarray:
+        """Weighted integrand values (n, len(index), len(u), C) at the azimuth parameters t = 2π·index/M and the
+        radial nodes u ∈ (0, 1) of the units (case, piece)."""
+        raise NotImplementedError
 
-def integrate_global(integrand, frame, widths, supports, cases: np.ndarray, noise_amplitude: np.ndarray, *,
-                     rtol: float, atol: float, noise_bound, max_nodes: int = MAX_NODES,
-                     max_nodes_per_call: int = 1_500_000, azimuthal_tail: np.ndarray | None = None) -> RouteResult:
-    """The global tensor rule (module docstring) for ``cases`` (indices into the frame): ``converged`` says which
-    cases it settled; unsettled cases keep their evaluation count and are left to the caller. Where
-    ``azimuthal_tail`` (K,) is True (lobes that are not rotation-invariant), the β estimate is at least
-    :func:`_azimuthal_tail`."""
-    K = frame[0].shape[0]
-    lam = clustering(frame, widths)
-    grading = np.full(K, 2)
-    value = np.zeros((K, 1))
-    error = np.zeros((K, 1))
-    evaluations = np.zeros(K, dtype=np.int64)
-    settled = np.zeros(K, dtype=bool)
-    # Batches of cases whose grids, at most max_nodes each, fit in BATCH_NODES values (bounded memory).
-    batch = max(1, BATCH_NODES // max(max_nodes, START_NODES))
-    # Cases whose neck (neck_u) no grid within max_nodes reaches, even on the start map, go to the panels untried.
-    cases = cases[_fits(_neck_levels(neck_u(frame, widths, supports, lam, grading)[cases]), max_nodes)]
-    for start in range(0, cases.size, batch):
-        part = cases[start:start + batch]
-        value, error = _integrate_batch(integrand, frame, widths, supports, (lam, grading), part, noise_amplitude,
-                                        rtol, atol, noise_bound, max_nodes, max_nodes_per_call, value, error,
-                                        evaluations, settled, np.zeros(K, dtype=bool) if azimuthal_tail is None
-                                        else azimuthal_tail)
-    return RouteResult(value, error, evaluations, settled)
+    def count(self, case: np.ndarray, index: np.ndarray, M: int) -> np.ndarray | int:
+        """Azimuths :meth:`evaluate` spends per unit for ``index`` (each of them at every radial node)."""
+        return index.size
 
+    def batch_nodes(self, max_nodes: int) -> int:
+        """Grid values one case may hold at most (for the batches of :data:`BATCH_NODES`)."""
+        return self.pieces * max_nodes
 
-def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_amplitude, rtol, atol, noise_bound,
-                     max_nodes, max_nodes_per_call, value, error, evaluations, settled, azimuthal_tail):
-    """:func:`integrate_global` for one batch of cases: fills ``evaluations`` and ``settled`` in place and returns
-    ``value`` and ``error`` (re-allocated when the integrand turns out to have several channels). ``maps`` holds
-    per case the β map's λ and the horizon grading's exponent (:func:`map_grid`), both updated in place;
-    ``azimuthal_tail`` (K,) as in :func:`integrate_global`."""
-    lam, grading = maps
-    K = value.shape[0]
-    level_b, level_u = START_LEVELS
-    grid = _evaluate(integrand, frame, widths, supports, maps, cases, _azimuths(level_b), fejer(level_u)[0],
-                     max_nodes_per_call)
-    evaluations[cases] += grid.shape[1] * grid.shape[2]
-    # Heavy tails (GGX) want weaker clustering than the floor and a stronger horizon grading: start those cases
-    # again on that map.
-    # (Not where the integrand is not finite: the panels take those.)
-    weaker = _heavy_tailed(grid, level_u) & np.isfinite(grid).all(axis=(1, 2, 3))
-    if weaker.any():
-        lam[cases[weaker]] = np.maximum(lam[cases[weaker]], LAMBDA_MIN_HEAVY_TAIL)
-        grading[cases[weaker]] = HEAVY_TAIL_GRADING
-        grid[weaker] = _evaluate(integrand, frame, widths, supports, maps, cases[weaker], _azimuths(level_b),
-                                 fejer(level_u)[0], max_nodes_per_call)
-        evaluations[cases[weaker]] += grid.shape[1] * grid.shape[2]
-    # The radial level each case needs before it may settle (neck_u), on its final map.
-    min_level_u = np.zeros(K, dtype=int)
-    min_level_u[cases] = _neck_levels(neck_u(frame, widths, supports, lam, grading)[cases])
-    groups = [_Group(cases, level_b, level_u, grid, np.full(cases.size, np.inf), np.full(cases.size, np.inf))]
-    while groups:
-        refined: dict[tuple[int, int], list[_Group]] = {}
-        for group in groups:
-            F = group.grid
-            finite = np.isfinite(F).all(axis=(1, 2, 3))
-            with np.errstate(invalid="ignore", over="ignore"):
-                F = np.where(finite[:, None, None, None], F, 0.0)
-                q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else sums)(
-                    F, group.level_u)
-                if azimuthal_tail[group.case].any():
-                    tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
-                    e_b = np.maximum(e_b, tail)
-            if value.shape[1] != q.shape[1]:
-                shape = (K, q.shape[1])
-                value, error = np.broadcast_to(value, shape).copy(), np.broadcast_to(error, shape).copy()
-            noise = noise_bound(noise_amplitude[group.case], magnitude)
-            floor = FLOOR * magnitude
-            tolerance = np.maximum(atol, rtol * np.abs(q))
-            estimate = e_b + e_u + floor + noise
-            earlier = np.full((q.shape[0], 3, q.shape[1]), np.nan) if group.earlier is None else group.earlier
-            short = group.level_u < min_level_u[group.case]  # the neck lies below the coarse rules' nodes
-            within = np.all(estimate <= tolerance, axis=1) & finite & ~_stalled(q, earlier) & ~short
-            group.earlier = np.concatenate([q[:, None], earlier[:, :2]], axis=1)
-            done = within
-            value[group.case[done]] = q[done]
-            error[group.case[done]] = estimate[done]
-            settled[group.case[done]] = True
-            # Double the direction(s) whose deviation exceeds its share of the tolerance, else the larger one (a
-            # case within tolerance is confirmed at the next level).
-            share = np.maximum(tolerance - floor - noise, 0.0) / 2
-            more_b = np.any(e_b > share, axis=1)
-            more_u = np.any(e_u > share, axis=1)
-            neither = ~(more_b | more_u | short)
-            larger_b = np.any(e_b >= e_u, axis=1)
-            more_b |= neither & larger_b
-            more_u |= neither & ~larger_b
-            ratio_b = normalized(e_b, share).max(axis=1)
-            ratio_u = normalized(e_u, share).max(axis=1)
-            # Where both exceed their shares but one direction's estimate is within the whole tolerance on its
-            # own (ratio < 2), double only the other: it then has the rest of the tolerance to reach, at half the
-            # cost (examples/ggx.brdf, roughness 0.107, θ_o = 60°, rtol 1e-9: e_u at 1.1 shares after 64 × 127
-            # nodes; doubling both passed the cap of 16 384 and sent the case to the panels, 55 248 evaluations;
-            # 128 × 127 settles it).
-            both = more_b & more_u
-            lone_b = both & (ratio_u < 2.0) & (ratio_b >= ratio_u)
-            lone_u = both & (ratio_b < 2.0) & ~lone_b
-            more_u = (more_u & ~lone_b) | short
-            more_b &= ~lone_u
-            size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
-            # Give up early where geometric convergence, extrapolated from the last doubling, would not settle
-            # the case within max_nodes (a kink, a feature the coordinates do not follow): the panels will.
-            needed_b = np.where(lone_u, 0, doublings(ratio_b, group.last_b))
-            needed_u = np.maximum(np.where(lone_b & ~short, 0, doublings(ratio_u, group.last_u)),
-                                  min_level_u[group.case] - group.level_u)
-            hopeless = ((needed_b + group.level_b) > MAX_LEVEL_B) | (
-                2 ** (group.level_b + needed_b) * (2 ** (group.level_u + needed_u) - 1) > max_nodes)
-            go_on = finite & ~done & (size <= max_nodes) & ~hopeless
-            schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
-                               lambda g, pick, b, u: _refine(g, pick, b, u, integrand, frame, widths, supports,
-                                                             maps, max_nodes_per_call, evaluations))
-        groups = [_merge(parts) for parts in refined.values()]
-    return value, error
+    def start(self, group) -> np.ndarray | None:
+        """Called once the start grid is in: the units to evaluate again (the grid changed their map), or None."""
+        return None
+
+    def sums(self, F: np.ndarray, level_u: int):
+        """Q, the deviations along β and u, and the |F| integral (:func:`sums` or its compiled pass)."""
+        return sums(F, level_u)
+
+    def estimate(self, group, F, q, e_b, e_u, magnitude):
+        """(e_b, floor, noise, estimate): the β deviation with any extra term, the rounding floor, the float64
+        noise bound (both taken off the tolerance the deviations share) and the estimate."""
+        raise NotImplementedError
+
+    def short(self, group) -> np.ndarray:
+        """Units whose radial level is below the least they need before they may settle."""
+        return np.zeros(group.case.size, dtype=bool)
+
+    def min_level_u(self, group) -> np.ndarray | int:
+        """The least radial level each unit needs (0: none)."""
+        return 0
+
+    def may_settle(self, group, q: np.ndarray) -> np.ndarray | bool:
+        """Units that may settle at this level if within their tolerance (the grid may record ``q`` here)."""
+        return True
+
+    def may_predict(self, group) -> np.ndarray | bool:
+        """Units the doubling prediction may give up."""
+        return True
 
 
-def schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine) -> None:
-    """Double the cases ``go_on`` of ``group`` along β (``more_b``), u (``more_u``) or both:
-    ``refine(group, pick, b, u)`` makes the finer group of the picked cases, filed in ``refined`` by its levels
-    with the ratios it was doubled on (the extrapolation of :func:`doublings`)."""
-    for b in (False, True):
-        for u in (False, True):
-            pick = go_on & (more_b == b) & (more_u == u)
-            if not pick.any():
-                continue
-            new = refine(group, pick, b, u)
-            # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
-            if b and group.level_b > START_LEVELS[0]:
-                new.last_b = ratio_b[pick]
-            if u and group.level_u > START_LEVELS[1]:
-                new.last_u = ratio_u[pick]
-            refined.setdefault((new.level_b, new.level_u), []).append(new)
+class LobeAlignedGrid(GlobalGrid):
+    """The rectangle (β, u) of the lobe-aligned coordinates about each case's peak (``frame``), with the lobe's
+    width and support per case; ``noise_amplitude`` and ``noise_bound`` give the integrand's float64 noise,
+    ``azimuthal_tail`` (K,) marks the lobes that are not rotation-invariant."""
+
+    lone = True
+
+    def __init__(self, integrand, frame, widths, supports, noise_amplitude, noise_bound, max_nodes_per_call: int,
+                 azimuthal_tail: np.ndarray | None):
+        K = frame[0].shape[0]
+        self.integrand, self.frame, self.widths, self.supports = integrand, frame, widths, supports
+        self.noise_amplitude, self.noise_bound = noise_amplitude, noise_bound
+        self.max_nodes_per_call = max_nodes_per_call
+        self.azimuthal_tail = np.zeros(K, dtype=bool) if azimuthal_tail is None else azimuthal_tail
+        #: Per case the β map's λ and the horizon grading's exponent (:func:`map_grid`), updated by :meth:`start`.
+        self.lam, self.grading = clustering(frame, widths), np.full(K, 2)
+        self._min_level_u = np.zeros(K, dtype=int)
+
+    def evaluate(self, case, piece, index, M, u):
+        t = index * (2 * np.pi / M)
+        parts = []
+        chunk = max(1, min(self.max_nodes_per_call, CHUNK_NODES) // (t.size * u.size))
+        for start in range(0, case.size, chunk):
+            k = case[start:start + chunk]
+            beta, dbeta = beta_map(t[None, :], self.lam[k][:, None])
+            omega, jacobian = map_grid(k, beta, u[None, :], dbeta, self.frame, self.widths, self.supports,
+                                       radial_width_scale(dbeta, self.lam[k][:, None]), self.grading[k])
+            index_k = np.broadcast_to(k[:, None, None], jacobian.shape)
+            with np.errstate(all="ignore"):
+                values = np.asarray(self.integrand(omega.reshape(-1, 3), index_k.ravel()), dtype=float)
+                parts.append(values.reshape(jacobian.shape + (-1,)) * jacobian[..., None])
+        return np.concatenate(parts)
+
+    def sums(self, F, level_u):
+        # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
+        return (compiled_sums if hasattr(self.integrand, "kernels") else sums)(F, level_u)
+
+    def batch_nodes(self, max_nodes):
+        return max(max_nodes, START_NODES)
+
+    def start(self, group) -> np.ndarray:
+        # Heavy tails (GGX) want weaker clustering than the floor and a stronger horizon grading: start those cases
+        # again on that map.
+        # (Not where the integrand is not finite: the panels take those.)
+        cases = group.case
+        weaker = _heavy_tailed(group.grid, group.level_u) & np.isfinite(group.grid).all(axis=(1, 2, 3))
+        if weaker.any():
+            self.lam[cases[weaker]] = np.maximum(self.lam[cases[weaker]], LAMBDA_MIN_HEAVY_TAIL)
+            self.grading[cases[weaker]] = HEAVY_TAIL_GRADING
+        # The radial level each case needs before it may settle (neck_u), on its final map.
+        self._min_level_u[cases] = _neck_levels(neck_u(self.frame, self.widths, self.supports, self.lam,
+                                                       self.grading)[cases])
+        return weaker
+
+    def estimate(self, group, F, q, e_b, e_u, magnitude):
+        if self.azimuthal_tail[group.case].any():
+            tail = np.where(self.azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
+            e_b = np.maximum(e_b, tail)
+        noise = self.noise_bound(self.noise_amplitude[group.case], magnitude)
+        floor = FLOOR * magnitude
+        estimate = e_b + e_u + floor + noise
+        return e_b, floor, noise, estimate
+
+    def admit(self, cases: np.ndarray, max_nodes: int) -> np.ndarray:
+        """The ``cases`` worth trying: not those whose neck (:func:`neck_u`) no grid within ``max_nodes`` reaches,
+        even on the start map (the panels take them untried)."""
+        return cases[_fits(_neck_levels(neck_u(self.frame, self.widths, self.supports, self.lam,
+                                                self.grading)[cases]), max_nodes)]
+
+    def min_level_u(self, group):
+        return self._min_level_u[group.case]
+
+    def short(self, group):
+        return group.level_u < self._min_level_u[group.case]
+
+    def may_settle(self, group, q):
+        earlier = np.full((q.shape[0], 3, q.shape[1]), np.nan) if group.earlier is None else group.earlier
+        stalled = _stalled(q, earlier)
+        group.earlier = np.concatenate([q[:, None], earlier[:, :2]], axis=1)
+        return ~stalled
 
 
 def _heavy_tailed(grid: np.ndarray, level_u: int) -> np.ndarray:
@@ -498,52 +483,3 @@ def _azimuthal_tail(F: np.ndarray, level_u: int) -> np.ndarray:
 
 def _margin(deviation: np.ndarray, coarser: np.ndarray) -> np.ndarray:
     return deviation + np.minimum(coarser, SAFETY * deviation)
-
-
-def _evaluate(integrand, frame, widths, supports, maps, case, t, u, max_nodes_per_call) -> np.ndarray:
-    """Weighted integrand values F (n, len(t), len(u), C) at azimuth parameters t and radial nodes u, on the
-    maps ``maps`` = (λ, grading) per case."""
-    lam, grading = maps
-    parts = []
-    chunk = max(1, min(max_nodes_per_call, CHUNK_NODES) // (t.size * u.size))
-    for start in range(0, case.size, chunk):
-        k = case[start:start + chunk]
-        beta, dbeta = beta_map(t[None, :], lam[k][:, None])
-        omega, jacobian = map_grid(k, beta, u[None, :], dbeta, frame, widths, supports,
-                                   radial_width_scale(dbeta, lam[k][:, None]), grading[k])
-        index = np.broadcast_to(k[:, None, None], jacobian.shape)
-        with np.errstate(all="ignore"):
-            values = np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float)
-            parts.append(values.reshape(jacobian.shape + (-1,)) * jacobian[..., None])
-    return np.concatenate(parts)
-
-
-def _refine(group: _Group, pick, along_b: bool, along_u: bool, integrand, frame, widths, supports, maps,
-            max_nodes_per_call, evaluations) -> _Group:
-    """The picked cases of ``group`` with their grid doubled along β and/or u (only the new nodes evaluated)."""
-    case, F = group.case[pick], group.grid[pick]
-    level_b, level_u = group.level_b, group.level_u
-    if along_b:
-        M = 2**level_b
-        t_new = (2 * np.arange(M) + 1) * (np.pi / M)
-        new = _evaluate(integrand, frame, widths, supports, maps, case, t_new, fejer(level_u)[0], max_nodes_per_call)
-        grid = np.empty((case.size, 2 * M) + F.shape[2:])
-        grid[:, 0::2], grid[:, 1::2] = F, new
-        F, level_b = grid, level_b + 1
-        np.add.at(evaluations, case, new.shape[1] * new.shape[2])
-    if along_u:
-        nodes = fejer(level_u + 1)[0][0::2]
-        new = _evaluate(integrand, frame, widths, supports, maps, case, _azimuths(level_b), nodes, max_nodes_per_call)
-        grid = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
-        grid[:, :, 1::2], grid[:, :, 0::2] = F, new
-        F, level_u = grid, level_u + 1
-        np.add.at(evaluations, case, new.shape[1] * new.shape[2])
-    return _Group(case, level_b, level_u, F, group.last_b[pick], group.last_u[pick], group.earlier[pick])
-
-
-def _merge(parts: list[_Group]) -> _Group:
-    if len(parts) == 1:
-        return parts[0]
-    return _Group(np.concatenate([p.case for p in parts]), parts[0].level_b, parts[0].level_u,
-                  np.concatenate([p.grid for p in parts]), np.concatenate([p.last_b for p in parts]),
-                  np.concatenate([p.last_u for p in parts]), np.concatenate([p.earlier for p in parts]))

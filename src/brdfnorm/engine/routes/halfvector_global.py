@@ -3,11 +3,12 @@ panels.
 
 On the rectangle (φ, v) of (H1) each radial piece v ∈ [j, j + 1] (pole, tail, horizon layer) carries an integrand
 that is periodic and analytic in the azimuth φ and smooth in v. So each (case, piece) is first integrated by one
-tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule` does for the hemisphere engine and
-with its
-helpers: the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM Review 56, 2014) ×
-Fejér's second rule in v, both nested under doubling, error along each direction d₁ + min(d₂, 9 d₁) from the
-embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule.sums`), plus the rounding floor.
+tensor rule over the whole piece, as :mod:`brdfnorm.engine.machinery.tensor_rule` does for the hemisphere engine,
+by the same driver (:mod:`brdfnorm.engine.machinery.global_driver`, this rectangle being its
+:class:`HalfVectorGrid`): the periodic trapezoid rule in φ (geometric convergence, Trefethen & Weideman, SIAM
+Review 56, 2014) × Fejér's second rule in v, both nested under doubling, error along each direction
+d₁ + min(d₂, 9 d₁) from the embedded coarser rules (:func:`brdfnorm.engine.machinery.tensor_rule.sums`), plus the
+rounding floor.
 
 Azimuth nodes. At grazing views the horizon radius s_h(φ) varies over an azimuthal width ~V_z next to the zeros
 of p(φ) = c·d(φ), which lie at φ = 0, π from the offset of :func:`brdfnorm.engine.routes.halfvector.slope_integrand`
@@ -48,23 +49,11 @@ with a non-finite value, go to the adaptive panels, which start afresh (their ev
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from ..machinery import global_driver
 from ..machinery.result import RouteResult
-from ..machinery.tensor_rule import (
-    FLOOR,
-    MAX_LEVEL_B,
-    START_LEVELS,
-    beta_map,
-    compiled_sums,
-    doublings,
-    fejer,
-    normalized,
-    schedule_doublings,
-    sums,
-)
+from ..machinery.tensor_rule import FLOOR, GlobalGrid, beta_map, compiled_sums, sums
 
 #: Radial pieces of (H1): pole, tail, horizon layer.
 PIECES = 3
@@ -82,8 +71,6 @@ GRADED_PREDICTS = 6
 GRADED = ("ggx",)
 #: Nodes per integrand call (arrays that stay in cache).
 CHUNK_NODES = 16_384
-#: Grid values held at once.
-BATCH_NODES = 2**23
 
 
 def clustering(cos_view: np.ndarray) -> np.ndarray:
@@ -113,49 +100,69 @@ def azimuth_map(t: np.ndarray, lam: np.ndarray, width: np.ndarray | None = None)
     return np.where(width > 0, graded, phi), np.where(width > 0, graded_dphi, dphi)
 
 
-@dataclass
-class _Group:
-    case: np.ndarray  # (n,) case of each (case, piece)
-    piece: np.ndarray  # (n,)
-    level_b: int
-    level_u: int
-    grid: np.ndarray  # (n, M, N − 1, C)
-    last_b: np.ndarray
-    last_u: np.ndarray
+class HalfVectorGrid(GlobalGrid):
+    """The rectangle (φ, v) of (H1) for the one driver (:mod:`brdfnorm.engine.machinery.global_driver`): three
+    radial pieces per case sharing its tolerance, the azimuth map per case (λ, and the graded map's δ =
+    ``width``), mirror-symmetric azimuths sharing one evaluation where ``symmetric``; ``scale`` (K,) turns the
+    integrand's weight into one over the full azimuth range."""
 
+    pieces = PIECES
 
-def _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, M, u):
-    """Weighted values (n, len(index), len(u), C) at t = 2π·index/M and v = piece + u (sharing mirror nodes)."""
-    out = None
-    fresh = getattr(integrand, "compiled", False)
-    for mirrored in (False, True):
-        rows = np.flatnonzero(symmetric[case] == mirrored)
-        if not rows.size:
-            continue
-        canonical = index
-        if mirrored:  # t ↔ π − t: keep t ∈ [−π/2, π/2]
-            i = index % M
-            canonical = np.where((i <= M // 4) | (i >= 3 * M // 4), i, (M // 2 - i) % M)
-        unique, back = np.unique(canonical, return_inverse=True)
-        phi, dphi = azimuth_map(unique[None, :] * (2 * np.pi / M), lam[case[rows]][:, None],
-                                width[case[rows]][:, None])
-        chunk = max(1, CHUNK_NODES // (unique.size * u.size))
-        for start in range(0, rows.size, chunk):
-            r = rows[start:start + chunk]
-            k = case[r]
-            values = integrand(k, phi[start:start + chunk, :, None], (piece[r][:, None] + u)[:, None, :], piece[r])
-            factor = dphi[start:start + chunk, :, None, None] * scale[k][:, None, None, None]
-            if fresh:  # (a compiled integrand's output is its own: scaled in place, and kept where it is all)
-                values *= factor
-                if not mirrored and r.size == case.size:
-                    out = values
-                    continue
-            else:
-                values = values * factor
-            if out is None:
-                out = np.empty((case.size, index.size, u.size, values.shape[-1]))
-            out[r] = values[:, back] if mirrored else values  # (index is sorted: back is the identity)
-    return out
+    def __init__(self, integrand, lam, width, symmetric, scale):
+        self.integrand, self.lam, self.width, self.symmetric, self.scale = integrand, lam, width, symmetric, scale
+
+    def evaluate(self, case, piece, index, M, u):
+        """Weighted values (n, len(index), len(u), C) at t = 2π·index/M and v = piece + u (sharing mirror nodes)."""
+        out = None
+        fresh = getattr(self.integrand, "compiled", False)
+        for mirrored in (False, True):
+            rows = np.flatnonzero(self.symmetric[case] == mirrored)
+            if not rows.size:
+                continue
+            canonical = index
+            if mirrored:  # t ↔ π − t: keep t ∈ [−π/2, π/2]
+                i = index % M
+                canonical = np.where((i <= M // 4) | (i >= 3 * M // 4), i, (M // 2 - i) % M)
+            unique, back = np.unique(canonical, return_inverse=True)
+            phi, dphi = azimuth_map(unique[None, :] * (2 * np.pi / M), self.lam[case[rows]][:, None],
+                                    self.width[case[rows]][:, None])
+            chunk = max(1, CHUNK_NODES // (unique.size * u.size))
+            for start in range(0, rows.size, chunk):
+                r = rows[start:start + chunk]
+                k = case[r]
+                values = self.integrand(k, phi[start:start + chunk, :, None], (piece[r][:, None] + u)[:, None, :],
+                                        piece[r])
+                factor = dphi[start:start + chunk, :, None, None] * self.scale[k][:, None, None, None]
+                if fresh:  # (a compiled integrand's output is its own: scaled in place, and kept where it is all)
+                    values *= factor
+                    if not mirrored and r.size == case.size:
+                        out = values
+                        continue
+                else:
+                    values = values * factor
+                if out is None:
+                    out = np.empty((case.size, index.size, u.size, values.shape[-1]))
+                out[r] = values[:, back] if mirrored else values  # (index is sorted: back is the identity)
+        return out
+
+    def count(self, case, index, M):
+        """Azimuths evaluated per unit for ``index``: the distinct mirror classes where symmetric."""
+        i = index % M
+        canonical = np.where((i <= M // 4) | (i >= 3 * M // 4), i, (M // 2 - i) % M)
+        return np.where(self.symmetric[case], np.unique(canonical).size, index.size)
+
+    def sums(self, F, level_u):
+        # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
+        return (compiled_sums if getattr(self.integrand, "compiled", False) else sums)(F, level_u)
+
+    def estimate(self, group, F, q, e_b, e_u, magnitude):
+        floor = FLOOR * magnitude
+        estimate = e_b + e_u + floor
+        return e_b, floor, 0.0, estimate
+
+    def may_predict(self, group):
+        # The graded map converges pre-asymptotically: no prediction before GRADED_PREDICTS azimuth levels.
+        return (group.level_b >= GRADED_PREDICTS) | (self.width[group.case] == 0)
 
 
 def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symmetric: np.ndarray,
@@ -175,122 +182,5 @@ def integrate_global(integrand, K: int, cases: np.ndarray, lam: np.ndarray, symm
         per_case = np.broadcast_to(np.asarray(rtol, dtype=float).reshape(-1), (K,))
         return RouteResult(*integrate(cases, np.broadcast_to(lam, (K,)), width, symmetric,
                                       np.broadcast_to(scale, (K,)), per_case, atol, max_nodes, GRADED_PREDICTS, lobe))
-    evaluations = np.zeros(K, dtype=np.int64)
-    value = error = None
-    settled = np.zeros(K, dtype=bool)
-    batch = max(1, BATCH_NODES // (PIECES * max_nodes))
-    for start in range(0, cases.size, batch):
-        part = cases[start:start + batch]
-        v, e, ok = _integrate_batch(integrand, K, part, lam, width, symmetric, scale, rtol, atol, max_nodes,
-                                    evaluations)
-        if value is None:
-            value, error = np.zeros((K, v.shape[1])), np.zeros((K, v.shape[1]))
-        value[part], error[part], settled[part] = v[part], e[part], ok[part]
-    if value is None:
-        value, error = np.zeros((K, 1)), np.zeros((K, 1))
-    return RouteResult(value, error, evaluations, settled)
-
-
-def _integrate_batch(integrand, K, cases, lam, width, symmetric, scale, rtol, atol, max_nodes, evaluations):
-    level_b, level_u = START_LEVELS
-    case, piece = np.repeat(cases, PIECES), np.tile(np.arange(PIECES), cases.size)
-    M = 2**level_b
-    grid = _evaluate(integrand, lam, width, symmetric, scale, case, piece, np.arange(M), M, fejer(level_u)[0])
-    np.add.at(evaluations, case, _count(symmetric[case], np.arange(M), M) * grid.shape[2])
-    C = grid.shape[-1]
-    latest = np.zeros((K, PIECES, C))
-    value, error = np.zeros((K, PIECES, C)), np.zeros((K, PIECES, C))
-    done_piece = np.zeros((K, PIECES), dtype=bool)
-    failed = np.zeros(K, dtype=bool)
-    inf = np.full(case.size, np.inf)
-    groups = [_Group(case, piece, level_b, level_u, grid, inf, inf.copy())]
-    while groups:
-        rules = []
-        for group in groups:
-            finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
-            with np.errstate(invalid="ignore", over="ignore"):
-                # (one compiled pass where the integrand is compiled: numpy's strided matmuls cost more than it)
-                rule_sums = compiled_sums if getattr(integrand, "compiled", False) else sums
-                grid = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
-                q, e_b, e_u, magnitude = rule_sums(grid, group.level_u)
-            latest[group.case, group.piece] = q
-            failed[group.case[~finite]] = True
-            rules.append((finite, q, e_b, e_u, magnitude))
-        total = np.where(done_piece[..., None], value, latest).sum(axis=1)
-        case_tolerance = np.maximum(atol[:, None], rtol * np.abs(total)) / PIECES
-        refined: dict[tuple[int, int], list[_Group]] = {}
-        for group, (finite, q, e_b, e_u, magnitude) in zip(groups, rules, strict=True):
-            floor = FLOOR * magnitude
-            tolerance = case_tolerance[group.case]
-            estimate = e_b + e_u + floor
-            done = np.all(estimate <= tolerance, axis=1) & finite
-            value[group.case[done], group.piece[done]] = q[done]
-            error[group.case[done], group.piece[done]] = estimate[done]
-            done_piece[group.case[done], group.piece[done]] = True
-            share = np.maximum(tolerance - floor, 0.0) / 2
-            more_b, more_u = np.any(e_b > share, axis=1), np.any(e_u > share, axis=1)
-            neither = ~(more_b | more_u)
-            larger_b = np.any(e_b >= e_u, axis=1)
-            more_b |= neither & larger_b
-            more_u |= neither & ~larger_b
-            size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
-            ratio_b, ratio_u = normalized(e_b, share).max(axis=1), normalized(e_u, share).max(axis=1)
-            need_b, need_u = doublings(ratio_b, group.last_b), doublings(ratio_u, group.last_u)
-            hopeless = (need_b + group.level_b > MAX_LEVEL_B) | (
-                2 ** (group.level_b + need_b) * (2 ** (group.level_u + need_u) - 1) > max_nodes)
-            hopeless &= (group.level_b >= GRADED_PREDICTS) | (width[group.case] == 0)
-            go_on = finite & ~done & (size <= max_nodes) & ~hopeless & ~failed[group.case]
-            failed[group.case[finite & ~done & ~go_on]] = True
-            schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
-                               lambda g, pick, b, u: _refine(g, pick, b, u, integrand, lam, width, symmetric,
-                                                             scale, evaluations))
-        groups = [_merge(parts) for parts in refined.values()]
-        groups = [g if keep.all() else g.__class__(*(x[keep] if isinstance(x, np.ndarray) else x
-                                                     for x in vars(g).values()))
-                  for g in groups if (keep := ~failed[g.case]).any()]
-    # A case is settled when all its pieces are and their summed estimate meets the final tolerance.
-    value, error = value.sum(axis=1), error.sum(axis=1)
-    settled = done_piece.all(axis=1) & ~failed
-    settled &= np.all(error <= np.maximum(atol[:, None], rtol * np.abs(value)), axis=1)
-    return value, error, settled
-
-
-def _count(mirrored: np.ndarray, index: np.ndarray, M: int) -> np.ndarray:
-    """Azimuths evaluated per case for ``index``: the distinct mirror classes where ``mirrored``."""
-    i = index % M
-    canonical = np.where((i <= M // 4) | (i >= 3 * M // 4), i, (M // 2 - i) % M)
-    return np.where(mirrored, np.unique(canonical).size, index.size)
-
-
-def _refine(group, pick, along_b, along_u, integrand, lam, width, symmetric, scale, evaluations) -> _Group:
-    # (all picked: the group's arrays as they are, no copy of its grid)
-    every = pick.all()
-    case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
-    F = group.grid if every else group.grid[pick]
-    level_b, level_u = group.level_b, group.level_u
-    if along_b:
-        M = 2**level_b
-        index = 2 * np.arange(M) + 1
-        new = _evaluate(integrand, lam, width, symmetric, scale, case, piece, index, 2 * M, fejer(level_u)[0])
-        grid = np.empty((case.size, 2 * M) + F.shape[2:])
-        grid[:, 0::2], grid[:, 1::2] = F, new
-        F, level_b = grid, level_b + 1
-        np.add.at(evaluations, case, _count(symmetric[case], index, 2 * M) * new.shape[2])
-    if along_u:
-        M = 2**level_b
-        new = _evaluate(integrand, lam, width, symmetric, scale, case, piece, np.arange(M), M,
-                        fejer(level_u + 1)[0][0::2])
-        grid = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
-        grid[:, :, 1::2], grid[:, :, 0::2] = F, new
-        F, level_u = grid, level_u + 1
-        np.add.at(evaluations, case, _count(symmetric[case], np.arange(M), M) * new.shape[2])
-    return _Group(case, piece, level_b, level_u, F, group.last_b[pick], group.last_u[pick])
-
-
-def _merge(parts: list[_Group]) -> _Group:
-    if len(parts) == 1:
-        return parts[0]
-    first = parts[0]
-    return _Group(np.concatenate([p.case for p in parts]), np.concatenate([p.piece for p in parts]), first.level_b,
-                  first.level_u, np.concatenate([p.grid for p in parts]),
-                  np.concatenate([p.last_b for p in parts]), np.concatenate([p.last_u for p in parts]))
+    return global_driver.integrate_global(HalfVectorGrid(integrand, lam, width, symmetric, scale), K, cases,
+                                          rtol=rtol, atol=atol, max_nodes=max_nodes)

@@ -70,12 +70,13 @@ import numpy as np
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import drivers as native
 from ..machinery.grazing_panels import starting_panels
+from ..machinery.hemisphere_global import integrate_global
 from ..machinery.kinks import LOBATTO_NODES, algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
 from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
 from ..machinery.result import RouteResult
 from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
-from ..machinery.tensor_rule import START_NODES, integrate_global, map_grid, neck_u, normalized
+from ..machinery.tensor_rule import START_NODES, map_grid, neck_u, normalized
 
 NonFinitePolicy = Literal["raise", "zero"]
 

@@ -1,0 +1,225 @@
+"""The one driver of the global tensor rules (issue 39): the levels loop every coordinate system of the rule shares.
+
+A global tensor rule integrates a case over one rectangle (t, u) ∈ [0, 2π) × [0, 1] at a time: the periodic
+trapezoid rule in t × Fejér's second rule in u, both nested under doubling, each doubling evaluating only the new
+nodes (:mod:`brdfnorm.engine.machinery.tensor_rule` gives the rule, its sums and estimates, and the reasons for
+each step below). This module runs it, level by level, for many cases at once:
+
+1. the start grid (2^3 azimuths × 2^4 − 1 radial nodes) of every (case, piece) — a case may be cut into radial
+   pieces that share its tolerance;
+2. per level and per group of units at the same levels: the sums and deviations of the embedded coarser rules
+   (:func:`~brdfnorm.engine.machinery.tensor_rule.sums`), the estimate, and the units that settle;
+3. the direction(s) to double (those whose estimate exceeds half the tolerance, else the larger one; a single
+   one where the grid allows it), the doublings still needed if each squares the last reduction
+   (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), and the units predicted hopeless within the node
+   cap — those, and the non-finite ones, are left unsettled for the caller's adaptive panels;
+4. the doublings (:func:`schedule_doublings`), the refined units merged into one group per pair of levels, and
+   batches of cases bounded in memory.
+
+What differs between coordinate systems is a grid,
+:class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
+a few methods to override): the weighted integrand at (cases, azimuth indices, radial nodes), the count of
+evaluations, the radial pieces, the sums' implementation, extra estimate terms, the minimum radial level, when the
+prediction may give a case up, and what happens once the start grid is in (a restart on another map). Two exist:
+:class:`brdfnorm.engine.machinery.tensor_rule.LobeAlignedGrid` (the hemisphere's lobe-aligned coordinates) and
+:class:`brdfnorm.engine.routes.halfvector_global.HalfVectorGrid` (the half-vector rectangle, three pieces).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .result import RouteResult
+from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
+
+
+@dataclass
+class Group:
+    """Units (case, piece) at the same levels: their grids of weighted integrand values F (n, M, N − 1, C), per
+    unit the deviations e_β, e_u (relative to their share of the tolerance) before the last doubling along each
+    direction (inf where there was none), and what the grid keeps of earlier levels (``earlier``; for
+    :func:`brdfnorm.engine.machinery.tensor_rule._stalled`, the values Q of the last three levels)."""
+
+    case: np.ndarray  # (n,)
+    piece: np.ndarray  # (n,)
+    level_b: int
+    level_u: int
+    grid: np.ndarray
+    last_b: np.ndarray  # (n,)
+    last_u: np.ndarray  # (n,)
+    earlier: np.ndarray | None = None
+
+    def take(self, keep: np.ndarray) -> Group:
+        return Group(self.case[keep], self.piece[keep], self.level_b, self.level_u, self.grid[keep],
+                     self.last_b[keep], self.last_u[keep], None if self.earlier is None else self.earlier[keep])
+
+
+def integrate_global(grid: GlobalGrid, K: int, cases: np.ndarray, *, rtol, atol, max_nodes: int) -> RouteResult:
+    """The global rule on ``grid`` for ``cases`` (indices < K) as a :class:`RouteResult` (value and error (K, C),
+    evaluations and converged (K,)): ``converged`` marks the cases it settled; the others keep their evaluation
+    count and are left to the caller."""
+    atol = np.broadcast_to(np.asarray(atol, dtype=float).reshape(-1), (K,))
+    evaluations = np.zeros(K, dtype=np.int64)
+    value = error = None
+    settled = np.zeros(K, dtype=bool)
+    batch = max(1, BATCH_NODES // grid.batch_nodes(max_nodes))
+    for start in range(0, cases.size, batch):
+        part = cases[start:start + batch]
+        v, e, ok = _integrate_batch(grid, K, part, rtol, atol, max_nodes, evaluations)
+        if value is None:
+            value, error = np.zeros((K, v.shape[1])), np.zeros((K, v.shape[1]))
+        value[part], error[part], settled[part] = v[part], e[part], ok[part]
+    if value is None:
+        value, error = np.zeros((K, 1)), np.zeros((K, 1))
+    return RouteResult(value, error, evaluations, settled)
+
+
+def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluations):
+    """:func:`integrate_global` for one batch: fills ``evaluations`` in place, returns value, error (K, C) and
+    settled (K,)."""
+    P = grid.pieces
+    level_b, level_u = START_LEVELS
+    case, piece = np.repeat(cases, P), np.tile(np.arange(P), cases.size)
+    M, u = 2**level_b, fejer(level_u)[0]
+    F = grid.evaluate(case, piece, np.arange(M), M, u)
+    np.add.at(evaluations, case, grid.count(case, np.arange(M), M) * F.shape[2])
+    inf = np.full(case.size, np.inf)
+    start = Group(case, piece, level_b, level_u, F, inf, inf.copy())
+    again = grid.start(start)
+    if again is not None and again.any():
+        F[again] = grid.evaluate(case[again], piece[again], np.arange(M), M, u)
+        np.add.at(evaluations, case[again], grid.count(case[again], np.arange(M), M) * F.shape[2])
+    C = F.shape[-1]
+    latest = np.zeros((K, P, C))
+    value, error = np.zeros((K, P, C)), np.zeros((K, P, C))
+    done_piece = np.zeros((K, P), dtype=bool)
+    failed = np.zeros(K, dtype=bool)
+    groups = [start]
+    while groups:
+        rules = []
+        for group in groups:
+            finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
+            with np.errstate(invalid="ignore", over="ignore"):
+                F = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
+                q, e_b, e_u, magnitude = grid.sums(F, group.level_u)
+                e_b, floor, noise, estimate = grid.estimate(group, F, q, e_b, e_u, magnitude)
+            latest[group.case, group.piece] = q
+            failed[group.case[~finite]] = True
+            rules.append((finite, q, e_b, e_u, floor, noise, estimate))
+        # A case's tolerance, shared by its pieces, is on its value: the settled pieces' and the others' latest.
+        total = np.where(done_piece[..., None], value, latest).sum(axis=1)
+        case_tolerance = np.maximum(atol[:, None], rtol * np.abs(total)) / P
+        refined: dict[tuple[int, int], list[Group]] = {}
+        for group, (finite, q, e_b, e_u, floor, noise, estimate) in zip(groups, rules, strict=True):
+            tolerance = case_tolerance[group.case]
+            short = grid.short(group)  # (the neck lies below the coarse rules' nodes: tensor_rule.neck_u)
+            done = np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, q) & ~short
+            value[group.case[done], group.piece[done]] = q[done]
+            error[group.case[done], group.piece[done]] = estimate[done]
+            done_piece[group.case[done], group.piece[done]] = True
+            share = np.maximum(tolerance - floor - noise, 0.0) / 2
+            more_b, more_u, ratio_b, ratio_u, needed_b, needed_u = _directions(grid, group, short, e_b, e_u, share)
+            size = 2 ** (group.level_b + more_b) * (2 ** (group.level_u + more_u) - 1)
+            # Give up early where geometric convergence, extrapolated from the last doubling, would not settle
+            # the unit within max_nodes (a kink, a feature the coordinates do not follow): the panels will.
+            hopeless = ((needed_b + group.level_b) > MAX_LEVEL_B) | (
+                2 ** (group.level_b + needed_b) * (2 ** (group.level_u + needed_u) - 1) > max_nodes)
+            hopeless &= grid.may_predict(group)
+            go_on = finite & ~done & (size <= max_nodes) & ~hopeless & ~failed[group.case]
+            failed[group.case[finite & ~done & ~go_on]] = True
+            schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
+                               lambda g, pick, b, u: _refine(grid, g, pick, b, u, evaluations))
+        groups = [_merge(parts) for parts in refined.values()]
+        groups = [g if keep.all() else g.take(keep) for g in groups if (keep := ~failed[g.case]).any()]
+    # A case is settled when all its pieces are and their summed estimate meets the final tolerance.
+    value, error = value.sum(axis=1), error.sum(axis=1)
+    settled = done_piece.all(axis=1) & ~failed
+    settled &= np.all(error <= np.maximum(atol[:, None], rtol * np.abs(value)), axis=1)
+    return value, error, settled
+
+
+def _directions(grid: GlobalGrid, group: Group, short, e_b, e_u, share):
+    """The directions to double (more_b, more_u), the estimates over their shares (ratio_b, ratio_u) and the
+    doublings each still needs (needed_b, needed_u; :func:`brdfnorm.engine.machinery.tensor_rule.doublings`)."""
+    # Double the direction(s) whose deviation exceeds its share of the tolerance, else the larger one (a unit
+    # within tolerance is confirmed at the next level); a unit short of its radial level doubles u.
+    more_b = np.any(e_b > share, axis=1)
+    more_u = np.any(e_u > share, axis=1)
+    neither = ~(more_b | more_u | short)
+    larger_b = np.any(e_b >= e_u, axis=1)
+    more_b |= neither & larger_b
+    more_u |= neither & ~larger_b
+    ratio_b = normalized(e_b, share).max(axis=1)
+    ratio_u = normalized(e_u, share).max(axis=1)
+    lone_b = lone_u = np.zeros(group.case.size, dtype=bool)
+    if grid.lone:
+        # Where both exceed their shares but one direction's estimate is within the whole tolerance on its
+        # own (ratio < 2), double only the other: it then has the rest of the tolerance to reach, at half the
+        # cost (examples/ggx.brdf, roughness 0.107, θ_o = 60°, rtol 1e-9: e_u at 1.1 shares after 64 × 127
+        # nodes; doubling both passed the cap of 16 384 and sent the case to the panels, 55 248 evaluations;
+        # 128 × 127 settles it).
+        both = more_b & more_u
+        lone_b = both & (ratio_u < 2.0) & (ratio_b >= ratio_u)
+        lone_u = both & (ratio_b < 2.0) & ~lone_b
+    more_u = (more_u & ~lone_b) | short
+    more_b &= ~lone_u
+    needed_b = np.where(lone_u, 0, doublings(ratio_b, group.last_b))
+    needed_u = np.maximum(np.where(lone_b & ~short, 0, doublings(ratio_u, group.last_u)),
+                          grid.min_level_u(group) - group.level_u)
+    return more_b, more_u, ratio_b, ratio_u, needed_b, needed_u
+
+
+def schedule_doublings(group: Group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine) -> None:
+    """Double the units ``go_on`` of ``group`` along β (``more_b``), u (``more_u``) or both:
+    ``refine(group, pick, b, u)`` makes the finer group of the picked units, filed in ``refined`` by its levels
+    with the ratios it was doubled on (the extrapolation of
+    :func:`~brdfnorm.engine.machinery.tensor_rule.doublings`)."""
+    for b in (False, True):
+        for u in (False, True):
+            pick = go_on & (more_b == b) & (more_u == u)
+            if not pick.any():
+                continue
+            new = refine(group, pick, b, u)
+            # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
+            if b and group.level_b > START_LEVELS[0]:
+                new.last_b = ratio_b[pick]
+            if u and group.level_u > START_LEVELS[1]:
+                new.last_u = ratio_u[pick]
+            refined.setdefault((new.level_b, new.level_u), []).append(new)
+
+
+def _refine(grid: GlobalGrid, group: Group, pick, along_b: bool, along_u: bool, evaluations) -> Group:
+    """The picked units of ``group`` with their grid doubled along β and/or u (only the new nodes evaluated)."""
+    every = pick.all()  # (all picked: the group's arrays as they are, no copy of its grid)
+    case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
+    F = group.grid if every else group.grid[pick]
+    level_b, level_u = group.level_b, group.level_u
+    if along_b:
+        M = 2**level_b
+        index = 2 * np.arange(M) + 1
+        new = grid.evaluate(case, piece, index, 2 * M, fejer(level_u)[0])
+        refined = np.empty((case.size, 2 * M) + F.shape[2:])
+        refined[:, 0::2], refined[:, 1::2] = F, new
+        F, level_b = refined, level_b + 1
+        np.add.at(evaluations, case, grid.count(case, index, 2 * M) * new.shape[2])
+    if along_u:
+        M = 2**level_b
+        new = grid.evaluate(case, piece, np.arange(M), M, fejer(level_u + 1)[0][0::2])
+        refined = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+        refined[:, :, 1::2], refined[:, :, 0::2] = F, new
+        F, level_u = refined, level_u + 1
+        np.add.at(evaluations, case, grid.count(case, np.arange(M), M) * new.shape[2])
+    return Group(case, piece, level_b, level_u, F, group.last_b[pick], group.last_u[pick],
+                 None if group.earlier is None else group.earlier[pick])
+
+
+def _merge(parts: list[Group]) -> Group:
+    if len(parts) == 1:
+        return parts[0]
+    first = parts[0]
+    return Group(np.concatenate([p.case for p in parts]), np.concatenate([p.piece for p in parts]), first.level_b,
+                 first.level_u, np.concatenate([p.grid for p in parts]), np.concatenate([p.last_b for p in parts]),
+                 np.concatenate([p.last_u for p in parts]),
+                 None if first.earlier is None else np.concatenate([p.earlier for p in parts]))
