@@ -65,6 +65,7 @@ from functools import cache
 
 import numpy as np
 
+from . import grid_estimate
 from .result import RouteResult
 
 _EPS = np.finfo(float).eps
@@ -310,6 +311,8 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
                 F = np.where(finite[:, None, None, None], F, 0.0)
                 q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else sums)(
                     F, group.level_u)
+                # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
+                e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
                     e_b = np.maximum(e_b, tail)
