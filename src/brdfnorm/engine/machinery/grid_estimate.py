@@ -33,12 +33,22 @@ import numpy as np
 
 #: Both of the last two differences along a direction must have fallen at least this many times.
 CONVERGING = 16.0
-#: The extrapolation's power of the last fall (below 1: a margin that grows as the fall steepens).
-POWER = 0.75
+#: The last fall may be at most this many times steeper than the square of the fall before it (geometric
+#: convergence squares it; a steeper one is pre-asymptotic or a coincidence).
+ACCELERATION = 2.0
+#: The extrapolation's power of the last fall along β and along u (below 1: a margin against a slower next
+#: fall, which grows as the fall steepens).
+POWER_B = 0.5
+POWER_U = 1.0
 #: The extrapolation's factor.
 SAFETY = 2.0
-#: The last fall may be at most the previous fall to this power (a steeper one is a coincidence, not convergence).
-ACCELERATION = 3.0
+#: The coarsest embedded rule (every eighth node) must have at least this many azimuths, radial nodes.
+COARSEST_B = 4
+COARSEST_U = 3
+#: Differences below this many units of rounding of the |integrand| integral are noise, not convergence.
+RESOLVED = 1000.0
+
+_EPS = np.finfo(float).eps
 
 
 def deviations(F: np.ndarray, weights: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -56,22 +66,31 @@ def deviations(F: np.ndarray, weights: list[np.ndarray]) -> tuple[np.ndarray, np
     return tuple(np.abs(np.diff(np.stack(q), axis=0)) for q in (along_b, along_u))
 
 
-def extrapolated(d: np.ndarray, plain: np.ndarray) -> np.ndarray:
+def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, rounding: np.ndarray,
+                 power: float) -> np.ndarray:
     """The estimate (module docstring) from one direction's differences ``d`` (3, n, C) and its plain estimate
-    ``plain`` (n, C): the extrapolation where the direction converges steadily, else ``plain``."""
+    ``plain`` (n, C): the extrapolation with ``power`` where the direction converges steadily, else ``plain``;
+    ``magnitude`` (n, C) is the integral of |integrand|, ``rounding`` (n, C) the rounding terms of the whole
+    estimate (the extrapolation never goes below them, nor above ``plain``)."""
     d1, d2, d3 = d
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         fall, before = d1 / d2, d2 / d3
         converging = (d1 * CONVERGING <= d2) & (d2 * CONVERGING <= d3)
-        steady = fall >= before**ACCELERATION
-        estimate = SAFETY * d1 * fall**POWER
-    use = converging & steady & np.isfinite(estimate)
-    return np.where(use, np.minimum(estimate, plain), plain)
+        steady = fall * ACCELERATION >= before * before
+        estimate = SAFETY * d1 * fall**power
+    use = converging & steady & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
+    return np.where(use, np.minimum(np.maximum(estimate, rounding), plain), plain)
 
 
-def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray,
-              e_u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np.ndarray, magnitude: np.ndarray,
+              rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The β and u estimates of the reported grid ``F`` (n, M, N − 1, C), ``weights`` as in :func:`deviations`, from
-    the plain ones ``e_b``, ``e_u`` (n, C) of :func:`brdfnorm.engine.machinery.tensor_rule.sums`."""
+    the plain ones ``e_b``, ``e_u`` and the |integrand| integral ``magnitude`` (n, C) of
+    :func:`brdfnorm.engine.machinery.tensor_rule.sums`; ``rounding`` (n, C): the estimate's rounding floor and noise
+    bound."""
     d_b, d_u = deviations(F, weights)
-    return extrapolated(d_b, e_b), extrapolated(d_u, e_u)
+    if F.shape[1] >= 8 * COARSEST_B:
+        e_b = extrapolated(d_b, e_b, magnitude, rounding, POWER_B)
+    if weights[3].size >= COARSEST_U:
+        e_u = extrapolated(d_u, e_u, magnitude, rounding, POWER_U)
+    return e_b, e_u

@@ -311,16 +311,17 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
                 F = np.where(finite[:, None, None, None], F, 0.0)
                 q, e_b, e_u, magnitude = (compiled_sums if hasattr(integrand, "kernels") else sums)(
                     F, group.level_u)
+                noise = noise_bound(noise_amplitude[group.case], magnitude)
+                floor = FLOOR * magnitude
                 # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
-                e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u)
+                e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u,
+                                                   magnitude, floor + noise)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
                     e_b = np.maximum(e_b, tail)
             if value.shape[1] != q.shape[1]:
                 shape = (K, q.shape[1])
                 value, error = np.broadcast_to(value, shape).copy(), np.broadcast_to(error, shape).copy()
-            noise = noise_bound(noise_amplitude[group.case], magnitude)
-            floor = FLOOR * magnitude
             tolerance = np.maximum(atol, rtol * np.abs(q))
             estimate = e_b + e_u + floor + noise
             earlier = np.full((q.shape[0], 3, q.shape[1]), np.nan) if group.earlier is None else group.earlier
