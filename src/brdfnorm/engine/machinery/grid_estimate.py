@@ -39,7 +39,11 @@ ACCELERATION = 2.0
 #: The extrapolation's power of the last fall along β and along u (below 1: a margin against a slower next
 #: fall, which grows as the fall steepens).
 POWER_B = 0.5
-POWER_U = 1.0
+POWER_U = 0.75
+#: Along u, where the last fall is at most the one before to this power (the squaring of geometric convergence
+#: seen, not only a steady ratio), the power :data:`POWER_SQUARING`.
+SQUARING = 2.0
+POWER_SQUARING = 1.0
 #: The extrapolation's factor.
 SAFETY = 2.0
 #: The coarsest embedded rule (every eighth node) must have at least this many azimuths, radial nodes.
@@ -67,7 +71,7 @@ def deviations(F: np.ndarray, weights: list[np.ndarray]) -> tuple[np.ndarray, np
 
 
 def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, rounding: np.ndarray,
-                 power: float) -> np.ndarray:
+                 power: float, squaring_power: float | None = None) -> np.ndarray:
     """The estimate (module docstring) from one direction's differences ``d`` (3, n, C) and its plain estimate
     ``plain`` (n, C): the extrapolation with ``power`` where the direction converges steadily, else ``plain``;
     ``magnitude`` (n, C) is the integral of |integrand|, ``rounding`` (n, C) the rounding terms of the whole
@@ -77,6 +81,8 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
         fall, before = d1 / d2, d2 / d3
         converging = (d1 * CONVERGING <= d2) & (d2 * CONVERGING <= d3)
         steady = fall * ACCELERATION >= before * before
+        if squaring_power is not None:
+            power = np.where(fall <= before**SQUARING, squaring_power, power)
         estimate = SAFETY * d1 * fall**power
     use = converging & steady & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
     return np.where(use, np.minimum(np.maximum(estimate, rounding), plain), plain)
@@ -92,5 +98,5 @@ def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np
     if F.shape[1] >= 8 * COARSEST_B:
         e_b = extrapolated(d_b, e_b, magnitude, rounding, POWER_B)
     if weights[3].size >= COARSEST_U:
-        e_u = extrapolated(d_u, e_u, magnitude, rounding, POWER_U)
+        e_u = extrapolated(d_u, e_u, magnitude, rounding, POWER_U, POWER_SQUARING)
     return e_b, e_u
