@@ -49,6 +49,8 @@ SAFETY = 2.0
 #: The coarsest embedded rule (every eighth node) must have at least this many azimuths, radial nodes.
 COARSEST_B = 4
 COARSEST_U = 3
+#: Only lobes whose peak lies at least this many widths above the horizon (c_P ≥ HORIZON · w) are extrapolated.
+HORIZON = 1.0
 #: Differences below this many units of rounding of the |integrand| integral are noise, not convergence.
 RESOLVED = 1000.0
 
@@ -89,12 +91,14 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
 
 
 def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np.ndarray, magnitude: np.ndarray,
-              rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              rounding: np.ndarray, height: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The β and u estimates of the reported grid ``F`` (n, M, N − 1, C), ``weights`` as in :func:`deviations`, from
     the plain ones ``e_b``, ``e_u`` and the |integrand| integral ``magnitude`` (n, C) of
     :func:`brdfnorm.engine.machinery.tensor_rule.sums`; ``rounding`` (n, C): the estimate's rounding floor and noise
     bound."""
     d_b, d_u = deviations(F, weights)
+    clear = (height >= HORIZON * width)[:, None]
+    rounding = np.where(clear, rounding, np.inf)  # a lobe cut by the horizon keeps the plain estimates
     if F.shape[1] >= 8 * COARSEST_B:
         e_b = extrapolated(d_b, e_b, magnitude, rounding, POWER_B)
     if weights[3].size >= COARSEST_U:
