@@ -50,6 +50,8 @@ CONVERGING = 16.0
 #: The last fall may be at most this many times steeper than the square of the fall before it (geometric
 #: convergence squares it; a steeper one is pre-asymptotic or a coincidence).
 ACCELERATION = 2.0
+#: ... and at most this many times shallower: a steady ratio (r ≈ r₋) is algebraic convergence, not geometric.
+GEOMETRIC = 8.0
 #: The extrapolation's power of the last fall along β and along u (below 1: a margin against a slower next
 #: fall, which grows as the fall steepens).
 POWER_B = 0.5
@@ -96,9 +98,10 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         fall, before = d1 / d2, d2 / d3
         converging = (d1 * CONVERGING <= d2) & (d2 * CONVERGING <= d3)
-        steady = fall * ACCELERATION >= before * before
+        squared = before * before
+        steady = (fall * ACCELERATION >= squared) & (fall <= GEOMETRIC * squared)
         if squaring_power is not None:
-            power = np.where(fall <= before * before, squaring_power, power)
+            power = np.where(fall <= squared, squaring_power, power)
         estimate = SAFETY * d1 * fall**power
     use = converging & steady & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
     return np.where(use, np.minimum(np.maximum(estimate, rounding), plain), plain)
