@@ -11,6 +11,8 @@
 - :mod:`.interval` — the 1-D adaptive integration (the 1-D routes, the claims, the tables' μ-average);
 - :mod:`.tensor_rule` — lobe-aligned coordinates of the hemisphere and a global tensor rule with degree doubling
   on them (the hemisphere and half-vector routes try it before adaptive panels);
+- :mod:`.grid_estimate` — the lobe-aligned global rule's estimate of its reported grid, extrapolated where its
+  convergence is shown to be geometric;
 - :mod:`.slope_coordinates` — the radial coordinates (pole, tail, cap) the half-vector routes run in over each
   microfacet slope distribution;
 - :mod:`.directions` — random hemisphere directions and rotations about the normal.

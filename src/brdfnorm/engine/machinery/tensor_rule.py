@@ -44,7 +44,9 @@ d₂ = |Q(½) − Q(¼)| (:func:`sums`), plus the rounding floor and the integra
 the nodes, is
 far more accurate once convergence is geometric (its error is roughly the square of d₁, relative). The factor 10
 covers pre-asymptotic plateaus, where two rules agree better than either is accurate (a randomized probe found
-Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). The direction(s) whose estimate
+Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). Where convergence along a direction
+is shown to be geometric, :mod:`brdfnorm.engine.machinery.grid_estimate` replaces that estimate by one of the
+reported grid itself, extrapolated from d₁, d₂ and d₃ = |Q(¼) − Q(⅛)|. The direction(s) whose estimate
 exceeds half the tolerance (the larger one where neither does) are doubled — only one where the other is within
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
 (:func:`_stalled`). A case goes to the adaptive panels of
