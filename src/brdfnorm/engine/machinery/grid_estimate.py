@@ -113,10 +113,13 @@ def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np
     the plain ones ``e_b``, ``e_u`` and the |integrand| integral ``magnitude`` (n, C) of
     :func:`brdfnorm.engine.machinery.tensor_rule.sums`; ``rounding`` (n, C): the estimate's rounding floor and noise
     bound; ``height``, ``width`` (n,): the lobe's peak height c_P above the horizon and its width w."""
-    d_b, d_u = deviations(F, weights)
     clear = (height >= HORIZON * width)[:, None]
-    if F.shape[1] >= 8 * COARSEST_B:
+    along_b, along_u = F.shape[1] >= 8 * COARSEST_B, weights[3].size >= COARSEST_U
+    if not (clear.any() and (along_b or along_u)):
+        return e_b, e_u
+    d_b, d_u = deviations(F, weights)
+    if along_b:
         e_b = np.where(clear, extrapolated(d_b, e_b, magnitude, rounding, POWER_B), e_b)
-    if weights[3].size >= COARSEST_U:
+    if along_u:
         e_u = np.where(clear, extrapolated(d_u, e_u, magnitude, rounding, POWER_U, POWER_SQUARING), e_u)
     return e_b, e_u
