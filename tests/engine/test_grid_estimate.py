@@ -88,16 +88,30 @@ def test_the_horizon_guard_is_needed(monkeypatch):
     assert _covered(_quiet(model, theta, rtol=1e-5), exact.value[:, 0], allowance)[0] > 1.0
 
 
-def test_the_coarsest_rule_guard_is_needed(monkeypatch):
-    # examples/beckmann.brdf, α = 0.242 at 2.44°, rtol 1e-3: on the 8 × 15 start grid the u differences (3, 1 and
-    # 0 radial nodes in the coarser rules) fell 16-fold twice; extrapolated, the start grid settled 2.4 times
-    # outside its estimate.
-    model = bn.load(str(EXAMPLES / "beckmann.brdf"), alpha=0.24166669242777883)
-    theta = np.radians(2.439540142352451)
-    exact = bn.albedo(bn.load("beckmann", alpha=0.24166669242777883), np.atleast_1d(theta), rtol=1e-13)
-    assert _covered(_quiet(model, theta, rtol=1e-3), exact.value[:, 0], exact.error[:, 0])[0] <= 1.0
-    monkeypatch.setattr(grid_estimate, "COARSEST_U", 1)
-    assert _covered(_quiet(model, theta, rtol=1e-3), exact.value[:, 0], exact.error[:, 0])[0] > 1.0
+def test_the_start_grid_is_never_extrapolated():
+    # On the 8 × 15 start grid the coarsest embedded rules have 1 azimuth and 1 radial node: their differences
+    # say nothing of convergence (examples/beckmann.brdf, α = 0.24 at 2.4°, rtol 1e-3: u fell 70-fold, then
+    # 40-fold; extrapolated without the steadiness band, 2.4 times outside). Both directions keep the plain
+    # estimates there, and extrapolate from 32 azimuths and 31 radial nodes on.
+    rho = 0.3
+    beta = np.arange(8) * 2 * np.pi / 8
+    weights = [fejer(4 - k)[1] for k in range(4)]
+    u = fejer(4)[0]
+    F = (1.0 / (1.0 - 2 * rho * np.cos(beta) + rho**2))[None, :, None, None] * (1.0 / (u + 0.2))[None, None, :, None]
+    plain = np.ones((1, 1))
+    same = grid_estimate.own_error(F, weights, plain, plain, np.ones((1, 1)), np.zeros((1, 1)), np.ones(1),
+                                   np.full(1, 0.1))
+    assert same[0][0, 0] == 1.0 and same[1][0, 0] == 1.0
+    beta = np.arange(32) * 2 * np.pi / 32
+    weights = [fejer(5 - k)[1] for k in range(4)]
+    u = fejer(5)[0]
+    F = (1.0 / (1.0 - 2 * rho * np.cos(beta) + rho**2))[None, :, None, None] * (1.0 / (u + 0.2))[None, None, :, None]
+    finer = grid_estimate.own_error(F, weights, plain, plain, np.ones((1, 1)), np.zeros((1, 1)), np.ones(1),
+                                    np.full(1, 0.1))
+    assert finer[0][0, 0] < 1e-6 and finer[1][0, 0] < 1e-6
+    # ... and bound the grid's true error: ∫ dβ/(1 − 2ρ cos β + ρ²) = 2π/(1 − ρ²), ∫₀¹ du/(u + 0.2) = ln 6.
+    q = (F[0, :, :, 0] @ weights[0]).sum() * 2 * np.pi / 32
+    assert abs(q - 2 * np.pi / (1 - rho**2) * np.log(6.0)) <= finer[0][0, 0] + finer[1][0, 0]
 
 
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])

@@ -18,12 +18,14 @@ never above the plain estimate nor below the estimate's rounding terms, and only
 
 * *converging*: both falls are at least :data:`CONVERGING`-fold (the ``.brdf`` table's E_avg rule,
   :func:`brdfnorm.lut.table.rule_error`, whose power 0.75 is also the one here);
-* *steady*: r ≥ r₋² / :data:`ACCELERATION` — a fall much steeper than the square of the one before is not
-  convergence but a coincidence or a pre-asymptotic phase, which ends (Blinn-Phong n = 268 at 34°, rtol 1e-11: u
-  fell 16-fold, then 38 000-fold, 146 times steeper than the square; extrapolated, 4.6 times outside the estimate);
+* *geometric*: r₋²/:data:`ACCELERATION` ≤ r ≤ :data:`GEOMETRIC`·r₋². A fall much steeper than the square of the
+  one before is not convergence but a coincidence or a pre-asymptotic phase, which ends (Blinn-Phong n = 268 at
+  34°, rtol 1e-11: u fell 16-fold, then 38 000-fold, 146 times steeper than the square; extrapolated, 4.6 times
+  outside the estimate); a steady ratio (r ≈ r₋) is algebraic convergence, whose ratio drifts (Blinn-Phong
+  n = 6 667 at 85.0°, rtol 1e-5: u fell 105-, 126-, then only 14-fold; 1.34 times outside);
 * the coarsest embedded rule has at least :data:`COARSEST_B` azimuths / :data:`COARSEST_U` radial nodes (a
   1-node rule says nothing: examples/beckmann.brdf, α = 0.24 at 2.4°, rtol 1e-3, settled on its start grid 2.4
-  times outside);
+  times outside before the band below was added, which refuses it too);
 * the lobe's peak lies at least :data:`HORIZON` widths above the horizon (c_P ≥ w): the horizon's cut, a
   feature the lobe-aligned coordinates do not follow, adds a slowly converging part under the fast bulk
   (beckmann.brdf, α = 0.10 at 85.5°, rtol 1e-5: u fell 31-, 146-, then only 6-fold, 2.1 times outside; α = 0.33 at
@@ -48,7 +50,7 @@ import numpy as np
 #: Both of the last two differences along a direction must have fallen at least this many times.
 CONVERGING = 16.0
 #: The last fall may be at most this many times steeper than the square of the fall before it (geometric
-#: convergence squares it; a steeper one is pre-asymptotic or a coincidence).
+#: convergence squares it; a steeper one is pre-asymptotic or a coincidence) ...
 ACCELERATION = 2.0
 #: ... and at most this many times shallower: a steady ratio (r ≈ r₋) is algebraic convergence, not geometric.
 GEOMETRIC = 8.0
@@ -91,7 +93,7 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
                  power: float, squaring_power: float | None = None) -> np.ndarray:
     """The estimate (module docstring) from one direction's differences ``d`` (3, n, C) and its plain estimate
     ``plain`` (n, C): the extrapolation with ``power`` (``squaring_power`` where the squaring is seen) where the
-    direction converges steadily, else ``plain``;
+    direction converges geometrically, else ``plain``;
     ``magnitude`` (n, C) is the integral of |integrand|, ``rounding`` (n, C) the rounding terms of the whole
     estimate (the extrapolation never goes below them, nor above ``plain``)."""
     d1, d2, d3 = d
@@ -99,11 +101,11 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
         fall, before = d1 / d2, d2 / d3
         converging = (d1 * CONVERGING <= d2) & (d2 * CONVERGING <= d3)
         squared = before * before
-        steady = (fall * ACCELERATION >= squared) & (fall <= GEOMETRIC * squared)
+        geometric = (fall * ACCELERATION >= squared) & (fall <= GEOMETRIC * squared)
         if squaring_power is not None:
             power = np.where(fall <= squared, squaring_power, power)
         estimate = SAFETY * d1 * fall**power
-    use = converging & steady & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
+    use = converging & geometric & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
     return np.where(use, np.minimum(np.maximum(estimate, rounding), plain), plain)
 
 
