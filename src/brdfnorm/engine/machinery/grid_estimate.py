@@ -11,36 +11,37 @@ plain estimate is 8e-7, so the rule doubled both directions once more (×4 in no
 Here, per direction, with also d₃ = |Q(¼) − Q(⅛)| (every eighth node, on the grid too), the last fall r = d₁/d₂
 and the one before it, r₋ = d₂/d₃, the estimate is
 
-    :data:`SAFETY` · d₁ · r^p,   p = :data:`POWER_B` along β, :data:`POWER_U` along u
-                                 (:data:`POWER_SQUARING` along u where r ≤ r₋², the squaring itself seen),
+    :data:`SAFETY` · d₁ · r^p,   p = :data:`POWER_B` along β, :data:`POWER_U` along u,
 
 never above the plain estimate nor below the estimate's rounding terms, and only where
 
 * *converging*: both falls are at least :data:`CONVERGING`-fold (the ``.brdf`` table's E_avg rule,
-  :func:`brdfnorm.lut.table.rule_error`, whose power 0.75 is also the one here);
+  :func:`brdfnorm.lut.table.rule_error`, whose power 0.75 is also the one along u here);
 * *geometric*: r₋²/:data:`ACCELERATION` ≤ r ≤ :data:`GEOMETRIC`·r₋². A fall much steeper than the square of the
   one before is not convergence but a coincidence or a pre-asymptotic phase, which ends (Blinn-Phong n = 268 at
   34°, rtol 1e-11: u fell 16-fold, then 38 000-fold, 146 times steeper than the square; extrapolated, 4.6 times
   outside the estimate); a steady ratio (r ≈ r₋) is algebraic convergence, whose ratio drifts (Blinn-Phong
-  n = 6 667 at 85.0°, rtol 1e-5: u fell 105-, 126-, then only 14-fold; 1.34 times outside);
+  n = 6 667 at 85.0°, rtol 1e-5: u fell 105-, 125-, then only 14-fold; 1.34 times outside);
 * the coarsest embedded rule has at least :data:`COARSEST_B` azimuths / :data:`COARSEST_U` radial nodes (a
   1-node rule says nothing: examples/beckmann.brdf, α = 0.24 at 2.4°, rtol 1e-3, settled on its start grid 2.4
-  times outside before the band below was added, which refuses it too);
+  times outside before the geometric band above was added, which refuses it too);
 * the lobe's peak lies at least :data:`HORIZON` widths above the horizon (c_P ≥ w): the horizon's cut, a
   feature the lobe-aligned coordinates do not follow, adds a slowly converging part under the fast bulk
-  (beckmann.brdf, α = 0.10 at 85.5°, rtol 1e-5: u fell 31-, 146-, then only 6-fold, 2.1 times outside; α = 0.33 at
-  73.5°: β fell 1e-2, 1e-4 — exactly squaring — then 270-fold, 19 times outside with power 1 along β);
+  (beckmann.brdf, α = 0.10 at 85.5°, rtol 1e-5: u fell 31-, 146-, then only 6-fold, 2.1 times outside);
 * d₁ is above :data:`RESOLVED` units of rounding of the |integrand| integral (differences of rounding noise are
   not convergence).
 
-The margins: with a steady reduction the true error is about r·d₁, so the estimate is S·r^(p−1) times that (4–8
-and more at r ≤ 1/16), and under geometric convergence (error r²·d₁) far more; it fails only if the next fall is
-slower than the last by more than that, which the guards above are there to exclude. Powers of 1 everywhere came
-within 0.994 of the true error (Blinn-Phong n = 7 744 at 85.3°, rtol 1e-5, u falling 72-fold twice, a steady
-ratio), hence 1 only where the squaring is seen. Measured mean evaluations and honesty ratios per variant are in
-docs/performance.md ("Where the evaluations of a generic albedo go", fourth session); the cases above are tests in
-tests/engine/test_grid_estimate.py, each failing with its guard off. (Berntsen and Espelid 1991, "Error estimation
-in automatic quadrature routines", decide by such ratios whether a rule is in its asymptotic range.)
+The margins: were the next fall as steep as the last, the true error would be r·d₁, and the estimate is
+S·r^(p−1) times that — at least 4 (u) and 8 (β) for r ≤ 1/16, more as r falls; under geometric convergence
+(error r²·d₁) far more. It fails only where the next fall is slower than the last by more than that margin,
+which the guards above are there to exclude. Power 1 (a margin of 2) failed along both directions: Phong n = 79
+at 40.9°, rtol 1e-11, u squaring exactly (r = 7.6e-5 after 1.05e-2), then the next fall only 3.4e-4, 1.007 times
+outside; beckmann.brdf α = 0.33 at 73.5° (before the horizon guard), β falling 1e-2, then 1e-4 — squaring — then
+only 270-fold, 19 times outside. Measured mean evaluations and honesty ratios per variant are in
+docs/performance.md ("Where the evaluations of a generic albedo go", fourth session); the cases of the geometric
+band and of the horizon are tests in tests/engine/test_grid_estimate.py that fail with their guard off. (Berntsen
+and Espelid 1991, "Error estimation in automatic quadrature routines", decide by such ratios whether a rule is in
+its asymptotic range.)
 """
 
 from __future__ import annotations
@@ -58,9 +59,6 @@ GEOMETRIC = 8.0
 #: fall, which grows as the fall steepens).
 POWER_B = 0.5
 POWER_U = 0.75
-#: Along u, where the last fall is at most the square of the one before (the squaring of geometric convergence
-#: seen, not only a steady ratio): this power.
-POWER_SQUARING = 1.0
 #: The extrapolation's factor.
 SAFETY = 2.0
 #: The coarsest embedded rule (every eighth node) must have at least this many azimuths, radial nodes.
@@ -90,10 +88,9 @@ def deviations(F: np.ndarray, weights: list[np.ndarray]) -> tuple[np.ndarray, np
 
 
 def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, rounding: np.ndarray,
-                 power: float, squaring_power: float | None = None) -> np.ndarray:
+                 power: float) -> np.ndarray:
     """The estimate (module docstring) from one direction's differences ``d`` (3, n, C) and its plain estimate
-    ``plain`` (n, C): the extrapolation with ``power`` (``squaring_power`` where the squaring is seen) where the
-    direction converges geometrically, else ``plain``;
+    ``plain`` (n, C): the extrapolation with ``power`` where the direction converges geometrically, else ``plain``;
     ``magnitude`` (n, C) is the integral of |integrand|, ``rounding`` (n, C) the rounding terms of the whole
     estimate (the extrapolation never goes below them, nor above ``plain``)."""
     d1, d2, d3 = d
@@ -102,8 +99,6 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
         converging = (d1 * CONVERGING <= d2) & (d2 * CONVERGING <= d3)
         squared = before * before
         geometric = (fall * ACCELERATION >= squared) & (fall <= GEOMETRIC * squared)
-        if squaring_power is not None:
-            power = np.where(fall <= squared, squaring_power, power)
         estimate = SAFETY * d1 * fall**power
     use = converging & geometric & np.isfinite(estimate) & (d1 > RESOLVED * _EPS * magnitude)
     return np.where(use, np.minimum(np.maximum(estimate, rounding), plain), plain)
@@ -123,5 +118,5 @@ def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np
     if along_b:
         e_b = np.where(clear, extrapolated(d_b, e_b, magnitude, rounding, POWER_B), e_b)
     if along_u:
-        e_u = np.where(clear, extrapolated(d_u, e_u, magnitude, rounding, POWER_U, POWER_SQUARING), e_u)
+        e_u = np.where(clear, extrapolated(d_u, e_u, magnitude, rounding, POWER_U), e_u)
     return e_b, e_u
