@@ -105,12 +105,14 @@ def extrapolated(d: np.ndarray, plain: np.ndarray, magnitude: np.ndarray, roundi
 
 
 def own_error(F: np.ndarray, weights: list[np.ndarray], e_b: np.ndarray, e_u: np.ndarray, magnitude: np.ndarray,
-              rounding: np.ndarray, height: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              rounding: np.ndarray, height: np.ndarray, width: np.ndarray,
+              heavy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The β and u estimates of the reported grid ``F`` (n, M, N − 1, C), ``weights`` as in :func:`deviations`, from
     the plain ones ``e_b``, ``e_u`` and the |integrand| integral ``magnitude`` (n, C) of
     :func:`brdfnorm.engine.machinery.tensor_rule.sums`; ``rounding`` (n, C): the estimate's rounding floor and noise
-    bound; ``height``, ``width`` (n,): the lobe's peak height c_P above the horizon and its width w."""
-    clear = (height >= HORIZON * width)[:, None]
+    bound; ``height``, ``width`` (n,): the lobe's peak height c_P above the horizon and its width w; ``heavy`` (n,):
+    whether the lobe is heavy-tailed (:func:`brdfnorm.engine.machinery.tensor_rule._heavy_tailed`)."""
+    clear = ((height >= HORIZON * width) & ~heavy)[:, None]
     along_b, along_u = F.shape[1] >= 8 * COARSEST_B, weights[3].size >= COARSEST_U
     if not (clear.any() and (along_b or along_u)):
         return e_b, e_u

@@ -318,7 +318,7 @@ def _integrate_batch(integrand, frame, widths, supports, maps, cases, noise_ampl
                 # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
                 e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u,
                                                    magnitude, floor + noise, frame[0][group.case, 2],
-                                                   widths[group.case])
+                                                   widths[group.case], grading[group.case] == HEAVY_TAIL_GRADING)
                 if azimuthal_tail[group.case].any():
                     tail = np.where(azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
                     e_b = np.maximum(e_b, tail)
