@@ -28,6 +28,10 @@ never above the plain estimate nor below the estimate's rounding terms, and only
 * the lobe's peak lies at least :data:`HORIZON` widths above the horizon (c_P ≥ w): the horizon's cut, a
   feature the lobe-aligned coordinates do not follow, adds a slowly converging part under the fast bulk
   (beckmann.brdf, α = 0.10 at 85.5°, rtol 1e-5: u fell 31-, 146-, then only 6-fold, 2.1 times outside);
+* the lobe is not heavy-tailed (:func:`brdfnorm.engine.machinery.tensor_rule._heavy_tailed`, GGX-like): its Smith
+  boundary layer at the horizon makes plateaus that three differences cannot tell from convergence
+  (examples/ggx.brdf, roughness 0.418 at 11.9°, rtol 1e-9: u fell 255-, then 96 000-fold — squaring — yet the 15-
+  and 31-node rules were both 2.5e-9 off; 1 373 times outside);
 * d₁ is above :data:`RESOLVED` units of rounding of the |integrand| integral (differences of rounding noise are
   not convergence).
 
@@ -39,9 +43,9 @@ at 40.9°, rtol 1e-11, u squaring exactly (r = 7.6e-5 after 1.05e-2), then the n
 outside; beckmann.brdf α = 0.33 at 73.5° (before the horizon guard), β falling 1e-2, then 1e-4 — squaring — then
 only 270-fold, 19 times outside. Measured mean evaluations and honesty ratios per variant are in
 docs/performance.md ("Where the evaluations of a generic albedo go", fourth session); the cases of the geometric
-band and of the horizon are tests in tests/engine/test_grid_estimate.py that fail with their guard off. (Berntsen
-and Espelid 1991, "Error estimation in automatic quadrature routines", decide by such ratios whether a rule is in
-its asymptotic range.)
+band, the horizon and the heavy tails are tests in tests/engine/test_grid_estimate.py that fail with their guard
+off. (Berntsen and Espelid 1991, "Error estimation in automatic quadrature routines", decide by such ratios whether
+a rule is in its asymptotic range.)
 """
 
 from __future__ import annotations
