@@ -35,7 +35,7 @@ class Rectangle(GlobalGrid):
     def estimate(self, group, F, q, e_b, e_u, magnitude):
         floor = FLOOR * magnitude
         estimate = e_b + e_u + floor
-        return e_b, floor, 0.0, estimate
+        return e_b, e_u, floor, 0.0, estimate
 
 
 def _exact(a, s, pieces):

@@ -104,7 +104,7 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
             with np.errstate(invalid="ignore", over="ignore"):
                 F = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = grid.sums(F, group.level_u)
-                e_b, floor, noise, estimate = grid.estimate(group, F, q, e_b, e_u, magnitude)
+                e_b, e_u, floor, noise, estimate = grid.estimate(group, F, q, e_b, e_u, magnitude)
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
             rules.append((finite, q, e_b, e_u, floor, noise, estimate))

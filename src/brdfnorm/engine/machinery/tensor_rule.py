@@ -44,7 +44,9 @@ d₂ = |Q(½) − Q(¼)| (:func:`sums`), plus the rounding floor and the integra
 the nodes, is
 far more accurate once convergence is geometric (its error is roughly the square of d₁, relative). The factor 10
 covers pre-asymptotic plateaus, where two rules agree better than either is accurate (a randomized probe found
-Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). The direction(s) whose estimate
+Blinn-Phong n = 805 at θ_o = 50°, rtol 1e-6, 1.5 times outside the plain d₁). Where convergence along a direction
+is shown to be geometric, :mod:`brdfnorm.engine.machinery.grid_estimate` replaces that estimate by one of the
+reported grid itself, extrapolated from d₁, d₂ and d₃ = |Q(¼) − Q(⅛)|. The direction(s) whose estimate
 exceeds half the tolerance (the larger one where neither does) are doubled — only one where the other is within
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
 (:func:`_stalled`). A case goes to the adaptive panels of
@@ -71,6 +73,8 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
+
+from . import grid_estimate
 
 _EPS = np.finfo(float).eps
 
@@ -265,8 +269,9 @@ class GlobalGrid:
         return sums(F, level_u)
 
     def estimate(self, group, F, q, e_b, e_u, magnitude):
-        """(e_b, floor, noise, estimate): the β deviation with any extra term, the rounding floor, the float64
-        noise bound (both taken off the tolerance the deviations share) and the estimate."""
+        """(e_b, e_u, floor, noise, estimate): the deviations along β and u as the grid reads them (any extra
+        term, any extrapolation to the reported grid), the rounding floor, the float64 noise bound (both taken off
+        the tolerance the deviations share) and the estimate."""
         raise NotImplementedError
 
     def short(self, group) -> np.ndarray:
@@ -341,13 +346,17 @@ class LobeAlignedGrid(GlobalGrid):
         return weaker
 
     def estimate(self, group, F, q, e_b, e_u, magnitude):
+        noise = self.noise_bound(self.noise_amplitude[group.case], magnitude)
+        floor = FLOOR * magnitude
+        # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
+        e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u, magnitude,
+                                           floor + noise, self.frame[0][group.case, 2], self.widths[group.case],
+                                           self.grading[group.case] == HEAVY_TAIL_GRADING)
         if self.azimuthal_tail[group.case].any():
             tail = np.where(self.azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
             e_b = np.maximum(e_b, tail)
-        noise = self.noise_bound(self.noise_amplitude[group.case], magnitude)
-        floor = FLOOR * magnitude
         estimate = e_b + e_u + floor + noise
-        return e_b, floor, noise, estimate
+        return e_b, e_u, floor, noise, estimate
 
     def admit(self, cases: np.ndarray, max_nodes: int) -> np.ndarray:
         """The ``cases`` worth trying: not those whose neck (:func:`neck_u`) no grid within ``max_nodes`` reaches,

@@ -158,7 +158,7 @@ class HalfVectorGrid(GlobalGrid):
     def estimate(self, group, F, q, e_b, e_u, magnitude):
         floor = FLOOR * magnitude
         estimate = e_b + e_u + floor
-        return e_b, floor, 0.0, estimate
+        return e_b, e_u, floor, 0.0, estimate
 
     def may_predict(self, group):
         # The graded map converges pre-asymptotically: no prediction before GRADED_PREDICTS azimuth levels.
