@@ -32,6 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
+from brdfnorm.engine.compiled.global_rule import fused_loop
 from brdfnorm.engine.compiled.slopes import slope_loop
 
 shader = None  # set per copy (drivers.py)
@@ -246,3 +247,14 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     largest |value|; ``failed[k]`` where a value above the horizon is not finite."""
     slope_loop(_slope_case, _slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
                amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light), True, out, failed)
+
+
+@njit(cache=True, error_model="numpy")
+def global_grid(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon, vz,
+                cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, F, rows, fixed, U,
+                over_light, failed, value, error, evaluations, settled):  # pragma: no cover - compiled
+    """The half-vector route's global rule on :func:`slope_grid`'s weight, fused
+    (:func:`brdfnorm.engine.compiled.global_rule.fused_loop`); ``failed[k]`` as there."""
+    fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon, False,
+               (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), _slope_case,
+               _slope_value, (F, rows, fixed, U, over_light), True, failed, (value, error, evaluations, settled))

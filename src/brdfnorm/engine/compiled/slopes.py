@@ -145,21 +145,6 @@ def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx,
                     fresnel_factor(fresnel_kind, cos_vh, fresnel, 2))
 
 
-@njit(**_OPTIONS, inline="always")
-def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
-                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
-                      out):  # pragma: no cover - compiled
-    """w·F of :func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
-    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C] (C = 1 where ``fresnel_kind``
-    is 0, else 3)."""
-    s, weight_t, one_sp, n2, Lz = slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
-                                             beckmann, d2, p, q_minus_p, vz)
-    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v,
-                                 separable, fresnel_kind, fresnel)
-    for c in range(1 if fresnel_kind == 0 else 3):
-        out[c] = weight * F[c]
-
-
 @njit(error_model="numpy", inline="always")
 def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax,
                ay, layer, delta, kappa, multiplicity, extra, largest, out, flags):  # pragma: no cover - compiled
@@ -203,13 +188,13 @@ def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz,
 
 
 @njit(**_OPTIONS, inline="always")
-def _microfacet_case(q, extra):  # pragma: no cover - compiled
+def microfacet_case(q, extra):  # pragma: no cover - compiled
     beckmann, vx, lambda_v, separable, fresnel_kind, fresnel = extra
     return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, fresnel[q]
 
 
 @njit(**_OPTIONS, inline="always")
-def _microfacet(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+def microfacet_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
     """(F, w, 1, True, False) of :func:`microfacet_value` (F·w·1 is w·F to the bit)."""
     weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, case[0], dx, vz, case[1], ax, ay, case[2],
                                  case[3], case[4], case[5])
@@ -223,7 +208,7 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
     """w·F of :func:`microfacet_value` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
     ``piece`` (R,) (:func:`slope_loop`): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3
     (``fresnel`` (K, 16): the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
-    slope_loop(_microfacet_case, _microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
+    slope_loop(microfacet_case, microfacet_node, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
                sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity,
                (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel), False, out, np.zeros(0, dtype=np.bool_))
 
@@ -256,6 +241,6 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
 
     integrand.compiled = True  # the route's sums run compiled too
     # and its global rule (compiled.global_rule.integrate), with these arguments of the lobe
-    integrand.fused = (channels, linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:], lambda_v,
-                       kind, fresnel)
+    integrand.fused = (None, channels, (linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:],
+                                        lambda_v, kind, fresnel))
     return integrand
