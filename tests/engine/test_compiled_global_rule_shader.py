@@ -1,9 +1,9 @@
-"""The half-vector route's global rule fused into one kernel of a shader's compiled copy
-(brdfnorm.engine.compiled.kernels.global_grid, the loop of brdfnorm.engine.compiled.global_rule.fused_loop), for
-``.brdf`` shaders in batches of at least drivers.FUSED_MIN_CASES cases: it is used there (and not below), its values
-equal the numpy driver's over the same compiled shader within their estimates, the generic route keeps the same
-cases, a non-finite shader value flags its case as the numpy driver's does, its estimates bound the error against
-the one-dimensional GGX integral (brdfnorm.engine.routes.azimuthal, no code in common), and a hostile shader's text
+"""The half-vector route's global rule fused into one kernel for ``.brdf`` shaders
+(brdfnorm.engine.compiled.global_rule.shader_global, the loop of global_rule.fused_loop, the shader a first-class
+function): it is used, loaded from the cache in a new process rather than compiled for each shader, its values equal
+the numpy driver's over the same compiled shader within their estimates, the generic route keeps the same cases,
+a non-finite shader value flags its case as the numpy driver's does, its estimates bound the error against the
+one-dimensional GGX integral (brdfnorm.engine.routes.azimuthal, no code in common), and a hostile shader's text
 reaches neither the kernels' copy nor anything the fused rule runs."""
 
 from __future__ import annotations
@@ -27,11 +27,12 @@ ROUGHNESS = np.array([0.05, 0.3, 1.0])
 @pytest.fixture
 def fused_calls(monkeypatch):
     """albedo(fused: bool, model, theta, **kwargs) under the compiled backend, the shader's fused kernel used (and
-    seen used) or not; the generic route's kept cases and ``failed`` flags of each call are recorded."""
+    seen used) or hidden (the numpy driver over the same compiled rectangle integrand); the generic route's kept
+    cases and ``failed`` flags of each call are recorded."""
     kernel, rectangle, calls = global_rule.integrate, drivers.slope_rectangle, []
 
     def integrate(*args):
-        calls.append(args[-1][0] is not None)  # (a shader's kernel, not the microfacet lobes')
+        calls.append(args[-1][0] == "shader")
         return kernel(*args)
 
     def albedo(fused: bool, model, theta, **kwargs):
@@ -39,13 +40,15 @@ def fused_calls(monkeypatch):
 
         def spy(native, geometry, F, rows, failed, linear, log_horizon):
             flags.append((failed, rows))
-            return rectangle(native, geometry, F, rows, failed, linear, log_horizon)
+            integrand = rectangle(native, geometry, F, rows, failed, linear, log_horizon)
+            if not fused:
+                del integrand.fused
+            return integrand
 
         # (the kernels loaded, and warmed, before the spy: the warm-up runs a rectangle integrand of its own)
         drivers.native_integrand(model.native_kernel(), np.zeros((1, 3)), [np.zeros(1)], True)
         monkeypatch.setattr(global_rule, "integrate", integrate)
         monkeypatch.setattr(drivers, "slope_rectangle", spy)
-        monkeypatch.setattr(drivers, "FUSED_MIN_CASES", drivers.FUSED_MIN_CASES if fused else 10**9)
         before = len(calls)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -77,12 +80,23 @@ def test_the_fused_rule_equals_the_numpy_driver_within_the_estimates(fused_calls
     assert np.all(np.abs(fused.value - driver.value) <= fused.error + driver.error)
 
 
-def test_below_the_batch_size_the_numpy_driver_runs(fused_calls):
-    # (a one-shot albedo does not compile the fused kernel: drivers.FUSED_MIN_CASES)
-    model = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=0.3, f0=1.0)
-    assert drivers.FUSED_MIN_CASES > 1
-    with pytest.raises(AssertionError):
-        fused_calls(True, model, np.arccos(0.5), rtol=1e-9)
+def test_the_fused_kernel_is_compiled_once_for_every_shader(tmp_path):
+    # a new process with an empty kernel cache, a shader it has never seen: the fused kernel loads from Numba's
+    # cache of the package (its type holds no shader), only the small kernels of the shader's own copy compile
+    import subprocess
+    import sys
+
+    code = ("import numpy as np, brdfnorm as bn\n"
+            "from brdfnorm.engine.compiled import global_rule\n"
+            f"m = bn.load({str(EXAMPLES / 'ggx.brdf')!r}, roughness=np.array([0.2, 0.7]), f0=0.5)\n"
+            "r = bn.albedo(m, np.arccos([0.05, 0.6])[:, None], method='quadrature', backend='compiled')\n"
+            "s = global_rule.shader_global\n"
+            "print(len(s.overloads), sum(s.stats.cache_hits.values()), sum(s.stats.cache_misses.values()))\n")
+    env = {**__import__("os").environ, "BRDFNORM_CACHE_DIR": str(tmp_path)}
+    runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+            for _ in range(2)]
+    # the first run may compile it (a fresh clone's first shader); the second loads it, in a new process
+    assert runs[1].split() == ["1", "1", "0"], runs
 
 
 def test_a_non_finite_shader_value_flags_its_case(fused_calls, kept):

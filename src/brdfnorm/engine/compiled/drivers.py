@@ -49,9 +49,8 @@ def _version() -> str:
 def kernels_file(key: str, numba_version: str) -> Path:
     """The path of the kernels' copy for shader ``key`` (Numba's cache of it lies beside it)."""
     source = _TEMPLATE.read_text(encoding="utf-8")
-    # the helpers the kernels inline or call are part of their machine code: a change there is a new copy too
-    helpers = "\0".join(_TEMPLATE.with_name(name).read_text(encoding="utf-8")
-                         for name in ("slopes.py", "global_rule.py", "rules.py"))
+    # the helpers the kernels inline are part of their machine code: a change there is a new copy too
+    helpers = _TEMPLATE.with_name("slopes.py").read_text(encoding="utf-8")
     digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
     return cache_directory() / f"brdfnorm_kernels_{digest}.py"
 
@@ -163,13 +162,6 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
     return native
 
 
-#: Cases at least in a batch of the half-vector route for which its global rule runs as one kernel of the shader's
-#: copy (:func:`.kernels.global_grid`) rather than the numpy driver over :func:`.kernels.slope_grid`: that kernel
-#: takes ~9 s to compile (once per shader; cached), more than a one-shot albedo's whole cold start may (5 s), and
-#: saves ~1 s of a 32 × 32 table's 4 s (docs/performance.md). Tables pass hundreds of cases per batch.
-FUSED_MIN_CASES = 16
-
-
 #: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
 #: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
 SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
@@ -240,7 +232,7 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
         return out
 
     integrand.compiled = True  # the route's sums run compiled too
-    if len(rows) >= FUSED_MIN_CASES:  # and its whole global rule (compiled.global_rule.integrate), one kernel
-        integrand.fused = (native.kernels.global_grid, native.channels + 1,
-                           (linear, log_horizon, *per_case, F, rows, native.fixed, native.U, native.over_light, failed))
+    # and its whole global rule, one kernel for every shader (compiled.global_rule.shader_global)
+    integrand.fused = ("shader", native.channels + 1, (linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
+                                                       native.over_light, native.kernels.shader, failed))
     return integrand

@@ -25,7 +25,7 @@ from numba import njit
 
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS, fejer
 from .rules import grid_sums
-from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, slope_node
+from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
@@ -320,23 +320,68 @@ def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gra
                np.zeros(0, dtype=np.bool_), (value, error, evaluations, settled))
 
 
+@njit(**_OPTIONS, inline="always")
+def _shader_case(q, extra):  # pragma: no cover - compiled
+    """Per case: the reflection's fixed direction F, the shader's fixed direction and parameters U, ``over_light``
+    (:func:`.slopes.reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader)."""
+    F, rows, fixed, U, over_light, shader = extra
+    row = rows[q]
+    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light, shader
+
+
+@njit(**_OPTIONS, inline="always")
+def _shader_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    return reflected_value(case[8], s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
+
+
+@njit(**_OPTIONS)
+def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+                  vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, F, rows, fixed, U,
+                  over_light, shader, failed, value, error, evaluations, settled):  # pragma: no cover - compiled
+    """The global rule of a ``.brdf`` shader (the generic weight of :func:`.slopes.reflected_value`, the largest
+    |value| as a last channel, ``failed[k]`` where a value above the horizon is not finite): :func:`fused_loop`.
+    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once per channel count
+    and cached with the package, not once per shader (~9 s each)."""
+    fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+               False, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
+               _shader_case, _shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
+               (value, error, evaluations, settled))
+
+
+def shader_kernel(arguments: list, shader: int, channels: int):
+    """:func:`shader_global` compiled (or loaded from the cache) for ``arguments``, the one at index ``shader`` (a
+    jitted shader of ``channels`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> C float64s:
+    called with the jitted function itself, Numba would type the kernel by that function object and compile it anew
+    in every process. Returns the compiled entry point, which takes the shader's dispatcher."""
+    import numba
+    from numba import types
+
+    signature = types.UniTuple(types.float64, channels)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
+                     for i, a in enumerate(arguments))
+    if argtypes not in shader_global.overloads:
+        shader_global.compile(argtypes)
+    return shader_global.overloads[argtypes].entry_point
+
+
 def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
               rtol: np.ndarray, atol: np.ndarray, max_nodes: int, graded_predicts: int,
               lobe: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases`` (the others
-    zero and unsettled); ``lobe``: a compiled rectangle integrand's ``fused`` attribute, (kernel, channels C, the
-    kernel's arguments of the lobe): kernel None for the microfacet lobes' :func:`fused_global`
-    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), else a shader's
-    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`)."""
+    zero and unsettled); ``lobe``: a compiled rectangle integrand's ``fused`` attribute, (kind, channels C, the
+    kernel's arguments of the lobe): kind "microfacet" for :func:`fused_global`
+    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), "shader" for :func:`shader_global`
+    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, C its outputs + 1)."""
     if max_nodes > MAX_NODES:
         raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
-    kernel, channels, arguments = lobe
+    kind, channels, arguments = lobe
     K = lam.size
     value, error = np.zeros((K, channels)), np.zeros((K, channels))
     evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
-    (fused_global if kernel is None else kernel)(
-        np.ascontiguousarray(cases, dtype=np.int64), *(np.ascontiguousarray(x, dtype=float) for x in (lam, width)),
-        np.ascontiguousarray(symmetric, dtype=bool),
-        *(np.ascontiguousarray(x, dtype=float) for x in (scale, rtol, atol)), max_nodes, graded_predicts,
-        *arguments, value, error, evaluations, settled)
+    # (writeable contiguous copies: the kernel's argument types do not change with how the caller's arrays came)
+    every = [np.array(cases, dtype=np.int64), *(np.array(x, dtype=float) for x in (lam, width)),
+             np.array(symmetric, dtype=bool), *(np.array(x, dtype=float) for x in (scale, rtol, atol)), max_nodes,
+             graded_predicts, *arguments, value, error, evaluations, settled]
+    kernel = fused_global if kind == "microfacet" else shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+    kernel(*every)
     return value, error, evaluations, settled

@@ -145,6 +145,32 @@ def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx,
                     fresnel_factor(fresnel_kind, cos_vh, fresnel, 2))
 
 
+@njit(**_OPTIONS, inline="always")
+def reflected_value(shader, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case):  # pragma: no cover - compiled
+    """The generic weight g·J of the reflected direction ω = 2(F·H)H − F at one node of :func:`slope_loop` (the
+    weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`): (g, N·L, J, finite above the horizon,
+    non-finite above the horizon); ``case``: F, the shader's fixed direction and parameters u, and whether ω is the
+    light (the shader's first direction); ``shader``: f(lx, ly, lz, vx, vy, vz, u) -> tuple (the kernels' copy's
+    own, or a first-class function of :func:`brdfnorm.engine.compiled.global_rule.shader_global`)."""
+    fx, fy, fz, wx, wy, wz, u, over_light = case[0], case[1], case[2], case[3], case[4], case[5], case[6], case[7]
+    root = math.sqrt(n2)
+    cos_fh = fz * one_sp / root
+    ox = 2.0 * cos_fh * (s * dx / root) - fx
+    oy = 2.0 * cos_fh * (s * dy / root) - fy
+    if over_light:
+        g = shader(ox, oy, Lz, wx, wy, wz, u)
+    else:
+        g = shader(wx, wy, wz, ox, oy, Lz, u)
+    one_s2 = 1.0 + s * s
+    jacobian = 4.0 * cos_fh * math.pi * ax * ax * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
+    inside = Lz > 0
+    finite = True
+    for c in range(len(g)):
+        if not math.isfinite(g[c] * Lz):
+            finite = False
+    return g, Lz, jacobian, inside and finite, inside and not finite
+
+
 @njit(error_model="numpy", inline="always")
 def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset, sin_offset, amplitude, ax,
                ay, layer, delta, kappa, multiplicity, extra, largest, out, flags):  # pragma: no cover - compiled
@@ -241,6 +267,6 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
 
     integrand.compiled = True  # the route's sums run compiled too
     # and its global rule (compiled.global_rule.integrate), with these arguments of the lobe
-    integrand.fused = (None, channels, (linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:],
-                                        lambda_v, kind, fresnel))
+    integrand.fused = ("microfacet", channels, (linear, log_horizon, beckmann, separable, per_case[0], vx,
+                                                *per_case[1:], lambda_v, kind, fresnel))
     return integrand
