@@ -173,3 +173,15 @@ def test_a_hostile_shader_reaches_nothing_the_fused_rule_runs(fused_calls, tmp_p
     shader = inspect.getsource(kernel.function.py_func)
     for word in ("os.system", "PWNED", "__exec", "failed", "global_grid", "fused_loop", "_slope_value"):
         assert word not in shader.split("\n", 1)[1], word
+
+
+@pytest.mark.parametrize("level", range(1, 12))
+def test_the_kernels_weight_tables_are_fejers_second_rule(level):
+    # (by FFT, global_rule.fejer_fft, against the direct sum of the numpy driver, tensor_rule.fejer)
+    from brdfnorm.engine.machinery.tensor_rule import fejer
+
+    nodes, weights = fejer(level)
+    fast_nodes, fast_weights = global_rule.fejer_fft(level)
+    assert np.array_equal(nodes, fast_nodes)
+    assert np.abs(fast_weights - weights).max() <= 1e-16 and abs(fast_weights.sum() - 1.0) <= 1e-15
+    assert np.array_equal(global_rule._WEIGHTS[level][:weights.size], fast_weights)
