@@ -185,3 +185,20 @@ def test_the_kernels_weight_tables_are_fejers_second_rule(level):
     assert np.array_equal(nodes, fast_nodes)
     assert np.abs(fast_weights - weights).max() <= 1e-16 and abs(fast_weights.sum() - 1.0) <= 1e-15
     assert np.array_equal(global_rule._WEIGHTS[level][:weights.size], fast_weights)
+
+
+def test_a_shader_the_fused_rule_cannot_take_goes_to_the_panels(monkeypatch, capsys):
+    from numba.core.errors import TypingError
+
+    def refuse(*args):
+        raise TypingError("no such signature")
+
+    model = bn.load(str(EXAMPLES / "ggx.brdf"), roughness=np.array([0.1, 0.5]), f0=1.0)
+    theta = np.arccos([0.02, 0.5, 0.9])[:, None]
+    fused = bn.albedo(model, theta, method="quadrature", backend="compiled", rtol=1e-10)
+    monkeypatch.setattr(global_rule, "shader_kernel", refuse)
+    panels = bn.albedo(model, theta, method="quadrature", backend="compiled", rtol=1e-10)
+    assert "the fused global rule does not compile for this shader (TypingError)" in capsys.readouterr().err
+    assert np.all(panels.converged) and np.all(panels.evaluations >= fused.evaluations)
+    assert panels.evaluations.sum() > 1.5 * fused.evaluations.sum()  # (the panels are dearer than the rule)
+    assert np.all(np.abs(panels.value - fused.value) <= panels.error + fused.error)

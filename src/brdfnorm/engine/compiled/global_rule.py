@@ -19,9 +19,11 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 from numba import njit
+from numba.core.errors import NumbaError
 
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .rules import grid_sums
@@ -393,6 +395,23 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
     every = [np.array(cases, dtype=np.int64), *(np.array(x, dtype=float) for x in (lam, width)),
              np.array(symmetric, dtype=bool), *(np.array(x, dtype=float) for x in (scale, rtol, atol)), max_nodes,
              graded_predicts, *arguments, value, error, evaluations, settled]
-    kernel = fused_global if kind == "microfacet" else shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+    if kind == "microfacet":
+        kernel = fused_global
+    else:
+        try:
+            kernel = shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+        except NumbaError as failure:  # (settling no case here, the route's panels compute them all)
+            _tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
+                       "; its panels compute")
+            return value, error, evaluations, settled
     kernel(*every)
     return value, error, evaluations, settled
+
+
+_TOLD: set[str] = set()
+
+
+def _tell_once(message: str) -> None:
+    if message not in _TOLD:
+        _TOLD.add(message)
+        print(message, file=sys.stderr)
