@@ -54,9 +54,10 @@ DASK_CONNECT_TIMEOUT = 10.0
 #: "HTTP/1.1" read as a length is 3.5·10¹⁸).
 HANDSHAKE_BYTES = 1024**2
 #: Seconds of wall time a local pool takes before its first chunk computes: a fresh interpreter per worker importing
-#: brdfnorm, rebuilding the model and loading its kernels from the disk cache. Measured on the 2-core machine, idle
-#: (docs/performance.md, fourth round): a 32 × 32 ``lut examples/ggx.brdf`` E stage took 1.7 s on 2 workers against
-#: 1.0 s in this process; a new process's import + .brdf load + kernel load is 0.7–1.2 s, and two start at once.
+#: brdfnorm, rebuilding the model and loading its kernels from the disk cache. Measured on the 2-core machine
+#: (docs/performance.md, fourth session): a new process's import + .brdf load + kernel load + one albedo is 0.7–0.9 s
+#: of CPU idle, and two start at once on two cores; a 32 × 32 ``lut examples/ggx.brdf`` E stage of 1.6–1.7 s in this
+#: process took 1.8 s on 2 workers at load 1.2 and 3.0 s at load 2.5.
 POOL_START_SECONDS = 1.5
 _SCHEMES = ("tcp", "tls")
 _HOST = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9.-]{0,252}[A-Za-z0-9])?\Z")
