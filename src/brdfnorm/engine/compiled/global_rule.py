@@ -93,7 +93,7 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
     outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). The weight at a node is that of
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
-    flags[q]; ``geometry``: the slope map's per-case arrays (drivers.SLOPE_MAP). Returns the nodes evaluated."""
+    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
     vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
     C = grid.shape[2] - 1 if largest else grid.shape[2]
     parameters = case(q, extra)

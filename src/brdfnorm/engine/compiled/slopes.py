@@ -18,11 +18,28 @@ from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
-from .drivers import rectangle_grids, slope_arrays
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
 CAP = 8.0
+
+
+#: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
+#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
+SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
+
+
+def slope_arrays(geometry: dict, cases: int) -> list[np.ndarray]:
+    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, as writeable contiguous float64
+    copies (a read-only broadcast view of one case would be another type to Numba: a second compilation)."""
+    return [np.array(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
+
+
+def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A rectangle integrand's φ (R, n, 1) and v (R, 1, m) as the kernels' contiguous grids (R, n) and (R, m)."""
+    R = case.size
+    return (np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1),
+            np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1))
 
 
 @njit(**_OPTIONS, inline="always")
