@@ -190,9 +190,10 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
 
     Not cached and always inlined, like :func:`.slopes.slope_loop`: ``case`` and ``value`` are first-class function
     arguments; each cached caller (:func:`fused_global` for the microfacet lobes,
-    :func:`brdfnorm.engine.compiled.kernels.global_grid` for a shader) compiles the loop with its weight. One call
-    site of :func:`_fill` (which inlines the weight, a shader's included): the first grids and both doublings; no
-    array assigned to a slice (Numba compiles the shape-mismatch error's message for each: ~5 of 11.6 s)."""
+    :func:`shader_global` for the shaders, which calls the shader through a first-class function) compiles the
+    loop with its weight. One call site of :func:`_fill` (which inlines the weight): the first grids and both
+    doublings; no array assigned to a slice (Numba compiles the shape-mismatch error's message for each: ~5 of
+    11.6 s of compile)."""
     out_value, out_error, evaluations, settled = outputs
     pieces = 3
     C = out_value.shape[1]
