@@ -19,6 +19,9 @@ CPU seconds, ratios of CPU seconds):
 * ``brdf-table``: the same table of ``examples/ggx.brdf`` (its GLSL shader compiled where the GLSL native backend
   is present, else through numpy closures);
 * ``ggx-table`` and ``dfg-table``: ``lut ggx`` 32 × 32 E + E_avg, and its split-sum channels, in-process;
+* ``brdf-table-cli``: the ``brdf-table`` row as a user runs it, ``brdfnorm lut examples/ggx.brdf … --clamp mu=1e-4
+  -p f0=1 --rtol 1e-10`` in a new process (kernel cache warm), with ``--workers 1`` and with the default workers
+  (the pool starts only where it pays, :mod:`brdfnorm.parallel.executors`); CPU of the process and its workers;
 * ``cold-start``: a new process importing brdfnorm and computing one built-in albedo, and one generic albedo with
   the kernel cache warm and with an empty cache (compiling the lobe's kernels).
 
@@ -206,6 +209,19 @@ def _seconds_in_new_process(code: str, env: dict) -> dict:
     return {"wall_s": wall, "cpu_s": cpu}
 
 
+def _cli_table(size: int) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    row = {}
+    with tempfile.TemporaryDirectory() as out:
+        for name, extra in (("workers_1", ["--workers", "1"]), ("default_workers", [])):
+            argv = ["brdfnorm", "lut", str(ROOT / "examples" / "ggx.brdf"), "--axis", f"mu=0:1:n={size}", "--axis",
+                    f"roughness=0.05:1:n={size}", "--clamp", "mu=1e-4", "-p", "f0=1", "--rtol", "1e-10", "-o",
+                    str(Path(out) / "table.json"), *extra]
+            code = f"import sys; sys.argv = {argv!r}; from brdfnorm.cli import main; main()"
+            row[name] = _seconds_in_new_process(code, env)
+    return row
+
+
 def _cold_start() -> dict:
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     builtin = "import brdfnorm as bn; bn.albedo(bn.load('ggx', alpha=0.3), 0.5)"
@@ -265,6 +281,11 @@ def rows(w: dict) -> list[tuple[str, str, str, str, str]]:
             ratio += f"; equal within estimates: {table['compiled_within_estimates']}"
         out.append((title, *(f"{_cpu(table[b])}, {table[b]['evaluations']} evaluations, "
                              f"{table[b]['unconverged']} unconverged" for b in BACKENDS), ratio, goal))
+    cli = w["brdf_table_cli"]
+    out.append(("the same .brdf table through the CLI, new process, warm kernel cache", "",
+                "; ".join(f"{label} {cli[key]['wall_s']:.3g} s wall ({cli[key]['cpu_s']:.3g} CPU s)"
+                          for key, label in (("workers_1", "--workers 1"), ("default_workers", "default workers"))),
+                "", "≤ 2 s"))
     cold = w["cold_start"]
     for key, title, goal in (("builtin_albedo", "new process: import + one built-in GGX albedo", "≤ 0.5 s"),
                              ("generic_albedo_empty_cache", "new process, empty kernel cache: import + compile + "
@@ -291,6 +312,7 @@ def w_backends(cfg, refs=None) -> dict:
         "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness"),
         "ggx_table": _table(ggx, size, repeats),
         "dfg_table": _table(ggx, size, 1, channels=("dfg",)),
+        "brdf_table_cli": _cli_table(size),
         "cold_start": _cold_start(),
     }
 

@@ -162,13 +162,12 @@ def test_a_second_copy_of_a_skeleton_is_found(name):
 
 
 def test_a_copy_that_calls_the_node_map_through_another_helper_is_found():
-    # the slope loop again with the weight of the global rule's grid (microfacet_weight, which reaches slope_node)
-    # in place of slope_node and the value: the levels reach the same map (radial_node), so the copy shows
+    # the slope loop again with a weight helper of its own (which reaches slope_node) in place of slope_node and the
+    # value: the levels reach the same map (radial_node), so the copy shows
     def edit(text: str) -> str:
         start = text.index("s, weight_t, one_sp, n2, Lz = slope_node(")
-        return text[:start] + ("microfacet_weight(kind, v[r, j] - kind, start, length, log_ratio, s_h, s_split, "
-                               "s_end, log_horizon, beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], 0.0, ax[q], ay[q], "
-                               "0.0, False, 0, extra, out[r, i, j])\n")
+        helper = "def node_weight(*args):\n    return slope_node(*args)\n\n\n"
+        return helper + text[:start] + "node_weight(kind, v[r, j] - kind, start, length, out[r, i, j])\n"
     sources = _with_copy("slopes", "slope_loop", "copied_loop", edit)
     ast.parse(sources["slopes"])
     assert "slope_node(" not in sources["slopes"].rsplit("def copied_loop(", 1)[1]

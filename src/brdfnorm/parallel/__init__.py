@@ -112,6 +112,8 @@ def run_job(job: CellsJob, pool: Workers, *, checkpoint: str | Path | None = Non
             cells_done += result.value.shape[0]
             if on_progress is not None:
                 on_progress(cells_done, job.size)
+    if missing:  # (where they ran: the default pool starts only where it pays, after the first chunk)
+        executor, count = pool.placed
     return _assemble(job, plan, done, len(missing), spent, count, executor, time.perf_counter() - start)
 
 

@@ -8,7 +8,8 @@ object — so a worker on another machine only needs the same brdfnorm version (
 :class:`Workers` (held open across the jobs of one run: a check asks for many small jobs) yields
 :class:`ChunkResult` objects as chunks finish, in completion order, from one of:
 
-* this process (``workers=1``, or a job with one chunk to compute);
+* this process (``workers=1``, or a job with one chunk to compute; with the default ``workers``, also a job whose
+  chunks after the first, predicted from its time, would not repay the pool's start, :data:`POOL_START_SECONDS`);
 * a local :class:`concurrent.futures.ProcessPoolExecutor` with the ``forkserver`` start method (``spawn`` where
   there is none): fresh interpreters, never a fork of a process that may hold threads or a Dask client;
 * ``dask.distributed`` (``scheduler="tcp://HOST:PORT"``): one task per chunk with a key derived from the job's
@@ -52,6 +53,12 @@ DASK_CONNECT_TIMEOUT = 10.0
 #: Largest first message a Dask scheduler's handshake may announce (it is a few hundred bytes; an HTTP server's
 #: "HTTP/1.1" read as a length is 3.5·10¹⁸).
 HANDSHAKE_BYTES = 1024**2
+#: Seconds of wall time a local pool takes before its first chunk computes: a fresh interpreter per worker importing
+#: brdfnorm, rebuilding the model and loading its kernels from the disk cache. Measured on the 2-core machine
+#: (docs/performance.md, fourth session): a new process's import + .brdf load + kernel load + one albedo is 0.7–0.9 s
+#: of CPU idle, and two start at once on two cores; a 32 × 32 ``lut examples/ggx.brdf`` E stage of 1.6–1.7 s in this
+#: process took 1.8 s on 2 workers at load 1.2 and 3.0 s at load 2.5.
+POOL_START_SECONDS = 1.5
 _SCHEMES = ("tcp", "tls")
 _HOST = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9.-]{0,252}[A-Za-z0-9])?\Z")
 
@@ -165,9 +172,11 @@ def local_cores() -> int:
 class Workers:
     """Where the chunks of one or more jobs run, held open between jobs (one pool, one Dask client per run).
 
-    ``workers``: local processes (None: all cores; 1: this process); ``scheduler``: a Dask scheduler address
-    (then ``workers`` must be None). Validated here, before any work; the pool starts at the first job with
-    more than one chunk to compute, the Dask client at :meth:`start`. Use it as a context manager: leaving it
+    ``workers``: local processes (None: all cores, where they pay, :func:`pool_pays`; 1: this process);
+    ``scheduler``: a Dask scheduler address (then ``workers`` must be None). Validated here, before any work; the
+    pool starts at the first job with more than one chunk to compute (given ``workers``) or whose chunks after its
+    first, computed here, are predicted to repay the pool's start (the default), the Dask client at :meth:`start`.
+    ``placed``: where the last job's chunks ran, as :meth:`placement` says it. Use it as a context manager: leaving it
     stops the pool's processes at once (an exception, SIGTERM turned into KeyboardInterrupt) and closes the
     client.
     """
@@ -182,6 +191,8 @@ class Workers:
         self.scheduler = None if target is None else target.address
         self.connect_timeout = DASK_CONNECT_TIMEOUT if target is None else target.connect_timeout
         self.count = int(workers) if workers is not None else local_cores()
+        self.adaptive = workers is None and target is None  # (the default: the pool where it pays)
+        self.placed = ("in-process", 1)
         self._pool: ProcessPoolExecutor | None = None
         self._client = None
 
@@ -217,7 +228,7 @@ class Workers:
         process with ``model`` (the job's, already loaded) where given, never parsing it again."""
         header = canonical_json(job.header())
         tasks = [(header, k, *job.cells(plan.chunk(k))) for k in missing]
-        where, count = self.placement(len(tasks))
+        where, count = self.placed = self.placement(len(tasks))
         if self.scheduler is not None:
             return _on_dask(tasks, self._client, job.digest)
         if where == "in-process":
@@ -225,7 +236,22 @@ class Workers:
                 return (run_chunk(*task) for task in tasks)
             data = job.header()
             return (compute_chunk(model, data, *task[1:]) for task in tasks)
+        if self.adaptive and self._pool is None and model is not None:
+            return self._first_here(job.header(), tasks, model)
         return _in_pool(self._local_pool(), tasks)
+
+    def _first_here(self, header: Mapping, tasks: list[tuple], model: Model) -> Iterator[ChunkResult]:
+        """The first chunk in this process, then the rest on the pool only where :func:`pool_pays` for their time
+        predicted from the first's (chunks are cut at equal estimated cost, :func:`.job.chunk_plan`)."""
+        first = compute_chunk(model, header, *tasks[0][1:])
+        yield first
+        rest = tasks[1:]
+        if pool_pays(first.seconds * len(rest), min(self.count, len(rest))):
+            self.placed = ("local processes", min(self.count, len(rest)))
+            yield from _in_pool(self._local_pool(), rest)
+        else:
+            self.placed = ("in-process", 1)
+            yield from (compute_chunk(model, header, *task[1:]) for task in rest)
 
     def map(self, function, tasks: list[tuple]) -> list:
         """``function(*task)`` for every task, in order, where the chunks of a job would run (a module-level
@@ -264,6 +290,12 @@ class Workers:
         client, self._client = self._client, None
         if client is not None:
             client.close()
+
+
+def pool_pays(seconds: float, workers: int) -> bool:
+    """Whether ``seconds`` of chunks (in one process) end sooner on a new pool of ``workers`` processes, which
+    first takes :data:`POOL_START_SECONDS`."""
+    return workers > 1 and POOL_START_SECONDS + seconds / workers < seconds
 
 
 #: How often a pool worker checks that the process that started the pool is still alive (seconds).

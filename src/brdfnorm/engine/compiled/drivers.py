@@ -121,7 +121,9 @@ def compile_seconds() -> float:
 def _warm(native: NativeIntegrand, key: str) -> None:
     """Every kernel of ``native``'s copy once on the smallest input (compiled or loaded now, not in a route)."""
     from ..machinery.kronrod import GAUSS, KRONROD, NODES
+    from .global_rule import integrate
     from .rules import tensor_sums
+    from .slopes import SLOPE_MAP
 
     one, zero, unit = np.zeros(1, dtype=np.int64), np.zeros(1), np.ones(1)
     frame = (np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
@@ -132,6 +134,9 @@ def _warm(native: NativeIntegrand, key: str) -> None:
     rectangle = slope_rectangle(native, geometry, np.array([[0.0, 0.0, 1.0]]), one, np.zeros(1, dtype=bool), True,
                                 True)
     rectangle(one, np.full((1, 1, 1), 0.5), np.full((1, 1, 1), 0.5), one)
+    # the fused global rule (compiled once per channel count for every shader; loaded, and the shader's first-class
+    # function compiled, here): the first grid alone, whose 2^3 × 15 nodes are the node cap
+    integrate(one, unit, zero, np.zeros(1, dtype=bool), unit, unit, unit, 120, 0, rectangle.fused)
     tensor_sums(np.zeros((1, 4, 3, native.channels)), np.ones(3), np.ones(1), np.zeros(0))
     _WARM.add(key)
     Path(native.kernels.__file__).with_suffix(".compiled").touch()  # the mark kernels_compiled reads
@@ -160,24 +165,6 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
     finally:
         COMPILING["seconds"] += time.perf_counter() - start
     return native
-
-
-#: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
-#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
-SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
-
-
-def slope_arrays(geometry: dict, cases: int) -> list[np.ndarray]:
-    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, as writeable contiguous float64
-    copies (a read-only broadcast view of one case would be another type to Numba: a second compilation)."""
-    return [np.array(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
-
-
-def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A rectangle integrand's φ (R, n, 1) and v (R, 1, m) as the kernels' contiguous grids (R, n) and (R, m)."""
-    R = case.size
-    return (np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1),
-            np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1))
 
 
 def _flat(*arrays: np.ndarray) -> list[np.ndarray]:
@@ -217,6 +204,8 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
     as one kernel (:func:`.kernels.slope_grid`); ``geometry`` holds the per-case arrays of the slope map (vz,
     cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks
     non-finite values."""
+    from .slopes import rectangle_grids, slope_arrays
+
     per_case = slope_arrays(geometry, len(rows))
     F = np.ascontiguousarray(F, dtype=float)
     rows = np.ascontiguousarray(rows, dtype=np.int64)
@@ -232,4 +221,7 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
         return out
 
     integrand.compiled = True  # the route's sums run compiled too
+    # and its whole global rule, one kernel for every shader (compiled.global_rule.shader_global)
+    integrand.fused = ("shader", native.channels + 1, (linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
+                                                       native.over_light, native.kernels.shader, failed))
     return integrand

@@ -19,13 +19,15 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 from numba import njit
+from numba.core.errors import NumbaError
 
-from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS, fejer
+from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .rules import grid_sums
-from .slopes import azimuth_node, microfacet_weight, piece_extent
+from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
@@ -34,10 +36,21 @@ _LEVELS = 14
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
 
 
+def fejer_fft(level: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`brdfnorm.engine.machinery.tensor_rule.fejer` (Fejér's second rule on [0, 1], N = 2^level) with the
+    weights as the inverse FFT of their Chebyshev moments (Waldvogel, BIT 46, 2006, section 2): O(N log N) where
+    that sum is O(N²) — all the levels took 1.1 s at import, ~1 ms so; the weights agree to ~1e-17."""
+    N = 2**level
+    k = np.arange(N // 2)
+    moments = 2.0 / (1.0 - 4.0 * k * k)
+    v = np.concatenate([moments, [(N - 3) / (2 * (N // 2) - 1) - 1], moments[:0:-1]])
+    return (1.0 - np.cos(np.arange(1, N) * np.pi / N)) / 2.0, np.fft.ifft(v).real[1:] / 2.0
+
+
 def _fejer_tables() -> tuple[np.ndarray, np.ndarray]:
     nodes, weights = np.zeros((_LEVELS, 2 ** (_LEVELS - 1))), np.zeros((_LEVELS, 2 ** (_LEVELS - 1)))
     for level in range(1, _LEVELS):
-        u, w = fejer(level)
+        u, w = fejer_fft(level)
         nodes[level, :u.size], weights[level, :w.size] = u, w
     return nodes, weights
 
@@ -72,14 +85,18 @@ def _canonical(i, M):  # pragma: no cover - compiled
     return (M // 2 - i) % M
 
 
-@njit(**_OPTIONS)
+@njit(error_model="numpy", inline="always")
 def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon, beckmann,
-          separable, vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, lambda_v,
-          fresnel_kind, fresnel, node):  # pragma: no cover - compiled
+          geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
     """The weighted values at the azimuth indices ``rows`` of ``M`` (t = 2π·index/M) and the radial nodes
     ``radial`` of piece ``kind`` of case ``q``, written to grid[index, col_step·j]; a mirrored case's indices
-    outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). Returns the nodes evaluated."""
-    C = grid.shape[2]
+    outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). The weight at a node is that of
+    :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
+    flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
+    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
+    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+    C = grid.shape[2] - 1 if largest else grid.shape[2]
+    parameters = case(q, extra)
     count = 0
     for a in range(rows.size):
         index = rows[a]
@@ -92,11 +109,19 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
             multiplicity[q], vz[q], beckmann)
         start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
         for j in range(radial.size):
-            microfacet_weight(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h, s_split, s_end,
-                              log_horizon, beckmann, dx, d2, p, q_minus_p, azimuth, vz[q], vx[q], ax[q], ay[q],
-                              lambda_v[q], separable, fresnel_kind, fresnel[q], node)
+            s, weight_t, one_sp, n2, Lz = slope_node(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h,
+                                                     s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
+            g, w_a, w_b, keep, flag = value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz[q], ax[q], ay[q],
+                                            parameters)
+            if flag:
+                flags[q] = True
+            most = 0.0
             for c in range(C):
-                grid[index, col_step * j, c] = node[c] * factor
+                x = g[c] * w_a * w_b if keep else 0.0
+                most = max(most, abs(x))
+                grid[index, col_step * j, c] = x * factor
+            if largest:
+                grid[index, col_step * j, C] = most * factor
         count += radial.size
     if mirrored:
         for a in range(rows.size):
@@ -104,7 +129,7 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
             source = _canonical(index, M)
             if source != index:
                 for j in range(radial.size):
-                    for c in range(C):
+                    for c in range(grid.shape[2]):
                         grid[index, col_step * j, c] = grid[source, col_step * j, c]
     return count
 
@@ -156,15 +181,24 @@ def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
         sums[3, c] = magnitude
 
 
-@njit(**_OPTIONS)
-def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, C, linear,
-                 log_horizon, beckmann, separable, vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
-                 kappa, multiplicity, lambda_v, fresnel_kind, fresnel, value, error, evaluations,
-                 settled):  # pragma: no cover - compiled
-    """The global rule of every case of ``cases``: fills value, error (K, C), evaluations and settled (K,)."""
+@njit(error_model="numpy", inline="always")
+def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+               beckmann, geometry, case, value, extra, largest, flags, outputs):  # pragma: no cover - compiled
+    """The global rule of every case of ``cases``: fills ``outputs`` = (value, error (K, C), evaluations,
+    settled (K,)); the weight at a node is ``case``/``value``'s (:func:`_fill`). (Arguments packed in tuples: a
+    call of more than 30 arguments is compiled by Python as a call with ``*args``, which Numba does not inline.)
+
+    Not cached and always inlined, like :func:`.slopes.slope_loop`: ``case`` and ``value`` are first-class function
+    arguments; each cached caller (:func:`fused_global` for the microfacet lobes,
+    :func:`shader_global` for the shaders, which calls the shader through a first-class function) compiles the
+    loop with its weight. One call site of :func:`_fill` (which inlines the weight): the first grids and both
+    doublings; no array assigned to a slice (Numba compiles the shape-mismatch error's message for each: ~5 of
+    11.6 s of compile)."""
+    out_value, out_error, evaluations, settled = outputs
     pieces = 3
-    out_nodes = np.empty(3)
+    C = out_value.shape[1]
     sums = np.empty((4, C))
+    M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
     for n in range(cases.size):
         k = cases[n]
         mirrored = symmetric[k]
@@ -176,36 +210,65 @@ def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gra
         latest, piece_value, piece_error = np.zeros((pieces, C)), np.zeros((pieces, C)), np.zeros((pieces, C))
         results = np.zeros((pieces, 4, C))
         finite = np.ones(pieces, dtype=np.bool_)
-        grids = []
-        M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
-        for kind in range(pieces):
-            grid = np.empty((M0, N0, C))
-            rows = np.arange(M0)
-            evaluations[k] += _fill(grid, rows, M0, 1, _NODES[START_LEVELS[1]][:N0], k, kind, mirrored, lam[k],
-                                    width[k], scale[k], linear, log_horizon, beckmann, separable, vz, vx, cos_offset,
-                                    sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, lambda_v,
-                                    fresnel_kind, fresnel, out_nodes)
-            grids.append(grid)
-        failed = False
-        while alive.any():
+        more = np.zeros((pieces, 2), dtype=np.bool_)
+        grids = []  # (no comprehension: a closure, which the inlining refuses)
+        for _ in range(pieces):
+            grids.append(np.empty((M0, N0, C)))
+        first, failed = True, False
+        while first or alive.any():
+            # the grids: the first ones, then each piece's doublings along t (1) and u (2), one _fill call site
+            for kind in range(pieces):
+                if not alive[kind]:
+                    continue
+                grid = grids[kind]
+                for step in range(3):
+                    if (step == 0) != first or (step == 1 and not more[kind, 0]) or (step == 2 and not more[kind, 1]):
+                        continue
+                    M, N1 = 2 ** level_b[kind], 2 ** level_u[kind] - 1
+                    if step == 0:
+                        target, rows, M_fill, col_step, radial = grid, np.arange(M), M, 1, _NODES[level_u[kind]][:N1]
+                    elif step == 1:
+                        target = np.empty((2 * M, N1, C))
+                        for i in range(M):
+                            for j in range(N1):
+                                for c in range(C):
+                                    target[2 * i, j, c] = grid[i, j, c]
+                        rows, M_fill, col_step, radial = 2 * np.arange(M) + 1, 2 * M, 1, _NODES[level_u[kind]][:N1]
+                        level_b[kind] += 1
+                    else:
+                        target = np.empty((M, 2 * N1 + 1, C))
+                        for i in range(M):
+                            for j in range(N1):
+                                for c in range(C):
+                                    target[i, 2 * j + 1, c] = grid[i, j, c]
+                        lu = level_u[kind] + 1
+                        rows, M_fill, col_step, radial = np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
+                        level_u[kind] = lu
+                    evaluations[k] += _fill(target, rows, M_fill, col_step, radial, k, kind, mirrored, lam[k],
+                                            width[k], scale[k], linear, log_horizon, beckmann, geometry, case,
+                                            value, extra, largest, flags)
+                    grid = target
+                grids[kind] = grid
+            first = False
             for kind in range(pieces):
                 if not alive[kind]:
                     continue
                 grid = grids[kind]
                 finite[kind] = np.isfinite(grid).all()
                 if not finite[kind]:
-                    grid[:] = 0.0
+                    grid.fill(0.0)
                     failed = True
                 _sums(grid, 2 ** level_b[kind], level_u[kind], sums)
-                results[kind] = sums
-                latest[kind] = sums[0]
+                for c in range(C):
+                    for row in range(4):
+                        results[kind, row, c] = sums[row, c]
+                    latest[kind, c] = sums[0, c]
             tolerance = np.empty(C)
             for c in range(C):
                 total = 0.0
                 for kind in range(pieces):
                     total += piece_value[kind, c] if done_piece[kind] else latest[kind, c]
                 tolerance[c] = max(atol[k], rtol[k] * abs(total)) / pieces
-            more = np.zeros((pieces, 2), dtype=np.bool_)
             for kind in range(pieces):
                 if not alive[kind]:
                     continue
@@ -250,59 +313,106 @@ def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gra
                         last_u[kind] = ratio_u
             if failed:
                 break
-            for kind in range(pieces):
-                if not alive[kind]:
-                    continue
-                grid = grids[kind]
-                M, N1 = 2 ** level_b[kind], 2 ** level_u[kind] - 1
-                if more[kind, 0]:
-                    finer = np.empty((2 * M, N1, C))
-                    for i in range(M):
-                        finer[2 * i] = grid[i]
-                    rows = 2 * np.arange(M) + 1
-                    evaluations[k] += _fill(finer, rows, 2 * M, 1, _NODES[level_u[kind]][:N1], k, kind, mirrored,
-                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, separable,
-                                            vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa,
-                                            multiplicity, lambda_v, fresnel_kind, fresnel, out_nodes)
-                    grid, M = finer, 2 * M
-                    level_b[kind] += 1
-                if more[kind, 1]:
-                    finer = np.empty((M, 2 * N1 + 1, C))
-                    for i in range(M):
-                        for j in range(N1):
-                            finer[i, 2 * j + 1] = grid[i, j]
-                    lu = level_u[kind] + 1
-                    radial = _NODES[lu][0:2 ** lu - 1:2]
-                    evaluations[k] += _fill(finer, np.arange(M), M, 2, radial, k, kind, mirrored,
-                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, separable,
-                                            vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa,
-                                            multiplicity, lambda_v, fresnel_kind, fresnel, out_nodes)
-                    grid = finer
-                    level_u[kind] = lu
-                grids[kind] = grid
         ok = (not failed) and done_piece.all()
         for c in range(C):
-            value[k, c] = piece_value[:, c].sum()
-            error[k, c] = piece_error[:, c].sum()
-            if not error[k, c] <= max(atol[k], rtol[k] * abs(value[k, c])):
+            out_value[k, c] = piece_value[:, c].sum()
+            out_error[k, c] = piece_error[:, c].sum()
+            if not out_error[k, c] <= max(atol[k], rtol[k] * abs(out_value[k, c])):
                 ok = False
         settled[k] = ok
+
+
+@njit(**_OPTIONS)
+def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+                 beckmann, separable, vz, vx, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa,
+                 multiplicity, lambda_v, fresnel_kind, fresnel, value, error, evaluations,
+                 settled):  # pragma: no cover - compiled
+    """The global rule of the microfacet lobes (the weight of :func:`.slopes.microfacet_grid`): :func:`fused_loop`."""
+    fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+               beckmann, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
+               microfacet_case, microfacet_node, (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel), False,
+               np.zeros(0, dtype=np.bool_), (value, error, evaluations, settled))
+
+
+@njit(**_OPTIONS, inline="always")
+def _shader_case(q, extra):  # pragma: no cover - compiled
+    """Per case: the reflection's fixed direction F, the shader's fixed direction and parameters U, ``over_light``
+    (:func:`.slopes.reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader)."""
+    F, rows, fixed, U, over_light, shader = extra
+    row = rows[q]
+    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light, shader
+
+
+@njit(**_OPTIONS, inline="always")
+def _shader_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    return reflected_value(case[8], s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
+
+
+@njit(**_OPTIONS)
+def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+                  vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, F, rows, fixed, U,
+                  over_light, shader, failed, value, error, evaluations, settled):  # pragma: no cover - compiled
+    """The global rule of a ``.brdf`` shader (the generic weight of :func:`.slopes.reflected_value`, the largest
+    |value| as a last channel, ``failed[k]`` where a value above the horizon is not finite): :func:`fused_loop`.
+    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once per channel count
+    and cached with the package, not once per shader (~9 s each)."""
+    fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
+               False, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
+               _shader_case, _shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
+               (value, error, evaluations, settled))
+
+
+def shader_kernel(arguments: list, shader: int, channels: int):
+    """:func:`shader_global` compiled (or loaded from the cache) for ``arguments``, the one at index ``shader`` (a
+    jitted shader of ``channels`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> C float64s:
+    called with the jitted function itself, Numba would type the kernel by that function object and compile it anew
+    in every process. Returns the compiled entry point, which takes the shader's dispatcher."""
+    import numba
+    from numba import types
+
+    signature = types.UniTuple(types.float64, channels)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
+                     for i, a in enumerate(arguments))
+    if argtypes not in shader_global.overloads:
+        shader_global.compile(argtypes)
+    return shader_global.overloads[argtypes].entry_point
 
 
 def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
               rtol: np.ndarray, atol: np.ndarray, max_nodes: int, graded_predicts: int,
               lobe: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(value (K, C), error (K, C), evaluations (K,), settled (K,)) of the global rule for ``cases`` (the others
-    zero and unsettled); ``lobe``: the microfacet rectangle integrand's ``fused`` arguments
-    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), its channel count first."""
+    zero and unsettled); ``lobe``: a compiled rectangle integrand's ``fused`` attribute, (kind, channels C, the
+    kernel's arguments of the lobe): kind "microfacet" for :func:`fused_global`
+    (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), "shader" for :func:`shader_global`
+    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, C its outputs + 1)."""
     if max_nodes > MAX_NODES:
         raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
-    K, channels = lam.size, lobe[0]
+    kind, channels, arguments = lobe
+    K = lam.size
     value, error = np.zeros((K, channels)), np.zeros((K, channels))
     evaluations, settled = np.zeros(K, dtype=np.int64), np.zeros(K, dtype=bool)
-    fused_global(np.ascontiguousarray(cases, dtype=np.int64), *(np.ascontiguousarray(x, dtype=float) for x in
-                                                                (lam, width)),
-                 np.ascontiguousarray(symmetric, dtype=bool),
-                 *(np.ascontiguousarray(x, dtype=float) for x in (scale, rtol, atol)), max_nodes, graded_predicts,
-                 *lobe, value, error, evaluations, settled)
+    # (writeable contiguous copies: the kernel's argument types do not change with how the caller's arrays came)
+    every = [np.array(cases, dtype=np.int64), *(np.array(x, dtype=float) for x in (lam, width)),
+             np.array(symmetric, dtype=bool), *(np.array(x, dtype=float) for x in (scale, rtol, atol)), max_nodes,
+             graded_predicts, *arguments, value, error, evaluations, settled]
+    if kind == "microfacet":
+        kernel = fused_global
+    else:
+        try:
+            kernel = shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+        except NumbaError as failure:  # (settling no case here, the route's panels compute them all)
+            _tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
+                       "; its panels compute")
+            return value, error, evaluations, settled
+    kernel(*every)
     return value, error, evaluations, settled
+
+
+_TOLD: set[str] = set()
+
+
+def _tell_once(message: str) -> None:
+    if message not in _TOLD:
+        _TOLD.add(message)
+        print(message, file=sys.stderr)

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from brdfnorm.engine.compiled.slopes import slope_loop
+from brdfnorm.engine.compiled.slopes import reflected_value, slope_loop
 
 shader = None  # set per copy (drivers.py)
 
@@ -215,25 +215,9 @@ def _slope_case(q, extra):  # pragma: no cover - compiled
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _slope_value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
-    """The generic weight g·J of the reflected direction at one node of :func:`.slopes.slope_loop`: (g, N·L, J,
-    finite above the horizon, non-finite above the horizon)."""
-    fx, fy, fz, wx, wy, wz, u, over_light = case
-    root = math.sqrt(n2)
-    cos_fh = fz * one_sp / root
-    ox = 2.0 * cos_fh * (s * dx / root) - fx
-    oy = 2.0 * cos_fh * (s * dy / root) - fy
-    if over_light:
-        g = shader(ox, oy, Lz, wx, wy, wz, u)
-    else:
-        g = shader(wx, wy, wz, ox, oy, Lz, u)
-    one_s2 = 1.0 + s * s
-    jacobian = 4.0 * cos_fh * math.pi * ax * ax * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
-    inside = Lz > 0
-    finite = True
-    for c in range(len(g)):
-        if not math.isfinite(g[c] * Lz):
-            finite = False
-    return g, Lz, jacobian, inside and finite, inside and not finite
+    """The generic weight of the reflected direction at one node of :func:`.slopes.slope_loop`
+    (:func:`.slopes.reflected_value` with this copy's shader)."""
+    return reflected_value(shader, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
 
 
 @njit(cache=True, error_model="numpy")
@@ -246,3 +230,4 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     largest |value|; ``failed[k]`` where a value above the horizon is not finite."""
     slope_loop(_slope_case, _slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
                amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light), True, out, failed)
+

@@ -18,11 +18,28 @@ from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
-from .drivers import rectangle_grids, slope_arrays
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
 CAP = 8.0
+
+
+#: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
+#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
+SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
+
+
+def slope_arrays(geometry: dict, cases: int) -> list[np.ndarray]:
+    """The :data:`SLOPE_MAP` arrays of ``geometry``, broadcast to ``cases`` cases, as writeable contiguous float64
+    copies (a read-only broadcast view of one case would be another type to Numba: a second compilation)."""
+    return [np.array(np.broadcast_to(geometry[name], (cases,)), dtype=float) for name in SLOPE_MAP]
+
+
+def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A rectangle integrand's φ (R, n, 1) and v (R, 1, m) as the kernels' contiguous grids (R, n) and (R, m)."""
+    R = case.size
+    return (np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1),
+            np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1))
 
 
 @njit(**_OPTIONS, inline="always")
@@ -146,18 +163,29 @@ def microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx,
 
 
 @njit(**_OPTIONS, inline="always")
-def microfacet_weight(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon, beckmann, dx, d2, p,
-                      q_minus_p, azimuth, vz, vx, ax, ay, lambda_v, separable, fresnel_kind, fresnel,
-                      out):  # pragma: no cover - compiled
-    """w·F of :func:`microfacet_value` at position ``at`` of radial piece ``kind``, for one azimuth (the results of
-    :func:`azimuth_node` and :func:`piece_extent`) and one case's parameters: out[:C] (C = 1 where ``fresnel_kind``
-    is 0, else 3)."""
-    s, weight_t, one_sp, n2, Lz = slope_node(kind, at, start, length, log_ratio, s_h, s_split, s_end, log_horizon,
-                                             beckmann, d2, p, q_minus_p, vz)
-    weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, beckmann, dx, vz, vx, ax, ay, lambda_v,
-                                 separable, fresnel_kind, fresnel)
-    for c in range(1 if fresnel_kind == 0 else 3):
-        out[c] = weight * F[c]
+def reflected_value(shader, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case):  # pragma: no cover - compiled
+    """The generic weight g·J of the reflected direction ω = 2(F·H)H − F at one node of :func:`slope_loop` (the
+    weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`): (g, N·L, J, finite above the horizon,
+    non-finite above the horizon); ``case``: F, the shader's fixed direction and parameters u, and whether ω is the
+    light (the shader's first direction); ``shader``: f(lx, ly, lz, vx, vy, vz, u) -> tuple (the kernels' copy's
+    own, or a first-class function of :func:`brdfnorm.engine.compiled.global_rule.shader_global`)."""
+    fx, fy, fz, wx, wy, wz, u, over_light = case[0], case[1], case[2], case[3], case[4], case[5], case[6], case[7]
+    root = math.sqrt(n2)
+    cos_fh = fz * one_sp / root
+    ox = 2.0 * cos_fh * (s * dx / root) - fx
+    oy = 2.0 * cos_fh * (s * dy / root) - fy
+    if over_light:
+        g = shader(ox, oy, Lz, wx, wy, wz, u)
+    else:
+        g = shader(wx, wy, wz, ox, oy, Lz, u)
+    one_s2 = 1.0 + s * s
+    jacobian = 4.0 * cos_fh * math.pi * ax * ax * one_s2 * one_s2 / (n2 * root) * weight_t * azimuth
+    inside = Lz > 0
+    finite = True
+    for c in range(len(g)):
+        if not math.isfinite(g[c] * Lz):
+            finite = False
+    return g, Lz, jacobian, inside and finite, inside and not finite
 
 
 @njit(error_model="numpy", inline="always")
@@ -203,13 +231,13 @@ def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz,
 
 
 @njit(**_OPTIONS, inline="always")
-def _microfacet_case(q, extra):  # pragma: no cover - compiled
+def microfacet_case(q, extra):  # pragma: no cover - compiled
     beckmann, vx, lambda_v, separable, fresnel_kind, fresnel = extra
     return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, fresnel[q]
 
 
 @njit(**_OPTIONS, inline="always")
-def _microfacet(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+def microfacet_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
     """(F, w, 1, True, False) of :func:`microfacet_value` (F·w·1 is w·F to the bit)."""
     weight, F = microfacet_value(s, weight_t, one_sp, n2, Lz, azimuth, case[0], dx, vz, case[1], ax, ay, case[2],
                                  case[3], case[4], case[5])
@@ -223,7 +251,7 @@ def microfacet_grid(k, phi, v, piece, linear, log_horizon, beckmann, vz, vx, cos
     """w·F of :func:`microfacet_value` on grids φ (R, nφ) × v (R, nv) of the panels of cases ``k`` (R,) in radial
     ``piece`` (R,) (:func:`slope_loop`): out (R, nφ, nv, C), C = 1 where ``fresnel_kind`` is 0 (F = 1), else 3
     (``fresnel`` (K, 16): the packed f0, f90, η, k of :func:`brdfnorm.models.native.fresnel_factor`)."""
-    slope_loop(_microfacet_case, _microfacet, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
+    slope_loop(microfacet_case, microfacet_node, k, phi, v, piece, linear, log_horizon, beckmann, vz, cos_offset,
                sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity,
                (beckmann, vx, lambda_v, separable, fresnel_kind, fresnel), False, out, np.zeros(0, dtype=np.bool_))
 
@@ -256,6 +284,6 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
 
     integrand.compiled = True  # the route's sums run compiled too
     # and its global rule (compiled.global_rule.integrate), with these arguments of the lobe
-    integrand.fused = (channels, linear, log_horizon, beckmann, separable, per_case[0], vx, *per_case[1:], lambda_v,
-                       kind, fresnel)
+    integrand.fused = ("microfacet", channels, (linear, log_horizon, beckmann, separable, per_case[0], vx,
+                                                *per_case[1:], lambda_v, kind, fresnel))
     return integrand
