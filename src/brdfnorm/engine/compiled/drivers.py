@@ -50,7 +50,7 @@ def kernels_file(key: str, numba_version: str) -> Path:
     """The path of the kernels' copy for shader ``key`` (Numba's cache of it lies beside it)."""
     source = _TEMPLATE.read_text(encoding="utf-8")
     # the helpers the kernels inline are part of their machine code: a change there is a new copy too
-    helpers = _TEMPLATE.with_name("slopes.py").read_text(encoding="utf-8")
+    helpers = "\0".join(_TEMPLATE.with_name(name).read_text(encoding="utf-8") for name in ("slopes.py", "hemimap.py"))
     digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
     return cache_directory() / f"brdfnorm_kernels_{digest}.py"
 
