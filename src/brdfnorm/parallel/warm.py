@@ -9,13 +9,14 @@ on one core, while the other core idled (docs/performance.md).
 
 :func:`ahead` starts one child process (``python -m brdfnorm.parallel.warm``) that compiles, into the same disk
 caches, the kernels of the given models that are not there yet. The models come in the order the command first
-needs them, each with the method that integrates it; the child takes the route kernels first (the longest compile, and a command reaches them only after
-its first lobes), then the lobes the command needs after the first route, in that order, then the earlier lobes
-from the last back: the command compiles its first lobes itself as it reaches them, the child the rest, and where
-the two meet the command loads what the child wrote. Before each, the child looks again, and skips what the command
-compiled meanwhile. The child's results are only compiled code: every albedo is still computed by the command, so
-its numbers do not depend on whether or when the child ran. Numba and :func:`~brdfnorm.engine.compiled.drivers.
-kernels_file` write their cache files by atomic renames, so a kernel both compile is written whole by one.
+needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
+compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
+order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them,
+the child the rest, and where the two meet the command loads what the child wrote. Before each, the child looks
+again, and skips what the command compiled meanwhile. The child's results are only compiled code: every albedo is
+still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
+:func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
+compile is written whole by one.
 
 Nothing is started where the backend is numpy, where one core is all there is, or where every kernel is compiled;
 the child is stopped when the block ends (what it finished stays in the cache for the next run).
@@ -39,9 +40,25 @@ from .job import ModelSource
 _ANGLE, _RTOL = 0.5, 1e-3
 
 #: The albedo method whose route has kernels of its own (compiled once per machine for every lobe it takes, not per
-#: shader), and those kernels as (module of ``brdfnorm.engine.compiled``, function): what one albedo by that method
-#: compiles beside the lobe's own kernels.
+#: shader), and those kernels as (module of ``brdfnorm.engine.compiled``, function).
 ROUTE_KERNELS = {"microfacet": (("slopes", "microfacet_grid"), ("global_rule", "fused_global"))}
+
+
+def _microfacet_route(model: Model) -> None:
+    """Compile the microfacet route's kernels as tables call them: a 2 × 2 split-sum (DFG) table of ``model``
+    (:func:`brdfnorm.lut.compute`) at rtol 1e-8, whose cell (μ, α) = (3/64, 1/64), of the report's 32 × 32 texel
+    grid, leaves the global rule for the rectangles. (One albedo does not do: with one case the global rule is given
+    a read-only array, another signature, and at a view where it converges the rectangles never compile.)"""
+    import numpy as np
+
+    from ..lut import compute
+
+    compute(model, {"mu": np.array([3 / 64, 0.5]), "alpha": np.array([1 / 64, 0.5])},
+            clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=1e-8, channels=["dfg"], average=False, backend="compiled")
+
+
+#: How the child compiles a route's kernels, given a model the route takes.
+_ROUTE_RUNS = {"microfacet": _microfacet_route}
 
 
 @dataclass(frozen=True)
@@ -145,8 +162,8 @@ def ahead(needs: Sequence[Need]) -> Iterator[int]:
 
 
 def _compile(jobs: list[dict]) -> None:
-    """The child: one albedo per job by its method on the compiled backend (which compiles and caches its kernels),
-    skipping what is compiled by then."""
+    """The child: per job, one albedo by the generic quadrature on the compiled backend (which compiles and caches
+    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then."""
     import warnings
 
     from ..engine.methods import albedo
@@ -155,8 +172,12 @@ def _compile(jobs: list[dict]) -> None:
         with contextlib.suppress(Exception), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             job = Job.from_json(data)
-            if not job.done():
-                albedo(job.source.load(), _ANGLE, method=job.method, rtol=_RTOL, backend="compiled")
+            if job.done():
+                continue
+            if job.method in _ROUTE_RUNS:
+                _ROUTE_RUNS[job.method](job.source.load())
+            else:
+                albedo(job.source.load(), _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
 
 
 if __name__ == "__main__":
