@@ -12,8 +12,9 @@ caches, the kernels of the given models that are not there yet. The models come 
 needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
 compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
 order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them,
-the child the rest, and where the two meet the command loads what the child wrote. Before each, the child looks
-again, and skips what the command compiled meanwhile. The child's results are only compiled code: every albedo is
+the child the rest, and where the two meet the command waits for the lobe the child is compiling (a mark in the
+cache, :mod:`brdfnorm.engine.compiled.marks`) and loads it. Before each, the child looks again, and skips what the
+command compiled meanwhile. The child's results are only compiled code: every albedo is
 still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
 :func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
 compile is written whole by one.
@@ -166,6 +167,8 @@ def _compile(jobs: list[dict]) -> None:
     the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then."""
     import warnings
 
+    from ..engine.compiled.drivers import compiling_mark
+    from ..engine.compiled.marks import holding
     from ..engine.methods import albedo
 
     for data in jobs:
@@ -174,10 +177,12 @@ def _compile(jobs: list[dict]) -> None:
             job = Job.from_json(data)
             if job.done():
                 continue
+            model = job.source.load()
             if job.method in _ROUTE_RUNS:
-                _ROUTE_RUNS[job.method](job.source.load())
-            else:
-                albedo(job.source.load(), _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
+                _ROUTE_RUNS[job.method](model)
+                continue
+            with holding(compiling_mark(model.native_kernel().key)):  # the command waits for these, not compiles
+                albedo(model, _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
 
 
 if __name__ == "__main__":
