@@ -49,3 +49,19 @@ def test_a_dead_holder_holds_nothing_and_patience_ends_a_wait(tmp_path):
         sleeper.kill()
         sleeper.wait()
     assert marks.holder(mark) is None
+
+
+def test_an_old_mark_holds_nothing_and_a_stopped_childs_marks_are_released(tmp_path):
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        mark, other = tmp_path / "a.compiling", tmp_path / "b.compiling"
+        mark.write_text(str(sleeper.pid))
+        other.write_text("1")  # another holder's (init: alive)
+        old = time.time() - 2 * marks.PATIENCE
+        __import__("os").utime(mark, (old, old))
+        assert marks.holder(mark) is None  # its pid alive, but older than any compile (a reused pid)
+        marks.release(tmp_path, sleeper.pid)
+        assert not mark.exists() and other.exists()
+    finally:
+        sleeper.kill()
+        sleeper.wait()

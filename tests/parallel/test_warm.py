@@ -129,7 +129,7 @@ def test_a_lone_route_starts_the_child_with_it(compiled, monkeypatch, tmp_path):
 
     class Child:
         def __init__(self, argv, **kwargs):
-            self.stdin = self
+            self.stdin, self.pid = self, -1
             assert argv[1:] == ["-m", "brdfnorm.parallel.warm"]
 
         def write(self, data):

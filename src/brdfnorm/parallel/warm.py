@@ -160,6 +160,10 @@ def ahead(needs: Sequence[Need]) -> Iterator[int]:
         if child.poll() is None:
             child.terminate()
         child.wait()
+        from ..engine.compiled.drivers import cache_directory
+        from ..engine.compiled.marks import release
+
+        release(cache_directory(), child.pid)  # the mark of a lobe it was stopped compiling
 
 
 def _compile(jobs: list[dict]) -> None:

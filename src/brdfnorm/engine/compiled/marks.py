@@ -6,7 +6,8 @@ command reaches a lobe the child is still compiling, compiling it too would cost
 waiting costs what is left of the child's. The child holds a mark (:func:`holding`: a file holding its process id,
 written by an atomic rename, removed when done) while it compiles a lobe's kernels;
 :func:`brdfnorm.engine.compiled.drivers.native_integrand` waits (:func:`await_other`) while a mark is held by a live
-process, then loads what it wrote. A mark left by a process that died (a child stopped mid-compile) is ignored.
+process, then loads what it wrote. A mark left by a process that died (a child stopped mid-compile), or older
+than any compile takes, is ignored; :func:`release` removes those of a stopped child.
 """
 
 from __future__ import annotations
@@ -40,9 +41,10 @@ def holder(mark: Path) -> int | None:
     """The live process other than this one that holds ``mark``, or None."""
     try:
         pid = int(mark.read_text(encoding="ascii"))
+        age = time.time() - mark.stat().st_mtime
     except (OSError, ValueError):  # no mark (or one being replaced): nobody holds it now
         return None
-    if pid == os.getpid():
+    if pid == os.getpid() or age > PATIENCE:  # older than any compile: left by a process stopped, its pid reused
         return None
     try:
         os.kill(pid, 0)
@@ -62,3 +64,11 @@ def await_other(mark: Path, patience: float = PATIENCE) -> float:
     while holder(mark) is not None and time.monotonic() - start < patience:
         time.sleep(_POLL)
     return time.monotonic() - start
+
+
+def release(directory: Path, pid: int) -> None:
+    """Remove the marks in ``directory`` that process ``pid`` (stopped) left."""
+    for mark in directory.glob("*.compiling"):
+        with contextlib.suppress(OSError, ValueError):
+            if int(mark.read_text(encoding="ascii")) == pid:
+                mark.unlink()
