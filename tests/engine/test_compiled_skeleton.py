@@ -2,8 +2,8 @@
 rules"): the loop over panels × azimuth nodes × radial nodes that evaluates the half-vector slope map is
 :func:`brdfnorm.engine.compiled.slopes.slope_loop` alone (the shader kernels' ``slope_grid`` and the microfacet
 lobes' ``microfacet_grid`` pass it their weights), and the one of the lobe-aligned hemisphere map is
-:func:`brdfnorm.engine.compiled.kernels.hemisphere_loop` alone (``hemisphere_panels`` and ``hemisphere_sums`` pass it
-their rules).
+:func:`brdfnorm.engine.compiled.kernels.hemisphere` alone (``hemisphere_panels`` and ``hemisphere_sums`` run it
+with their rules).
 
 Read from the source (ast): a function's loop nests, each level named by the helpers of ``engine/compiled`` it calls
 directly or through other helpers. A second function with a loop (over panels or cells) around a level that reaches
@@ -22,7 +22,7 @@ COMPILED = SRC / "brdfnorm" / "engine" / "compiled"
 #: Each map: (the helper of its azimuth level, the helper of its node level) and the one function that loops over
 #: them.
 MAPS = {"slope": (("slopes", "azimuth_node"), ("slopes", "radial_node"), ("slopes", "slope_loop")),
-        "hemisphere": (("kernels", "_azimuth"), ("kernels", "_node"), ("kernels", "hemisphere_loop"))}
+        "hemisphere": (("hemimap", "azimuth"), ("hemimap", "node"), ("kernels", "hemisphere"))}
 #: A skeleton: panels × azimuths × nodes.
 DEPTH = 3
 

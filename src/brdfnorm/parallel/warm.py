@@ -1,16 +1,23 @@
 """Compiling the kernels a command will need on a second core, while the first computes.
 
-The compiled backend compiles each lobe's kernels once per machine (about 2 s of CPU per lobe, then loaded from the
-per-user disk cache, :mod:`brdfnorm.engine.compiled.drivers`). A first run of a command that visits several lobes —
-the demo's report visits eight — used to compile them one after the other on one core, while the other core idled:
-on an idle 2-core machine the first report took 32 s against 15 s once compiled (docs/performance.md).
+The compiled backend compiles each lobe's kernels once per machine (about 3 s of CPU per lobe, then loaded from the
+per-user disk cache, :mod:`brdfnorm.engine.compiled.drivers`), and some routes have kernels of their own, shared by
+every lobe they integrate: the microfacet lobes' half-vector route (:data:`ROUTE_KERNELS`: its rectangle integrand
+and its fused global rule, 13 s of CPU, cached by Numba beside the package). A first run of a command that visits
+several lobes — the demo's report visits eight and the microfacet route — used to compile them one after the other
+on one core, while the other core idled (docs/performance.md).
 
 :func:`ahead` starts one child process (``python -m brdfnorm.parallel.warm``) that compiles, into the same disk
-cache, the kernels of the given models that are not there yet, in the reverse of the order the command needs them:
-the command compiles its first lobes itself as it reaches them, the child the last ones, and where the two meet the
-command loads what the child wrote. The child's results are only compiled code: every albedo is still computed by the
-command, so its numbers do not depend on whether or when the child ran. Numba and :func:`~brdfnorm.engine.compiled.
-drivers.kernels_file` write their cache files by atomic renames, so a kernel both compile is written whole by one.
+caches, the kernels of the given models that are not there yet. The models come in the order the command first
+needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
+compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
+order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them,
+the child the rest, and where the two meet the command waits for the lobe the child is compiling (a mark in the
+cache, :mod:`brdfnorm.engine.compiled.marks`) and loads it. Before each, the child looks again, and skips what the
+command compiled meanwhile. The child's results are only compiled code: every albedo is
+still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
+:func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
+compile is written whole by one.
 
 Nothing is started where the backend is numpy, where one core is all there is, or where every kernel is compiled;
 the child is stopped when the block ends (what it finished stays in the cache for the next run).
@@ -23,66 +30,163 @@ import json
 import subprocess
 import sys
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 
 from ..errors import ArgumentError
 from ..models.base import Model
 from .executors import local_cores
 from .job import ModelSource
 
-#: The view angle (radians) and tolerance of the child's one albedo per model: any albedo compiles every kernel.
+#: The view angle (radians) and tolerance of the child's one albedo per job: any albedo compiles every kernel.
 _ANGLE, _RTOL = 0.5, 1e-3
 
+#: The albedo method whose route has kernels of its own (compiled once per machine for every lobe it takes, not per
+#: shader), and those kernels as (module of ``brdfnorm.engine.compiled``, function).
+ROUTE_KERNELS = {"microfacet": (("slopes", "microfacet_grid"), ("global_rule", "fused_global"))}
 
-def pending(models: Sequence[Model]) -> list[ModelSource]:
-    """The sources of ``models`` (first need first, one per kernel) whose compiled kernels are not in the cache."""
+
+def _microfacet_route(model: Model) -> None:
+    """Compile the microfacet route's kernels as tables call them: a 2 × 2 split-sum (DFG) table of ``model``
+    (:func:`brdfnorm.lut.compute`) at rtol 1e-8, whose cell (μ, α) = (3/64, 1/64), of the report's 32 × 32 texel
+    grid, leaves the global rule for the rectangles. (One albedo does not do: with one case the global rule is given
+    a read-only array, another signature, and at a view where it converges the rectangles never compile.)"""
+    import numpy as np
+
+    from ..lut import compute
+
+    compute(model, {"mu": np.array([3 / 64, 0.5]), "alpha": np.array([1 / 64, 0.5])},
+            clamp={"mu": 1e-4, "alpha": 1e-8}, rtol=1e-8, channels=["dfg"], average=False, backend="compiled")
+
+
+#: How the child compiles a route's kernels, given a model the route takes.
+_ROUTE_RUNS = {"microfacet": _microfacet_route}
+
+
+@dataclass(frozen=True)
+class Job:
+    """One thing for the child to compile: a model's own kernels (``method`` "quadrature", the generic route that
+    compiles every kernel of its shader), or the kernels of the route ``method`` (:data:`ROUTE_KERNELS`)."""
+
+    source: ModelSource
+    method: str = "quadrature"
+
+    def to_json(self) -> dict:
+        return {"source": self.source.to_json(), "method": self.method}
+
+    @classmethod
+    def from_json(cls, data: dict) -> Job:
+        return cls(ModelSource.from_json(data["source"]), data["method"])
+
+    def done(self) -> bool:
+        """Whether its kernels are in the disk caches now."""
+        if self.method in ROUTE_KERNELS:
+            return route_compiled(self.method)
+        from ..engine.compiled.drivers import kernels_compiled
+
+        kernel = self.source.load().native_kernel()
+        return kernel is None or kernels_compiled(kernel.key)
+
+
+def route_compiled(method: str) -> bool:
+    """Whether Numba's disk cache holds every kernel of route ``method`` (:data:`ROUTE_KERNELS`) for this source."""
+    import importlib
+
+    for module, name in ROUTE_KERNELS[method]:
+        dispatcher = getattr(importlib.import_module(f"brdfnorm.engine.compiled.{module}"), name)
+        try:  # the cache's index of compiled signatures, empty where missing or stale (another source, Numba)
+            if not dispatcher._cache._cache_file._load_index():
+                return False
+        except Exception:  # noqa: BLE001 - a Numba without this index: compile (the child costs the other core)
+            return False
+    return True
+
+
+#: What a command needs compiled: a model (its own kernels, for the generic quadrature), or (method, model): the
+#: model integrated by ``method`` (the route's kernels where :data:`ROUTE_KERNELS` has it, else the model's own).
+Need = Model | tuple[str, Model]
+
+
+def pending(needs: Sequence[Need]) -> list[Job]:
+    """What the child is to compile for ``needs`` (given in the order first needed), in that order, one job per
+    route and per kernel key, and only what is not in the caches."""
     from ..engine.compiled.backend import resolve
     from ..engine.compiled.drivers import kernels_compiled
 
     if resolve() != "compiled":
         return []
     out, seen = [], set()
-    for model in models:
-        kernel = model.native_kernel()
-        if kernel is None or kernel.key in seen or kernels_compiled(kernel.key):
+    for need in needs:
+        method, model = need if isinstance(need, tuple) else ("quadrature", need)
+        if method in ROUTE_KERNELS:
+            key, compiled = method, route_compiled
+        else:
+            kernel = model.native_kernel()
+            if kernel is None:
+                continue
+            key, compiled, method = kernel.key, kernels_compiled, "quadrature"
+        if key in seen or compiled(key):
             continue
-        seen.add(kernel.key)
+        seen.add(key)
         try:
-            out.append(ModelSource.of(model))
+            out.append(Job(ModelSource.of(model), method))
         except ArgumentError:  # a model that cannot travel (a Python subclass) compiles where it is used
             continue
     return out
 
 
+def order(jobs: Sequence[Job]) -> list[Job]:
+    """The child's order of ``jobs`` (in the order first needed): from the first route job on in that order, then
+    the lobes before it from the last back (all from the last back where no route job)."""
+    first = next((i for i, job in enumerate(jobs) if job.method in ROUTE_KERNELS), len(jobs))
+    return list(jobs[first:]) + list(reversed(jobs[:first]))
+
+
 @contextlib.contextmanager
-def ahead(models: Sequence[Model]) -> Iterator[int]:
-    """Within the block, a child process compiles the missing kernels of ``models`` (given in the order the block
-    first needs them); yields how many it was given (0: no child)."""
-    sources = pending(models)
-    if len(sources) < 2 or local_cores() < 2:  # the first is needed at once: the child would only race for it
+def ahead(needs: Sequence[Need]) -> Iterator[int]:
+    """Within the block, a child process compiles the missing kernels of ``needs`` (:data:`Need`, given in the order
+    the block first needs them); yields how many jobs it was given (0: no child)."""
+    jobs = pending(needs)
+    # one lobe alone is needed at once: the child would only race for it (a route is needed later)
+    if not jobs or (len(jobs) == 1 and jobs[0].method not in ROUTE_KERNELS) or local_cores() < 2:
         yield 0
         return
     child = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                              stderr=subprocess.DEVNULL)
     try:
         with child.stdin:
-            child.stdin.write(json.dumps([s.to_json() for s in reversed(sources)]).encode())
-        yield len(sources)
+            child.stdin.write(json.dumps([job.to_json() for job in order(jobs)]).encode())
+        yield len(jobs)
     finally:
         if child.poll() is None:
             child.terminate()
         child.wait()
+        from ..engine.compiled.drivers import cache_directory
+        from ..engine.compiled.marks import release
+
+        release(cache_directory(), child.pid)  # the mark of a lobe it was stopped compiling
 
 
-def _compile(sources: list[dict]) -> None:
-    """The child: one albedo of each model on the compiled backend (which compiles and caches its kernels)."""
+def _compile(jobs: list[dict]) -> None:
+    """The child: per job, one albedo by the generic quadrature on the compiled backend (which compiles and caches
+    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then."""
     import warnings
 
+    from ..engine.compiled.drivers import compiling_mark
+    from ..engine.compiled.marks import holding
     from ..engine.methods import albedo
 
-    for data in sources:
+    for data in jobs:
         with contextlib.suppress(Exception), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            albedo(ModelSource.from_json(data).load(), _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
+            job = Job.from_json(data)
+            if job.done():
+                continue
+            model = job.source.load()
+            if job.method in _ROUTE_RUNS:
+                _ROUTE_RUNS[job.method](model)
+                continue
+            with holding(compiling_mark(model.native_kernel().key)):  # the command waits for these, not compiles
+                albedo(model, _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
 
 
 if __name__ == "__main__":

@@ -43,9 +43,10 @@ OnStep = Callable[[str, float, int], None]
 
 
 def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[str, np.ndarray] | None = None,
-         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step], list[Model]]:
-    """The configuration, the steps of the page, and the models it computes albedos of in the order it first needs
-    them (whose kernels compile ahead, :mod:`brdfnorm.parallel.warm`)."""
+         config: StudyConfig | None = None) -> tuple[StudyConfig, list[sections.Step], list[warm.Need]]:
+    """The configuration, the steps of the page, and the models it computes albedos of, each with the method that
+    integrates it ((method, model), :data:`brdfnorm.parallel.warm.Need`), in the order it first needs them (their
+    kernels compile ahead, :mod:`brdfnorm.parallel.warm`)."""
     config = config or StudyConfig()
     if not models:
         if sweep is not None:
@@ -55,7 +56,7 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
             if np.any(np.asarray(values) <= 0):
                 raise ArgumentError("the default study needs exponents n > 0", where="sweep")
             config = dataclasses.replace(config, table_n=tuple(float(v) for v in values))
-        lobes = [(name, {}) for name in SEED_LOBES]
+        lobes = [("quadrature", name, {}) for name in SEED_LOBES]
         steps: list[sections.Step] = [
             ("factors at L = N: closed form vs quadrature; search for the maximum", sections.factor_section),
             ("albedo curves E(θ_o)", sections.albedo_section),
@@ -69,8 +70,8 @@ def plan(models: Sequence[Model | str | tuple[str, Model]] = (), sweep: tuple[st
             lobes += microfacet.LOBES
         if config.extras:
             steps.append(("verifying the seeds' claims", sections.verify_section(verify)))
-            lobes += published.LOBES
-        return config, steps, [load(name, **params) for name, params in lobes]
+            lobes += [("quadrature", name, params) for name, params in published.LOBES]
+        return config, steps, [(method, load(name, **params)) for method, name, params in lobes]
     steps, loaded = [], []
     for index, item in enumerate(models, start=1):
         if isinstance(item, tuple):

@@ -28,9 +28,10 @@ GLASS_GRID, QUICK_GLASS_GRID, GLASS_RTOL = 10, 4, 1e-6
 FURNACE_TABLES = (16, 32, 64, 0)
 FURNACE_ALPHAS = (0.1, 0.5, 1.0)
 RTOL = 1e-8
-#: The lobes whose albedos the section computes through the generic engine, as (name, parameters): GGX's tables
-#: and the sheen (charlie) of their third DFG channel (:mod:`brdfnorm.lut.cloth`); their kernels compile ahead.
-LOBES = (("ggx", {}), ("charlie", {}))
+#: The lobes whose albedos the section computes by compiled kernels, as (method, name, parameters): GGX's tables by
+#: the microfacet route (its kernels shared by every microfacet lobe) and the sheen (charlie) of their third DFG
+#: channel (:mod:`brdfnorm.lut.cloth`) by the generic quadrature; their kernels compile ahead.
+LOBES = (("microfacet", "ggx", {}), ("quadrature", "charlie", {}))
 
 
 def available() -> bool:

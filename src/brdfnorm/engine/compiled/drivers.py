@@ -25,6 +25,7 @@ import numpy as np
 
 from ...models.base import NativeKernel
 from .backend import notice
+from .marks import await_other
 
 _TEMPLATE = Path(__file__).with_name("kernels.py")
 
@@ -50,7 +51,7 @@ def kernels_file(key: str, numba_version: str) -> Path:
     """The path of the kernels' copy for shader ``key`` (Numba's cache of it lies beside it)."""
     source = _TEMPLATE.read_text(encoding="utf-8")
     # the helpers the kernels inline are part of their machine code: a change there is a new copy too
-    helpers = _TEMPLATE.with_name("slopes.py").read_text(encoding="utf-8")
+    helpers = "\0".join(_TEMPLATE.with_name(name).read_text(encoding="utf-8") for name in ("slopes.py", "hemimap.py"))
     digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
     return cache_directory() / f"brdfnorm_kernels_{digest}.py"
 
@@ -61,6 +62,13 @@ def kernels_compiled(key: str) -> bool:
     import numba
 
     return kernels_file(key, numba.__version__).with_suffix(".compiled").exists()
+
+
+def compiling_mark(key: str) -> Path:
+    """The mark a process holds while it compiles the kernels of shader ``key`` (:mod:`.marks`)."""
+    import numba
+
+    return kernels_file(key, numba.__version__).with_suffix(".compiling")
 
 
 @cache
@@ -154,6 +162,8 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
         U[k, :r.size] = r
     start = time.perf_counter()
     try:
+        if kernel.key not in _WARM:  # another process compiling them (parallel.warm's child): its result, not ours
+            await_other(compiling_mark(kernel.key))
         native = NativeIntegrand(kernel, fixed, U, over_light)
         native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
         if kernel.key not in _WARM:

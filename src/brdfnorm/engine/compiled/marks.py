@@ -1,0 +1,74 @@
+"""Marks in the kernel cache that say "a process is compiling these kernels now", so that a second process needing
+them waits for the first instead of compiling them again beside it.
+
+:mod:`brdfnorm.parallel.warm`'s child compiles, on the second core, the kernels a command will need later; where the
+command reaches a lobe the child is still compiling, compiling it too would cost the command the whole compile, where
+waiting costs what is left of the child's. The child holds a mark (:func:`holding`: a file holding its process id,
+written by an atomic rename, removed when done) while it compiles a lobe's kernels;
+:func:`brdfnorm.engine.compiled.drivers.native_integrand` waits (:func:`await_other`) while a mark is held by a live
+process, then loads what it wrote. A mark left by a process that died (a child stopped mid-compile), or older
+than any compile takes, is ignored; :func:`release` removes those of a stopped child.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+#: The longest wait for another process's compile (seconds): a lobe compiles in 2-4 s on an idle machine; beyond
+#: this the waiting process compiles the kernels itself (Numba's atomic cache writes keep either result whole).
+PATIENCE = 60.0
+_POLL = 0.02
+
+
+@contextlib.contextmanager
+def holding(mark: Path) -> Iterator[None]:
+    """Within the block, ``mark`` holds this process's id."""
+    temporary = mark.with_name(f"{mark.name}.{os.getpid()}.tmp")
+    temporary.write_text(str(os.getpid()), encoding="ascii")
+    os.replace(temporary, mark)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            mark.unlink()
+
+
+def holder(mark: Path) -> int | None:
+    """The live process other than this one that holds ``mark``, or None."""
+    try:
+        pid = int(mark.read_text(encoding="ascii"))
+        age = time.time() - mark.stat().st_mtime
+    except (OSError, ValueError):  # no mark (or one being replaced): nobody holds it now
+        return None
+    if pid == os.getpid() or age > PATIENCE:  # older than any compile: left by a process stopped, its pid reused
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # alive, another user's (a shared cache directory)
+        return pid
+    with contextlib.suppress(OSError, IndexError):  # a child that died unreaped (Linux: state Z) holds nothing
+        if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            return None
+    return pid
+
+
+def await_other(mark: Path, patience: float = PATIENCE) -> float:
+    """Wait while another live process holds ``mark``, at most ``patience`` seconds; returns the seconds waited."""
+    start = time.monotonic()
+    while holder(mark) is not None and time.monotonic() - start < patience:
+        time.sleep(_POLL)
+    return time.monotonic() - start
+
+
+def release(directory: Path, pid: int) -> None:
+    """Remove the marks in ``directory`` that process ``pid`` (stopped) left."""
+    for mark in directory.glob("*.compiling"):
+        with contextlib.suppress(OSError, ValueError):
+            if int(mark.read_text(encoding="ascii")) == pid:
+                mark.unlink()
