@@ -115,7 +115,10 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
         for group, (finite, q, e_b, e_u, floor, noise, estimate) in zip(groups, rules, strict=True):
             tolerance = case_tolerance[group.case]
             short = grid.short(group)  # (the neck lies below the coarse rules' nodes: tensor_rule.neck_u)
-            done = np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, q) & ~short
+            # Never on the start azimuths: their embedded 4- and 2-azimuth rules are blind to any azimuthal
+            # feature narrower than a quarter turn, and agree on the miss (module docstring, step 2).
+            done = (np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, q) & ~short
+                    & (group.level_b > START_LEVELS[0]))
             value[group.case[done], group.piece[done]] = q[done]
             error[group.case[done], group.piece[done]] = estimate[done]
             done_piece[group.case[done], group.piece[done]] = True
@@ -148,7 +151,8 @@ def _directions(grid: GlobalGrid, group: Group, short, e_b, e_u, share):
     more_b = np.any(e_b > share, axis=1)
     more_u = np.any(e_u > share, axis=1)
     neither = ~(more_b | more_u | short)
-    larger_b = np.any(e_b >= e_u, axis=1)
+    # (on the start azimuths, where no unit settles, the confirmation is along β)
+    larger_b = np.any(e_b >= e_u, axis=1) | (group.level_b == START_LEVELS[0])
     more_b |= neither & larger_b
     more_u |= neither & ~larger_b
     ratio_b = normalized(e_b, share).max(axis=1)
