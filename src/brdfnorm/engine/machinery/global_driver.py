@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import grid_estimate
 from .result import RouteResult
 from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
 
@@ -105,6 +106,11 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
                 F = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = grid.sums(F, group.level_u)
                 e_b, e_u, floor, noise, estimate = grid.estimate(group, F, q, e_b, e_u, magnitude)
+                # A sudden agreement is no evidence of convergence (grid_estimate.sudden): on every grid.
+                raised_b, raised_u = grid_estimate.sudden(F, [fejer(group.level_u - k)[1] for k in range(4)],
+                                                          e_b, e_u, magnitude)
+                estimate = estimate + (raised_b - e_b) + (raised_u - e_u)
+                e_b, e_u = raised_b, raised_u
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
             rules.append((finite, q, e_b, e_u, floor, noise, estimate))
