@@ -8,7 +8,12 @@ each step below). This module runs it, level by level, for many cases at once:
 1. the start grid (2^3 azimuths × 2^4 − 1 radial nodes) of every (case, piece) — a case may be cut into radial
    pieces that share its tolerance;
 2. per level and per group of units at the same levels: the sums and deviations of the embedded coarser rules
-   (:func:`~brdfnorm.engine.machinery.tensor_rule.sums`), the estimate, and the units that settle;
+   (:func:`~brdfnorm.engine.machinery.tensor_rule.sums`), the estimate — raised where 16 azimuths suddenly agree
+   with 8 (:func:`~brdfnorm.engine.machinery.grid_estimate.sudden`) — and the units that settle, never on the
+   start azimuths: their embedded 4- and 2-azimuth rules are blind to a feature the 8 alias, and agree on the miss
+   (the randomized sweep on main: a naive GGX shader, α = 0.14 at μ = 0.0146, rtol 1e-3, settled its half-vector
+   pole piece on 8 × 15 nodes 74 times outside its estimate; Blinn-Phong n = 1 611 at 78.8°, 6.7 times on 8 × 63).
+   A unit within its tolerance there is confirmed along β;
 3. the direction(s) to double (those whose estimate exceeds half the tolerance, else the larger one; a single
    one where the grid allows it), the doublings still needed if each squares the last reduction
    (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), and the units predicted hopeless within the node
@@ -121,8 +126,8 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
         for group, (finite, q, e_b, e_u, floor, noise, estimate) in zip(groups, rules, strict=True):
             tolerance = case_tolerance[group.case]
             short = grid.short(group)  # (the neck lies below the coarse rules' nodes: tensor_rule.neck_u)
-            # Never on the start azimuths: their embedded 4- and 2-azimuth rules are blind to any azimuthal
-            # feature narrower than a quarter turn, and agree on the miss (module docstring, step 2).
+            # Never on the start azimuths: their embedded 4- and 2-azimuth rules are blind to a feature the 8
+            # azimuths alias, and agree on the miss (module docstring, step 2).
             done = (np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, q) & ~short
                     & (group.level_b > START_LEVELS[0]))
             value[group.case[done], group.piece[done]] = q[done]

@@ -46,6 +46,10 @@ docs/performance.md ("Where the evaluations of a generic albedo go", fourth sess
 band, the horizon and the heavy tails are tests in tests/engine/test_grid_estimate.py that fail with their guard
 off. (Berntsen and Espelid 1991, "Error estimation in automatic quadrature routines", decide by such ratios whether
 a rule is in its asymptotic range.)
+
+The same band read the other way guards the plain estimate of every global grid (:func:`sudden`): at 16 azimuths,
+the first level a unit may settle, a fall steeper than :data:`ACCELERATION` times the square of the one before
+keeps the coarser difference d₂ in the estimate.
 """
 
 from __future__ import annotations
