@@ -14,7 +14,7 @@
   panels); :mod:`.global_driver` — its one levels loop; :mod:`.hemisphere_global` — the hemisphere route's entry
   point to it;
 - :mod:`.grid_estimate` — the lobe-aligned global rule's estimate of its reported grid, extrapolated where its
-  convergence is shown to be geometric;
+  convergence is shown to be geometric, and (every grid) the coarser difference kept after a sudden agreement;
 - :mod:`.slope_coordinates` — the radial coordinates (pole, tail, cap) the half-vector routes run in over each
   microfacet slope distribution;
 - :mod:`.directions` — random hemisphere directions and rotations about the normal.

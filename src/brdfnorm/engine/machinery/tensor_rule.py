@@ -49,7 +49,8 @@ is shown to be geometric, :mod:`brdfnorm.engine.machinery.grid_estimate` replace
 reported grid itself, extrapolated from d₁, d₂ and d₃ = |Q(¼) − Q(⅛)|. The direction(s) whose estimate
 exceeds half the tolerance (the larger one where neither does) are doubled — only one where the other is within
 the whole tolerance alone — and a case whose value stalled over its last two doublings is not settled
-(:func:`_stalled`). A case goes to the adaptive panels of
+(:func:`_stalled`), nor any case on the start azimuths, nor on 16 azimuths after a sudden agreement
+(:mod:`brdfnorm.engine.machinery.global_driver`, step 2). A case goes to the adaptive panels of
 :mod:`brdfnorm.engine.routes.hemisphere` when it would need more than :data:`MAX_NODES` nodes — predicted early, from
 the last
 doubling's reduction, assuming each doubling squares it (geometric convergence), or from the radial level its
