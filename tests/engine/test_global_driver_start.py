@@ -8,6 +8,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from helpers.paths import EXAMPLES, FIXTURES
 from helpers.references import ggx_albedo_reference
 from scipy.integrate import quad
@@ -42,28 +43,35 @@ def test_a_feature_aliased_by_the_start_azimuths_is_not_settled_there():
     assert np.all(np.abs(result.value[:, 0] - 2 * np.pi) <= result.error[:, 0])
 
 
-def _ratio(model, theta, exact, rtol):
+#: Both backends: the compiled one runs the half-vector rule of shaders and microfacet lobes in its fused kernel
+#: (engine/compiled/global_rule.fused_loop), which carries the same two rules as the numpy driver.
+BACKENDS = pytest.mark.parametrize("backend", ["numpy", "compiled"])
+
+
+def _ratio(model, theta, exact, rtol, backend="numpy"):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        result = bn.albedo(model, np.atleast_1d(theta), method="quadrature", backend="numpy", rtol=rtol)
+        result = bn.albedo(model, np.atleast_1d(theta), method="quadrature", backend=backend, rtol=rtol)
     return float(np.abs(result.value[0, 0] - exact) / result.error[0, 0])
 
 
-def test_naive_ggx_at_a_grazing_view_is_not_settled_on_the_start_azimuths():
+@BACKENDS
+def test_naive_ggx_at_a_grazing_view_is_not_settled_on_the_start_azimuths(backend):
     # Found by the randomized sweep: the half-vector rectangle's pole piece settled on 8 × 15 nodes at the graded
     # azimuth map (μ = 0.0146), its 8-, 4- and 2-azimuth rules agreeing to 1.2e-4 on a value 0.023 off: the
     # albedo 74 times outside its estimate at rtol 1e-3.
     alpha, mu = 0.14, 0.0146
     model = bn.load(str(FIXTURES / "ggx_naive.brdf")).with_params(alpha=alpha)
-    assert _ratio(model, np.arccos(mu), ggx_albedo_reference(alpha, mu, 64), 1e-3) <= 1.0
+    assert _ratio(model, np.arccos(mu), ggx_albedo_reference(alpha, mu, 64), 1e-3, backend) <= 1.0
 
 
-def test_blinn_phong_near_the_grazing_band_is_not_settled_on_the_start_azimuths():
+@BACKENDS
+def test_blinn_phong_near_the_grazing_band_is_not_settled_on_the_start_azimuths(backend):
     # Blinn-Phong n = 1 611 at 78.8°, rtol 1e-3: settled on 8 × 63 lobe-aligned nodes, 6.7 times outside.
     model = bn.load("blinn-phong", n=1611.0)
     theta = np.radians(78.8)
     exact = bn.albedo(model, np.atleast_1d(theta), method="series", rtol=1e-13)
-    assert _ratio(model, theta, exact.value[0, 0], 1e-3) <= 1.0
+    assert _ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0
 
 
 def _oren_nayar(theta: float, sigma: float, rho: float) -> float:
@@ -103,18 +111,20 @@ def test_a_sudden_agreement_on_sixteen_azimuths_keeps_the_coarser_difference():
     np.testing.assert_allclose(grid_estimate.deviations(F, weights)[0][:, 0, 0], [1e-4, 1e-2, 1e-1], rtol=1e-6)
     assert grid_estimate.sudden(F, weights, plain, plain, magnitude)[0][0, 0] == plain[0, 0]
 
-def test_oren_nayar_with_a_kink_between_sixteen_azimuths_is_not_settled_there():
+@BACKENDS
+def test_oren_nayar_with_a_kink_between_sixteen_azimuths_is_not_settled_there(backend):
     # examples/oren_nayar.brdf σ = 0.871 at 29.67°, rtol 1e-3: the half-vector rectangle's horizon piece fell
     # 2.7e5-fold from 8 to 16 azimuths, then moved 1.8e-4 at 32: 3.9 times outside its estimate.
     sigma, theta = 0.871, np.radians(29.67)
     model = bn.load(str(EXAMPLES / "oren_nayar.brdf")).with_params(sigma=sigma, rho=0.8)
-    assert _ratio(model, theta, _oren_nayar(theta, sigma, 0.8), 1e-3) <= 1.0
+    assert _ratio(model, theta, _oren_nayar(theta, sigma, 0.8), 1e-3, backend) <= 1.0
 
 
-def test_ggx_shader_at_a_grazing_view_is_not_settled_on_a_sudden_agreement():
+@BACKENDS
+def test_ggx_shader_at_a_grazing_view_is_not_settled_on_a_sudden_agreement(backend):
     # examples/ggx.brdf (f0 = 1) roughness 0.132 at 88.16°, rtol 1e-3: 2.4 times outside its estimate on main;
     # fails without grid_estimate.sudden.
     roughness, theta = 0.132, np.radians(88.16)
     model = bn.load(str(EXAMPLES / "ggx.brdf")).with_params(roughness=roughness, f0=1.0)
     exact = bn.albedo(bn.load("ggx", shadowing="separable", alpha=roughness**2), np.atleast_1d(theta), rtol=1e-13)
-    assert _ratio(model, theta, exact.value[0, 0], 1e-3) <= 1.0
+    assert _ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0

@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
+from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
@@ -33,6 +34,7 @@ _OPTIONS = dict(cache=True, error_model="numpy")
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
 _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).
+_EPS = np.finfo(np.float64).eps
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
 
 
@@ -181,6 +183,28 @@ def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
         sums[3, c] = magnitude
 
 
+@njit(**_OPTIONS)
+def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
+    """The β estimate ``e_b`` of channel ``c`` of a piece's grid at 16 azimuths, raised to d₁ + d₂ where the last
+    fall is more than ACCELERATION times steeper than the square of the one before, as
+    :func:`brdfnorm.engine.machinery.grid_estimate.sudden` (d_k the differences of the rules on every 1st, 2nd, 4th
+    and 8th azimuth)."""
+    M, N1 = grid.shape[0], grid.shape[1]
+    w = _WEIGHTS[level_u]
+    q = np.zeros(4)
+    for i in range(M):
+        s = 0.0
+        for j in range(N1):
+            s += grid[i, j, c] * w[j]
+        for k in range(4):
+            if i % (2**k) == 0:
+                q[k] += s * (2 * np.pi * 2**k / M)
+    d1, d2, d3 = abs(q[0] - q[1]), abs(q[1] - q[2]), abs(q[2] - q[3])
+    if d2 * d2 * d2 > ACCELERATION * d1 * d3 * d3 and max(d1, d2) > RESOLVED * _EPS * magnitude:
+        return max(e_b, d1 + d2)
+    return e_b
+
+
 @njit(error_model="numpy", inline="always")
 def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                beckmann, geometry, case, value, extra, largest, flags, outputs):  # pragma: no cover - compiled
@@ -263,6 +287,8 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                     for row in range(4):
                         results[kind, row, c] = sums[row, c]
                     latest[kind, c] = sums[0, c]
+                    if level_b[kind] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
+                        results[kind, 1, c] = _sudden(grid, level_u[kind], c, sums[1, c], sums[3, c])
             tolerance = np.empty(C)
             for c in range(C):
                 total = 0.0
@@ -285,13 +311,16 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                     larger_b |= e_b >= e_u
                     ratio_b = max(ratio_b, _normalized(e_b, share))
                     ratio_u = max(ratio_u, _normalized(e_u, share))
-                done = within and finite[kind]
+                # never on the start azimuths (global_driver: their embedded rules are blind to what the 8 alias)
+                done = within and finite[kind] and level_b[kind] > START_LEVELS[0]
                 if done:
                     for c in range(C):
                         piece_value[kind, c] = results[kind, 0, c]
                         piece_error[kind, c] = (results[kind, 1, c] + results[kind, 2, c]
                                                 + FLOOR * results[kind, 3, c])
                     done_piece[kind] = True
+                if level_b[kind] == START_LEVELS[0]:  # (confirmed along β there, as the numpy driver does)
+                    larger_b = True
                 if not (more_b or more_u):
                     more_b, more_u = larger_b, not larger_b
                 lb, lu = level_b[kind], level_u[kind]
