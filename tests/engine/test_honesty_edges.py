@@ -38,15 +38,3 @@ def test_surprised_marks_a_confirmation_several_times_above_the_pair_estimate():
     change = np.array([[SURPRISE * 0.5e-10, 0.0], [SURPRISE * 2e-10, 0.0], [0.0, SURPRISE * 1e-11]])
     assert surprised(change, err / 2, err / 2).tolist() == [False, True, True]
 
-
-@BACKENDS
-def test_modified_phong_estimate_covers_the_bias_of_cos_n(backend):
-    # (R·V)^n at n = 7 006 is biased by ~0.94 ε/w² relative (w = √(2/(n + 1))), where the rounding probe's fourth
-    # differences see 0.36–0.41 ε/w²: at rtol 1e-10 the errors (~6.5e-16 on 8.9e-4) were up to 1.34× outside.
-    n, theta = 7006.0, np.radians(np.linspace(3.9, 4.3, 41))
-    model = bn.load("modified-phong").with_params(n=np.full(theta.size, n))
-    exact = 2 * np.pi * np.cos(theta) / (n + 2)  # the lobe is 0 in float64 long before it meets the horizon
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        result = bn.albedo(model, theta, method="quadrature", backend=backend, rtol=1e-10)
-    assert np.all(np.abs(result.value[:, 0] - exact) <= result.error[:, 0])

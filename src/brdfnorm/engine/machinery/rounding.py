@@ -51,8 +51,7 @@ def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
 
     A lobe narrower than 1e-5 rad is also charged ε/w²·(1e-5/w)²: its core may be a plateau of rounding, the
     cosine 1 across it, which no difference sees (Phong at n = 1e20), or a staircase coarser than the fine
-    step (GGX at α = 1e-6). Rays with a non-finite sample are left out (the integrator raises or zeroes). Every
-    lobe is also charged ε/w²: the bias of cos^n (n ≈ 2/w²) from a cosine rounded half an ulp one way, not noise.
+    step (GGX at α = 1e-6). Rays with a non-finite sample are left out (the integrator raises or zeroes).
 
     ``epsilon``: the unit roundoff of a model evaluated in lower precision than float64 (None: float64). The
     plateau charge then uses it, over a width scaled by √(epsilon/ε) (where a cosine near 1 has as few values
@@ -93,16 +92,12 @@ def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     with np.errstate(invalid="ignore", divide="ignore"):  # so a ray along a fast-decaying sliver does not count
         mean_square = (np.where(usable, rms**2, 0.0).sum(axis=(1, 2)) / np.maximum(usable.sum(axis=(1, 2)), 1))
         relative = np.where(peak > 0, np.sqrt(mean_square) / peak, 0.0)
-    # The bias no difference sees: a lobe cos^n of width w ≈ √(2/n) whose cosine is off by half an ulp in one
-    # direction is off by n·ε/2 ≈ ε/w² relative (modified Phong n = 7 006: 0.94 ε/w², where the fourth differences
-    # saw 0.36–0.41 ε/w²; Blinn-Phong's measured noise is 1.2–1.7 ε/w² already).
-    bias = _EPS / widths[:, None] ** 2
     if epsilon is None or epsilon <= _EPS:
-        plateau = bias * (_PLATEAU_WIDTH / widths[:, None]) ** 2
-        return np.minimum(1.0, np.maximum(relative, np.maximum(plateau, bias)))
+        plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
+        return np.minimum(1.0, np.maximum(relative, plateau))
     plateau_width = _PLATEAU_WIDTH * np.sqrt(epsilon / _EPS)
     plateau = epsilon / widths[:, None] ** 2 * (plateau_width / widths[:, None]) ** 2
-    return np.minimum(1.0, np.maximum(np.maximum(relative, np.maximum(plateau, bias)), EVALUATION_ULPS * epsilon))
+    return np.minimum(1.0, np.maximum(np.maximum(relative, plateau), EVALUATION_ULPS * epsilon))
 
 
 def noise_bound(amplitude: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
