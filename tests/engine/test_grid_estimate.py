@@ -9,8 +9,7 @@ import warnings
 import numpy as np
 import pytest
 from helpers.paths import EXAMPLES, FIXTURES
-from helpers.references import ggx_albedo_reference, phong_like_reference
-from scipy.integrate import quad
+from helpers.references import ggx_albedo_reference, oren_nayar_reference, phong_like_reference
 
 import brdfnorm as bn
 from brdfnorm.engine.machinery import grid_estimate
@@ -167,18 +166,6 @@ def test_fewer_evaluations_for_blinn_phong():
     assert result.evaluations.tolist() == [2_760, 4_776, 4_776]
 
 
-def _oren_nayar(theta: float, sigma: float, rho: float) -> float:
-    """examples/oren_nayar.brdf's albedo: the azimuth in closed form (∫ max(cos Δφ, 0) dφ = 2), θ_L by quad."""
-    s2 = sigma * sigma
-    A, B = 1.0 - 0.5 * s2 / (s2 + 0.33), 0.45 * s2 / (s2 + 0.09)
-
-    def polar(t):
-        return 2.0 * np.sin(t) ** 2 * np.cos(t) / max(np.cos(t), np.cos(theta))
-
-    kinked = quad(polar, 0.0, theta, epsrel=1e-13, limit=200)[0] + quad(polar, theta, np.pi / 2, epsrel=1e-13,
-                                                                         limit=200)[0]
-    return rho / np.pi * (A * np.pi + B * np.sin(theta) * kinked)
-
 
 def _angles(rng, count: int) -> np.ndarray:
     """Views 0…89.9°, a third of them grazing (85° … 89.9°)."""
@@ -226,7 +213,7 @@ def _sweep(rng, rtols, scale: int) -> dict[str, float]:
             record("naive ggx", _quiet(model, np.arccos(mu), rtol=rtol), exact, 1e-12 * exact)
             theta = np.radians(rng.uniform(0.0, 89.9, scale))
             sigma = rng.uniform(0.05, 1.5, theta.size)
-            exact = np.array([_oren_nayar(t, s, 0.8) for t, s in zip(theta, sigma, strict=True)])
+            exact = np.array([oren_nayar_reference(t, s, 0.8) for t, s in zip(theta, sigma, strict=True)])
             model = bn.load(str(EXAMPLES / "oren_nayar.brdf")).with_params(sigma=sigma, rho=np.full(theta.size, 0.8))
             record("oren_nayar.brdf", _quiet(model, theta, rtol=rtol), exact, 2e-14)
     return worst

@@ -146,3 +146,17 @@ def dblquad_albedo(model, mu: float, *, even: bool = False, epsabs: float = 1e-1
     top = np.pi if even else 2 * np.pi
     value, _ = integrate.dblquad(g, 0.0, np.pi / 2, 0.0, top, epsabs=epsabs, epsrel=epsrel)
     return 2.0 * value if even else value
+
+
+def oren_nayar_reference(theta: float, sigma: float, rho: float) -> float:
+    """examples/oren_nayar.brdf's albedo: the azimuth in closed form (∫ max(cos Δφ, 0) dφ = 2), θ_L by quad, split
+    at the kink θ_L = θ_o."""
+    s2 = sigma * sigma
+    A, B = 1.0 - 0.5 * s2 / (s2 + 0.33), 0.45 * s2 / (s2 + 0.09)
+
+    def polar(t):
+        return 2.0 * np.sin(t) ** 2 * np.cos(t) / max(np.cos(t), np.cos(theta))
+
+    kinked = integrate.quad(polar, 0.0, theta, epsrel=1e-13, limit=200)[0] + integrate.quad(
+        polar, theta, np.pi / 2, epsrel=1e-13, limit=200)[0]
+    return rho / np.pi * (A * np.pi + B * np.sin(theta) * kinked)
