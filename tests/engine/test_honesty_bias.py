@@ -75,7 +75,7 @@ def test_the_bias_is_the_lobe_exponent_in_the_norms_times_their_errors(lobe):
     frame, width, support = _one_case(1e4, F[0])
     predicted = 1e4 * abs(norm_error(frame[0])[0] + norm_error(F)[0])
     assert predicted > 0.1 * 1e4 * EPS / 2  # this view's vectors are rounded
-    bias, probed = cosine_bias(lobe(F), lambda factor: lobe(F * factor[:, None]), frame, F, width, support,
+    bias, probed = cosine_bias(lambda factor: lobe(F * factor[:, None]), frame, F, width, support,
                                np.array([[1e-20]]), np.array([[1.0]]))
     assert probed.tolist() == [True]
     if lobe is _phong:
@@ -88,7 +88,7 @@ def test_exact_inputs_are_not_probed():
     # At normal incidence V = (0, 0, 1) and the frame are exact: nothing to charge, nothing evaluated.
     F = np.array([[0.0, 0.0, 1.0]])
     frame, width, support = _one_case(1e4, F[0])
-    bias, probed = cosine_bias(_phong(F), lambda factor: _phong(F * factor[:, None]), frame, F, width, support,
+    bias, probed = cosine_bias(lambda factor: _phong(F * factor[:, None]), frame, F, width, support,
                                np.array([[1e-20]]), np.array([[1.0]]))
     assert probed.tolist() == [False]
     assert bias.tolist() == [[0.0]]

@@ -130,8 +130,7 @@ def norm_error(vectors: np.ndarray) -> np.ndarray:
     return (total + (carry + square_error.sum(axis=-1))) / 2.0
 
 
-def cosine_bias(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                rescaled: Callable[[np.ndarray], Callable[[np.ndarray, np.ndarray], np.ndarray]],
+def cosine_bias(rescaled: Callable[[np.ndarray], Callable[[np.ndarray, np.ndarray], np.ndarray]],
                 frame, fixed: np.ndarray, widths: np.ndarray, supports: np.ndarray, error: np.ndarray,
                 magnitude: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Relative bias bound (K, C) of each case's integrand from the rounded norms of its inputs, and which cases
@@ -141,11 +140,12 @@ def cosine_bias(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray],
     P near the peak) and of the fixed direction F (|F| − 1 = δ_F) is off by S_ω·δ_P + S_F·δ_F relative, where
     S = d ln g / d ln|·| is the lobe's exponent in that input's norm: n for (R·V)^n, ~0 for a lobe of a
     normalized half vector ((N·H)^n, a GGX shader), whatever the lobe's width in ω. S is measured at 12 nodes
-    around the peak (0.01, 0.3 and 1 width out, 4 azimuths) from g at ω, at ω(1 + h) and, through
-    ``rescaled(1 + h)`` (the integrand with each case's F scaled by it), at F(1 + h), h ≈ 1e-3 w²: ln of the ratio
-    over ln(1 + h), exact for a power. The bound per node is |S_ω δ_P + S_F δ_F| + |S_ω|·max(|δ_T|, |δ_B|)·sin²α
-    (the frame's other axes weigh in off the peak), its largest over the nodes where g ≠ 0. δ are exact
-    (:func:`norm_error`). A systematic rounding inside the model itself (a shader's normalize(V)) is not seen.
+    around the peak (0.01, 0.3 and 1 width out, 4 azimuths) from g at ω, at ω(1 + h) and at F(1 + h),
+    h ≈ 1e-3 w², all through ``rescaled(factor)`` (the integrand with each case's F scaled by ``factor`` (K,), by
+    one evaluator, so that the ratios compare like with like): ln of the ratio over ln(1 + h), exact for a power.
+    The bound per node is |S_ω δ_P + S_F δ_F| + |S_ω|·max(|δ_T|, |δ_B|)·sin²α (the frame's other axes weigh in
+    off the peak), its largest over the nodes where g ≠ 0; the δ are exact (:func:`norm_error`). A systematic
+    rounding inside the model itself (a shader's normalize(V)) is not seen.
 
     Probed are the cases where the bias could matter against their error estimate ``error`` (K, C) of an integral
     of |g|-integral ``magnitude`` (K, C): where :func:`noise_bound` of 8/w²·(|δ_F| + max |δ_frame|) exceeds a
@@ -173,6 +173,7 @@ def cosine_bias(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray],
     case = np.repeat(cases, _PROBE_AZIMUTHS.size * _PROBE_RADII.size)
     h = np.clip(1e-3 * widths[cases] ** 2, 2.0**-40, 2.0**-20)
     h_node = np.repeat(h, _PROBE_AZIMUTHS.size * _PROBE_RADII.size)[:, None]
+    integrand = rescaled(np.ones(K))
     moved = rescaled(np.where(probed, 1.0 + np.clip(1e-3 * widths**2, 2.0**-40, 2.0**-20), 1.0))
     with np.errstate(all="ignore"):
         g = np.asarray(integrand(omega, case), dtype=float)

@@ -330,7 +330,7 @@ def integrate_hemisphere(
         # they hold (noise_bound takes no credit for averaging: its margin is what covers a bias, and the probe's
         # noise, independent from node to node, mostly averages out), |value| standing for the |g|-integral of a
         # lobe ≥ 0; a case it takes past its tolerance is rounding-limited.
-        bias, probed = cosine_bias(integrand, rescaled, frame, fixed, widths, supports, error, np.abs(value))
+        bias, probed = cosine_bias(rescaled, frame, fixed, widths, supports, error, np.abs(value))
         evaluations[probed] += BIAS_EVALUATIONS
         error = error + noise_bound(np.maximum(bias - noise_amplitude, 0.0), np.abs(value))
         over = converged & np.any(error > np.maximum(atol, rtol * np.abs(value)), axis=1)
