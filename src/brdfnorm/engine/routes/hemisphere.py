@@ -52,7 +52,9 @@ the lobe. Before the first round :func:`rounding_noise` measures each case's noi
 along rays from the peak, and :func:`noise_bound` adds it (times the |g|-integral) to the estimate. A case
 whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
 one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
-``converged`` is False and ``reason`` says why.
+``converged`` is False and ``reason`` says why. The bias no difference sees — of a lobe's cosine from the rounded
+norms of the fixed direction and of the lobe frame (:func:`cosine_bias`) — is a floor on that noise, charged once
+the estimates are known (a case it takes past its tolerance is "rounding-limited").
 
 Every round evaluates all panels of all unconverged cases in one vectorized call to the integrand; there is
 no Python loop per node or per case. ``scipy.integrate.cubature`` implements the same idea for a single
