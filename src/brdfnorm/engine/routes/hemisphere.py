@@ -52,7 +52,9 @@ the lobe. Before the first round :func:`rounding_noise` measures each case's noi
 along rays from the peak, and :func:`noise_bound` adds it (times the |g|-integral) to the estimate. A case
 whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
 one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
-``converged`` is False and ``reason`` says why.
+``converged`` is False and ``reason`` says why. The bias no difference sees — of a lobe's cosine from the rounded
+norms of the fixed direction and of the lobe frame (:func:`cosine_bias`) — is a floor on that noise, charged once
+the estimates are known (a case it takes past its tolerance is "rounding-limited").
 
 Every round evaluates all panels of all unconverged cases in one vectorized call to the integrand; there is
 no Python loop per node or per case. ``scipy.integrate.cubature`` implements the same idea for a single
@@ -75,7 +77,7 @@ from ..machinery.kinks import LOBATTO_NODES, algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
 from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
 from ..machinery.result import RouteResult
-from ..machinery.rounding import PROBE_EVALUATIONS, noise_bound, rounding_noise
+from ..machinery.rounding import BIAS_EVALUATIONS, PROBE_EVALUATIONS, cosine_bias, noise_bound, rounding_noise
 from ..machinery.tensor_rule import START_NODES, map_grid, neck_u, normalized
 
 NonFinitePolicy = Literal["raise", "zero"]
@@ -140,6 +142,8 @@ def integrate_hemisphere(
     first_route: FirstRoute | None = None,
     anisotropic: np.ndarray | None = None,
     epsilon: float | None = None,
+    fixed: np.ndarray | None = None,
+    rescaled: Callable[[np.ndarray], Integrand] | None = None,
 ) -> RouteResult:
     """Integrate ``integrand`` over the upper hemisphere for every case, adaptively.
 
@@ -165,6 +169,10 @@ def integrate_hemisphere(
     epsilon
         The unit roundoff of the integrand's evaluation where it is coarser than float64's (a model's ``epsilon``,
         2⁻²⁴ for float32): the rounding-noise bound is charged at least that (:func:`rounding_noise`).
+    fixed, rescaled
+        Each case's fixed direction (K, 3), and ``rescaled(factor)``: the integrand with it scaled by ``factor``
+        (K,). Given both, the bias of the lobe's cosine from the inputs' rounded norms joins the noise amplitude
+        (:func:`brdfnorm.engine.machinery.rounding.cosine_bias`).
     """
     poles = np.atleast_2d(np.asarray(poles, dtype=float))
     K = poles.shape[0]
@@ -319,6 +327,17 @@ def integrate_hemisphere(
         value[route.converged], error[route.converged] = route.value[route.converged], route.error[route.converged]
         converged |= route.converged
     reason[converged] = ""
+    if fixed is not None and rescaled is not None:
+        # The bias of the lobe's cosine, charged once the estimates are known, as a floor on the noise amplitude
+        # they hold (noise_bound takes no credit for averaging: its margin is what covers a bias, and the probe's
+        # noise, independent from node to node, mostly averages out), |value| standing for the |g|-integral of a
+        # lobe ≥ 0; a case it takes past its tolerance is rounding-limited.
+        bias, probed = cosine_bias(rescaled, frame, fixed, widths, supports, error, np.abs(value))
+        evaluations[probed] += BIAS_EVALUATIONS
+        error = error + noise_bound(np.maximum(bias - noise_amplitude, 0.0), np.abs(value))
+        over = converged & np.any(error > np.maximum(atol, rtol * np.abs(value)), axis=1)
+        converged &= ~over
+        reason[over] = "rounding-limited"
     return RouteResult(value, error, evaluations, converged, reason.astype(str),
                        {"nonfinite_fraction": bad_total / (2.0 * np.pi)})
 

@@ -12,6 +12,7 @@ reported at a real (L, V) pair.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -110,10 +111,18 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
     # it takes);
     # isotropy decides that and the global rule's azimuth estimate.
     isotropic = _isotropic_cases(problem, rtol)
+
+    def rescaled(factor: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """The integrand (by numpy) with each case's fixed direction scaled by ``factor`` (K,), for the bias of the
+        lobe's cosine (brdfnorm.engine.machinery.rounding.cosine_bias)."""
+        moved = replace(problem, fixed=problem.fixed * factor[:, None], native=None)
+        return lambda omega, case: moved.integrand(omega * FLIP if lower else omega, case) / scale[case, None]
+
     first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
     result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
                                   nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first,
-                                  anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None))
+                                  anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None),
+                                  fixed=problem.fixed, rescaled=rescaled)
     # Each case is charged the isotropy test as if it had run alone: counts do not depend on how cases are batched.
     return result.with_(value=result.value * scale[:, None], error=result.error * scale[:, None],
                         evaluations=result.evaluations + 3 * ISOTROPY_PAIRS)
