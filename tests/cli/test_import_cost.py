@@ -9,9 +9,9 @@ import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
-SRC = Path(__file__).resolve().parents[2] / "src"
+from helpers.paths import SRC
+
 LAZY = ("brdfnorm.lut.anisotropy", "brdfnorm.engine.routes.anisotropic", "brdfnorm.lut.certified", "scipy.optimize",
         "typer.rich_utils")
 
