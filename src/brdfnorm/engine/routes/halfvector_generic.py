@@ -31,7 +31,8 @@ Where it is tried, and when its answer is kept
 ----------------------------------------------
 - Only for isotropic lobes (:func:`brdfnorm.engine.routes.quadrature.rotation_invariant`, at each case's
   parameters), for cases whose rounding noise is below half the tolerance (:data:`HOPEFUL`), whose fixed direction
-  is at least :data:`MU_MIN` above the horizon (:data:`MU_MIN_NARROW` for some lobes), and either
+  is at least :data:`MU_MIN` above the horizon (:data:`MU_MIN_NARROW` for some lobes, :data:`MU_MIN_LOOSE`
+  for narrow ones at tolerances of :data:`LOOSE` and above), and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
   whose peak's half vector lies within the lobe's core of N (:func:`specular`) and whose tail is a power law
   (:func:`heavy_tailed`): narrow Gaussian lobes cost both routes about the same evaluations, each cheaper in
