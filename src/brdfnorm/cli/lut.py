@@ -14,10 +14,8 @@ import typer
 from .. import validate
 from ..errors import ArgumentError, OutputError
 from ..extras import require
-from ..lut import anisotropy as anisotropic_tables
-from ..lut import certified as certified_tables
 from ..lut import formats
-from ..lut.axes import DIRECTION_AXES, axis_parameter
+from ..lut.axes import DIRECTION_AXES, VIEW_AZIMUTH_AXIS, axis_parameter
 from ..lut.table import GRIDS, Lut, compute, grid_values
 from ..output import write_file
 from ..output.formats import format_error
@@ -178,11 +176,11 @@ def lut_command(
             from ..parallel.checkpoint import check_root
 
             check_root(spread.checkpoint)
-        if anisotropy is None and anisotropic_tables.VIEW_AZIMUTH_AXIS in axes:
+        if anisotropy is None and VIEW_AZIMUTH_AXIS in axes:
             raise ArgumentError("a phi_v axis needs --anisotropy", where="--axis phi_v")
-        azimuth_degrees = axes.get(anisotropic_tables.VIEW_AZIMUTH_AXIS)
+        azimuth_degrees = axes.get(VIEW_AZIMUTH_AXIS)
         if azimuth_degrees is not None:
-            axes[anisotropic_tables.VIEW_AZIMUTH_AXIS] = np.radians(azimuth_degrees)
+            axes[VIEW_AZIMUTH_AXIS] = np.radians(azimuth_degrees)
         if "theta" in axes:
             if np.any(axes["theta"] < 0) or np.any(axes["theta"] >= 90):
                 raise ArgumentError("theta must lie in [0°, 90°)", where="--axis theta")
@@ -196,7 +194,10 @@ def lut_command(
             if c not in ("dfg",):
                 raise ArgumentError(f"unknown channel set {c!r} (known: dfg)", where="--channels")
         m = load_model(model, param)
+        # (the anisotropic and certified routes imported only where asked: 0.1–0.2 s of a table's start)
         if anisotropy is not None:
+            from ..lut import anisotropy as anisotropic_tables
+
             if method != "auto" or digits is not None:
                 raise ArgumentError("anisotropic tables are computed by their own route (no --method, --digits)",
                                     where="--anisotropy")
@@ -225,6 +226,8 @@ def lut_command(
                                                     workers=spread.workers, scheduler=spread.dask_scheduler(),
                                                     channels=channels, checkpoint=spread.checkpoint)
             elif method == "certified":
+                from ..lut import certified as certified_tables
+
                 if spread.given():
                     raise ArgumentError("certified tables are computed in this process", where="--workers")
                 result = certified_tables.compute(m, axes, clamp=clamps, digits=12 if digits is None else digits,
@@ -238,10 +241,10 @@ def lut_command(
         if "theta" in axes:  # the file's θ axis in the degrees it was given in (the API's is in radians)
             result = in_degrees(result, degrees, clamp_degrees)
         if azimuth_degrees is not None:
-            result = Lut(dict(result), {n: azimuth_degrees if n == anisotropic_tables.VIEW_AZIMUTH_AXIS else v
+            result = Lut(dict(result), {n: azimuth_degrees if n == VIEW_AZIMUTH_AXIS else v
                                         for n, v in result.axes.items()},
                          {**result.meta, "units": {**result.meta["units"],
-                                                   anisotropic_tables.VIEW_AZIMUTH_AXIS: "degrees"}},
+                                                   VIEW_AZIMUTH_AXIS: "degrees"}},
                          result.table_axes)
         data = formats.dumps(result, name, tables=table_names, half=half, layout=spec, prefix=prefix,
                              channel_names=channel_names, broadcast_average=broadcast_average)

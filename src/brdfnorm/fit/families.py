@@ -18,10 +18,16 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares, linprog, minimize
 
 #: Lawson iterations for minimax (each one weighted least-squares solve; the polish finishes the job).
 LAWSON_ITERATIONS = 300
+
+
+def _optimize():
+    """scipy.optimize, imported at the first fit (not at the import of the command line: ~0.1 s of every command)."""
+    import scipy.optimize
+
+    return scipy.optimize
 
 
 def metric_scale(metric: str, y: np.ndarray) -> np.ndarray:
@@ -374,7 +380,8 @@ class HyperbolaForm(Form):
         for x0 in (X.min() - 0.1 * span, X.min(), X.min() + 0.05 * span):
             for b in (0.01 * span, 0.1 * span, 0.5 * span):
                 p0 = np.array([intercept + slope * x0, slope, x0, b])
-                result = least_squares(lambda p: (model(p, X) - Y) * ys / scale, p0, method="lm", x_scale="jac")
+                result = _optimize().least_squares(lambda p: (model(p, X) - Y) * ys / scale, p0, method="lm",
+                                                   x_scale="jac")
                 cost = float(np.sum(result.fun**2))
                 if best is None or cost < best[0]:
                     best = (cost, result.x)
@@ -408,7 +415,7 @@ def _infeasible(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, bound: float) -
                    np.hstack([-phi, (y - bound)[:, None] * psi]),
                    np.hstack([np.zeros_like(phi), -psi])])
     b = np.concatenate([np.zeros(2 * y.size), -np.ones(y.size)])
-    result = linprog(np.zeros(A.shape[1]), A_ub=A, b_ub=b, bounds=(None, None), method="highs")
+    result = _optimize().linprog(np.zeros(A.shape[1]), A_ub=A, b_ub=b, bounds=(None, None), method="highs")
     return bool(result.status == 2)
 
 
@@ -501,7 +508,7 @@ def _fit_rational(phi: np.ndarray, psi: np.ndarray, y: np.ndarray, scale: np.nda
 def _refine(residual, jacobian, c0: np.ndarray, root_w: np.ndarray) -> np.ndarray:
     """scipy.optimize.least_squares (Levenberg–Marquardt) from a start; the start if it does not improve."""
     try:
-        result = least_squares(residual, c0, jac=jacobian, args=(root_w,), method="lm", x_scale="jac")
+        result = _optimize().least_squares(residual, c0, jac=jacobian, args=(root_w,), method="lm", x_scale="jac")
     except (ValueError, np.linalg.LinAlgError):
         return c0
     start = np.sum(residual(c0, root_w) ** 2)
@@ -543,8 +550,9 @@ def _minimax(rel: Callable[[np.ndarray], np.ndarray], c0: np.ndarray,
             constraints[1]["jac"] = lambda z, r=rows, o=ones: np.hstack([jac(z[:n])[r], o])
         # The callers fit in scaled variables, so the unknowns are of order one, as SLSQP prefers.
         try:
-            result = minimize(objective, np.append(best, best_e), jac=objective_grad, constraints=constraints,
-                              method="SLSQP", options={"maxiter": 100, "ftol": 1e-15})
+            result = _optimize().minimize(objective, np.append(best, best_e), jac=objective_grad,
+                                          constraints=constraints, method="SLSQP",
+                                          options={"maxiter": 100, "ftol": 1e-15})
         except (ValueError, np.linalg.LinAlgError):
             break
         c = result.x[:n]

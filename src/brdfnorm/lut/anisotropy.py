@@ -35,7 +35,7 @@ from ..engine.routes import anisotropic as kernel
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..registry import Registry
-from .axes import DIRECTION_AXES
+from .axes import DIRECTION_AXES, VIEW_AZIMUTH_AXIS
 from .splitsum import DFG_F0, DFG_F90
 from .table import Lut, plain_params
 
@@ -43,7 +43,6 @@ from .table import Lut, plain_params
 CHUNK_CELLS = 64
 #: The anisotropy axis leaves the lobe no flatter than this ratio α_y/α_x (the cubature's cost grows as its root).
 MIN_ASPECT = 0.01
-VIEW_AZIMUTH_AXIS = "phi_v"
 
 
 @dataclass(frozen=True)

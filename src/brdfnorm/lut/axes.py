@@ -18,6 +18,9 @@ from ..parameters import NUMERIC, resolve
 
 #: Axes that give the view direction: μ = cos θ_o, or θ_o itself (radians in the API).
 DIRECTION_AXES = ("mu", "theta")
+#: The view azimuth axis of anisotropic tables (:mod:`brdfnorm.lut.anisotropy`; here so that the ``lut`` command
+#: checks its axes without importing the anisotropic route).
+VIEW_AZIMUTH_AXIS = "phi_v"
 
 
 def per_cell(model: Model, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -31,7 +31,8 @@ Where it is tried, and when its answer is kept
 ----------------------------------------------
 - Only for isotropic lobes (:func:`brdfnorm.engine.routes.quadrature.rotation_invariant`, at each case's
   parameters), for cases whose rounding noise is below half the tolerance (:data:`HOPEFUL`), whose fixed direction
-  is at least :data:`MU_MIN` above the horizon (:data:`MU_MIN_NARROW` for some lobes), and either
+  is at least :data:`MU_MIN` above the horizon (:data:`MU_MIN_NARROW` for some lobes, :data:`MU_MIN_LOOSE`
+  for narrow ones at tolerances of :data:`LOOSE` and above), and either
   whose lobe is broad (:data:`BROAD`: a spike at the mirror direction over it is at this route's pole), or
   whose peak's half vector lies within the lobe's core of N (:func:`specular`) and whose tail is a power law
   (:func:`heavy_tailed`): narrow Gaussian lobes cost both routes about the same evaluations, each cheaper in
@@ -70,8 +71,15 @@ MU_MIN = 1e-3
 #: tests/test_halfvector_generic_grazing.py); charlie.brdf 219 000 → 85 000 and multi_lobe.brdf 105 000 → 73 000
 #: at rtol 1e-9. Where the shader is not finite at a node (examples/ggx.brdf at μ = 1e-4 for some roughnesses) or
 #: the route fails (cook_torrance.brdf at rtol ≤ 1e-9), its evaluations are lost: up to 1.5× more there. Below
-#: 1e-4 the route rarely settles.
+#: 1e-4 the route rarely settles at tighter tolerances than LOOSE.
 MU_MIN_NARROW = 0.99e-4
+#: At tolerances of LOOSE and above, narrow lobes are tried down to this μ. Where the route does settle below 1e-4 it
+#: is at such tolerances: E_avg's grazing nodes (μ = 9.2e-5, 2.9e-5, 5.8e-6 of its Clenshaw–Curtis rule in √μ,
+#: asked for 2.5e-6 … 1e-4 by their weights, brdfnorm.lut.table), where the lobe-aligned panels took 47 000–120 000
+#: evaluations per albedo: examples/ggx.brdf's 32 × 32 E_avg, 2.6 M → 1.0 M, 1.5 M → 0.67 M and 0.61 M → 0.20 M
+#: evaluations on those nodes (tests/engine/test_halfvector_generic_loose.py: estimates cover the errors there).
+MU_MIN_LOOSE = 1e-6
+LOOSE = 1e-7
 #: Below MU_MIN a broad lobe is taken only where its peak's cos θ is below this: the horizon cuts a broad lobe
 #: peaked near N (diffuse lobes: lambert, disney_diffuse, oren_nayar, eon.brdf, peaks at cos θ ≥ 0.9) far from its
 #: core, which the lobe-aligned panels resolve in a few thousand evaluations (lambert.brdf at μ = 5e-4, rtol 1e-9:
@@ -105,14 +113,17 @@ MIN_BUDGET = 20_000
 _GGX = GGXDistribution()
 
 
-def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def specular(fixed: np.ndarray, poles: np.ndarray, widths: np.ndarray,
+             loose: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(eligible (K,), α (K,), broad (K,)): the lobe's half vector H_p = (P + F)/|P + F| is within its width of
-    N, or the lobe is broad, and the GGX width α = tan(width/2) (the reflection doubles angles at H = N)."""
+    N, or the lobe is broad, and the GGX width α = tan(width/2) (the reflection doubles angles at H = N); a narrow
+    lobe from :data:`MU_MIN_LOOSE` on where ``loose`` (a tolerance of :data:`LOOSE` or above)."""
     half = poles + fixed
     tilt = np.arctan2(np.hypot(half[:, 0], half[:, 1]), half[:, 2])
     width = np.asarray(widths, dtype=float)
     broad = width >= BROAD
-    eligible = (fixed[:, 2] >= MU_MIN_NARROW) & ((tilt <= width) | broad)
+    floor = np.where(~broad & loose, MU_MIN_LOOSE, MU_MIN_NARROW)
+    eligible = (fixed[:, 2] >= floor) & ((tilt <= width) | broad)
     eligible &= (fixed[:, 2] >= MU_MIN) | ~broad | (poles[:, 2] < LOW_PEAK)
     alpha = np.tan(np.clip(0.5 * width, 1e-8, np.pi / 4))
     return eligible, alpha, broad
@@ -180,7 +191,7 @@ def route(fixed: np.ndarray, isotropic: np.ndarray, integrand: Callable, poles: 
     other rows are to be ignored; their evaluations are counted)."""
     K = fixed.shape[0]
     quiet = quiet[np.all(noise_bound(noise_amplitude[quiet], 1.0) < rtol / HOPEFUL, axis=-1)]
-    eligible, alpha, broad = specular(fixed, poles, widths)
+    eligible, alpha, broad = specular(fixed, poles, widths, loose=rtol >= LOOSE)
     eligible &= isotropic
     cases = quiet[eligible[quiet]] if max_evaluations >= MIN_BUDGET else quiet[:0]
     budget = min(max_evaluations, BUDGET)
