@@ -7,7 +7,9 @@ by :mod:`brdfnorm.engine.machinery.global_driver`): at every level the grid M ×
 extrapolation), each over its share of the tolerance, the direction(s) doubled next, and — where a reference is
 given — the grid's true error. The grid is nested and refined as a whole (no local refinement along β or u), so a
 view's evaluations are its final grid plus the per-call probes (lobe search, isotropy test, rounding-noise probe,
-heavy-tail test), the same for every view of a call.
+heavy-tail test), the same for every view. Views that another route or grid settles (the half-vector
+rectangle, tried first for broad lobes, or the adaptive panels after the global rule) are not profiled: their
+``levels`` are empty, or end where the lobe-aligned rule gave them up.
 
 ``oracle=True`` replaces each estimate by the grid's true error (split over β and u in the estimates'
 proportions, so the driver's choice of direction is kept): the evaluations the same rule and coordinates need to
@@ -64,6 +66,8 @@ def profile(n: float, theta: np.ndarray, rtol: float, *, truth: np.ndarray | Non
 
     def observed_directions(grid, group, short, e_b, e_u, share):
         out = directions(grid, group, short, e_b, e_u, share)
+        if not isinstance(grid, tensor_rule.LobeAlignedGrid):  # (the half-vector rectangle: not profiled)
+            return out
         more_b, more_u, ratio_b, ratio_u = out[:4]
         for i, case in enumerate(group.case):
             level = levels[int(case)][-1]
