@@ -1,7 +1,7 @@
 """benchmarks/profile_evaluations.py: the per-view profile of the global rule adds up to what the call reports.
 
 The profile observes the driver through two patched internals; if either moved, or the driver's levels stopped
-being nested, these checks fail: the final grids plus one per-call probe cost are the reported evaluations, the
+being nested, these checks fail: the final grids plus one probe cost per view are the reported evaluations, the
 last level's estimate is the reported error, each level follows from the one before by the recorded doubling,
 and the oracle (estimates replaced by true errors) reaches the tolerance with no more evaluations.
 """
@@ -11,12 +11,12 @@ from __future__ import annotations
 import importlib.util
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.paths import REPO
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
+BENCH = REPO / "benchmarks"
 
 
 def _load(name: str):
