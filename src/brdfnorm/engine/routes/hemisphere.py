@@ -260,10 +260,11 @@ def integrate_hemisphere(
         # are confirmed again: a split keeps the edges, and a kink next to one, out of the K15 nodes' sight.
         unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
         estimate = np.where(present, (quadrature_error + noise).max(axis=1), np.nan)
-        ending = np.any(_stopping(history + [(evaluations - confirmations, estimate)], present & ~within, noise,
-                                  quadrature_error, tolerance, evaluations, confirmations, since, unchecked,
-                                  stall_after, max_evaluations)[:3], axis=0)
-        confirming = (within | ending)[pool.case] & ~pool.checked
+        ending = _stopping(history + [(evaluations - confirmations, estimate)], present & ~within, noise,
+                           quadrature_error, tolerance, evaluations, confirmations, since, unchecked, stall_after,
+                           max_evaluations)
+        stopping = np.any(ending[:3], axis=0)
+        confirming = (within | stopping)[pool.case] & ~pool.checked
         if confirming.any():
             # Halved along β and along u in turn; each change joins that direction's error (the panel is split
             # where the check found it wanting), less the panel's rounding-noise bound (charged to the case apart).
@@ -281,16 +282,19 @@ def integrate_hemisphere(
             pool.checked[confirming] = True
             unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
             panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
-            # What a confirmation found was in no earlier estimate: the stall check compares from here on.
-            raised = present & (quadrature_error.max(axis=1) > before)
+            # What a confirmation found was in no earlier estimate: the stall check of a case that goes on compares
+            # from here on.
+            raised = present & ~stopping & (quadrature_error.max(axis=1) > before)
             since[raised] = (evaluations - confirmations)[raised]
         # (Every panel of a case still within tolerance, or stopping, has now been confirmed.)
         case_ok = within
         converged |= case_ok
         history.append((evaluations - confirmations, np.where(present, (quadrature_error + noise).max(axis=1), np.nan)))
-        stop, stalled, out_of_budget, rounding_limited = _stopping(
-            history, present & ~case_ok, noise, quadrature_error, tolerance, evaluations, confirmations, since,
-            unchecked, stall_after, max_evaluations)
+        # A case confirmed to stop stops (with what its confirmation found), unless it now meets its tolerance.
+        going_on = _stopping(history, present & ~case_ok & ~stopping, noise, quadrature_error, tolerance, evaluations,
+                             confirmations, since, unchecked, stall_after, max_evaluations)
+        stop, stalled, out_of_budget, rounding_limited = (
+            (first & ~case_ok) | then for first, then in zip(ending, going_on, strict=True))
         reason[out_of_budget] = "budget"
         reason[stalled] = "stalled"
         reason[rounding_limited & (stop | stalled | out_of_budget)] = "rounding-limited"
