@@ -39,9 +39,10 @@ lower-order estimates (G7 in β or in u); their differences are the panel's erro
 This is the plain |K − G| estimate of the *lower*-order rule, not QUADPACK's heuristic rescaling: it bounds the
 error of the reported K15 ⊗ K15 value with a wide margin, which is what "honest" means here (the tests check
 estimate ≥ true error on random cases). Both embedded rules can still agree on a feature that lies between all
-their nodes (the sliver a Blinn-Phong lobe becomes at grazing views, 2 cos θ_o/√n wide sideways). So when a case
-first meets its tolerance, each of its panels is recomputed as two halves with the G7 ⊗ G7 rule — new nodes, a
-quarter of the cost of K15 halves — and the difference joins the panel's error before the case may stop. Panels
+their nodes (the sliver a Blinn-Phong lobe becomes at grazing views, 2 cos θ_o/√n wide sideways). So before a
+case stops — meeting its tolerance or not — each of its panels is recomputed as two halves on new nodes that include
+its edges and corners (Lobatto ⊗ G7 along β and along u, Lobatto ⊗ Lobatto along u: docs/kinks.md) and the
+differences join the panel's error. Panels
 are bisected along their worse direction, largest errors first, until the summed estimate is below max(atol,
 rtol·|E|) for every case and channel, or the evaluation budget runs out (then ``converged`` is False and the
 estimate still says how far off the value may be).
