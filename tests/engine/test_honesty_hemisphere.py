@@ -24,6 +24,7 @@ def oren_nayar():
     return bn.load(str(EXAMPLES / "oren_nayar.brdf")).with_params(sigma=np.array([SIGMA]))
 
 
+@pytest.mark.slow  # 2e7 evaluations: ~2 s of CPU idle, 6-14 s on a loaded machine
 @pytest.mark.parametrize("backend", ["numpy", "compiled"])
 def test_oren_nayar_shader_whose_kink_clips_a_panel_corner_stays_within_its_estimate(oren_nayar, backend):
     # The kink max(0, L·V − N·L N·V) clipped a corner of the panel [π/4, 3π/8] × [1/4, 3/8] within 0.8% of
