@@ -135,10 +135,9 @@ def pending(needs: Sequence[Need]) -> list[Job]:
 
 
 def order(jobs: Sequence[Job]) -> list[Job]:
-    """The child's order of ``jobs`` (in the order first needed): from the first route job on in that order, then
-    the lobes before it from the last back (all from the last back where no route job)."""
-    first = next((i for i, job in enumerate(jobs) if job.method in ROUTE_KERNELS), len(jobs))
-    return list(jobs[first:]) + list(reversed(jobs[:first]))
+    """The child's order of ``jobs`` (in the order first needed): from the second on in that order, then the first
+    (which the command compiles itself at once, the child only where the command does not reach it)."""
+    return list(jobs[1:]) + list(jobs[:1])
 
 
 @contextlib.contextmanager
@@ -172,7 +171,7 @@ def _compile(jobs: list[dict]) -> None:
     import warnings
 
     from ..engine.compiled.drivers import compiling_mark
-    from ..engine.compiled.marks import holding
+    from ..engine.compiled.marks import holder, holding
     from ..engine.methods import albedo
 
     for data in jobs:
@@ -185,7 +184,10 @@ def _compile(jobs: list[dict]) -> None:
             if job.method in _ROUTE_RUNS:
                 _ROUTE_RUNS[job.method](model)
                 continue
-            with holding(compiling_mark(model.native_kernel().key)):  # the command waits for these, not compiles
+            mark = compiling_mark(model.native_kernel().key)
+            if holder(mark) is not None:  # the command compiling them now: the next job
+                continue
+            with holding(mark):  # the command waits for these, not compiles
                 albedo(model, _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
 
 

@@ -18,8 +18,10 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 
 from __future__ import annotations
 
+import hashlib
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -27,6 +29,7 @@ from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
+from .marks import await_other, holding
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
 
@@ -383,28 +386,56 @@ def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gr
                   over_light, shader, failed, value, error, evaluations, settled):  # pragma: no cover - compiled
     """The global rule of a ``.brdf`` shader (the generic weight of :func:`.slopes.reflected_value`, the largest
     |value| as a last channel, ``failed[k]`` where a value above the horizon is not finite): :func:`fused_loop`.
-    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once per channel count
-    and cached with the package, not once per shader (~9 s each)."""
+    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once and cached with the
+    package, not once per shader (~9 s of CPU each); the shader returns at least :data:`PADDED` outputs (a shader of
+    fewer comes padded with zeros), of which the channels of ``value`` are used: one compile serves shaders of one,
+    two and three channels (a fresh machine's report needs one and three)."""
     fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                False, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
                _shader_case, _shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
                (value, error, evaluations, settled))
 
 
-def shader_kernel(arguments: list, shader: int, channels: int):
+#: The outputs of the shader :func:`shader_global` calls, at least: a shader of fewer channels is called through its
+#: kernels' copy's ``padded_shader`` (its outputs, then zeros), so that its first-class function type, and with it
+#: the kernel's signature, is the same for one, two and three channels.
+PADDED = 3
+
+
+def shader_kernel(arguments: list, shader: int, outputs: int):
     """:func:`shader_global` compiled (or loaded from the cache) for ``arguments``, the one at index ``shader`` (a
-    jitted shader of ``channels`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> C float64s:
-    called with the jitted function itself, Numba would type the kernel by that function object and compile it anew
-    in every process. Returns the compiled entry point, which takes the shader's dispatcher."""
+    jitted shader of ``outputs`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> ``outputs``
+    float64s: called with the jitted function itself, Numba would type the kernel by that function object and
+    compile it anew in every process. Returns the compiled entry point, which takes the shader's dispatcher.
+
+    The compile (~9 s of CPU) under a mark (:mod:`.marks`): where another process is compiling the same signature
+    (:mod:`brdfnorm.parallel.warm`'s child, or the command while its child reaches a lobe), this one waits for it
+    and loads its result from Numba's cache instead of compiling it beside it."""
     import numba
     from numba import types
 
-    signature = types.UniTuple(types.float64, channels)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
     argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
                      for i, a in enumerate(arguments))
     if argtypes not in shader_global.overloads:
-        shader_global.compile(argtypes)
+        mark = compile_mark(argtypes)
+        if mark is None:
+            shader_global.compile(argtypes)
+        else:
+            await_other(mark)
+            with holding(mark):
+                shader_global.compile(argtypes)
     return shader_global.overloads[argtypes].entry_point
+
+
+def compile_mark(argtypes: tuple) -> Path | None:
+    """The mark a process holds while it compiles :func:`shader_global` for ``argtypes``, beside Numba's cache of it
+    (None where Numba caches nothing)."""
+    directory = getattr(shader_global._cache, "_cache_path", None)
+    if directory is None:
+        return None
+    digest = hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]
+    return Path(directory) / f"shader_global-{digest}.compiling"
 
 
 def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
@@ -414,7 +445,8 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
     zero and unsettled); ``lobe``: a compiled rectangle integrand's ``fused`` attribute, (kind, channels C, the
     kernel's arguments of the lobe): kind "microfacet" for :func:`fused_global`
     (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), "shader" for :func:`shader_global`
-    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, C its outputs + 1)."""
+    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, returning
+    max(C − 1, :data:`PADDED`) outputs, of which the first C − 1 are the channels)."""
     if max_nodes > MAX_NODES:
         raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
     kind, channels, arguments = lobe
@@ -429,7 +461,7 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
         kernel = fused_global
     else:
         try:
-            kernel = shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+            kernel = shader_kernel(every, 9 + len(arguments) - 2, max(channels - 1, PADDED))
         except NumbaError as failure:  # (settling no case here, the route's panels compute them all)
             _tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
                        "; its panels compute")
