@@ -1,0 +1,47 @@
+"""brdfnorm.parallel.warm's child (warm._compile) skips a lobe whose mark another live process holds (the command
+compiling it now: brdfnorm.engine.compiled.drivers.native_integrand), and compiles one nobody holds."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import brdfnorm as bn
+from brdfnorm.engine import methods
+from brdfnorm.engine.compiled import drivers
+from brdfnorm.parallel import warm
+from brdfnorm.parallel.job import ModelSource
+
+pytest.importorskip("numba")
+
+
+@pytest.fixture
+def albedos(monkeypatch, tmp_path):
+    """The models the child computes its one albedo of (the compile stood in for), with an empty kernel cache."""
+    monkeypatch.setenv("BRDFNORM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("BRDFNORM_BACKEND", "compiled")
+    seen = []
+    monkeypatch.setattr(methods, "albedo", lambda model, *args, **kwargs: seen.append(model.name))
+    return seen
+
+
+def _job(name: str) -> dict:
+    return warm.Job(ModelSource("builtin", name)).to_json()
+
+
+def test_the_child_skips_a_lobe_another_process_is_compiling(albedos):
+    mark = drivers.compiling_mark(bn.load("phong").native_kernel().key)
+    script = (f"import time; from pathlib import Path; from brdfnorm.engine.compiled import marks\n"
+              f"with marks.holding(Path({str(mark)!r})):\n    print('held', flush=True); time.sleep(60)")
+    holder = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        warm._compile([_job("phong"), _job("blinn-phong")])
+    finally:
+        holder.kill()
+        holder.wait(timeout=60)
+    assert albedos == ["blinn-phong"]
+    assert Path(mark).read_text() == str(holder.pid)  # (not the child's to remove)
