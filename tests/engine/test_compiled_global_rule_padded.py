@@ -3,7 +3,8 @@ and three channels, and the mark its compile is held under: a shader of fewer th
 called through its kernels' copy's ``padded_shader`` (its outputs, then zeros), so that a scalar built-in lobe and a
 three-channel one take the same kernel signature (a fresh machine's report needs both: one compile, not two), and
 the padded lobe's values equal the numpy backend's within the estimates; a process compiling the kernel holds a mark
-beside Numba's cache of it, and a second process waits for it rather than compiling the same signature beside it."""
+beside Numba's cache of it, and a second process waits for it rather than compiling the same signature beside it;
+likewise the microfacet route's fused_global at its first call in a process (global_rule.route_mark)."""
 
 from __future__ import annotations
 
@@ -98,3 +99,31 @@ def test_no_mark_where_numba_caches_nothing(monkeypatch, tmp_path):
     stand_in._cache = object()
     monkeypatch.setattr(global_rule, "shader_global", stand_in)
     assert global_rule.compile_mark((1,)) is None
+
+
+class _Route:
+    """A stand-in for fused_global: no overloads until called, a call that records the route mark's holder."""
+
+    def __init__(self, directory):
+        self.overloads, self.held = {}, []
+        self._cache = type("Cache", (), {"_cache_path": str(directory)})()
+
+    def __call__(self, *every):
+        mark = global_rule.route_mark()
+        self.held.append(mark.read_text() if mark.exists() else None)
+        self.overloads["compiled"] = True
+
+
+def test_the_first_microfacet_call_waits_for_and_holds_the_route_mark(monkeypatch, tmp_path):
+    stand_in, waited = _Route(tmp_path), []
+    monkeypatch.setattr(global_rule, "fused_global", stand_in)
+    monkeypatch.setattr(global_rule, "await_other", lambda mark: waited.append(mark) or 0.0)
+    one = np.zeros(1, dtype=np.int64)
+    call = (one, np.ones(1), np.zeros(1), np.zeros(1, dtype=bool), np.ones(1), np.ones(1), np.ones(1), 120, 0,
+            ("microfacet", 1, ()))
+    global_rule.integrate(*call)
+    mark = global_rule.route_mark()
+    assert mark.parent == tmp_path and waited == [mark] and stand_in.held == [str(os.getpid())]
+    assert not mark.exists()
+    global_rule.integrate(*call)  # compiled in this process: neither waits nor marks
+    assert waited == [mark] and stand_in.held == [str(os.getpid()), None]

@@ -63,6 +63,16 @@ def _microfacet_route(model: Model) -> None:
 _ROUTE_RUNS = {"microfacet": _microfacet_route}
 
 
+def _microfacet_mark():
+    from ..engine.compiled.global_rule import route_mark
+
+    return route_mark()
+
+
+#: The mark (or None) a process holds while it compiles a route's kernels, the command's side included.
+_ROUTE_MARKS = {"microfacet": _microfacet_mark}
+
+
 @dataclass(frozen=True)
 class Job:
     """One thing for the child to compile: a model's own kernels (``method`` "quadrature", the generic route that
@@ -183,7 +193,11 @@ def _compile(jobs: list[dict]) -> None:
                 continue
             model = job.source.load()
             if job.method in _ROUTE_RUNS:
-                _ROUTE_RUNS[job.method](model)
+                mark = _ROUTE_MARKS[job.method]()
+                if mark is not None and holder(mark) is not None:  # the command compiling them now
+                    continue
+                with holding(mark) if mark is not None else contextlib.nullcontext():
+                    _ROUTE_RUNS[job.method](model)
                 continue
             mark = compiling_mark(model.native_kernel().key)
             if holder(mark) is not None:  # the command compiling them now: the next job

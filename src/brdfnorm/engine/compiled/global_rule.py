@@ -438,6 +438,15 @@ def compile_mark(argtypes: tuple) -> Path | None:
     return Path(directory) / f"shader_global-{digest}.compiling"
 
 
+def route_mark() -> Path | None:
+    """The mark held while the microfacet route's kernels compile (:func:`fused_global` here, by the command or
+    :mod:`brdfnorm.parallel.warm`'s child, which compiles :func:`.slopes.microfacet_grid` with it), beside Numba's
+    cache of :func:`fused_global` (None where Numba caches nothing): the second process to need them waits for the
+    first's, ~14 s of CPU, rather than compiling them beside it."""
+    directory = getattr(fused_global._cache, "_cache_path", None)
+    return None if directory is None else Path(directory) / "microfacet-route.compiling"
+
+
 def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
               rtol: np.ndarray, atol: np.ndarray, max_nodes: int, graded_predicts: int,
               lobe: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -458,6 +467,13 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
              np.array(symmetric, dtype=bool), *(np.array(x, dtype=float) for x in (scale, rtol, atol)), max_nodes,
              graded_predicts, *arguments, value, error, evaluations, settled]
     if kind == "microfacet":
+        if not fused_global.overloads:  # the first call here: compiled (or loaded), under the route's mark
+            mark = route_mark()
+            if mark is not None:
+                await_other(mark)
+                with holding(mark):
+                    fused_global(*every)
+                return value, error, evaluations, settled
         kernel = fused_global
     else:
         try:
