@@ -4,7 +4,9 @@ called through its kernels' copy's ``padded_shader`` (its outputs, then zeros), 
 three-channel one take the same kernel signature (a fresh machine's report needs both: one compile, not two), and
 the padded lobe's values equal the numpy backend's within the estimates; a process compiling the kernel holds a mark
 beside Numba's cache of it, and a second process waits for it rather than compiling the same signature beside it;
-likewise the microfacet route's fused_global at its first call in a process (global_rule.route_mark)."""
+likewise the microfacet route's fused_global at its first call in a process (global_rule.route_mark); within
+global_rule.shader_rule_left_to_others (brdfnorm.parallel.warm's child) the kernel is loaded where cached, never
+compiled."""
 
 from __future__ import annotations
 
@@ -68,9 +70,10 @@ def test_the_padded_shader_is_the_shaders_outputs_then_zeros():
 class _Kernel:
     """A stand-in for shader_global: its overloads, a compile that records who holds the mark, a cache path."""
 
-    def __init__(self, directory):
-        self.overloads, self.compiled = {}, []
-        self._cache = type("Cache", (), {"_cache_path": str(directory)})()
+    def __init__(self, directory, cached=None):
+        self.overloads, self.compiled, self.targetctx = {}, [], None
+        self._cache = type("Cache", (), {"_cache_path": str(directory),
+                                         "load_overload": lambda self, argtypes, context: cached})()
 
     def compile(self, argtypes):
         mark = global_rule.compile_mark(argtypes)
@@ -127,3 +130,20 @@ def test_the_first_microfacet_call_waits_for_and_holds_the_route_mark(monkeypatc
     assert not mark.exists()
     global_rule.integrate(*call)  # compiled in this process: neither waits nor marks
     assert waited == [mark] and stand_in.held == [str(os.getpid()), None]
+
+
+def test_the_child_loads_the_shaders_rule_but_leaves_its_compile_to_the_command(monkeypatch, tmp_path):
+    from numba.core.errors import NumbaError
+
+    arguments = [np.zeros(2), np.zeros(2, dtype=np.int64), None]
+    for cached, compiles in ((None, 0), ("a cached result", 1)):
+        stand_in = _Kernel(tmp_path, cached)
+        monkeypatch.setattr(global_rule, "shader_global", stand_in)
+        with global_rule.shader_rule_left_to_others():
+            if compiles:
+                assert global_rule.shader_kernel(arguments, 2, 3) == "entry"
+            else:
+                with pytest.raises(NumbaError):
+                    global_rule.shader_kernel(arguments, 2, 3)
+        assert len(stand_in.compiled) == compiles
+    assert global_rule.shader_kernel(arguments, 2, 1) == "entry"  # outside the block: compiled as ever

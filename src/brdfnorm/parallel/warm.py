@@ -178,15 +178,18 @@ def ahead(needs: Sequence[Need]) -> Iterator[int]:
 
 def _compile(jobs: list[dict]) -> None:
     """The child: per job, one albedo by the generic quadrature on the compiled backend (which compiles and caches
-    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then."""
+    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then, or being
+    compiled by the command; the shaders' global rule it leaves to the command, which compiles it at its first lobe
+    (:func:`~brdfnorm.engine.compiled.global_rule.shader_rule_left_to_others`)."""
     import warnings
 
     from ..engine.compiled.drivers import compiling_mark
+    from ..engine.compiled.global_rule import shader_rule_left_to_others
     from ..engine.compiled.marks import holder, holding
     from ..engine.methods import albedo
 
     for data in jobs:
-        with contextlib.suppress(Exception), warnings.catch_warnings():
+        with contextlib.suppress(Exception), warnings.catch_warnings(), shader_rule_left_to_others():
             warnings.simplefilter("ignore")
             job = Job.from_json(data)
             if job.done():
@@ -204,7 +207,6 @@ def _compile(jobs: list[dict]) -> None:
                 continue
             with holding(mark):  # the command waits for these, not compiles
                 albedo(model, _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
-
 
 if __name__ == "__main__":
     _compile(json.loads(sys.stdin.read()))

@@ -18,9 +18,11 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -418,6 +420,8 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
     argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
                      for i, a in enumerate(arguments))
     if argtypes not in shader_global.overloads:
+        if _LEFT["to_others"] and shader_global._cache.load_overload(argtypes, shader_global.targetctx) is None:
+            raise NumbaError("the shaders' global rule is left to the command to compile")
         mark = compile_mark(argtypes)
         if mark is None:
             shader_global.compile(argtypes)
@@ -426,6 +430,23 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
             with holding(mark):
                 shader_global.compile(argtypes)
     return shader_global.overloads[argtypes].entry_point
+
+
+_LEFT = {"to_others": False}
+
+
+@contextlib.contextmanager
+def shader_rule_left_to_others() -> Iterator[None]:
+    """Within the block, :func:`shader_kernel` loads :func:`shader_global` where Numba's cache has it, and does not
+    compile it where not (a NumbaError: the route's panels compute instead). For :mod:`brdfnorm.parallel.warm`'s
+    child: it and the command reach this kernel at their first lobe, a few seconds in, and whichever is second
+    waits for the other's compile; the command, which cannot go on without it, compiles it while the child compiles
+    the lobes the command needs next."""
+    _LEFT["to_others"] = True
+    try:
+        yield
+    finally:
+        _LEFT["to_others"] = False
 
 
 def compile_mark(argtypes: tuple) -> Path | None:
