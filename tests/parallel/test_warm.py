@@ -103,12 +103,11 @@ def _job(name: str, method: str = "quadrature") -> warm.Job:
     return warm.Job(ModelSource("builtin", name), method)
 
 
-def test_the_child_takes_the_needs_in_order_from_the_second_then_the_first():
+def test_the_child_takes_the_route_first_then_what_follows_then_the_rest_backwards():
     a, b, c, d, e = (_job(n) for n in ("phong", "blinn-phong", "charlie", "fon", "ggx"))
     route = _job("ggx", "microfacet")
-    # (the command compiles the first at once, and the shaders' global rule with it, while the child takes the next)
-    assert warm.order([a, b, route, c, d, e]) == [b, route, c, d, e, a]
-    assert warm.order([a, b, c]) == [b, c, a]
+    assert warm.order([a, b, route, c, d, e]) == [route, c, d, e, b, a]
+    assert warm.order([a, b, c]) == [c, b, a]  # no route: last-needed first
 
 
 def test_a_route_is_pending_until_numba_caches_its_kernels(compiled, monkeypatch, tmp_path):

@@ -9,12 +9,13 @@ on one core, while the other core idled (docs/performance.md).
 
 :func:`ahead` starts one child process (``python -m brdfnorm.parallel.warm``) that compiles, into the same disk
 caches, the kernels of the given models that are not there yet. The models come in the order the command first
-needs them, each with the method that integrates it; the child takes them in that order from the second on (the
-command compiles its first lobe itself at once, with the shaders' global rule,
-:func:`brdfnorm.engine.compiled.global_rule.shader_global`, ~9 s of CPU; meanwhile the child compiles the lobes it
-needs next, then the route and the later lobes), the first last. Whoever compiles a lobe's kernels holds a mark in
-the cache (:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is compiling, it waits
-for it and loads it; before each job, the child looks again and skips what the command compiled, or is compiling,
+needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
+compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
+order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them
+(the first with the shaders' global rule, :func:`brdfnorm.engine.compiled.global_rule.shader_global`, which the
+child leaves to it), the child the rest. Whoever compiles a lobe's or a route's kernels holds a mark in the cache
+(:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is compiling, it waits for it
+and loads it; before each job, the child looks again and skips what the command compiled, or is compiling,
 meanwhile. The child's results are only compiled code: every albedo is
 still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
 :func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
@@ -146,9 +147,10 @@ def pending(needs: Sequence[Need]) -> list[Job]:
 
 
 def order(jobs: Sequence[Job]) -> list[Job]:
-    """The child's order of ``jobs`` (in the order first needed): from the second on in that order, then the first
-    (which the command compiles itself at once, the child only where the command does not reach it)."""
-    return list(jobs[1:]) + list(jobs[:1])
+    """The child's order of ``jobs`` (in the order first needed): from the first route job on in that order, then
+    the lobes before it from the last back (all from the last back where no route job)."""
+    first = next((i for i, job in enumerate(jobs) if job.method in ROUTE_KERNELS), len(jobs))
+    return list(jobs[first:]) + list(reversed(jobs[:first]))
 
 
 @contextlib.contextmanager
