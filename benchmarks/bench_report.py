@@ -1,18 +1,24 @@
 #!/usr/bin/env python
 """`brdfnorm report` (what `make demo` runs) on a fresh machine and again: issue 39 item 5's report row (≤ 30 s).
 
-Usage: ``python benchmarks/bench_report.py [--runs N]``. Each run gives the command new, empty caches — the kernel
-cache (``BRDFNORM_CACHE_DIR``) and Numba's cache of the package's own kernels (``NUMBA_CACHE_DIR``), as on a fresh
-clone — then runs it a second time on the caches it filled. Printed per run: wall seconds, CPU seconds of the command
-with the child that compiles ahead on the second core (``brdfnorm.parallel.warm``; user + system, from rusage: on a
-shared machine the wall time grows with the load, the CPU time hardly), the load average before, and whether the
-page is byte-identical to the first run's. Idle, the cold run's wall time is about half its CPU seconds where the
-two processes' shares balance (docs/performance.md has the timeline).
+Usage: ``python benchmarks/bench_report.py [--runs N] [--kernels]``. Each run gives the command new, empty caches — the
+kernel cache (``BRDFNORM_CACHE_DIR``) and Numba's cache of the package's own kernels (``NUMBA_CACHE_DIR``), as on a
+fresh clone — then runs it a second time on the caches it filled. Printed per run: wall seconds, CPU seconds of the
+command with the child that compiles ahead on the second core (``brdfnorm.parallel.warm``; user + system, from rusage:
+on a shared machine the wall time grows with the load, the CPU time hardly), the load average before, and whether the
+page is byte-identical to the first run's. Idle, the cold run's wall time is about half its CPU seconds where the two
+processes' shares balance (docs/performance.md has the timeline).
+
+``--kernels``: the first run's empty-cache pass also lists every function Numba compiled, per process (the command,
+the child), with its CPU seconds of compile less those of the functions compiled within it (Numba's
+``numba:compile`` events, recorded by a ``sitecustomize`` hook put first on the command's path; loads from a cache
+are not compiles and are not listed).
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import filecmp
 import os
 import resource
@@ -25,9 +31,34 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _run(caches: Path, out: Path) -> dict:
+#: The compile log's hook: per process, one line per compile (name, CPU s less nested compiles, depth).
+_HOOK = """\
+import os, time
+from numba.core import event
+_stack = []
+class _Listener(event.Listener):
+    def on_start(self, ev):
+        f = ev.data["dispatcher"].py_func
+        _stack.append([f"{f.__module__}.{f.__qualname__}", time.process_time(), 0.0])
+    def on_end(self, ev):
+        name, start, inner = _stack.pop()
+        spent = time.process_time() - start
+        if _stack:
+            _stack[-1][2] += spent
+        # (written at once: the child is stopped, not left to exit, where the command ends first)
+        with open(os.path.join(os.environ["BRDFNORM_BENCH_COMPILES"], f"{os.getpid()}.tsv"), "a") as out:
+            out.write(f"{name}\\t{spent - inner:.3f}\\t{len(_stack)}\\n")
+event.register("numba:compile", _Listener())
+"""
+
+
+def _run(caches: Path, out: Path, log: Path | None = None) -> dict:
     env = dict(os.environ, BRDFNORM_CACHE_DIR=str(caches / "kernels"), NUMBA_CACHE_DIR=str(caches / "numba"),
                PYTHONPATH=str(ROOT / "src"))
+    if log is not None:
+        log.mkdir()
+        (log / "sitecustomize.py").write_text(_HOOK, encoding="utf-8")
+        env.update(PYTHONPATH=f"{log}{os.pathsep}{ROOT / 'src'}", BRDFNORM_BENCH_COMPILES=str(log))
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
@@ -39,22 +70,42 @@ def _run(caches: Path, out: Path) -> dict:
     return {"wall_s": wall, "cpu_s": cpu, "load": load}
 
 
+def _kernels(log: Path) -> None:
+    """The compile log of one run: per process (the first to start is the command), CPU s per function."""
+    files = sorted(log.glob("*.tsv"), key=lambda path: int(path.stem))
+    for role, path in zip(("command", "child"), files, strict=False):
+        spent = collections.Counter()
+        for line in path.read_text(encoding="utf-8").splitlines():
+            name, seconds, _ = line.split("\t")
+            spent[name.replace("numba.np.", "").split(".<locals>")[0]] += float(seconds)
+        total = sum(spent.values())
+        print(f"  {role}: {total:.1f} CPU s of compile", flush=True)
+        for name, seconds in spent.most_common():
+            if seconds >= 0.2:
+                print(f"    {seconds:6.2f}  {name}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=2)
-    runs = parser.parse_args().runs
+    parser.add_argument("--kernels", action="store_true", help="list what the first run compiles, per process")
+    arguments = parser.parse_args()
+    runs = arguments.runs
     with tempfile.TemporaryDirectory() as scratch:
         first = None
         for index in range(runs):
             caches = Path(scratch) / f"caches{index}"
             for state in ("empty caches", "warm caches"):
                 out = Path(scratch) / f"report{index}-{state[:4]}"
-                row = _run(caches, out)
+                log = Path(scratch) / "compiles" if arguments.kernels and index == 0 and state[0] == "e" else None
+                row = _run(caches, out, log)
                 page = out / "index.html"
                 first = first or page
                 same = "same page" if filecmp.cmp(first, page, shallow=False) else "PAGE DIFFERS"
                 print(f"run {index + 1}, {state}: {row['wall_s']:.1f} s wall, {row['cpu_s']:.1f} CPU s "
                       f"(load {row['load']:.2f} before), {same}", flush=True)
+                if log is not None:
+                    _kernels(log)
 
 
 if __name__ == "__main__":

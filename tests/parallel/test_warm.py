@@ -156,7 +156,7 @@ def test_a_lone_route_starts_the_child_with_it(compiled, monkeypatch, tmp_path):
 def test_every_route_has_its_kernels_and_its_run():
     import importlib
 
-    assert warm.ROUTE_KERNELS.keys() == warm._ROUTE_RUNS.keys()
+    assert warm.ROUTE_KERNELS.keys() == warm._ROUTE_RUNS.keys() == warm._ROUTE_MARKS.keys()
     for kernels in warm.ROUTE_KERNELS.values():
         for module, name in kernels:  # a renamed kernel fails here, not silently as "never cached"
             assert hasattr(getattr(importlib.import_module(f"brdfnorm.engine.compiled.{module}"), name), "_cache")

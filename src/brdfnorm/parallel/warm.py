@@ -11,10 +11,12 @@ on one core, while the other core idled (docs/performance.md).
 caches, the kernels of the given models that are not there yet. The models come in the order the command first
 needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
 compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
-order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them,
-the child the rest, and where the two meet the command waits for the lobe the child is compiling (a mark in the
-cache, :mod:`brdfnorm.engine.compiled.marks`) and loads it. Before each, the child looks again, and skips what the
-command compiled meanwhile. The child's results are only compiled code: every albedo is
+order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them
+(the first with the shaders' global rule, :func:`brdfnorm.engine.compiled.global_rule.shader_global`, which the
+child leaves to it), the child the rest. Whoever compiles a lobe's or a route's kernels holds a mark in the cache
+(:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is compiling, it waits for it
+and loads it; before each job, the child looks again and skips what the command compiled, or is compiling,
+meanwhile. The child's results are only compiled code: every albedo is
 still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
 :func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
 compile is written whole by one.
@@ -60,6 +62,16 @@ def _microfacet_route(model: Model) -> None:
 
 #: How the child compiles a route's kernels, given a model the route takes.
 _ROUTE_RUNS = {"microfacet": _microfacet_route}
+
+
+def _microfacet_mark():
+    from ..engine.compiled.global_rule import route_mark
+
+    return route_mark()
+
+
+#: The mark (or None) a process holds while it compiles a route's kernels, the command's side included.
+_ROUTE_MARKS = {"microfacet": _microfacet_mark}
 
 
 @dataclass(frozen=True)
@@ -168,26 +180,35 @@ def ahead(needs: Sequence[Need]) -> Iterator[int]:
 
 def _compile(jobs: list[dict]) -> None:
     """The child: per job, one albedo by the generic quadrature on the compiled backend (which compiles and caches
-    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then."""
+    the lobe's kernels) or the route's run (:data:`_ROUTE_RUNS`), skipping what is compiled by then, or being
+    compiled by the command; the shaders' global rule it leaves to the command, which compiles it at its first lobe
+    (:func:`~brdfnorm.engine.compiled.global_rule.shader_rule_left_to_others`)."""
     import warnings
 
     from ..engine.compiled.drivers import compiling_mark
-    from ..engine.compiled.marks import holding
+    from ..engine.compiled.global_rule import shader_rule_left_to_others
+    from ..engine.compiled.marks import holder, holding
     from ..engine.methods import albedo
 
     for data in jobs:
-        with contextlib.suppress(Exception), warnings.catch_warnings():
+        with contextlib.suppress(Exception), warnings.catch_warnings(), shader_rule_left_to_others():
             warnings.simplefilter("ignore")
             job = Job.from_json(data)
             if job.done():
                 continue
             model = job.source.load()
             if job.method in _ROUTE_RUNS:
-                _ROUTE_RUNS[job.method](model)
+                mark = _ROUTE_MARKS[job.method]()
+                if mark is not None and holder(mark) is not None:  # the command compiling them now
+                    continue
+                with holding(mark) if mark is not None else contextlib.nullcontext():
+                    _ROUTE_RUNS[job.method](model)
                 continue
-            with holding(compiling_mark(model.native_kernel().key)):  # the command waits for these, not compiles
+            mark = compiling_mark(model.native_kernel().key)
+            if holder(mark) is not None:  # the command compiling them now: the next job
+                continue
+            with holding(mark):  # the command waits for these, not compiles
                 albedo(model, _ANGLE, method="quadrature", rtol=_RTOL, backend="compiled")
-
 
 if __name__ == "__main__":
     _compile(json.loads(sys.stdin.read()))

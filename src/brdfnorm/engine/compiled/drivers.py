@@ -11,6 +11,7 @@ run of the same model loads machine code and compiles nothing.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.metadata
 import importlib.util
@@ -25,7 +26,7 @@ import numpy as np
 
 from ...models.base import NativeKernel
 from .backend import notice
-from .marks import await_other
+from .marks import await_other, holding
 
 _TEMPLATE = Path(__file__).with_name("kernels.py")
 
@@ -162,12 +163,17 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
         U[k, :r.size] = r
     start = time.perf_counter()
     try:
+        hold = contextlib.nullcontext()
         if kernel.key not in _WARM:  # another process compiling them (parallel.warm's child): its result, not ours
-            await_other(compiling_mark(kernel.key))
-        native = NativeIntegrand(kernel, fixed, U, over_light)
-        native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
-        if kernel.key not in _WARM:
-            _warm(native, kernel.key)
+            mark = compiling_mark(kernel.key)
+            await_other(mark)
+            if not kernels_compiled(kernel.key):  # and ours marked, for the child to skip them
+                hold = holding(mark)
+        with hold:
+            native = NativeIntegrand(kernel, fixed, U, over_light)
+            native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
+            if kernel.key not in _WARM:
+                _warm(native, kernel.key)
     except Exception as error:  # noqa: BLE001 - any failure to compile means: the numpy backend computes
         notice(f"the compiled kernel of {kernel.key} does not compile ({type(error).__name__}: "
                f"{str(error).splitlines()[0] if str(error) else ''})")
@@ -214,6 +220,7 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
     as one kernel (:func:`.kernels.slope_grid`); ``geometry`` holds the per-case arrays of the slope map (vz,
     cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks
     non-finite values."""
+    from .global_rule import PADDED
     from .slopes import rectangle_grids, slope_arrays
 
     per_case = slope_arrays(geometry, len(rows))
@@ -232,6 +239,8 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
 
     integrand.compiled = True  # the route's sums run compiled too
     # and its whole global rule, one kernel for every shader (compiled.global_rule.shader_global)
+    # (a shader of fewer than PADDED channels padded: one compile of that kernel for one, two and three channels)
+    shader = native.kernels.padded_shader if native.channels < PADDED else native.kernels.shader
     integrand.fused = ("shader", native.channels + 1, (linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
-                                                       native.over_light, native.kernels.shader, failed))
+                                                       native.over_light, shader, failed))
     return integrand

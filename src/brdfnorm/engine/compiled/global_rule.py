@@ -18,8 +18,12 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import math
 import sys
+from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -27,6 +31,7 @@ from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
+from .marks import await_other, holding
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
 
@@ -383,28 +388,84 @@ def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gr
                   over_light, shader, failed, value, error, evaluations, settled):  # pragma: no cover - compiled
     """The global rule of a ``.brdf`` shader (the generic weight of :func:`.slopes.reflected_value`, the largest
     |value| as a last channel, ``failed[k]`` where a value above the horizon is not finite): :func:`fused_loop`.
-    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once per channel count
-    and cached with the package, not once per shader (~9 s each)."""
+    ``shader`` is a first-class function (:func:`shader_kernel`): this kernel is compiled once and cached with the
+    package, not once per shader (~9 s of CPU each); the shader returns at least :data:`PADDED` outputs (a shader of
+    fewer comes padded with zeros), of which the channels of ``value`` are used: one compile serves shaders of one,
+    two and three channels (a fresh machine's report needs one and three)."""
     fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                False, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
                _shader_case, _shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
                (value, error, evaluations, settled))
 
 
-def shader_kernel(arguments: list, shader: int, channels: int):
+#: The outputs of the shader :func:`shader_global` calls, at least: a shader of fewer channels is called through its
+#: kernels' copy's ``padded_shader`` (its outputs, then zeros), so that its first-class function type, and with it
+#: the kernel's signature, is the same for one, two and three channels.
+PADDED = 3
+
+
+def shader_kernel(arguments: list, shader: int, outputs: int):
     """:func:`shader_global` compiled (or loaded from the cache) for ``arguments``, the one at index ``shader`` (a
-    jitted shader of ``channels`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> C float64s:
-    called with the jitted function itself, Numba would type the kernel by that function object and compile it anew
-    in every process. Returns the compiled entry point, which takes the shader's dispatcher."""
+    jitted shader of ``outputs`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> ``outputs``
+    float64s: called with the jitted function itself, Numba would type the kernel by that function object and
+    compile it anew in every process. Returns the compiled entry point, which takes the shader's dispatcher.
+
+    The compile (~9 s of CPU) under a mark (:mod:`.marks`): where another process is compiling the same signature
+    (:mod:`brdfnorm.parallel.warm`'s child, or the command while its child reaches a lobe), this one waits for it
+    and loads its result from Numba's cache instead of compiling it beside it."""
     import numba
     from numba import types
 
-    signature = types.UniTuple(types.float64, channels)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
     argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
                      for i, a in enumerate(arguments))
     if argtypes not in shader_global.overloads:
-        shader_global.compile(argtypes)
+        if _LEFT["to_others"] and shader_global._cache.load_overload(argtypes, shader_global.targetctx) is None:
+            raise NumbaError("the shaders' global rule is left to the command to compile")
+        mark = compile_mark(argtypes)
+        if mark is None:
+            shader_global.compile(argtypes)
+        else:
+            await_other(mark)
+            with holding(mark):
+                shader_global.compile(argtypes)
     return shader_global.overloads[argtypes].entry_point
+
+
+_LEFT = {"to_others": False}
+
+
+@contextlib.contextmanager
+def shader_rule_left_to_others() -> Iterator[None]:
+    """Within the block, :func:`shader_kernel` loads :func:`shader_global` where Numba's cache has it, and does not
+    compile it where not (a NumbaError: the route's panels compute instead). For :mod:`brdfnorm.parallel.warm`'s
+    child: it and the command reach this kernel at their first lobe, a few seconds in, and whichever is second
+    waits for the other's compile; the command, which cannot go on without it, compiles it while the child compiles
+    the lobes the command needs next."""
+    _LEFT["to_others"] = True
+    try:
+        yield
+    finally:
+        _LEFT["to_others"] = False
+
+
+def compile_mark(argtypes: tuple) -> Path | None:
+    """The mark a process holds while it compiles :func:`shader_global` for ``argtypes``, beside Numba's cache of it
+    (None where Numba caches nothing)."""
+    directory = getattr(shader_global._cache, "_cache_path", None)
+    if directory is None:
+        return None
+    digest = hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]
+    return Path(directory) / f"shader_global-{digest}.compiling"
+
+
+def route_mark() -> Path | None:
+    """The mark held while the microfacet route's kernels compile (:func:`fused_global` here, by the command or
+    :mod:`brdfnorm.parallel.warm`'s child, which compiles :func:`.slopes.microfacet_grid` with it), beside Numba's
+    cache of :func:`fused_global` (None where Numba caches nothing): the second process to need them waits for the
+    first's, ~14 s of CPU, rather than compiling them beside it."""
+    directory = getattr(fused_global._cache, "_cache_path", None)
+    return None if directory is None else Path(directory) / "microfacet-route.compiling"
 
 
 def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: np.ndarray, scale: np.ndarray,
@@ -414,7 +475,8 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
     zero and unsettled); ``lobe``: a compiled rectangle integrand's ``fused`` attribute, (kind, channels C, the
     kernel's arguments of the lobe): kind "microfacet" for :func:`fused_global`
     (:func:`brdfnorm.engine.compiled.slopes.microfacet_rectangle`), "shader" for :func:`shader_global`
-    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, C its outputs + 1)."""
+    (:func:`brdfnorm.engine.compiled.drivers.slope_rectangle`: the shader second to last, returning
+    max(C − 1, :data:`PADDED`) outputs, of which the first C − 1 are the channels)."""
     if max_nodes > MAX_NODES:
         raise ValueError(f"max_nodes: at most {MAX_NODES} per piece in the fused global rule, got {max_nodes}")
     kind, channels, arguments = lobe
@@ -426,10 +488,17 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
              np.array(symmetric, dtype=bool), *(np.array(x, dtype=float) for x in (scale, rtol, atol)), max_nodes,
              graded_predicts, *arguments, value, error, evaluations, settled]
     if kind == "microfacet":
+        if not fused_global.overloads:  # the first call here: compiled (or loaded), under the route's mark
+            mark = route_mark()
+            if mark is not None:
+                await_other(mark)
+                with holding(mark):
+                    fused_global(*every)
+                return value, error, evaluations, settled
         kernel = fused_global
     else:
         try:
-            kernel = shader_kernel(every, 9 + len(arguments) - 2, channels - 1)
+            kernel = shader_kernel(every, 9 + len(arguments) - 2, max(channels - 1, PADDED))
         except NumbaError as failure:  # (settling no case here, the route's panels compute them all)
             _tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
                        "; its panels compute")

@@ -147,3 +147,12 @@ def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset
     slope_loop(_slope_case, _slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
                amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light), True, out, failed)
 
+
+@njit(cache=True, error_model="numpy")
+def padded_shader(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
+    """The shader's outputs, then zeros up to three: the first-class function that
+    :func:`.global_rule.shader_global` calls for a shader of fewer channels (it uses only the shader's own), so that
+    one compile of that kernel serves one, two and three channels (:data:`.global_rule.PADDED`)."""
+    g = shader(lx, ly, lz, vx, vy, vz, u)
+    n = len(g)
+    return g[0], g[min(1, n - 1)] if n > 1 else 0.0, g[min(2, n - 1)] if n > 2 else 0.0

@@ -1,13 +1,16 @@
-"""Marks in the kernel cache that say "a process is compiling these kernels now", so that a second process needing
+"""Marks in the caches that say "a process is compiling these kernels now", so that a second process needing
 them waits for the first instead of compiling them again beside it.
 
 :mod:`brdfnorm.parallel.warm`'s child compiles, on the second core, the kernels a command will need later; where the
 command reaches a lobe the child is still compiling, compiling it too would cost the command the whole compile, where
-waiting costs what is left of the child's. The child holds a mark (:func:`holding`: a file holding its process id,
-written by an atomic rename, removed when done) while it compiles a lobe's kernels;
-:func:`brdfnorm.engine.compiled.drivers.native_integrand` waits (:func:`await_other`) while a mark is held by a live
-process, then loads what it wrote. A mark left by a process that died (a child stopped mid-compile), or older
-than any compile takes, is ignored; :func:`release` removes those of a stopped child.
+waiting costs what is left of the child's. Whoever compiles a lobe's kernels — the child, or the command reaching a
+lobe first — holds a mark (:func:`holding`: a file holding its process id, written by an atomic rename, removed when
+done) while it does: :func:`brdfnorm.engine.compiled.drivers.native_integrand` waits (:func:`await_other`) while a
+mark is held by a live process, then loads what it wrote, and the child skips a lobe whose mark another process
+holds. The shaders' fused global rule (:func:`brdfnorm.engine.compiled.global_rule.shader_kernel`, ~9 s of CPU, one
+compile per machine) is compiled under a mark of its own beside Numba's cache of it. A mark left by a process that
+died (a child stopped mid-compile), or older than any compile takes, is ignored; :func:`release` removes those of a
+stopped child.
 """
 
 from __future__ import annotations
