@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import kinks
 from .kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor, refinement_change
 from .kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 from .result import RouteResult
@@ -217,7 +218,10 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
             pool.checked[check] = True
             np.add.at(evaluations, subset.case, per_check)
         total_error = per_case(K, pool.case, pool.error())
-        done = np.all(total_error <= tolerance, axis=1) & active
+        # A confirmation far off the panel's own |K − G| (kinks.surprised): the panel is bisected before its case
+        # may stop.
+        unsure = pool.checked & kinks.surprised(pool.change, pool.err_a, pool.err_b)
+        done = np.all(total_error <= tolerance, axis=1) & active & (np.bincount(pool.case[unsure], minlength=K) == 0)
         out_of_budget = active & ~done & (evaluations + 2 * per_panel > max_evaluations)
         finished = done | out_of_budget
         value[finished], error[finished] = total[finished], total_error[finished]
@@ -231,9 +235,13 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         count = np.bincount(pool.case, minlength=K)
         worst = np.zeros(K)
         np.maximum.at(worst, pool.case, badness)
-        split = (badness > 1.0 / count[pool.case]) | (badness >= worst[pool.case])
+        unsure = pool.checked & kinks.surprised(pool.change, pool.err_a, pool.err_b)
+        split = (badness > 1.0 / count[pool.case]) | (badness >= worst[pool.case]) | unsure
         parents = pool.take(split)
         pool = pool.take(~split)
-        parent_error = parents.err_a + parents.err_b
+        # A surprised parent's confirmation counts as its estimate: its halves keep half of it as their floor.
+        parent_error = parents.err_a + parents.err_b + np.where(
+            kinks.surprised(parents.change, parents.err_a, parents.err_b)[:, None] & parents.checked[:, None],
+            parents.change, 0.0)
         fresh = parents.halves(np.max(parents.err_a, axis=1) >= np.max(parents.err_b, axis=1))
     return RouteResult(value, error, evaluations, converged)
