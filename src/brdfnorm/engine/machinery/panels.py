@@ -196,7 +196,8 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
     ``atol`` scalars or per case, (K, 1)). When a case first meets the tolerance, every panel not yet checked is
     re-integrated on its four quarters (:func:`_quarters`, new nodes) and the difference joins its error before the
     case may stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6 in
-    the half-vector route: kept as a sum)."""
+    the half-vector route: kept as a sum); a difference more than :data:`.kinks.SURPRISE` times the panel's
+    |K − G| (:func:`.kinks.surprised`) counts that many times over."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
