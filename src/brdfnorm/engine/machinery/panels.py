@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import kinks
 from .kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor, refinement_change
 from .kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
 from .result import RouteResult
@@ -121,9 +122,18 @@ def check_by_halves(panels: Panels, along_a: bool, sums: Callable[[Panels, tuple
 
 
 def per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Sums per case (K, C) of per-panel values (R, C)."""
+    """Sums per case (K, C) of per-panel values (R, C), each by pairwise summation (numpy's ``add.reduceat`` over
+    the panels sorted by case): its rounding error grows like ε log₂ R, where ``np.add.at``'s running sum grows
+    like ε R and is in no estimate — 1.4e-14 over 10 821 panels of GGX α = 1.9e-7 at μ = 6.1e-6 against an
+    estimate of 5.6e-14, 3e-13 over 129 000 (math.fsum of the same panels: 1.1e-16 off the 1-D azimuthal route)."""
     out = np.zeros((K, values.shape[1]))
-    np.add.at(out, case, values)
+    if not case.size:
+        return out
+    order = np.argsort(case, kind="stable")
+    ordered = case[order]
+    starts = np.flatnonzero(np.concatenate([[True], ordered[1:] != ordered[:-1]]))
+    # (C, R) contiguous along the panels, so that each case's sum is one pairwise reduction
+    out[ordered[starts]] = np.add.reduceat(np.ascontiguousarray(values[order].T), starts, axis=1).T
     return out
 
 
@@ -186,7 +196,8 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
     ``atol`` scalars or per case, (K, 1)). When a case first meets the tolerance, every panel not yet checked is
     re-integrated on its four quarters (:func:`_quarters`, new nodes) and the difference joins its error before the
     case may stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6 in
-    the half-vector route: kept as a sum)."""
+    the half-vector route: kept as a sum); a difference more than :data:`.kinks.SURPRISE` times the panel's
+    |K − G| (:func:`.kinks.surprised`) counts that many times over."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
@@ -212,8 +223,16 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         check = meets[pool.case] & ~pool.checked
         if np.any(check):
             subset = pool.take(check)
-            difference = np.abs(subset.value - _quarters(integrand, subset, chunk))
-            pool.change[check] = np.maximum(difference, 50.0 * _EPS * np.abs(subset.value))
+            difference = np.maximum(np.abs(subset.value - _quarters(integrand, subset, chunk)),
+                                    50.0 * _EPS * np.abs(subset.value))
+            # A confirmation far off the panel's own |K − G| (kinks.surprised): neither rule is in its asymptotic
+            # regime there, and the difference itself was found 3.2 times below the true error (modified Phong
+            # n = 1.735); the panel's estimate is SURPRISE times the difference, and the usual splitting below
+            # refines it where that matters to its case. (Bisecting every surprised panel before its case may
+            # stop, as first tried, chased differences of 1e-17…1e-28 against a tolerance of 1e-13 — GGX α = 1.9e-7
+            # at μ = 6.1e-6 — down to panels 7e-12 wide, from 0.7 to 29 million evaluations.)
+            surprise = kinks.surprised(difference, subset.err_a, subset.err_b)
+            pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
             pool.checked[check] = True
             np.add.at(evaluations, subset.case, per_check)
         total_error = per_case(K, pool.case, pool.error())
