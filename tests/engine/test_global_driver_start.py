@@ -5,10 +5,8 @@ on the miss; nor on 16 after a sudden agreement (brdfnorm.engine.machinery.grid_
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-import pytest
+from helpers.honesty import BACKENDS, honesty_ratio
 from helpers.paths import EXAMPLES, FIXTURES
 from helpers.references import ggx_albedo_reference, oren_nayar_reference
 
@@ -42,18 +40,6 @@ def test_a_feature_aliased_by_the_start_azimuths_is_not_settled_there():
     assert np.all(np.abs(result.value[:, 0] - 2 * np.pi) <= result.error[:, 0])
 
 
-#: Both backends: the compiled one runs the half-vector rule of shaders and microfacet lobes in its fused kernel
-#: (engine/compiled/global_rule.fused_loop), which carries the same two rules as the numpy driver.
-BACKENDS = pytest.mark.parametrize("backend", ["numpy", "compiled"])
-
-
-def _ratio(model, theta, exact, rtol, backend="numpy"):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        result = bn.albedo(model, np.atleast_1d(theta), method="quadrature", backend=backend, rtol=rtol)
-    return float(np.abs(result.value[0, 0] - exact) / result.error[0, 0])
-
-
 @BACKENDS
 def test_naive_ggx_at_a_grazing_view_is_not_settled_on_the_start_azimuths(backend):
     # Found by the randomized sweep: the half-vector rectangle's pole piece settled on 8 × 15 nodes at the graded
@@ -61,7 +47,7 @@ def test_naive_ggx_at_a_grazing_view_is_not_settled_on_the_start_azimuths(backen
     # albedo 74 times outside its estimate at rtol 1e-3.
     alpha, mu = 0.14, 0.0146
     model = bn.load(str(FIXTURES / "ggx_naive.brdf")).with_params(alpha=alpha)
-    assert _ratio(model, np.arccos(mu), ggx_albedo_reference(alpha, mu, 64), 1e-3, backend) <= 1.0
+    assert honesty_ratio(model, np.arccos(mu), ggx_albedo_reference(alpha, mu, 64), 1e-3, backend) <= 1.0
 
 
 @BACKENDS
@@ -70,7 +56,7 @@ def test_blinn_phong_near_the_grazing_band_is_not_settled_on_the_start_azimuths(
     model = bn.load("blinn-phong", n=1611.0)
     theta = np.radians(78.8)
     exact = bn.albedo(model, np.atleast_1d(theta), method="series", rtol=1e-13)
-    assert _ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0
+    assert honesty_ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0
 
 
 
@@ -104,7 +90,7 @@ def test_oren_nayar_with_a_kink_between_sixteen_azimuths_is_not_settled_there(ba
     # 2.7e5-fold from 8 to 16 azimuths, then moved 1.8e-4 at 32: 3.9 times outside its estimate.
     sigma, theta = 0.871, np.radians(29.67)
     model = bn.load(str(EXAMPLES / "oren_nayar.brdf")).with_params(sigma=sigma, rho=0.8)
-    assert _ratio(model, theta, oren_nayar_reference(theta, sigma, 0.8), 1e-3, backend) <= 1.0
+    assert honesty_ratio(model, theta, oren_nayar_reference(theta, sigma, 0.8), 1e-3, backend) <= 1.0
 
 
 @BACKENDS
@@ -114,4 +100,4 @@ def test_ggx_shader_at_a_grazing_view_is_not_settled_on_a_sudden_agreement(backe
     roughness, theta = 0.132, np.radians(88.16)
     model = bn.load(str(EXAMPLES / "ggx.brdf")).with_params(roughness=roughness, f0=1.0)
     exact = bn.albedo(bn.load("ggx", shadowing="separable", alpha=roughness**2), np.atleast_1d(theta), rtol=1e-13)
-    assert _ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0
+    assert honesty_ratio(model, theta, exact.value[0, 0], 1e-3, backend) <= 1.0

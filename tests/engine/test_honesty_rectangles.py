@@ -5,24 +5,14 @@ reference — the 1-D polar integral of helpers.references.phong_like_reference 
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
-import pytest
+from helpers.honesty import BACKENDS, honesty_ratio
 from helpers.references import phong_like_reference
 
 import brdfnorm as bn
 from brdfnorm.engine.machinery.kinks import SURPRISE, surprised
 from brdfnorm.engine.machinery.panels import per_case
-
-BACKENDS = pytest.mark.parametrize("backend", ["numpy", "compiled"])
-
-
-def _ratio(model, theta, exact, rtol, backend):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        result = bn.albedo(model, np.atleast_1d(theta), method="quadrature", backend=backend, rtol=rtol)
-    return float(np.abs(result.value[0, 0] - exact) / result.error[0, 0])
 
 
 @BACKENDS
@@ -32,7 +22,7 @@ def test_modified_phong_with_a_weak_edge_singularity_is_not_settled_on_a_surpris
     n, theta = 1.735, np.radians(18.95)
     model = bn.load("modified-phong").with_params(n=np.array([n]))
     exact = phong_like_reference(n, theta, original=False)
-    assert _ratio(model, theta, exact, 1e-8, backend) <= 1.0
+    assert honesty_ratio(model, theta, exact, 1e-8, backend) <= 1.0
 
 
 def test_surprised_marks_a_confirmation_several_times_above_the_pair_estimate():
