@@ -4,7 +4,7 @@ rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector.m
 shader and so is one cached kernel for every ggx/beckmann lobe.
 
 The loop over panels, azimuths and radial nodes is :func:`slope_loop` alone: :func:`microfacet_grid` and the shader
-kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) pass it their weights. Term for term the numpy
+kernel (:func:`shader_grid`) pass it their weights. Term for term the numpy
 formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
 three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps its accuracy at the horizon.
 """
@@ -28,7 +28,7 @@ CAP = 8.0
 
 
 #: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
-#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
+#: kernels (:func:`shader_grid`, :func:`microfacet_grid`) take, in their order.
 SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
 
 
@@ -200,7 +200,7 @@ def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz,
     1 + s² d², N·L, azimuth Jacobian, dx, dy, vz, ax, ay, parameters)`` -> (g, a, b, keep, flag):
     out[r, i, j, c] = g[c]·a·b (0 where not ``keep``) for the channels of ``out``, the last of them |·|'s largest
     where ``largest``; ``flag`` marks flags[q]. The weights: :func:`microfacet_grid` (no shader) and
-    :func:`brdfnorm.engine.compiled.kernels.slope_grid` (a shader's).
+    :func:`shader_grid` (a shader's, the shader a first-class function).
 
     Not cached and always inlined: ``case`` and ``value`` are first-class function arguments, whose types Numba's
     disk cache cannot key across processes; inlined into each cached caller (whose signature holds no function), the
