@@ -228,18 +228,21 @@ def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows
     rows = np.ascontiguousarray(rows, dtype=np.int64)
     # (a shader of fewer than PADDED channels padded: one compile of the package's kernels for one to three channels)
     shader = native.kernels.padded_shader if native.channels < PADDED else native.kernels.shader
-    entry = []  # the kernel's compiled entry point, found at the first call (its argument types never change)
+    # the kernel's compiled entry points, by what of the grids' types can change from call to call (a grid is a
+    # read-only view where it was one already): the entry point itself does not check its arguments' types
+    entries = {}
 
     def integrand(case, phi, v, piece):
         phi, v = rectangle_grids(case, phi, v)
+        case, piece = (np.ascontiguousarray(a, dtype=np.int64).ravel() for a in (case, piece))
         out = np.empty((case.size, phi.shape[1], v.shape[1], native.channels + 1))
         flags = np.zeros(failed.size, dtype=np.bool_)
-        arguments = [np.ascontiguousarray(case, dtype=np.int64), phi, v, np.ascontiguousarray(piece, dtype=np.int64),
-                     linear, log_horizon, *per_case, F, rows, native.fixed, native.U, native.over_light, shader, out,
-                     flags]
-        if not entry:
-            entry.append(shader_grid_kernel(arguments, len(arguments) - 3, max(native.channels, PADDED)))
-        entry[0](*arguments)
+        arguments = [case, phi, v, piece, linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
+                     native.over_light, shader, out, flags]
+        key = tuple(a.flags.writeable for a in (case, phi, v, piece))
+        if key not in entries:
+            entries[key] = shader_grid_kernel(arguments, len(arguments) - 3, max(native.channels, PADDED))
+        entries[key](*arguments)
         failed[:] |= flags
         return out
 
