@@ -1,6 +1,6 @@
 """The compiled kernels keep one loop skeleton per coordinate map (issue 39: "no route re-implements panels or
 rules"): the loop over panels × azimuth nodes × radial nodes that evaluates the half-vector slope map is
-:func:`brdfnorm.engine.compiled.slopes.slope_loop` alone (the shader kernels' ``slope_grid`` and the microfacet
+:func:`brdfnorm.engine.compiled.slopes.slope_loop` alone (the shaders' ``shader_grid`` and the microfacet
 lobes' ``microfacet_grid`` pass it their weights), and the one of the lobe-aligned hemisphere map is
 :func:`brdfnorm.engine.compiled.kernels.hemisphere` alone (``hemisphere_panels`` and ``hemisphere_sums`` run it
 with their rules).

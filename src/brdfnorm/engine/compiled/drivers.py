@@ -52,7 +52,7 @@ def kernels_file(key: str, numba_version: str) -> Path:
     """The path of the kernels' copy for shader ``key`` (Numba's cache of it lies beside it)."""
     source = _TEMPLATE.read_text(encoding="utf-8")
     # the helpers the kernels inline are part of their machine code: a change there is a new copy too
-    helpers = "\0".join(_TEMPLATE.with_name(name).read_text(encoding="utf-8") for name in ("slopes.py", "hemimap.py"))
+    helpers = "\0".join(_TEMPLATE.with_name(name).read_text(encoding="utf-8") for name in ("hemimap.py",))
     digest = hashlib.sha256("\0".join((source, helpers, key, _version(), numba_version)).encode()).hexdigest()[:24]
     return cache_directory() / f"brdfnorm_kernels_{digest}.py"
 
@@ -217,30 +217,37 @@ def hemisphere_sums(native: NativeIntegrand, case, b0, b1, u0, u1, frame, widths
 def slope_rectangle(native: NativeIntegrand, geometry: dict, F: np.ndarray, rows: np.ndarray, failed: np.ndarray,
                     linear: bool, log_horizon: bool):
     """The half-vector route's rectangle integrand (case, φ (R, n, 1), v (R, 1, m), piece (R,)) -> (R, n, m, C + 1)
-    as one kernel (:func:`.kernels.slope_grid`); ``geometry`` holds the per-case arrays of the slope map (vz,
-    cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks
-    non-finite values."""
+    as one kernel (:func:`.slopes.shader_grid`, compiled once per machine for every shader, the shader a first-class
+    function); ``geometry`` holds the per-case arrays of the slope map (vz, cos_offset, sin_offset, amplitude, ax,
+    ay, layer, delta, kappa, multiplicity), ``failed`` (local cases) marks non-finite values."""
     from .global_rule import PADDED
-    from .slopes import rectangle_grids, slope_arrays
+    from .slopes import rectangle_grids, shader_grid_kernel, slope_arrays
 
     per_case = slope_arrays(geometry, len(rows))
     F = np.ascontiguousarray(F, dtype=float)
     rows = np.ascontiguousarray(rows, dtype=np.int64)
+    # (a shader of fewer than PADDED channels padded: one compile of the package's kernels for one to three channels)
+    shader = native.kernels.padded_shader if native.channels < PADDED else native.kernels.shader
+    # the kernel's compiled entry points, by what of the grids' types can change from call to call (a grid is a
+    # read-only view where it was one already): the entry point itself does not check its arguments' types
+    entries = {}
 
     def integrand(case, phi, v, piece):
         phi, v = rectangle_grids(case, phi, v)
+        case, piece = (np.ascontiguousarray(a, dtype=np.int64).ravel() for a in (case, piece))
         out = np.empty((case.size, phi.shape[1], v.shape[1], native.channels + 1))
         flags = np.zeros(failed.size, dtype=np.bool_)
-        native.kernels.slope_grid(np.ascontiguousarray(case, dtype=np.int64), phi, v,
-                                  np.ascontiguousarray(piece, dtype=np.int64), linear, log_horizon, *per_case, F,
-                                  rows, native.fixed, native.U, native.over_light, out, flags)
+        arguments = [case, phi, v, piece, linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
+                     native.over_light, shader, out, flags]
+        key = tuple(a.flags.writeable for a in (case, phi, v, piece))
+        if key not in entries:
+            entries[key] = shader_grid_kernel(arguments, len(arguments) - 3, max(native.channels, PADDED))
+        entries[key](*arguments)
         failed[:] |= flags
         return out
 
     integrand.compiled = True  # the route's sums run compiled too
     # and its whole global rule, one kernel for every shader (compiled.global_rule.shader_global)
-    # (a shader of fewer than PADDED channels padded: one compile of that kernel for one, two and three channels)
-    shader = native.kernels.padded_shader if native.channels < PADDED else native.kernels.shader
     integrand.fused = ("shader", native.channels + 1, (linear, log_horizon, *per_case, F, rows, native.fixed, native.U,
                                                        native.over_light, shader, failed))
     return integrand

@@ -33,7 +33,7 @@ from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .marks import await_other, holding
 from .rules import grid_sums
-from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, reflected_value, slope_node
+from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
@@ -368,20 +368,6 @@ def fused_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gra
                np.zeros(0, dtype=np.bool_), (value, error, evaluations, settled))
 
 
-@njit(**_OPTIONS, inline="always")
-def _shader_case(q, extra):  # pragma: no cover - compiled
-    """Per case: the reflection's fixed direction F, the shader's fixed direction and parameters U, ``over_light``
-    (:func:`.slopes.reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader)."""
-    F, rows, fixed, U, over_light, shader = extra
-    row = rows[q]
-    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light, shader
-
-
-@njit(**_OPTIONS, inline="always")
-def _shader_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
-    return reflected_value(case[8], s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
-
-
 @njit(**_OPTIONS)
 def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                   vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, F, rows, fixed, U,
@@ -394,7 +380,7 @@ def shader_global(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, gr
     two and three channels (a fresh machine's report needs one and three)."""
     fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                False, (vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity),
-               _shader_case, _shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
+               shader_case, shader_node, (F, rows, fixed, U, over_light, shader), True, failed,
                (value, error, evaluations, settled))
 
 

@@ -17,10 +17,9 @@ one lobe and its threads, woken per call, cost more than they gave on a loaded m
   :func:`brdfnorm.engine.machinery.panels.kronrod_estimate`, and :func:`hemisphere_sums`, any tensor rule (the
   Lobatto ⊗ G7 check on halves). The map and the rules are plain functions of :mod:`.hemimap`, compiled once per
   machine for every shader;
-* :func:`slope_grid` — the half-vector route's rectangle integrand
-  (:func:`brdfnorm.engine.routes.halfvector_generic.route`): the slope map of the GGX measure, the reflection
-  L = 2(V·H)H − V, the shader and the Jacobian (the loop :func:`.slopes.slope_loop`, shared with the microfacet
-  lobes' :func:`.slopes.microfacet_grid`).
+* :func:`padded_shader` — the shader padded to three outputs: the first-class function that the package's kernels
+  of every shader call (the half-vector route's rectangle integrand :func:`.slopes.shader_grid` and its global
+  rule :func:`.global_rule.shader_global`, each compiled once per machine, not once per shader).
 
 The formulas are those of the numpy backend, term for term; the sums run in another order, so values agree to
 rounding (far inside the error estimates), not bit for bit.
@@ -34,7 +33,6 @@ import numpy as np
 from numba import njit
 
 from brdfnorm.engine.compiled.hemimap import azimuth, kronrod_rule, node, tensor_rule
-from brdfnorm.engine.compiled.slopes import reflected_value, slope_loop
 
 shader = None  # set per copy (drivers.py)
 
@@ -120,39 +118,12 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                _NONE, empty, empty, empty, empty, _NONE, np.zeros(0, dtype=np.int64), weights_b, weights_u, total)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _slope_case(q, extra):  # pragma: no cover - compiled
-    """Per panel of :func:`.slopes.slope_loop`: F (the reflection's fixed direction), the fixed direction of the
-    shader and its parameters U of case q (extra: F, rows, fixed, U, over_light)."""
-    F, rows, fixed, U, over_light = extra
-    row = rows[q]
-    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _slope_value(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
-    """The generic weight of the reflected direction at one node of :func:`.slopes.slope_loop`
-    (:func:`.slopes.reflected_value` with this copy's shader)."""
-    return reflected_value(shader, s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
-
-
-@njit(cache=True, error_model="numpy")
-def slope_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
-               kappa, multiplicity, F, rows, fixed, U, over_light, out, failed):  # pragma: no cover - compiled
-    """The half-vector route's rectangle integrand (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for
-    the GGX slope measure, with the generic weight of :func:`brdfnorm.engine.routes.halfvector_generic.route`) on
-    grids φ (R, nφ) × v (R, nv) of the panels of the local cases ``k`` (R,) in radial ``piece`` (R,)
-    (:func:`.slopes.slope_loop` with :func:`_slope_value`): out (R, nφ, nv, C + 1), the weighted values and their
-    largest |value|; ``failed[k]`` where a value above the horizon is not finite."""
-    slope_loop(_slope_case, _slope_value, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
-               amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light), True, out, failed)
-
-
 @njit(cache=True, error_model="numpy")
 def padded_shader(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     """The shader's outputs, then zeros up to three: the first-class function that
     :func:`.global_rule.shader_global` calls for a shader of fewer channels (it uses only the shader's own), so that
-    one compile of that kernel serves one, two and three channels (:data:`.global_rule.PADDED`)."""
+    one compile of that kernel serves one, two and three channels (:data:`.global_rule.PADDED`); so does
+    :func:`.slopes.shader_grid`."""
     g = shader(lx, ly, lz, vx, vy, vz, u)
     n = len(g)
     return g[0], g[min(1, n - 1)] if n > 1 else 0.0, g[min(2, n - 1)] if n > 2 else 0.0

@@ -8,9 +8,10 @@ lobe first — holds a mark (:func:`holding`: a file holding its process id, wri
 done) while it does: :func:`brdfnorm.engine.compiled.drivers.native_integrand` waits (:func:`await_other`) while a
 mark is held by a live process, then loads what it wrote, and the child skips a lobe whose mark another process
 holds. The shaders' fused global rule (:func:`brdfnorm.engine.compiled.global_rule.shader_kernel`, ~9 s of CPU, one
-compile per machine) is compiled under a mark of its own beside Numba's cache of it. A mark left by a process that
-died (a child stopped mid-compile), or older than any compile takes, is ignored; :func:`release` removes those of a
-stopped child.
+compile per machine) and their rectangle integrand (:func:`brdfnorm.engine.compiled.slopes.shader_grid_kernel`, ~2 s,
+one compile per machine, by whichever process reaches it first) are compiled under marks of their own beside Numba's
+caches of them. A mark left by a process that died (a child stopped mid-compile), or older than any compile takes,
+is ignored; :func:`release` removes those of a stopped child.
 """
 
 from __future__ import annotations

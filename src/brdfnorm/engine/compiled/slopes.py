@@ -4,20 +4,23 @@ rectangle integrand on it (:func:`microfacet_grid`, the weight of ``halfvector.m
 shader and so is one cached kernel for every ggx/beckmann lobe.
 
 The loop over panels, azimuths and radial nodes is :func:`slope_loop` alone: :func:`microfacet_grid` and the shader
-kernels (:func:`brdfnorm.engine.compiled.kernels.slope_grid`) pass it their weights. Term for term the numpy
+kernel (:func:`shader_grid`) pass it their weights. Term for term the numpy
 formulas: the zero of p(φ) kept apart so that p keeps its relative accuracy, the cancellation-free roots, the
 three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps its accuracy at the horizon.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
+from .marks import await_other, holding
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
@@ -25,7 +28,7 @@ CAP = 8.0
 
 
 #: The per-case arrays of the half-vector slope map (``engine.routes.halfvector.slope_map``) that the rectangle
-#: kernels (:func:`.kernels.slope_grid`, :func:`.slopes.microfacet_grid`) take, in their order.
+#: kernels (:func:`shader_grid`, :func:`microfacet_grid`) take, in their order.
 SLOPE_MAP = ("vz", "cos_offset", "sin_offset", "amplitude", "ax", "ay", "layer", "delta", "kappa", "multiplicity")
 
 
@@ -197,7 +200,7 @@ def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz,
     1 + s² d², N·L, azimuth Jacobian, dx, dy, vz, ax, ay, parameters)`` -> (g, a, b, keep, flag):
     out[r, i, j, c] = g[c]·a·b (0 where not ``keep``) for the channels of ``out``, the last of them |·|'s largest
     where ``largest``; ``flag`` marks flags[q]. The weights: :func:`microfacet_grid` (no shader) and
-    :func:`brdfnorm.engine.compiled.kernels.slope_grid` (a shader's).
+    :func:`shader_grid` (a shader's, the shader a first-class function).
 
     Not cached and always inlined: ``case`` and ``value`` are first-class function arguments, whose types Numba's
     disk cache cannot key across processes; inlined into each cached caller (whose signature holds no function), the
@@ -287,3 +290,62 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
     integrand.fused = ("microfacet", channels, (linear, log_horizon, beckmann, separable, per_case[0], vx,
                                                 *per_case[1:], lambda_v, kind, fresnel))
     return integrand
+
+
+@njit(**_OPTIONS, inline="always")
+def shader_case(q, extra):  # pragma: no cover - compiled
+    """Per case: the reflection's fixed direction F, the shader's fixed direction and parameters U, ``over_light``
+    (:func:`reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader)."""
+    F, rows, fixed, U, over_light, shader = extra
+    row = rows[q]
+    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light, shader
+
+
+@njit(**_OPTIONS, inline="always")
+def shader_node(s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, vz, ax, ay, case):  # pragma: no cover - compiled
+    """The generic weight of :func:`reflected_value` with the case's shader (:func:`shader_case`)."""
+    return reflected_value(case[8], s, weight_t, one_sp, n2, Lz, azimuth, dx, dy, ax, case)
+
+
+@njit(**_OPTIONS)
+def shader_grid(k, phi, v, piece, linear, log_horizon, vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta,
+                kappa, multiplicity, F, rows, fixed, U, over_light, shader, out, failed):  # pragma: no cover - compiled
+    """The half-vector route's rectangle integrand for a ``.brdf`` shader
+    (:func:`brdfnorm.engine.routes.halfvector.slope_integrand` for the GGX slope measure, with the generic weight of
+    :func:`brdfnorm.engine.routes.halfvector_generic.route`) on grids φ (R, nφ) × v (R, nv) of the panels of the
+    local cases ``k`` (R,) in radial ``piece`` (R,) (:func:`slope_loop` with :func:`shader_node`): out
+    (R, nφ, nv, C + 1), the weighted values and their largest |value|; ``failed[k]`` where a value above the horizon
+    is not finite. ``shader`` is a first-class function (:func:`shader_grid_kernel`), so this kernel is compiled once
+    per machine for every shader, as :func:`brdfnorm.engine.compiled.global_rule.shader_global` is, not once per
+    shader (1.7-2.5 s of CPU each); it returns at least :data:`.global_rule.PADDED` outputs, of which the channels of
+    ``out`` are used."""
+    slope_loop(shader_case, shader_node, k, phi, v, piece, linear, log_horizon, False, vz, cos_offset, sin_offset,
+               amplitude, ax, ay, layer, delta, kappa, multiplicity, (F, rows, fixed, U, over_light, shader), True,
+               out, failed)
+
+
+def shader_grid_kernel(arguments: list, shader: int, outputs: int):
+    """:func:`shader_grid` compiled (or loaded from Numba's cache) for ``arguments``, the one at index ``shader`` (a
+    jitted shader of ``outputs`` outputs) typed as a first-class function f(6 × float64, u (P,)) -> ``outputs``
+    float64s (called with the jitted function itself, Numba would type the kernel by that function object and compile
+    it anew in every process). Returns the compiled entry point, which takes the shader's dispatcher.
+
+    The compile under a mark (:mod:`.marks`) beside Numba's cache of the kernel: where another process is compiling
+    the same signature (:mod:`brdfnorm.parallel.warm`'s child, or the command), this one waits for it and loads its
+    result instead of compiling it beside it; whichever process needs it first compiles it."""
+    import numba
+    from numba import types
+
+    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
+                     for i, a in enumerate(arguments))
+    if argtypes not in shader_grid.overloads:
+        directory = getattr(shader_grid._cache, "_cache_path", None)
+        if directory is None:
+            shader_grid.compile(argtypes)
+        else:
+            mark = Path(directory) / f"shader_grid-{hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]}.compiling"
+            await_other(mark)
+            with holding(mark):
+                shader_grid.compile(argtypes)
+    return shader_grid.overloads[argtypes].entry_point

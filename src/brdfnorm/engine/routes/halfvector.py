@@ -178,7 +178,7 @@ def microfacet_weight(g: SlopeGeometry) -> SlopeWeight:
 
 def slope_map(g: SlopeGeometry) -> dict[str, np.ndarray]:
     """Per case, the constants of the slope map of (H1) that :func:`slope_integrand` uses (and the compiled
-    backend's kernel, :func:`brdfnorm.engine.compiled.kernels.slope_grid`)."""
+    backend's kernel, :func:`brdfnorm.engine.compiled.slopes.shader_grid`)."""
     Vz = g.V[:, 2]
     cx, cy = g.V[:, 0] / Vz, g.V[:, 1] / Vz
     offset = np.arctan2(cy * g.ay, cx * g.ax) + np.pi / 2  # a zero of p(φ) = c·d(φ) = A cos(φ − offset + π/2)
