@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
-from brdfnorm.engine.compiled import drivers, global_rule
+from brdfnorm.engine.compiled import drivers, global_rule, marks
 
 pytest.importorskip("numba")
 
@@ -84,7 +84,7 @@ class _Kernel:
 def test_the_compile_is_held_under_a_mark_another_process_waits_on(monkeypatch, tmp_path):
     stand_in, waited = _Kernel(tmp_path), []
     monkeypatch.setattr(global_rule, "shader_global", stand_in)
-    monkeypatch.setattr(global_rule, "await_other", lambda mark: waited.append(mark) or 0.0)
+    monkeypatch.setattr(marks, "await_other", lambda mark: waited.append(mark) or 0.0)
     arguments = [np.zeros(2), np.zeros(2, dtype=np.int64), None]
     assert global_rule.shader_kernel(arguments, 2, 3) == "entry"
     one = global_rule.compile_mark(next(iter(stand_in.overloads)))

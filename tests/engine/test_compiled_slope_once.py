@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import brdfnorm as bn
-from brdfnorm.engine.compiled import drivers, global_rule, slopes
+from brdfnorm.engine.compiled import drivers, global_rule, marks, slopes
 
 pytest.importorskip("numba")
 
@@ -78,7 +78,7 @@ class _Kernel:
 def test_the_compile_is_held_under_a_mark_another_process_waits_on(monkeypatch, tmp_path):
     stand_in, waited = _Kernel(tmp_path), []
     monkeypatch.setattr(slopes, "shader_grid", stand_in)
-    monkeypatch.setattr(slopes, "await_other", lambda mark: waited.append(mark) or 0.0)
+    monkeypatch.setattr(marks, "await_other", lambda mark: waited.append(mark) or 0.0)
     arguments = [np.zeros(2), np.zeros(2, dtype=np.int64), None]
     assert slopes.shader_grid_kernel(arguments, 2, 3) == "entry"
     assert len(waited) == 1 and waited[0].parent == tmp_path  # waited for another holder before compiling
@@ -93,6 +93,6 @@ def test_no_mark_where_numba_caches_nothing(monkeypatch, tmp_path):
     stand_in = _Kernel(tmp_path)
     stand_in._cache = object()
     monkeypatch.setattr(slopes, "shader_grid", stand_in)
-    monkeypatch.setattr(slopes, "await_other", lambda mark: pytest.fail("no mark to wait on"))
+    monkeypatch.setattr(marks, "await_other", lambda mark: pytest.fail("no mark to wait on"))
     assert slopes.shader_grid_kernel([np.zeros(2), None], 1, 3) == "entry"
     assert stand_in.compiled == [[]]

@@ -19,7 +19,6 @@ the grids stay in cache. The values differ from the numpy driver's by the roundi
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import math
 import sys
 from collections.abc import Iterator
@@ -31,7 +30,7 @@ from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
-from .marks import await_other, holding
+from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
@@ -399,22 +398,11 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
     The compile (~9 s of CPU) under a mark (:mod:`.marks`): where another process is compiling the same signature
     (:mod:`brdfnorm.parallel.warm`'s child, or the command while its child reaches a lobe), this one waits for it
     and loads its result from Numba's cache instead of compiling it beside it."""
-    import numba
-    from numba import types
-
-    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
-    argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
-                     for i, a in enumerate(arguments))
+    argtypes = first_class_argtypes(arguments, shader, outputs)
     if argtypes not in shader_global.overloads:
         if _LEFT["to_others"] and shader_global._cache.load_overload(argtypes, shader_global.targetctx) is None:
             raise NumbaError("the shaders' global rule is left to the command to compile")
-        mark = compile_mark(argtypes)
-        if mark is None:
-            shader_global.compile(argtypes)
-        else:
-            await_other(mark)
-            with holding(mark):
-                shader_global.compile(argtypes)
+        compile_marked(shader_global, "shader_global", argtypes)
     return shader_global.overloads[argtypes].entry_point
 
 
@@ -438,11 +426,7 @@ def shader_rule_left_to_others() -> Iterator[None]:
 def compile_mark(argtypes: tuple) -> Path | None:
     """The mark a process holds while it compiles :func:`shader_global` for ``argtypes``, beside Numba's cache of it
     (None where Numba caches nothing)."""
-    directory = getattr(shader_global._cache, "_cache_path", None)
-    if directory is None:
-        return None
-    digest = hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]
-    return Path(directory) / f"shader_global-{digest}.compiling"
+    return cache_mark(shader_global, "shader_global", argtypes)
 
 
 def route_mark() -> Path | None:

@@ -17,6 +17,7 @@ is ignored; :func:`release` removes those of a stopped child.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import time
 from collections.abc import Iterator
@@ -76,3 +77,36 @@ def release(directory: Path, pid: int) -> None:
         with contextlib.suppress(OSError, ValueError):
             if int(mark.read_text(encoding="ascii")) == pid:
                 mark.unlink()
+
+
+def first_class_argtypes(arguments: list, shader: int, outputs: int) -> tuple:
+    """Numba's types of ``arguments``, the one at index ``shader`` (a jitted shader of ``outputs`` outputs) typed as a
+    first-class function f(6 × float64, u (P,)) -> ``outputs`` float64s: called with the jitted function itself,
+    Numba would type a kernel by that function object and compile it anew in every process."""
+    import numba
+    from numba import types
+
+    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
+    return tuple(types.FunctionType(signature) if i == shader else numba.typeof(a) for i, a in enumerate(arguments))
+
+
+def cache_mark(kernel, name: str, argtypes: tuple) -> Path | None:
+    """The mark a process holds while it compiles ``kernel`` (a Numba dispatcher) for ``argtypes``, beside Numba's
+    cache of it, named ``name`` and a digest of the types (None where Numba caches nothing)."""
+    directory = getattr(kernel._cache, "_cache_path", None)
+    if directory is None:
+        return None
+    digest = hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]
+    return Path(directory) / f"{name}-{digest}.compiling"
+
+
+def compile_marked(kernel, name: str, argtypes: tuple) -> None:
+    """Compile ``kernel`` for ``argtypes`` under its :func:`cache_mark`: where another process is compiling the same
+    signature, wait for it first (Numba then loads its result from the cache instead of compiling it beside it)."""
+    mark = cache_mark(kernel, name, argtypes)
+    if mark is None:
+        kernel.compile(argtypes)
+        return
+    await_other(mark)
+    with holding(mark):
+        kernel.compile(argtypes)

@@ -11,16 +11,14 @@ three radial pieces (pole, tail, horizon layer) and N·L as a product that keeps
 
 from __future__ import annotations
 
-import hashlib
 import math
-from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
-from .marks import await_other, holding
+from .marks import compile_marked, first_class_argtypes
 
 _OPTIONS = dict(cache=True, error_model="numpy")
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
@@ -333,19 +331,7 @@ def shader_grid_kernel(arguments: list, shader: int, outputs: int):
     The compile under a mark (:mod:`.marks`) beside Numba's cache of the kernel: where another process is compiling
     the same signature (:mod:`brdfnorm.parallel.warm`'s child, or the command), this one waits for it and loads its
     result instead of compiling it beside it; whichever process needs it first compiles it."""
-    import numba
-    from numba import types
-
-    signature = types.UniTuple(types.float64, outputs)(*(types.float64,) * 6, types.Array(types.float64, 1, "C"))
-    argtypes = tuple(types.FunctionType(signature) if i == shader else numba.typeof(a)
-                     for i, a in enumerate(arguments))
+    argtypes = first_class_argtypes(arguments, shader, outputs)
     if argtypes not in shader_grid.overloads:
-        directory = getattr(shader_grid._cache, "_cache_path", None)
-        if directory is None:
-            shader_grid.compile(argtypes)
-        else:
-            mark = Path(directory) / f"shader_grid-{hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]}.compiling"
-            await_other(mark)
-            with holding(mark):
-                shader_grid.compile(argtypes)
+        compile_marked(shader_grid, "shader_grid", argtypes)
     return shader_grid.overloads[argtypes].entry_point
