@@ -7,8 +7,6 @@
   :mod:`.kronrod`) and the plain |KK − GK|, |KK − KG| of the embedded G7 rules as the error in each direction (not
   QUADPACK's rescaling), each at least the rounding-noise floor 50ε∫|g| (QUADPACK's), with ∫|g| itself (the scale
   of the integrand's own float64 noise, :mod:`.rounding`);
-- :func:`check_by_halves` — the confirmation of a panel before its case may stop: its halves on new nodes, the
-  Gauss–Lobatto ones in the split direction including the edges (:mod:`.kinks`), whose difference joins its error;
 - :func:`adaptive_rectangles` — the driver of the half-vector and dielectric routes over a rectangle integrand: it
   bisects panels along their worse direction while their case misses the tolerance, and confirms a case's panels
   on their quarters with Gauss–Lobatto nodes that include the edges (:data:`.kinks.QUARTER_NODES`) before the case
@@ -25,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kinks
-from .kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor, refinement_change
-from .kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
+from .kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
+from .kronrod import GAUSS, KRONROD, NODES
 from .result import RouteResult
 
 _EPS = np.finfo(float).eps
@@ -102,23 +100,6 @@ def kronrod_estimate(weighted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     magnitude = np.einsum("rabc,a,b->rc", np.abs(weighted), KRONROD, KRONROD)
     floor = 50.0 * _EPS * magnitude  # rounding noise: QUADPACK's floor on |K − G|
     return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor), magnitude
-
-
-def check_by_halves(panels: Panels, along_a: bool, sums: Callable[[Panels, tuple, tuple], np.ndarray]) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum over its two halves (split along a or b)| (R, C), less rounding noise: the
-    halves by Gauss-Lobatto in the split direction ⊗ G7 across, ``sums(halves, (nodes_a, nodes_b), (weights_a,
-    weights_b))`` giving their integrals (2R, C) with the route's own node map (non-finite values counted as 0).
-    Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an edge, beyond all Gauss-Kronrod nodes
-    (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and a jump J in slope, the error J δ²/2 is
-    below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9). G7 across, as Lobatto was weaker than G7
-    on steep integrands (Phong n = 1e4, rtol 1e-12). docs/kinks.md has the details."""
-    halves = panels.halves(np.full(panels.case.size, along_a))
-    nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
-    if not along_a:
-        nodes, weights = nodes[::-1], weights[::-1]
-    total = sums(halves, nodes, weights)
-    half = panels.case.size
-    return refinement_change(panels.value, total[:half], total[half:])
 
 
 def per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
