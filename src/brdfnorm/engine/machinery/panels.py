@@ -8,21 +8,23 @@
   QUADPACK's rescaling), each at least the rounding-noise floor 50ε∫|g| (QUADPACK's), with ∫|g| itself (the scale
   of the integrand's own float64 noise, :mod:`.rounding`);
 - :func:`adaptive_rectangles` — the driver of the half-vector and dielectric routes over a rectangle integrand: it
-  bisects panels along their worse direction while their case misses the tolerance, and confirms a case's panels
-  on their quarters with Gauss–Lobatto nodes that include the edges (:data:`.kinks.QUARTER_NODES`) before the case
-  may stop. The hemisphere route (:mod:`brdfnorm.engine.routes.hemisphere`) drives the same pool with its own
-  loop, which adds what only a lobe sampled in lobe-aligned coordinates needs: the rounding-noise bound, the stall
-  check and non-finite values.
+  bisects panels along their worse direction while their case misses the tolerance, and confirms a case's panels on
+  their quarters with Gauss–Lobatto nodes that include the edges (:data:`.kinks.QUARTER_NODES`) before the case may
+  stop, within tolerance or out of budget (:mod:`.confirmation`, as the hemisphere route). The hemisphere route
+  (:mod:`brdfnorm.engine.routes.hemisphere`) drives the same pool with its own loop, which adds what only a lobe
+  sampled in lobe-aligned coordinates needs: the rounding-noise bound, the stall check and non-finite values.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from . import kinks
+from .confirmation import confirm_before_stop, out_of_budget
 from .kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
 from .kronrod import GAUSS, KRONROD, NODES
 from .result import RouteResult
@@ -170,15 +172,33 @@ def _quarters(integrand: RectangleIntegrand, panels: Panels, chunk: int) -> np.n
     return total
 
 
+def _confirm_quarters(pool: Panels, check: np.ndarray, *, integrand: RectangleIntegrand, chunk: int) -> None:
+    """The confirmation of the panels ``pool[check]``: the difference to their quarters (:func:`_quarters`, new
+    nodes) becomes the panel's ``change``, at least the rounding floor 50ε|value|. A confirmation far off the panel's
+    own |K − G| (:func:`.kinks.surprised`): neither rule is in its asymptotic regime there, and the difference itself
+    was found 3.2 times below the true error (modified Phong n = 1.735); the panel's estimate is then
+    :data:`.kinks.SURPRISE` times the difference, and the driver's usual splitting refines it where that matters to
+    its case. (Bisecting every surprised panel before its case may stop, as first tried, chased differences of
+    1e-17…1e-28 against a tolerance of 1e-13 — GGX α = 1.9e-7 at μ = 6.1e-6 — down to panels 7e-12 wide, from 0.7 to
+    29 million evaluations.)"""
+    subset = pool.take(check)
+    difference = np.maximum(np.abs(subset.value - _quarters(integrand, subset, chunk)),
+                            50.0 * _EPS * np.abs(subset.value))
+    surprise = kinks.surprised(difference, subset.err_a, subset.err_b)
+    pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
+
+
 def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, *, rtol: float | np.ndarray,
                         atol: float | np.ndarray, max_evaluations: int,
                         chunk: int = PANELS_PER_CHUNK) -> RouteResult:
     """Integrate every case over the union of its initial panels, adaptively and all cases at once (``rtol`` and
-    ``atol`` scalars or per case, (K, 1)). When a case first meets the tolerance, every panel not yet checked is
-    re-integrated on its four quarters (:func:`_quarters`, new nodes) and the difference joins its error before the
-    case may stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6 in
-    the half-vector route: kept as a sum); a difference more than :data:`.kinks.SURPRISE` times the panel's
-    |K − G| (:func:`.kinks.surprised`) counts that many times over."""
+    ``atol`` scalars or per case, (K, 1)). Before a case stops — meeting the tolerance or out of budget — every
+    panel of it not yet checked is re-integrated on its four quarters (:func:`_confirm_quarters`, new nodes) and the
+    difference joins its error (:func:`.confirmation.confirm_before_stop`, as the hemisphere route does; the budget
+    keeps what that costs, :func:`.confirmation.out_of_budget`): an unconverged case's estimate must bound its error
+    too (an edge ramp beyond every K15 node, 2e-8, was reported with an estimate of 1.9e-14 when the budget stopped
+    it unconfirmed: tests/engine/test_rectangle_budget.py). The difference is kept as a sum (taking the smaller of
+    the two instead halves the work but was found optimistic at μ ≲ 1e-6 in the half-vector route)."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
@@ -186,6 +206,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
     pool: Panels | None = None
     fresh = initial
     per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
+    confirm = partial(_confirm_quarters, integrand=integrand, chunk=chunk)
     parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
     while True:
         _evaluate(integrand, fresh, chunk)
@@ -200,26 +221,19 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         total = per_case(K, pool.case, pool.value)
         tolerance = np.maximum(atol, rtol * np.abs(total))
         meets = np.all(per_case(K, pool.case, pool.error()) <= tolerance, axis=1) & active
-        # Confirmation: the unchecked panels of cases that meet the tolerance, on new nodes.
-        check = meets[pool.case] & ~pool.checked
-        if np.any(check):
-            subset = pool.take(check)
-            difference = np.maximum(np.abs(subset.value - _quarters(integrand, subset, chunk)),
-                                    50.0 * _EPS * np.abs(subset.value))
-            # A confirmation far off the panel's own |K − G| (kinks.surprised): neither rule is in its asymptotic
-            # regime there, and the difference itself was found 3.2 times below the true error (modified Phong
-            # n = 1.735); the panel's estimate is SURPRISE times the difference, and the usual splitting below
-            # refines it where that matters to its case. (Bisecting every surprised panel before its case may
-            # stop, as first tried, chased differences of 1e-17…1e-28 against a tolerance of 1e-13 — GGX α = 1.9e-7
-            # at μ = 6.1e-6 — down to panels 7e-12 wide, from 0.7 to 29 million evaluations.)
-            surprise = kinks.surprised(difference, subset.err_a, subset.err_b)
-            pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
-            pool.checked[check] = True
-            np.add.at(evaluations, subset.case, per_check)
+        unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
+        stopping = out_of_budget(active & ~meets, evaluations, unchecked, per_check, 2 * per_panel, max_evaluations)
+        # Confirmation: the unchecked panels of the cases that meet the tolerance or stop, on new nodes.
+        confirm_before_stop(pool, meets, stopping, confirm, evaluations, per_check)
         total_error = per_case(K, pool.case, pool.error())
         done = np.all(total_error <= tolerance, axis=1) & active
-        out_of_budget = active & ~done & (evaluations + 2 * per_panel > max_evaluations)
-        finished = done | out_of_budget
+        # A case confirmed to stop stops (with what its confirmation found), unless it now meets its tolerance; one
+        # whose confirmation took it back over the tolerance goes on while the budget allows (its panels are all
+        # confirmed now, so it stops honestly whenever it does).
+        unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
+        budget = active & ~done & (stopping | out_of_budget(active, evaluations, unchecked, per_check, 2 * per_panel,
+                                                            max_evaluations))
+        finished = done | budget
         value[finished], error[finished] = total[finished], total_error[finished]
         converged[done] = True
         active &= ~finished
