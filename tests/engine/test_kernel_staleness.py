@@ -141,3 +141,47 @@ def test_the_stamp_covers_every_cached_module_and_what_each_imports():
             imported |= _package_imports(path, tree)
     assert cached == set(staleness.CACHED)
     assert cached | imported == set(staleness.SOURCES)
+
+
+KERNEL = """from numba import njit
+
+from helper import twice
+
+
+@njit(cache=True)
+def kernel(x):
+    return twice(x)
+"""
+RUN = """import sys
+from pathlib import Path
+sys.path.insert(0, {root!r})
+from brdfnorm.engine.compiled import staleness
+if {refresh}:
+    staleness.refresh([Path({root!r}) / "kernel.py", Path({root!r}) / "helper.py"], [Path({root!r}) / "kernel.py"])
+import kernel
+print(kernel.kernel(1.0))
+"""
+
+
+@pytest.mark.slow  # three processes that import Numba and compile a small kernel: ~3 s of CPU
+@pytest.mark.parametrize("refresh", [False, True])
+def test_an_edited_inlined_helper_reaches_the_cached_kernel_only_after_a_refresh(tmp_path, refresh):
+    numba = pytest.importorskip("numba")
+    import subprocess
+    import sys
+
+    (tmp_path / "kernel.py").write_text(KERNEL)
+    helper = "from numba import njit\n\n\n@njit(inline='always')\ndef twice(x):\n    return {} * x\n"
+    (tmp_path / "helper.py").write_text(helper.format(2.0))
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path), "NUMBA_CACHE_DIR": ""}
+
+    def run() -> str:
+        code = RUN.format(root=str(tmp_path), refresh=refresh)
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                              env=environment).stdout.strip()
+
+    assert run() == "2.0"  # compiled and cached
+    assert list((tmp_path / "__pycache__").glob("kernel.kernel-*.nbi"))
+    (tmp_path / "helper.py").write_text(helper.format(3.0))
+    # Numba alone (refresh False) loads the cached kernel with the old helper inside: the bug this module fixes.
+    assert run() == ("3.0" if refresh else "2.0"), numba.__version__
