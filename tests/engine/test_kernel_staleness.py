@@ -86,13 +86,11 @@ def test_the_stamp_lives_where_numba_caches_the_package_and_a_numba_cache_dir(mo
     assert staleness.numba_cache_directory(Path(global_rule.__file__)) == Path(
         global_rule.fused_global._cache._cache_path)
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))  # what $NUMBA_CACHE_DIR sets
+    from numba.core.caching import FunctionCache
 
-    def kernel(x):
-        return x
-
-    dispatcher = numba.njit(cache=True)(kernel)
-    assert staleness.numba_cache_directory(Path(__file__)) == Path(dispatcher._cache._cache_path)
-    assert Path(dispatcher._cache._cache_path).parent == tmp_path
+    where = Path(FunctionCache(global_rule.fused_global.py_func)._cache_path)  # where Numba would cache it now
+    assert staleness.numba_cache_directory(Path(global_rule.__file__)) == where
+    assert where.parent == tmp_path
 
 
 def test_the_compiled_backend_refreshes_once_when_it_loads(monkeypatch):
