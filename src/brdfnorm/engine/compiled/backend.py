@@ -18,6 +18,7 @@ from contextvars import ContextVar
 from functools import cache
 
 from ...errors import ArgumentError
+from . import staleness
 
 BACKENDS = ("numpy", "compiled")
 #: The environment variable that chooses the backend where no argument does.
@@ -48,12 +49,16 @@ def notice(message: str) -> None:
 
 @cache
 def numba_available() -> bool:
-    """Whether Numba imports (the notice is printed where it does not)."""
+    """Whether Numba imports (the notice is printed where it does not); where it does, the package's stale cached
+    kernels are removed first (:func:`brdfnorm.engine.compiled.staleness.refresh`)."""
     try:
         import numba  # noqa: F401
     except Exception as error:  # noqa: BLE001 - any failure to import means: no compiled backend
         notice(f"Numba cannot be imported ({type(error).__name__}: {error})")
         return False
+    # Before any kernel loads: Numba's cache of the package's kernels is dropped where a source compiled into them
+    # changed (Numba itself compares only each kernel's own file).
+    staleness.refresh()
     return True
 
 

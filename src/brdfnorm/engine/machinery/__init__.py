@@ -1,8 +1,11 @@
 """The one integration machinery the engine's routes share (no route re-implements it).
 
 - :mod:`.result` — :class:`~.result.RouteResult`, what every route and rule returns;
-- :mod:`.panels` — the one panel pool of the adaptive 2-D routes, the K15/G7 rule pair on a panel, the check on
-  halves, and the rectangle driver of the half-vector and dielectric routes;
+- :mod:`.panels` — the one panel pool of the adaptive 2-D routes, the K15/G7 rule pair on a panel, and the
+  rectangle driver of the half-vector and dielectric routes;
+- :mod:`.confirmation` — the confirmation of a case's panels on new nodes before it stops (within tolerance, out of
+  budget, stalled), shared by the hemisphere route and the rectangle driver: the check on halves with its corner
+  check, the budget stop that keeps the confirmation's cost, the stall check;
 - :mod:`.kronrod` — the G7/K15 Gauss–Kronrod rule of every adaptive panel (the engine's and the tables' μ-average);
 - :mod:`.kinks` — the Gauss–Lobatto edge nodes of the panels' checks and the floor under a panel that converges
   algebraically;

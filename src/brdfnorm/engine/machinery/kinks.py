@@ -44,7 +44,7 @@ def lobatto(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: Nodes on both ends of the interval, where no Gauss or Kronrod node lies
-#: (brdfnorm.engine.machinery.panels.check_by_halves).
+#: (brdfnorm.engine.machinery.confirmation.check_by_halves).
 LOBATTO_NODES, LOBATTO_WEIGHTS = lobatto(LOBATTO_POINTS)
 QUARTER_NODES, QUARTER_WEIGHTS = lobatto(QUARTER_POINTS)
 

@@ -7,26 +7,26 @@
   :mod:`.kronrod`) and the plain |KK − GK|, |KK − KG| of the embedded G7 rules as the error in each direction (not
   QUADPACK's rescaling), each at least the rounding-noise floor 50ε∫|g| (QUADPACK's), with ∫|g| itself (the scale
   of the integrand's own float64 noise, :mod:`.rounding`);
-- :func:`check_by_halves` — the confirmation of a panel before its case may stop: its halves on new nodes, the
-  Gauss–Lobatto ones in the split direction including the edges (:mod:`.kinks`), whose difference joins its error;
 - :func:`adaptive_rectangles` — the driver of the half-vector and dielectric routes over a rectangle integrand: it
-  bisects panels along their worse direction while their case misses the tolerance, and confirms a case's panels
-  on their quarters with Gauss–Lobatto nodes that include the edges (:data:`.kinks.QUARTER_NODES`) before the case
-  may stop. The hemisphere route (:mod:`brdfnorm.engine.routes.hemisphere`) drives the same pool with its own
-  loop, which adds what only a lobe sampled in lobe-aligned coordinates needs: the rounding-noise bound, the stall
-  check and non-finite values.
+  bisects panels along their worse direction while their case misses the tolerance, and confirms a case's panels on
+  their quarters with Gauss–Lobatto nodes that include the edges (:data:`.kinks.QUARTER_NODES`) before the case may
+  stop, within tolerance or out of budget (:mod:`.confirmation`, as the hemisphere route). The hemisphere route
+  (:mod:`brdfnorm.engine.routes.hemisphere`) drives the same pool with its own loop, which adds what only a lobe
+  sampled in lobe-aligned coordinates needs: the rounding-noise bound, the stall check and non-finite values.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from . import kinks
-from .kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor, refinement_change
-from .kronrod import GAUSS, GAUSS_NODES, GAUSS_WEIGHTS, KRONROD, NODES
+from .confirmation import confirm_before_stop, out_of_budget
+from .kinks import QUARTER_NODES, QUARTER_WEIGHTS, algebraic_floor
+from .kronrod import GAUSS, KRONROD, NODES
 from .result import RouteResult
 
 _EPS = np.finfo(float).eps
@@ -104,23 +104,6 @@ def kronrod_estimate(weighted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     return kk, np.maximum(np.abs(kk - gk), floor), np.maximum(np.abs(kk - kg), floor), magnitude
 
 
-def check_by_halves(panels: Panels, along_a: bool, sums: Callable[[Panels, tuple, tuple], np.ndarray]) -> np.ndarray:
-    """|K15⊗K15 of each panel − the sum over its two halves (split along a or b)| (R, C), less rounding noise: the
-    halves by Gauss-Lobatto in the split direction ⊗ G7 across, ``sums(halves, (nodes_a, nodes_b), (weights_a,
-    weights_b))`` giving their integrals (2R, C) with the route's own node map (non-finite values counted as 0).
-    Lobatto's end nodes see a kink or jump in the 0.43% of a panel next to an edge, beyond all Gauss-Kronrod nodes
-    (FON at θ_V = 53.6°: 2.8e-7 off, |K − G| = 2e-15): with δ < 0.0043 h and a jump J in slope, the error J δ²/2 is
-    below the end node's h/(2n(n − 1)) J δ (n = 9: 3.9 times; a jump 1.9). G7 across, as Lobatto was weaker than G7
-    on steep integrands (Phong n = 1e4, rtol 1e-12). docs/kinks.md has the details."""
-    halves = panels.halves(np.full(panels.case.size, along_a))
-    nodes, weights = (LOBATTO_NODES, GAUSS_NODES), (LOBATTO_WEIGHTS, GAUSS_WEIGHTS)
-    if not along_a:
-        nodes, weights = nodes[::-1], weights[::-1]
-    total = sums(halves, nodes, weights)
-    half = panels.case.size
-    return refinement_change(panels.value, total[:half], total[half:])
-
-
 def per_case(K: int, case: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Sums per case (K, C) of per-panel values (R, C), each by pairwise summation (numpy's ``add.reduceat`` over
     the panels sorted by case): its rounding error grows like ε log₂ R, where ``np.add.at``'s running sum grows
@@ -189,15 +172,33 @@ def _quarters(integrand: RectangleIntegrand, panels: Panels, chunk: int) -> np.n
     return total
 
 
+def _confirm_quarters(pool: Panels, check: np.ndarray, *, integrand: RectangleIntegrand, chunk: int) -> None:
+    """The confirmation of the panels ``pool[check]``: the difference to their quarters (:func:`_quarters`, new
+    nodes) becomes the panel's ``change``, at least the rounding floor 50ε|value|. A confirmation far off the panel's
+    own |K − G| (:func:`.kinks.surprised`): neither rule is in its asymptotic regime there, and the difference itself
+    was found 3.2 times below the true error (modified Phong n = 1.735); the panel's estimate is then
+    :data:`.kinks.SURPRISE` times the difference, and the driver's usual splitting refines it where that matters to
+    its case. (Bisecting every surprised panel before its case may stop, as first tried, chased differences of
+    1e-17…1e-28 against a tolerance of 1e-13 — GGX α = 1.9e-7 at μ = 6.1e-6 — down to panels 7e-12 wide, from 0.7 to
+    29 million evaluations.)"""
+    subset = pool.take(check)
+    difference = np.maximum(np.abs(subset.value - _quarters(integrand, subset, chunk)),
+                            50.0 * _EPS * np.abs(subset.value))
+    surprise = kinks.surprised(difference, subset.err_a, subset.err_b)
+    pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
+
+
 def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, *, rtol: float | np.ndarray,
                         atol: float | np.ndarray, max_evaluations: int,
                         chunk: int = PANELS_PER_CHUNK) -> RouteResult:
     """Integrate every case over the union of its initial panels, adaptively and all cases at once (``rtol`` and
-    ``atol`` scalars or per case, (K, 1)). When a case first meets the tolerance, every panel not yet checked is
-    re-integrated on its four quarters (:func:`_quarters`, new nodes) and the difference joins its error before the
-    case may stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6 in
-    the half-vector route: kept as a sum); a difference more than :data:`.kinks.SURPRISE` times the panel's
-    |K − G| (:func:`.kinks.surprised`) counts that many times over."""
+    ``atol`` scalars or per case, (K, 1)). Before a case stops — meeting the tolerance or out of budget — every
+    panel of it not yet checked is re-integrated on its four quarters (:func:`_confirm_quarters`, new nodes) and the
+    difference joins its error (:func:`.confirmation.confirm_before_stop`, as the hemisphere route does; the budget
+    keeps what that costs, :func:`.confirmation.out_of_budget`): an unconverged case's estimate must bound its error
+    too (an edge ramp beyond every K15 node, 2e-8, was reported with an estimate of 1.9e-14 when the budget stopped
+    it unconfirmed: tests/engine/test_rectangle_budget.py). The difference is kept as a sum (taking the smaller of
+    the two instead halves the work but was found optimistic at μ ≲ 1e-6 in the half-vector route)."""
     value = error = None
     evaluations = np.zeros(K, dtype=np.int64)
     converged = np.zeros(K, dtype=bool)
@@ -205,6 +206,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
     pool: Panels | None = None
     fresh = initial
     per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
+    confirm = partial(_confirm_quarters, integrand=integrand, chunk=chunk)
     parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
     while True:
         _evaluate(integrand, fresh, chunk)
@@ -219,26 +221,19 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         total = per_case(K, pool.case, pool.value)
         tolerance = np.maximum(atol, rtol * np.abs(total))
         meets = np.all(per_case(K, pool.case, pool.error()) <= tolerance, axis=1) & active
-        # Confirmation: the unchecked panels of cases that meet the tolerance, on new nodes.
-        check = meets[pool.case] & ~pool.checked
-        if np.any(check):
-            subset = pool.take(check)
-            difference = np.maximum(np.abs(subset.value - _quarters(integrand, subset, chunk)),
-                                    50.0 * _EPS * np.abs(subset.value))
-            # A confirmation far off the panel's own |K − G| (kinks.surprised): neither rule is in its asymptotic
-            # regime there, and the difference itself was found 3.2 times below the true error (modified Phong
-            # n = 1.735); the panel's estimate is SURPRISE times the difference, and the usual splitting below
-            # refines it where that matters to its case. (Bisecting every surprised panel before its case may
-            # stop, as first tried, chased differences of 1e-17…1e-28 against a tolerance of 1e-13 — GGX α = 1.9e-7
-            # at μ = 6.1e-6 — down to panels 7e-12 wide, from 0.7 to 29 million evaluations.)
-            surprise = kinks.surprised(difference, subset.err_a, subset.err_b)
-            pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
-            pool.checked[check] = True
-            np.add.at(evaluations, subset.case, per_check)
+        unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
+        stopping = out_of_budget(active & ~meets, evaluations, unchecked, per_check, 2 * per_panel, max_evaluations)
+        # Confirmation: the unchecked panels of the cases that meet the tolerance or stop, on new nodes.
+        confirm_before_stop(pool, meets, stopping, confirm, evaluations, per_check)
         total_error = per_case(K, pool.case, pool.error())
         done = np.all(total_error <= tolerance, axis=1) & active
-        out_of_budget = active & ~done & (evaluations + 2 * per_panel > max_evaluations)
-        finished = done | out_of_budget
+        # A case confirmed to stop stops (with what its confirmation found), unless it now meets its tolerance; one
+        # whose confirmation took it back over the tolerance goes on while the budget allows (its panels are all
+        # confirmed now, so it stops honestly whenever it does).
+        unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
+        budget = active & ~done & (stopping | out_of_budget(active, evaluations, unchecked, per_check, 2 * per_panel,
+                                                            max_evaluations))
+        finished = done | budget
         value[finished], error[finished] = total[finished], total_error[finished]
         converged[done] = True
         active &= ~finished

@@ -41,14 +41,15 @@ Cubature. First a global tensor rule per case and piece (:mod:`brdfnorm.engine.r
 trapezoid
 in φ × Fejér in v, degree doubling with node reuse), which settles most views with half the evaluations; the
 cases it does not settle (grazing views, μ ≲ 0.01) start afresh on the panels below.
-Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case), by the engine's
-rectangle driver (:func:`brdfnorm.engine.machinery.panels.adaptive_rectangles`): a tensor K15 ⊗ K15 rule per
-panel (225 nodes), its error the plain |KK − GK| + |KK − KG| of the embedded G7 rules (not QUADPACK's
-rescaling); panels are bisected along their worse direction while their case misses max(atol, rtol·|E|). When a
-case first meets the tolerance, every panel not yet checked is re-integrated on its four quarters with
-Lobatto7 ⊗ Lobatto7 (new nodes, the edges among them) and the difference joins its error before the case may
-stop (taking the smaller of the two instead halves the work but was found optimistic at μ ≲ 1e-6: kept as a sum).
-The tests check estimate ≥ true error against an independent reference on every case they compute.
+Adaptive Gauss–Kronrod over the rectangles of all cases at once (no Python loop per case), by the engine's rectangle
+driver (:func:`brdfnorm.engine.machinery.panels.adaptive_rectangles`): a tensor K15 ⊗ K15 rule per panel (225
+nodes), its error the plain |KK − GK| + |KK − KG| of the embedded G7 rules (not QUADPACK's rescaling); panels are
+bisected along their worse direction while their case misses max(atol, rtol·|E|). Before a case stops, meeting the
+tolerance or out of budget, every panel not yet checked is re-integrated on its four quarters with Lobatto7 ⊗
+Lobatto7 (new nodes, the edges among them) and the difference joins its error
+(:mod:`brdfnorm.engine.machinery.confirmation`; taking the smaller of the two instead halves the work but was found
+optimistic at μ ≲ 1e-6: kept as a sum). The tests check estimate ≥ true error against an independent reference on
+every case they compute.
 """
 
 from __future__ import annotations

@@ -66,17 +66,26 @@ where the speed comes from (see benchmarks/).
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import Literal
 
 import numpy as np
 
 from ...validate import DEFAULT_MAX_EVALUATIONS, DEFAULT_RTOL
 from ..compiled import drivers as native
+from ..machinery.confirmation import (
+    CHECK_EVALUATIONS,
+    SPLIT_EVALUATIONS,
+    STALL_EVALUATIONS,
+    check_with_corners,
+    confirm_before_stop,
+    stopping,
+)
 from ..machinery.grazing_panels import starting_panels
 from ..machinery.hemisphere_global import integrate_global
-from ..machinery.kinks import LOBATTO_NODES, LOBATTO_WEIGHTS, algebraic_floor, refinement_change
-from ..machinery.kronrod import GAUSS, GAUSS_NODES, KRONROD, NODES
-from ..machinery.panels import Panels, check_by_halves, kronrod_estimate
+from ..machinery.kinks import algebraic_floor, refinement_change
+from ..machinery.kronrod import GAUSS, KRONROD, NODES
+from ..machinery.panels import Panels, kronrod_estimate
 from ..machinery.result import RouteResult
 from ..machinery.rounding import BIAS_EVALUATIONS, PROBE_EVALUATIONS, cosine_bias, noise_bound, rounding_noise
 from ..machinery.tensor_rule import START_NODES, map_grid, neck_u, normalized
@@ -85,12 +94,6 @@ NonFinitePolicy = Literal["raise", "zero"]
 
 #: Nodes per case the global tensor rule may spend before a case goes to the adaptive panels.
 GLOBAL_NODES = 65_536
-#: Evaluations of one panel's confirmation (_check_by_halves): Lobatto-9 ⊗ G7 halves along β and along u, and the
-#: halves along u again by Lobatto-9 ⊗ Lobatto-9.
-CHECK_EVALUATIONS = 4 * LOBATTO_NODES.size * GAUSS_NODES.size + 2 * LOBATTO_NODES.size**2
-#: What one split may cost: its two halves evaluated and confirmed.
-_SPLIT_EVALUATIONS = 2 * (NODES.size**2 + CHECK_EVALUATIONS)
-
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C) values of f·(N·ω).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
 #: (integrand, poles, widths, cases, noise amplitude, rtol=, atol=, max_evaluations=) -> RouteResult (``converged``:
@@ -225,9 +228,9 @@ def integrate_hemisphere(
     # The stall check's budget grows with the initial panels: a graded start (starting_panels) holds up to a few
     # hundred of them, and its first rounds are pre-asymptotic (GGX α = 0.0038 at μ = 2.3e-4, rtol 1e-9, 72 initial
     # panels: estimates 0.73, 0.85, 0.39 at 71 000 evaluations, stopped as stalled, where 8 panels had converged).
-    stall_after = np.full(K, _STALL_EVALUATIONS)
+    stall_after = np.full(K, STALL_EVALUATIONS)
     stall_after[remaining] = np.maximum(
-        _STALL_EVALUATIONS, _STALL_EVALUATIONS * np.bincount(panels.case, minlength=K)[remaining] // (nb * nu))
+        STALL_EVALUATIONS, STALL_EVALUATIONS * np.bincount(panels.case, minlength=K)[remaining] // (nb * nu))
     pool = None  # evaluated panels of unfinished cases
     fresh = panels  # panels still to evaluate
     parent_value = parent_error = None  # values and |K − G| of the panels whose halves ``fresh`` holds
@@ -264,44 +267,32 @@ def integrate_hemisphere(
         panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
         # Before a case may stop, within tolerance or not (budget, stall, rounding), each of its panels not yet
         # confirmed is recomputed as halves on new nodes, among them its edges and corners (_check_by_halves), and
-        # the difference joins its error: the embedded rules can pass together where a feature falls between all
-        # their nodes, and an unconverged case's estimate must bound its error too. Halves of a panel split later
-        # are confirmed again: a split keeps the edges, and a kink next to one, out of the K15 nodes' sight.
+        # the difference joins its error (brdfnorm.engine.machinery.confirmation).
         unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
         estimate = np.where(present, (quadrature_error + noise).max(axis=1), np.nan)
-        ending = _stopping(history + [(evaluations - confirmations, estimate)], present & ~within, noise,
-                           quadrature_error, tolerance, evaluations, confirmations, since, unchecked, stall_after,
-                           max_evaluations)
-        stopping = np.any(ending[:3], axis=0)
-        confirming = (within | stopping)[pool.case] & ~pool.checked
+        ending = stopping(history + [(evaluations - confirmations, estimate)], present & ~within, noise,
+                          quadrature_error, tolerance, evaluations, confirmations, since, unchecked, stall_after,
+                          max_evaluations)
+        ends = np.any(ending[:3], axis=0)
+        before = quadrature_error.max(axis=1)
+        confirm = partial(_confirm, noise_amplitude=noise_amplitude, integrand=integrand, frame=frame, widths=widths,
+                          supports=supports, max_nodes_per_call=max_nodes_per_call)
+        confirming = confirm_before_stop(pool, within, ends, confirm, evaluations, CHECK_EVALUATIONS)
         if confirming.any():
-            # Halved along β and along u in turn; each change joins that direction's error (the panel is split
-            # where the check found it wanting), less the panel's rounding-noise bound (charged to the case apart).
-            checked = pool.take(confirming)
-            before = quadrature_error.max(axis=1)
-            own_noise = 2.0 * noise_bound(noise_amplitude[checked.case], checked.magnitude)
-            for along_beta, err in ((True, pool.err_a), (False, pool.err_b)):
-                change, corner = _check_by_halves(checked, along_beta, integrand, frame, widths, supports,
-                                                  max_nodes_per_call)
-                err[confirming] = np.maximum(err[confirming], change - own_noise)
-                if corner is not None:
-                    pool.err_a[confirming] = np.maximum(pool.err_a[confirming], corner - own_noise)
-            np.add.at(evaluations, pool.case[confirming], CHECK_EVALUATIONS)
             np.add.at(confirmations, pool.case[confirming], CHECK_EVALUATIONS)
-            pool.checked[confirming] = True
             unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
             panel_error, quadrature_error, within = _case_errors(pool, present, noise, tolerance)
             # What a confirmation found was in no earlier estimate: the stall check of a case that goes on compares
             # from here on.
-            raised = present & ~stopping & (quadrature_error.max(axis=1) > before)
+            raised = present & ~ends & (quadrature_error.max(axis=1) > before)
             since[raised] = (evaluations - confirmations)[raised]
         # (Every panel of a case still within tolerance, or stopping, has now been confirmed.)
         case_ok = within
         converged |= case_ok
         history.append((evaluations - confirmations, np.where(present, (quadrature_error + noise).max(axis=1), np.nan)))
         # A case confirmed to stop stops (with what its confirmation found), unless it now meets its tolerance.
-        going_on = _stopping(history, present & ~case_ok & ~stopping, noise, quadrature_error, tolerance, evaluations,
-                             confirmations, since, unchecked, stall_after, max_evaluations)
+        going_on = stopping(history, present & ~case_ok & ~ends, noise, quadrature_error, tolerance, evaluations,
+                            confirmations, since, unchecked, stall_after, max_evaluations)
         stop, stalled, out_of_budget, rounding_limited = (
             (first & ~case_ok) | then for first, then in zip(ending, going_on, strict=True))
         reason[out_of_budget] = "budget"
@@ -321,7 +312,7 @@ def integrate_hemisphere(
         before_case = np.where(case_start > 0, cumulative[np.maximum(case_start - 1, 0)], 0.0)
         split = np.zeros(pool.case.size, dtype=bool)
         # (no more of them than the budget can evaluate and confirm: the largest first)
-        affordable = (max_evaluations - evaluations - unchecked * CHECK_EVALUATIONS) // _SPLIT_EVALUATIONS
+        affordable = (max_evaluations - evaluations - unchecked * CHECK_EVALUATIONS) // SPLIT_EVALUATIONS
         from_top = np.searchsorted(sorted_case, sorted_case, side="right") - 1 - np.arange(sorted_case.size)
         split[order] = (cumulative - before_case > 0.5) & active[sorted_case] & (from_top < affordable[sorted_case])
         # Panels too thin to split further stay as they are (their error stays in the estimate).
@@ -378,43 +369,6 @@ def _case_errors(pool: Panels, present: np.ndarray, noise: np.ndarray, tolerance
     return panel_error, summed, present & np.all(normalized(summed + noise, tolerance) <= 1.0, axis=1)
 
 
-def _stopping(history, unsettled, noise, quadrature_error, tolerance, evaluations, confirmations, since, unchecked,
-              stall_after, max_evaluations):
-    """Which ``unsettled`` cases stop without meeting their tolerance: (rounding-limited stop, stalled, out of
-    budget, rounding-limited). Fail fast where more nodes cannot help: the rounding noise alone exceeds the
-    tolerance and the quadrature error is already below it, or the estimate stopped improving (see _stalled).
-    The stall check counts the evaluations that refined (``history`` holds them): a confirmation is spent once per
-    panel and raises the estimate by what it finds, which would read as a stall (so the check compares only the
-    rounds since a confirmation last raised the estimate, ``since``). The budget keeps what confirming
-    the case's ``unchecked`` panels costs (CHECK_EVALUATIONS each)."""
-    rounding_limited = unsettled & np.any(normalized(noise, tolerance) > 1.0, axis=1)
-    stop = rounding_limited & np.all(quadrature_error <= noise, axis=1)
-    stalled = unsettled & ~stop & _stalled(history, evaluations - confirmations, stall_after, since)
-    out_of_budget = unsettled & (evaluations + unchecked * CHECK_EVALUATIONS + _SPLIT_EVALUATIONS > max_evaluations)
-    return stop, stalled, out_of_budget, rounding_limited
-
-
-#: Evaluations after which a case whose error estimate no longer halves when its evaluations double stops.
-_STALL_EVALUATIONS = 50_000
-
-
-def _stalled(history: list[tuple[np.ndarray, np.ndarray]], evaluations: np.ndarray,
-             after: np.ndarray | int = _STALL_EVALUATIONS, since: np.ndarray | int = 0) -> np.ndarray:
-    """Cases whose error estimate shrank by less than 2× since they had half their evaluations, once past
-    a modest budget (``after``, per case): refining further only spends evaluations (rounding noise, a
-    singularity). ``history`` holds (evaluations, error estimate) per round; rounds before ``since`` (per case)
-    are not compared."""
-    stalled = np.zeros(evaluations.size, dtype=bool)
-    compared = np.zeros(evaluations.size, dtype=bool)
-    current = history[-1][1]
-    for spent, estimate in reversed(history[:-1]):  # the latest round with at most half the evaluations
-        latest = (spent <= evaluations / 2) & (spent >= since) & ~compared
-        with np.errstate(invalid="ignore"):
-            stalled |= latest & (current > 0.5 * estimate)
-        compared |= latest
-    return stalled & (evaluations > after)
-
-
 def _node_values(panels: Panels, integrand, frame, widths, supports, nodes: np.ndarray, max_nodes_per_call: int,
                  nodes_u: np.ndarray | None = None):
     """For bounded chunks of ``panels``: (chunk, directions, Jacobians, integrand values (R, n, m, C))."""
@@ -427,11 +381,25 @@ def _node_values(panels: Panels, integrand, frame, widths, supports, nodes: np.n
         yield part, omega, jacobian, values.reshape(jacobian.shape + (-1,))
 
 
+def _confirm(pool: Panels, confirming: np.ndarray, *, noise_amplitude, integrand, frame, widths, supports,
+             max_nodes_per_call) -> None:
+    """The confirmation of the panels ``pool[confirming]`` (brdfnorm.engine.machinery.confirmation): halved along β
+    and along u in turn, each change joins that direction's error (the panel is split where the check found it
+    wanting), less the panel's rounding-noise bound (charged to the case apart); the corner check joins β's."""
+    checked = pool.take(confirming)
+    own_noise = 2.0 * noise_bound(noise_amplitude[checked.case], checked.magnitude)
+    for along_beta, err in ((True, pool.err_a), (False, pool.err_b)):
+        change, corner = _check_by_halves(checked, along_beta, integrand, frame, widths, supports, max_nodes_per_call)
+        err[confirming] = np.maximum(err[confirming], change - own_noise)
+        if corner is not None:
+            pool.err_a[confirming] = np.maximum(pool.err_a[confirming], corner - own_noise)
+
+
 def _check_by_halves(panels: Panels, along_beta: bool, integrand, frame, widths, supports,
                      max_nodes_per_call) -> tuple[np.ndarray, np.ndarray | None]:
-    """:func:`brdfnorm.engine.machinery.panels.check_by_halves` of each panel, split along β or u, with this
-    route's node map (or, under the compiled backend, one fused kernel: map, shader, Jacobian and sums); with the
-    halves along u, also their corner check (:func:`_corner_change`), else None."""
+    """:func:`brdfnorm.engine.machinery.confirmation.check_with_corners` of each panel, split along β or u, with this
+    route's node map (or, under the compiled backend, one fused kernel: map, shader, Jacobian and sums): the change
+    and, with the halves along u, their corner check (else None)."""
     def sums(halves: Panels, nodes: tuple, weights: tuple) -> np.ndarray:
         if hasattr(integrand, "kernels"):
             return native.hemisphere_sums(integrand, halves.case, halves.a0, halves.a1, halves.b0, halves.b1, frame,
@@ -444,19 +412,7 @@ def _check_by_halves(panels: Panels, along_beta: bool, integrand, frame, widths,
                 parts.append(np.einsum("rbuc,rbu,b,u->rc", values, jacobian, *weights))
         return np.concatenate(parts)
 
-    corners = []
-
-    def sums_and_corners(halves: Panels, nodes: tuple, weights: tuple) -> np.ndarray:
-        total = sums(halves, nodes, weights)
-        if not along_beta:
-            # the same halves with Lobatto across too (β): its nodes include the panel's four corners
-            across = sums(halves, (LOBATTO_NODES, nodes[1]), (LOBATTO_WEIGHTS, weights[1]))
-            half = panels.case.size
-            corners.append(refinement_change(total[:half] + total[half:], across[:half], across[half:]))
-        return total
-
-    change = check_by_halves(panels, along_beta, sums_and_corners)
-    return change, (corners[0] if corners else None)
+    return check_with_corners(panels, along_beta, sums)
 
 
 def _evaluate(panels: Panels, integrand, frame, widths, supports, nonfinite, max_nodes_per_call) -> None:
