@@ -1,0 +1,77 @@
+"""A batch of albedo cells on every local core in this process: threads around the compiled kernels (issue #39, item 2).
+
+The compiled backend's kernels (:mod:`brdfnorm.engine.compiled`) are compiled with ``nogil=True``: while one runs,
+the interpreter lock is free, so a second Python thread can run another kernel, or the routes' Python between them,
+at the same time. Threads need no second interpreter, no pickled model and no second Numba start (a local process
+pool pays ~1.5 s for these, :data:`brdfnorm.parallel.executors.POOL_START_SECONDS`, more than a 32 × 32 table's E
+takes), and they reach every stage of a table (E, E_avg's nodes, the DFG channels), where the process pool takes
+the E cells only.
+
+How a batch is split (:func:`cell_tasks`): into blocks of ``threads × chunk`` cells, each block into ``threads``
+strided subsets (cells start + t, start + t + threads, …), so that each thread gets a share of every row of the
+table (grazing views cost 10–100× a head-on view; contiguous halves of a μ-major table would leave one thread with
+all of them). With one thread the tasks are the contiguous chunks of ``chunk`` cells computed before threads existed.
+
+Why the tables stay bit-for-bit the same for any thread count: the engine computes each albedo case on its own (its
+route choice, lobe search, rules and panels depend on that case's direction, parameters and tolerance, never on the
+other cases of the batch), so which cells share a batch changes no value (``tests/lut/test_table_threads.py``
+compares whole tables computed on one and two threads).
+
+What the threads share, and why it is safe: kernels are compiled or loaded once per process under a lock
+(:func:`brdfnorm.engine.compiled.drivers.native_integrand`) and under Numba's own compiler lock; each albedo call has
+its own arrays, and the results are scattered back by the calling thread into distinct cells; the calling thread's
+context (the backend :func:`brdfnorm.engine.compiled.backend.scope`, numpy's error state) is copied into each task;
+the warning filters are set once by the caller around the whole batch (``warnings.catch_warnings`` is not thread
+safe: per thread, it could leave a filter behind).
+
+Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
+short array operations) and for a Dask cluster (its workers compute the cells).
+"""
+
+from __future__ import annotations
+
+import contextvars
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+import numpy as np
+
+Result = TypeVar("Result")
+
+
+def local_threads(workers: int | None = None, scheduler: object = None) -> int:
+    """Threads a table's cells run on in this process: ``workers`` (None: every core this process may run on) where
+    the compiled backend computes (as :func:`brdfnorm.engine.compiled.backend.resolve` says now) and no Dask
+    ``scheduler`` is given; else 1."""
+    from ..engine.compiled.backend import resolve
+    from .executors import local_cores
+
+    if scheduler is not None or resolve() != "compiled":
+        return 1
+    return local_cores() if workers is None else max(1, int(workers))
+
+
+def cell_tasks(count: int, threads: int, chunk: int) -> list[np.ndarray]:
+    """The cells 0 … count − 1 as tasks of at most ``chunk`` cells: blocks of ``threads × chunk`` cells, each split
+    into ``threads`` strided subsets (module docstring); with one thread, contiguous chunks."""
+    threads = max(1, int(threads))
+    tasks = []
+    for start in range(0, count, threads * chunk):
+        stop = min(count, start + threads * chunk)
+        tasks.extend(np.arange(start + t, stop, threads) for t in range(min(threads, stop - start)))
+    return tasks
+
+
+def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarray], threads: int) -> list[Result]:
+    """``function(task)`` for every task, in order of the tasks; on ``threads`` threads of this process where that
+    is more than one (each task in a copy of the caller's context), else here. A failure in any task is raised
+    here, after the tasks not yet started are cancelled and the running ones have finished."""
+    if threads <= 1 or len(tasks) <= 1:
+        return [function(task) for task in tasks]
+    pool = ThreadPoolExecutor(max_workers=min(threads, len(tasks)), thread_name_prefix="brdfnorm-cells")
+    try:
+        futures = [pool.submit(contextvars.copy_context().run, function, task) for task in tasks]
+        return [future.result() for future in futures]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
