@@ -75,8 +75,8 @@ def test_thread_count_follows_backend_workers_and_scheduler(monkeypatch):
     monkeypatch.setattr(executors, "local_cores", lambda: 2)
     with backend.scope("compiled"):
         assert local_threads(None) == 2
-        assert local_threads(3) == 3
-        assert local_threads(1) == 1
+        assert local_threads(3) == local_threads(np.int64(3)) == 3
+        assert local_threads(1) == local_threads(True) == local_threads(2.5) == 1  # (Workers refuses 2.5)
         assert local_threads(None, scheduler="tcp://127.0.0.1:8786") == 1
     with backend.scope("numpy"):
         assert local_threads(None) == 1

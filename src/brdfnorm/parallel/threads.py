@@ -33,6 +33,7 @@ from __future__ import annotations
 import contextvars
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from numbers import Integral
 from typing import TypeVar
 
 import numpy as np
@@ -49,7 +50,10 @@ def local_threads(workers: int | None = None, scheduler: object = None) -> int:
 
     if scheduler is not None or resolve() != "compiled":
         return 1
-    return local_cores() if workers is None else max(1, int(workers))
+    if workers is None:
+        return local_cores()
+    # (a value that is not a whole number ≥ 1 is refused where the workers are validated: Workers)
+    return int(workers) if isinstance(workers, Integral) and not isinstance(workers, bool) and workers > 1 else 1
 
 
 def cell_tasks(count: int, threads: int, chunk: int) -> list[np.ndarray]:
