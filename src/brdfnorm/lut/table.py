@@ -52,6 +52,8 @@ CHANNELS = ("dfg",)
 #: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
 #: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
 CHUNK_CELLS = 256
+#: Cells per progress step of a table (whatever the number of threads: the batches, and so the values, stay the same).
+BLOCK_CELLS = 4 * CHUNK_CELLS
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
@@ -102,8 +104,8 @@ class CellResult:
 def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarray], *, rtol: float,
                   method: str = "auto", over: str = "light", threads: int = 1) -> CellResult:
     """E for K cells: view angles ``theta`` (K,) radians and per-cell parameter values (K,) — one albedo call per
-    chunk of at most CHUNK_CELLS cells, the chunks on ``threads`` threads of this process
-    (:mod:`brdfnorm.parallel.threads`; the values are the same for any number of threads).
+    task of at most CHUNK_CELLS cells (strided subsets, :func:`brdfnorm.parallel.threads.cell_tasks`), the tasks on
+    ``threads`` threads of this process (the tasks, and so the values, the same for any number of threads).
 
     A pure function of its arguments (the unit of work a process pool or a cluster computes).
     """
@@ -114,7 +116,7 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
         bound = model.with_params(**per_cell(model, {name: v[cells] for name, v in flat.items()}))
         return albedo(bound, theta[cells], over=over, rtol=rtol, method=method)
 
-    tasks = cell_tasks(theta.size, threads, CHUNK_CELLS)
+    tasks = cell_tasks(theta.size, CHUNK_CELLS)  # (the same for any number of threads: so are the values)
     with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
         warnings.simplefilter("ignore", UserWarning)  # (set here, once: catch_warnings is not thread safe)
         parts = run_tasks(chunk, tasks, threads)
@@ -174,8 +176,8 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
     # A BSDF's parts: reflection (E_R) and transmission (E_T), E = E_R + E_T.
     parts = {"E_R": np.empty(K), "E_T": np.empty(K)} if transmits else {}
     converged, evaluations = np.empty(K, dtype=bool), np.empty(K, dtype=np.int64)
-    for start in range(0, K, CHUNK_CELLS * threads):  # (a block of cells per progress step, a chunk per thread)
-        cells = slice(start, min(K, start + CHUNK_CELLS * threads))
+    for start in range(0, K, BLOCK_CELLS):
+        cells = slice(start, min(K, start + BLOCK_CELLS))
         result = compute_cells(model, theta_flat[cells], {n: v[cells] for n, v in flat.items()}, rtol=rtol,
                                method=method, threads=threads)
         value[cells], error[cells] = _single_channel(result.value, result.error, model)
