@@ -17,11 +17,13 @@ CPU seconds, ratios of CPU seconds):
 * ``generic-table``: a 32 × 32 E(μ, α) table and E_avg of built-in GGX through the generic engine (method
   "quadrature": the route a ``.brdf`` GGX takes, with the compiled lobe as its shader), rtol 1e-10;
 * ``brdf-table``: the same table of ``examples/ggx.brdf`` (its GLSL shader compiled where the GLSL native backend
-  is present, else through numpy closures);
-* ``ggx-table`` and ``dfg-table``: ``lut ggx`` 32 × 32 E + E_avg, and its split-sum channels, in-process;
+  is present, else through numpy closures); compiled also on every core (``workers=None``: one thread per core,
+  :mod:`brdfnorm.parallel.threads`), with whether its tables equal the one-thread tables bit for bit;
+* ``ggx-table`` and ``dfg-table``: ``lut ggx`` 32 × 32 E + E_avg, and its split-sum channels, in-process (the DFG
+  table also on every core);
 * ``brdf-table-cli``: the ``brdf-table`` row as a user runs it, ``brdfnorm lut examples/ggx.brdf … --clamp mu=1e-4
   -p f0=1 --rtol 1e-10`` in a new process (kernel cache warm), with ``--workers 1`` and with the default workers
-  (the pool starts only where it pays, :mod:`brdfnorm.parallel.executors`); CPU of the process and its workers;
+  (a thread per core under the compiled backend); CPU of the process (all its threads) and its wall time;
 * ``cold-start``: a new process importing brdfnorm and computing one built-in albedo, and one generic albedo with
   the kernel cache warm and with an empty cache (compiling the lobe's kernels).
 
@@ -43,6 +45,7 @@ import numpy as np
 
 import brdfnorm as bn
 from brdfnorm import lut
+from brdfnorm.parallel import local_cores
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -177,7 +180,7 @@ def _evaluations() -> dict:
 
 
 def _table(model, size: int, repeats: int, *, method: str = "auto", channels=(), backends=BACKENDS,
-           roughness: str = "alpha") -> dict:
+           roughness: str = "alpha", all_cores: bool = False) -> dict:
     axes = {"mu": np.linspace(0.0, 1.0, size), roughness: np.linspace(0.05, 1.0, size)}
     row = {}
     values = {}
@@ -190,6 +193,14 @@ def _table(model, size: int, repeats: int, *, method: str = "auto", channels=(),
         values[backend] = table
         row[backend] = {"time_s": seconds, "cpu_s": CPU[id(table)], "unconverged": table.meta["unconverged"],
                         "evaluations": table.meta["evaluations"]}
+    if all_cores:  # the compiled backend on a thread per core (the default workers), against its one-thread tables
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            seconds, table = _best(lambda: lut.compute(model, axes, clamp={"mu": 1e-4}, rtol=1e-10, method=method,
+                                                       channels=channels, backend="compiled", workers=None), repeats)
+        one = values["compiled"]
+        row["compiled_all_cores"] = {"time_s": seconds, "cpu_s": CPU[id(table)], "threads": local_cores(),
+                                     "identical": all(np.array_equal(table[n], one[n]) for n in one)}
     if len(values) == 2:
         a, b = values["numpy"], values["compiled"]
         row["compiled_within_estimates"] = bool(np.all(np.abs(a["E"] - b["E"]) <= a["E_error"] + b["E_error"]))
@@ -279,12 +290,18 @@ def rows(w: dict) -> list[tuple[str, str, str, str, str]]:
         ratio = f"numpy/compiled {table['numpy_over_compiled']:.3g}×" if "numpy_over_compiled" in table else ""
         if "compiled_within_estimates" in table:
             ratio += f"; equal within estimates: {table['compiled_within_estimates']}"
-        out.append((title, *(f"{_cpu(table[b])}, {table[b]['evaluations']} evaluations, "
-                             f"{table[b]['unconverged']} unconverged" for b in BACKENDS), ratio, goal))
+        cells = [f"{_cpu(table[b])}, {table[b]['evaluations']} evaluations, {table[b]['unconverged']} unconverged"
+                 for b in BACKENDS]
+        if "compiled_all_cores" in table:
+            every = table["compiled_all_cores"]
+            cells[1] += (f"; on {every['threads']} threads {_cpu(every)}, tables "
+                         f"{'identical' if every['identical'] else 'DIFFERENT'}")
+        out.append((title, *cells, ratio, goal))
     cli = w["brdf_table_cli"]
     out.append(("the same .brdf table through the CLI, new process, warm kernel cache", "",
                 "; ".join(f"{label} {cli[key]['wall_s']:.3g} s wall ({cli[key]['cpu_s']:.3g} CPU s)"
-                          for key, label in (("workers_1", "--workers 1"), ("default_workers", "default workers"))),
+                          for key, label in (("workers_1", "--workers 1"),
+                                             ("default_workers", f"default workers ({local_cores()} threads)"))),
                 "", "≤ 2 s"))
     cold = w["cold_start"]
     for key, title, goal in (("builtin_albedo", "new process: import + one built-in GGX albedo", "≤ 0.5 s"),
@@ -309,9 +326,10 @@ def w_backends(cfg, refs=None) -> dict:
         "dblquad_matched": _dblquad_matched(),
         "evaluations": _evaluations(),
         "generic_table": _table(ggx, size, repeats, method="quadrature"),
-        "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness"),
+        "brdf_table": _table(bn.load(str(ROOT / "examples" / "ggx.brdf"), f0=1.0), size, 1, roughness="roughness",
+                             all_cores=True),
         "ggx_table": _table(ggx, size, repeats),
-        "dfg_table": _table(ggx, size, 1, channels=("dfg",)),
+        "dfg_table": _table(ggx, size, 1, channels=("dfg",), all_cores=True),
         "brdf_table_cli": _cli_table(size),
         "cold_start": _cold_start(),
     }

@@ -17,7 +17,8 @@ clamped to that lobe's range (:func:`brdfnorm.lut.cloth.cloth_model`, what ``lut
 
 Many hypotheses share their μ and α values (a flip of a symmetric sample set, a transposed square table, the same
 grid with another clamp), so values are cached per (quantity, shadowing, μ, α, η) and only new ones are computed.
-Each value keeps the engine's error estimate, which an audit adds to its tolerance.
+Each value keeps the engine's error estimate, which an audit adds to its tolerance. Under the compiled backend the
+cells of each batch run on a thread per core (:mod:`brdfnorm.parallel.threads`; the values do not depend on it).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from ..lut.table import average_over_mu, compute_cells, split_sum_models
 from ..models.base import Model
 from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
 from ..models.microfacet import SHADOWING
+from ..parallel.threads import local_threads
 from .conventions import (
     DIELECTRIC_MEANINGS,
     DIELECTRIC_SHADOWING,
@@ -124,7 +126,8 @@ class Reference:
             m = np.array([key[0] for key in missing])
             a = np.array([key[1] for key in missing])
             if quantity == "E_avg":
-                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol)
+                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol,
+                                                     threads=local_threads())
             else:
                 cell_params = {"alpha": a}
                 if quantity in ("E_dielectric", "E_conductor"):
@@ -132,7 +135,7 @@ class Reference:
                 if quantity == "E_conductor":
                     cell_params["k"] = np.full(len(missing), float(k))
                 cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                      cell_params, rtol=rtol)
+                                      cell_params, rtol=rtol, threads=local_threads())
                 value, error = cells.value[:, 0], cells.error[:, 0]
             self.computed[quantity] += len(missing)
             for key, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
@@ -154,7 +157,7 @@ class Reference:
         if missing:
             m, a, e = (np.array([key[i] for key in missing]) for i in range(3))
             cells = compute_cells(self._model("E", shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                  {"alpha": a, "eta": e}, rtol=rtol)
+                                  {"alpha": a, "eta": e}, rtol=rtol, threads=local_threads())
             error = cells.error.reshape(len(missing), -1)[:, 0].tolist()
             parts = {"E_glass": cells.value.reshape(len(missing), -1)[:, 0],
                      "R_glass": cells.reflected.reshape(len(missing), -1)[:, 0],

@@ -25,6 +25,7 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ from ..engine.machinery.interval import GaussKronrod, adaptive_interval
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
+from ..parallel.threads import cell_tasks, local_threads, run_tasks
 from ..validate import DEFAULT_RTOL
 from . import glass
 from .axes import axis_parameter, checked_axes, per_cell
@@ -50,6 +52,8 @@ CHANNELS = ("dfg",)
 #: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
 #: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
 CHUNK_CELLS = 256
+#: Cells per progress step of a table (whatever the number of threads: the batches, and so the values, stay the same).
+BLOCK_CELLS = 4 * CHUNK_CELLS
 #: Panels the μ integral of E_avg may split into (per value of the other axes) before it gives up.
 MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
@@ -98,24 +102,28 @@ class CellResult:
 
 
 def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarray], *, rtol: float,
-                  method: str = "auto", over: str = "light") -> CellResult:
-    """E for K cells: view angles ``theta`` (K,) radians and per-cell parameter values (K,) — one albedo call.
+                  method: str = "auto", over: str = "light", threads: int = 1) -> CellResult:
+    """E for K cells: view angles ``theta`` (K,) radians and per-cell parameter values (K,) — one albedo call per
+    task of at most CHUNK_CELLS cells (strided subsets, :func:`brdfnorm.parallel.threads.cell_tasks`), the tasks on
+    ``threads`` threads of this process (the tasks, and so the values, the same for any number of threads).
 
     A pure function of its arguments (the unit of work a process pool or a cluster computes).
     """
     theta = np.asarray(theta, dtype=float).ravel()
     flat = {name: np.asarray(v, dtype=float).ravel() for name, v in params.items()}
-    parts = []
-    for start in range(0, theta.size, CHUNK_CELLS):
-        cells = slice(start, start + CHUNK_CELLS)
+
+    def chunk(cells: np.ndarray):
         bound = model.with_params(**per_cell(model, {name: v[cells] for name, v in flat.items()}))
-        with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
-            warnings.simplefilter("ignore", UserWarning)
-            parts.append(albedo(bound, theta[cells], over=over, rtol=rtol, method=method))
-    return CellResult(*(np.concatenate([getattr(r, key) for r in parts])
-                        for key in ("value", "error", "evaluations", "converged")),
-                      *(None if getattr(parts[0], key) is None else np.concatenate([getattr(r, key) for r in parts])
-                        for key in ("reflected", "transmitted", "reason")))
+        return albedo(bound, theta[cells], over=over, rtol=rtol, method=method)
+
+    tasks = cell_tasks(theta.size, CHUNK_CELLS)  # (the same for any number of threads: so are the values)
+    with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
+        warnings.simplefilter("ignore", UserWarning)  # (set here, once: catch_warnings is not thread safe)
+        parts = run_tasks(chunk, tasks, threads)
+    back = np.argsort(np.concatenate(tasks), kind="stable")  # the cells' order from the tasks'
+    keys = ("value", "error", "evaluations", "converged", "reflected", "transmitted", "reason")
+    return CellResult(*(None if getattr(parts[0], k) is None else np.concatenate([getattr(r, k) for r in parts])[back]
+                        for k in keys))
 
 
 def _single_channel(value: np.ndarray, error: np.ndarray, model: Model) -> tuple[np.ndarray, np.ndarray]:
@@ -134,13 +142,14 @@ def _theta_of(direction_axis: str, values: np.ndarray) -> np.ndarray:
 
 
 def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, total, progress, spread=None,
-              name="E"):
+              name="E", threads=1):
     """E, its error, convergence and evaluation counts over the full grid (and a BSDF's parts E_R, E_T).
 
     With ``spread`` (``workers``, ``scheduler``, ``checkpoint``) the cells go to :mod:`brdfnorm.parallel` — local
     processes or a Dask cluster, each table resumable in its own checkpoint directory — where the model has a
     source to travel as (built-ins and ``.brdf`` files; the split-sum weightings stay in this process).
-    Otherwise CHUNK_CELLS cells per call in this process. The values are the same either way."""
+    Otherwise in this process, CHUNK_CELLS cells per albedo call on ``threads`` threads (:func:`compute_cells`).
+    The values are the same either way."""
     K = int(np.prod(shape))
     theta_flat = np.broadcast_to(theta_grid, shape).ravel()
     flat = {n: np.broadcast_to(g, shape).ravel() for n, g in param_grids.items()}
@@ -167,10 +176,10 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
     # A BSDF's parts: reflection (E_R) and transmission (E_T), E = E_R + E_T.
     parts = {"E_R": np.empty(K), "E_T": np.empty(K)} if transmits else {}
     converged, evaluations = np.empty(K, dtype=bool), np.empty(K, dtype=np.int64)
-    for start in range(0, K, CHUNK_CELLS):
-        cells = slice(start, min(K, start + CHUNK_CELLS))
+    for start in range(0, K, BLOCK_CELLS):
+        cells = slice(start, min(K, start + BLOCK_CELLS))
         result = compute_cells(model, theta_flat[cells], {n: v[cells] for n, v in flat.items()}, rtol=rtol,
-                               method=method)
+                               method=method, threads=threads)
         value[cells], error[cells] = _single_channel(result.value, result.error, model)
         if parts:
             parts["E_R"][cells] = result.reflected[:, 0]
@@ -184,7 +193,7 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
 
 
 def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params: Mapping[str, np.ndarray],
-                  rtol: float, method: str, floor: np.ndarray | None = None
+                  rtol: float, method: str, floor: np.ndarray | None = None, threads: int = 1
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """E at max(μ, MU_FLOOR) for E_avg's nodes μ (N,) with per-node parameter values: (value, error, ok, noisy).
 
@@ -209,7 +218,7 @@ def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params:
     for step in np.unique(tolerance):
         nodes = np.flatnonzero(tolerance == step)
         cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()}, rtol=float(step),
-                              method=method)
+                              method=method, threads=threads)
         value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
         converged[nodes] = cells.converged
         if cells.reason is not None:
@@ -231,7 +240,8 @@ def clenshaw_curtis(intervals: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
-                    max_panels: int = MAX_AVG_PANELS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+                    max_panels: int = MAX_AVG_PANELS, threads: int = 1
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg = 2∫₀¹ E(μ) μ dμ = ∫₀¹ 4x³ E(x²) dx (x = √μ) for M parameter combinations (name -> (M,)).
 
     First nested Clenshaw–Curtis in x with CC_FIRST, 2·CC_FIRST, … CC_MAX intervals: a combination is settled
@@ -239,7 +249,8 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     successive differences show the rule converging) plus the albedo error estimates through |weights| is within
     rtol·|Q_2n| (Q_2n is kept). In x the weight 4x³ vanishes where E has its boundary layer (μ ≲ α), so a smooth
     E needs 32–64 albedos. Combinations not settled by CC_MAX (kinks, e.g. a critical angle) go to
-    :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR as there.
+    :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR as there, each batch of them on ``threads``
+    threads of this process (:func:`compute_cells`).
 
     The node at μ = 1 goes first: where it comes back "rounding-limited" (the shader's float64 noise above its
     tolerance, e.g. examples/ggx.brdf at roughness 0.05) its relative estimate becomes its combination's floor,
@@ -266,7 +277,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         owner = np.repeat(rows, columns.size)
         x = np.tile(nodes[columns], rows.size)
         value, error, ok, noisy = _node_albedos(model, x * x, 4.0 * x**3, {k: v[owner] for k, v in flat.items()},
-                                                rtol, method, NOISE_FLOOR_FACTOR * noise[owner])
+                                                rtol, method, NOISE_FLOOR_FACTOR * noise[owner], threads)
         _learn_noise(noise, owner, value, error, noisy)
         values[np.ix_(rows, columns)] = value.reshape(rows.size, columns.size)
         errors[np.ix_(rows, columns)] = error.reshape(rows.size, columns.size)
@@ -306,7 +317,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     if rest.size:
         total[rest], total_error[rest], converged[rest], count = _average_adaptive(
             model, {k: v[rest] for k, v in flat.items()}, rtol=rtol, method=method, max_panels=max_panels,
-            noise=noise[rest])
+            noise=noise[rest], threads=threads)
         integrals += count
     return total, total_error, converged, integrals
 
@@ -344,7 +355,7 @@ def _learn_noise(noise: np.ndarray, owner: np.ndarray, value: np.ndarray, error:
 
 
 def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
-                      max_panels: int = MAX_AVG_PANELS, noise: np.ndarray | None = None
+                      max_panels: int = MAX_AVG_PANELS, noise: np.ndarray | None = None, threads: int = 1
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15.
 
@@ -372,7 +383,7 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         which = np.broadcast_to(owner[:, None], x.shape)
         E, E_error, good, noisy = _node_albedos(
             model, mu.ravel(), density.ravel(), {n: v[which.ravel()] for n, v in flat.items()}, rtol, method,
-            NOISE_FLOOR_FACTOR * noise[which.ravel()])
+            NOISE_FLOOR_FACTOR * noise[which.ravel()], threads)
         _learn_noise(noise, which.ravel(), E, E_error, noisy)
         E, E_error, good = (a.reshape(x.shape) for a in (E, E_error, good))
         integrals += x.size
@@ -404,8 +415,9 @@ class Computed:
 def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
                    rtol: float = DEFAULT_RTOL, method: str = "auto", channels: Sequence[str] = (),
                    average: bool = True, progress: ProgressCallback | None = None,
-                   spread: Mapping[str, object] | None = None) -> Computed:
-    """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors)."""
+                   spread: Mapping[str, object] | None = None, threads: int = 1) -> Computed:
+    """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors); the
+    cells ``spread`` does not take, on ``threads`` threads of this process (:func:`compute_cells`)."""
     clamp = dict(clamp or {})
     for channel in channels:
         if channel not in CHANNELS:
@@ -428,7 +440,8 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     total = cells * (1 + 3 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
     E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
-                                                                method, done, total, progress, spread, "E")
+                                                                method, done, total, progress, spread, "E",
+                                                                threads)
     tables = {"E": E, "E_error": E_error, **parts}
     table_axes: dict[str, tuple[str, ...]] = {name: tuple(names) for name in tables}
     avg_converged = None
@@ -436,10 +449,12 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
                       for n in others)
         if getattr(model, "transmits", False):  # glass: the 3-D route of lut.glass, spread like the cells
-            avg, avg_error, avg_converged, _ = glass.average(model, combos, rtol=rtol, generic=average_over_mu,
-                                                             method=method, spread=spread)
+            avg, avg_error, avg_converged, _ = glass.average(
+                model, combos, rtol=rtol, generic=functools.partial(average_over_mu, threads=threads), method=method,
+                spread=spread)
         else:
-            avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
+            avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method,
+                                                               threads=threads)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
         avg_converged = avg_converged.reshape(avg_shape)
@@ -453,7 +468,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         dfg_models, dfg = split_sum_models(model)
         for name, weighted in dfg_models.items():
             value, error, ok, count, done, _ = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
-                                                         done, total, progress, spread, name)
+                                                         done, total, progress, spread, name, threads)
             tables[name], tables[f"{name}_error"] = value, error
             table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
             converged &= ok
@@ -461,7 +476,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         cloth = cloth_model(param_grids)  # the third channel engines store beside the pair (lut.cloth)
         if cloth is not None:
             value, error, ok, count, done, _ = _tabulate(cloth[0], shape, theta_grid, cloth[1], rtol, "auto", done,
-                                                         total, progress, spread, "DFG_cloth")
+                                                         total, progress, spread, "DFG_cloth", threads)
             tables["DFG_cloth"], tables["DFG_cloth_error"] = value, error
             table_axes["DFG_cloth"] = table_axes["DFG_cloth_error"] = tuple(names)
             converged &= ok
@@ -527,7 +542,10 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     (a built-in name or a ``.brdf`` path) in ``meta``. ``clamp`` raises axis values below a minimum
     before evaluation (μ ≥ 1e-4, α ≥ 1e-8 are the usual ones); ``grid`` only records how the values were made.
     ``workers`` (None: all cores), ``scheduler`` (a Dask address) and ``checkpoint`` (a directory) spread the
-    cells as :func:`brdfnorm.parallel.albedo_cells` does; the default computes in this process. ``backend``
+    cells as :func:`brdfnorm.parallel.albedo_cells` does; the default computes in this process. Under the compiled
+    backend, ``workers=None`` computes every stage on threads of this process instead, one per core
+    (:mod:`brdfnorm.parallel.threads`: no process to start; with a ``checkpoint`` the E cells still go to
+    processes), and ``workers=N`` computes what no process takes (E_avg) on N threads. ``backend``
     ("numpy" or "compiled", :func:`brdfnorm.albedo`) computes every albedo of the tables. Where cells miss ``rtol``
     their values and honest estimates are kept, ``meta["unconverged"]`` counts them and ``meta["converged_mask"]``
     marks them (``{"E": ..., "E_avg": ...}``, nested lists over each table's axes).
@@ -541,11 +559,13 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
 
     if method == "certified":  # bounds and digits: brdfnorm.lut.certified (which builds on this module)
         raise ArgumentError("certified tables come from brdfnorm.lut.certified.compute", where="method")
-    spread = None if (workers == 1 and scheduler is None and checkpoint is None) else \
-        {"workers": workers, "scheduler": scheduler, "checkpoint": checkpoint}
     with backend_scope(backend):
+        threads = local_threads(workers, scheduler)
+        # (the default workers on threads: processes only where a checkpoint or a scheduler asks, or N are asked)
+        here = scheduler is None and checkpoint is None and (workers == 1 or (workers is None and threads > 1))
+        spread = None if here else {"workers": workers, "scheduler": scheduler, "checkpoint": checkpoint}
         result = compute_tables(model, axes, clamp=clamp, rtol=rtol, method=method, channels=channels,
-                                average=average, progress=progress, spread=spread)
+                                average=average, progress=progress, spread=spread, threads=threads)
     unconverged = int(np.count_nonzero(~result.converged))
     if result.avg_converged is not None:
         unconverged += int(np.count_nonzero(~result.avg_converged))

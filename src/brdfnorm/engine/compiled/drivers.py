@@ -17,6 +17,7 @@ import importlib.metadata
 import importlib.util
 import os
 import sys
+import threading
 import time
 from functools import cache
 from pathlib import Path
@@ -120,6 +121,7 @@ class NativeIntegrand:
 #: (:mod:`brdfnorm.check`) leave it out, so that a first run, which compiles, searches as far as a later one.
 COMPILING = {"seconds": 0.0}
 _WARM: set[str] = set()
+_FIRST = threading.Lock()
 
 
 def compile_seconds() -> float:
@@ -162,24 +164,27 @@ def native_integrand(kernel: NativeKernel | None, fixed: np.ndarray, rows: list[
     for k, r in enumerate(rows):
         U[k, :r.size] = r
     start = time.perf_counter()
-    try:
-        hold = contextlib.nullcontext()
-        if kernel.key not in _WARM:  # another process compiling them (parallel.warm's child): its result, not ours
-            mark = compiling_mark(kernel.key)
-            await_other(mark)
-            if not kernels_compiled(kernel.key):  # and ours marked, for the child to skip them
-                hold = holding(mark)
-        with hold:
-            native = NativeIntegrand(kernel, fixed, U, over_light)
-            native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
-            if kernel.key not in _WARM:
-                _warm(native, kernel.key)
-    except Exception as error:  # noqa: BLE001 - any failure to compile means: the numpy backend computes
-        notice(f"the compiled kernel of {kernel.key} does not compile ({type(error).__name__}: "
-               f"{str(error).splitlines()[0] if str(error) else ''})")
-        return None
-    finally:
-        COMPILING["seconds"] += time.perf_counter() - start
+    # (the first use of a shader's kernels in this process, by one thread: a table's threads reach it at once)
+    first = _FIRST if kernel.key not in _WARM else contextlib.nullcontext()
+    with first:
+        try:
+            hold = contextlib.nullcontext()
+            if kernel.key not in _WARM:  # another process compiling them (parallel.warm's child): its result, not ours
+                mark = compiling_mark(kernel.key)
+                await_other(mark)
+                if not kernels_compiled(kernel.key):  # and ours marked, for the child to skip them
+                    hold = holding(mark)
+            with hold:
+                native = NativeIntegrand(kernel, fixed, U, over_light)
+                native(np.array([[0.0, 0.0, 1.0]]), np.zeros(1, dtype=np.int64))
+                if kernel.key not in _WARM:
+                    _warm(native, kernel.key)
+        except Exception as error:  # noqa: BLE001 - any failure to compile means: the numpy backend computes
+            notice(f"the compiled kernel of {kernel.key} does not compile ({type(error).__name__}: "
+                   f"{str(error).splitlines()[0] if str(error) else ''})")
+            return None
+        finally:
+            COMPILING["seconds"] += time.perf_counter() - start
     return native
 
 

@@ -34,7 +34,7 @@ from .marks import await_other, cache_mark, compile_marked, first_class_argtypes
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
-_OPTIONS = dict(cache=True, error_model="numpy")
+_OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
 _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).

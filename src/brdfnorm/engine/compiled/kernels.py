@@ -37,7 +37,7 @@ from brdfnorm.engine.compiled.hemimap import azimuth, kronrod_rule, node, tensor
 shader = None  # set per copy (drivers.py)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover - compiled
     """out[i] = f(ω_i, V) ω_z (over the light) or f(L, ω_i) ω_z (over the view), case[i] the row of fixed and U."""
     for i in range(omega.shape[0]):
@@ -51,7 +51,7 @@ def integrand_nodes(omega, case, fixed, U, over_light, out):  # pragma: no cover
             out[i, c] = r[c] * wz
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def hemisphere(panels, case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, over_light, nodes_b, nodes_u,
                kronrod, gauss, value, err_b, err_u, magnitude, bad, first_bad, weights_b, weights_u,
                total):  # pragma: no cover - compiled
@@ -118,7 +118,7 @@ def hemisphere_sums(case, b0, b1, u0, u1, P, T, B, widths, supports, fixed, U, o
                _NONE, empty, empty, empty, empty, _NONE, np.zeros(0, dtype=np.int64), weights_b, weights_u, total)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def padded_shader(lx, ly, lz, vx, vy, vz, u):  # pragma: no cover - compiled
     """The shader's outputs, then zeros up to three: the first-class function that
     :func:`.global_rule.shader_global` calls for a shader of fewer channels (it uses only the shader's own), so that

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,7 +33,7 @@ _POLL = 0.02
 @contextlib.contextmanager
 def holding(mark: Path) -> Iterator[None]:
     """Within the block, ``mark`` holds this process's id."""
-    temporary = mark.with_name(f"{mark.name}.{os.getpid()}.tmp")
+    temporary = mark.with_name(f"{mark.name}.{os.getpid()}.{threading.get_ident()}.tmp")  # (a table's threads too)
     temporary.write_text(str(os.getpid()), encoding="ascii")
     os.replace(temporary, mark)
     try:

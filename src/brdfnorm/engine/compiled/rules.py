@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def grid_sums(G, c, w, w_half, w_quarter, n_half, n_quarter):  # pragma: no cover - compiled
     """(Q, Q(½ β), Q(¼ β), Q(½ u), Q(¼ u), ∫|F|) of channel ``c`` of one case's grid G (M azimuths, N1 radial
     nodes, C), before the azimuth step 2π/M, with the first ``n_half`` and ``n_quarter`` weights of the coarser radial
@@ -41,7 +41,7 @@ def grid_sums(G, c, w, w_half, w_quarter, n_half, n_quarter):  # pragma: no cove
     return q, q_b, q_bb, q_u, q_uu, magnitude
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
     for r in range(F.shape[0]):
         for c in range(F.shape[3]):

@@ -20,7 +20,7 @@ from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
 from .marks import compile_marked, first_class_argtypes
 
-_OPTIONS = dict(cache=True, error_model="numpy")
+_OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 #: Beckmann's slope radius cap (``engine.machinery.slope_coordinates.BeckmannCoordinates.CAP``).
 CAP = 8.0
 

@@ -15,6 +15,7 @@ caller reports it as today by evaluating that direction pair with the numpy back
 
 from __future__ import annotations
 
+import threading
 import warnings
 from collections.abc import Mapping
 
@@ -23,6 +24,7 @@ import numpy as np
 from ...models.base import NativeKernel
 
 _kernels: dict[tuple, NativeKernel | None] = {}  # (path, shader text, place, uniforms) -> kernel
+_MAKING = threading.RLock()
 
 
 def _pack_function(layout: tuple, size: int):
@@ -47,10 +49,11 @@ def native_kernel(brdf) -> NativeKernel | None:
     native backend cannot express the shader or Numba is missing (made once per process and file)."""
     uniforms = brdf.uniforms
     key = (brdf.path, brdf.shader.text, brdf.shader.line, brdf.shader.column, tuple(uniforms.items()))
-    if key not in _kernels:
-        _kernels[key] = None  # also what a failure below leaves: it is not retried
-        _kernels[key] = _make(brdf, uniforms)
-    return _kernels[key]
+    with _MAKING:  # (a table's threads reach it at once; the None below is no answer for another thread)
+        if key not in _kernels:
+            _kernels[key] = None  # also what a failure below leaves: it is not retried
+            _kernels[key] = _make(brdf, uniforms)
+        return _kernels[key]
 
 
 def _make(brdf, uniforms: dict[str, str]) -> NativeKernel | None:

@@ -1,0 +1,90 @@
+"""A batch of albedo cells on every local core in this process: threads around the compiled kernels (issue #39, item 2).
+
+The compiled backend's kernels (:mod:`brdfnorm.engine.compiled`) are compiled with ``nogil=True``: while one runs,
+the interpreter lock is free, so a second Python thread can run another kernel, or the routes' Python between them,
+at the same time. Threads need no second interpreter, no pickled model and no second Numba start (a local process
+pool pays ~1.5 s for these, :data:`brdfnorm.parallel.executors.POOL_START_SECONDS`, more than a 32 × 32 table's E
+takes), and they reach every stage of a table (E, E_avg's nodes, the DFG channels), where the process pool takes
+the E cells only.
+
+How a batch is split (:func:`cell_tasks`): into blocks of ``SPLIT × chunk`` cells, each block into :data:`SPLIT`
+strided subsets (cells start, start + SPLIT, …; start + 1, …), so that each task gets a share of every row of the
+table (grazing views cost 10–100× a head-on view; contiguous halves of a μ-major table would leave one thread with
+all of them). The threads take the tasks in order as they finish their last.
+
+Why the tables are bit-for-bit the same for any thread count: the tasks, and so the batches each albedo call sees,
+depend on the batch only, never on the number of threads. That matters: most routes compute each case on its own,
+but not all — the generic panels of ``oren-nayar`` settled a case of E_avg (μ = 0.985, σ = 0.2, rtol 2.5e-9) in
+203 997 evaluations within its batch of 120 nodes and in 230 195 alone, values 6e-11 apart (within the estimate),
+and a split by thread count made the E_avg of a small table differ between one and two threads
+(``tests/lut/test_table_threads.py`` compares whole tables on one and two threads, that one included). Two subsets
+per block cost 1 % more CPU on one thread than one call per 256 cells (the 32 × 32 ``examples/ggx.brdf`` table: 52
+albedo calls instead of 28, 2.87 → 2.90 CPU s), four 10 %.
+
+What the threads share, and why it is safe: kernels are compiled or loaded once per process under a lock
+(:func:`brdfnorm.engine.compiled.drivers.native_integrand`) and under Numba's own compiler lock; each albedo call has
+its own arrays, and the results are scattered back by the calling thread into distinct cells; the calling thread's
+context (the backend :func:`brdfnorm.engine.compiled.backend.scope`, numpy's error state) is copied into each task;
+the warning filters are set once by the caller around the whole batch (``warnings.catch_warnings`` is not thread
+safe: per thread, it could leave a filter behind).
+
+Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
+short array operations) and for a Dask cluster (its workers compute the cells).
+"""
+
+from __future__ import annotations
+
+import contextvars
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from numbers import Integral
+from typing import TypeVar
+
+import numpy as np
+
+Result = TypeVar("Result")
+
+#: Strided subsets per block of cells (module docstring): a constant, so that the batches do not depend on the
+#: number of threads.
+SPLIT = 2
+
+
+def local_threads(workers: int | None = None, scheduler: object = None) -> int:
+    """Threads a table's cells run on in this process: ``workers`` (None: every core this process may run on) where
+    the compiled backend computes (as :func:`brdfnorm.engine.compiled.backend.resolve` says now) and no Dask
+    ``scheduler`` is given; else 1."""
+    from ..engine.compiled.backend import resolve
+    from .executors import local_cores
+
+    if scheduler is not None or resolve() != "compiled":
+        return 1
+    if workers is None:
+        return local_cores()
+    # (a value that is not a whole number ≥ 1 is refused where the workers are validated: Workers)
+    return int(workers) if isinstance(workers, Integral) and not isinstance(workers, bool) and workers > 1 else 1
+
+
+def cell_tasks(count: int, chunk: int, split: int = SPLIT) -> list[np.ndarray]:
+    """The cells 0 … count − 1 as tasks of at most ``chunk`` cells: blocks of ``split × chunk`` cells, each split
+    into ``split`` strided subsets (module docstring)."""
+    tasks = []
+    for start in range(0, count, split * chunk):
+        stop = min(count, start + split * chunk)
+        tasks.extend(np.arange(start + t, stop, split) for t in range(min(split, stop - start)))
+    return tasks
+
+
+def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarray], threads: int) -> list[Result]:
+    """``function(task)`` for every task, in order of the tasks; on ``threads`` threads of this process where that
+    is more than one (each task in a copy of the caller's context), else here. A failure in any task, or Ctrl-C
+    (:class:`KeyboardInterrupt` in the calling thread), is raised here after the tasks not yet started are cancelled
+    and the running ones have finished: a compiled kernel cannot be stopped midway, so Ctrl-C waits for at most one
+    albedo call per thread (a 32 × 32 ``examples/ggx.brdf`` table's costliest, 256 grazing cells, ~0.7 s)."""
+    if threads <= 1 or len(tasks) <= 1:
+        return [function(task) for task in tasks]
+    pool = ThreadPoolExecutor(max_workers=min(threads, len(tasks)), thread_name_prefix="brdfnorm-cells")
+    try:
+        futures = [pool.submit(contextvars.copy_context().run, function, task) for task in tasks]
+        return [future.result() for future in futures]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
