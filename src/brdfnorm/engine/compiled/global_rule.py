@@ -40,6 +40,9 @@ _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).
 _EPS = np.finfo(np.float64).eps
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
+#: The radial pieces of a case (pole, tail, horizon layer), and the columns of a case's switches (:func:`_begin`).
+_PIECES = 3
+_ALIVE, _DONE, _FINITE, _MORE_B, _MORE_U = range(5)
 
 
 def fejer_fft(level: int) -> tuple[np.ndarray, np.ndarray]:
@@ -209,6 +212,149 @@ def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
     return e_b
 
 
+@njit(**_OPTIONS)
+def _begin(C):  # pragma: no cover - compiled
+    """A case's state at its start: levels (pieces, 2: β, u), the ratios last extrapolated from (pieces, 2),
+    switches (pieces, 5: alive, done, finite, more along β, more along u), numbers (pieces, 7, C: the latest value,
+    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid."""
+    levels = np.empty((_PIECES, 2), dtype=np.int64)
+    lasts = np.empty((_PIECES, 2))
+    switches = np.zeros((_PIECES, 5), dtype=np.bool_)
+    for kind in range(_PIECES):
+        levels[kind, 0], levels[kind, 1] = START_LEVELS[0], START_LEVELS[1]
+        lasts[kind, 0] = lasts[kind, 1] = np.inf
+        switches[kind, _ALIVE] = switches[kind, _FINITE] = True
+    M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
+    return (levels, lasts, switches, np.zeros((_PIECES, 7, C)), np.empty((M0, N0, C)), np.empty((M0, N0, C)),
+            np.empty((M0, N0, C)))
+
+
+@njit(**_OPTIONS)
+def _grown(grid, step, kind, levels):  # pragma: no cover - compiled
+    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, rows, M, col_step, radial) — the first grid
+    (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place, whose level it raises."""
+    C = grid.shape[2]
+    M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
+    if step == 0:
+        return grid, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
+    if step == 1:
+        target = np.empty((2 * M, N1, C))
+        for i in range(M):
+            for j in range(N1):
+                for c in range(C):
+                    target[2 * i, j, c] = grid[i, j, c]
+        levels[kind, 0] += 1
+        return target, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
+    target = np.empty((M, 2 * N1 + 1, C))
+    for i in range(M):
+        for j in range(N1):
+            for c in range(C):
+                target[i, 2 * j + 1, c] = grid[i, j, c]
+    lu = levels[kind, 1] + 1
+    levels[kind, 1] = lu
+    return target, np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
+
+
+@njit(**_OPTIONS)
+def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
+            graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
+    """After a round of grids: each live piece's sums and estimates, the tolerance, and per piece whether it is
+    done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
+    outputs then written."""
+    C = numbers.shape[2]
+    sums = np.empty((4, C))
+    failed = False
+    for kind in range(_PIECES):
+        if not switches[kind, _ALIVE]:
+            continue
+        grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
+        finite = True
+        for x in grid.flat:
+            if not math.isfinite(x):
+                finite = False
+                break
+        switches[kind, _FINITE] = finite
+        if not finite:
+            grid.fill(0.0)
+            failed = True
+        _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums)
+        for c in range(C):
+            for row in range(4):
+                numbers[kind, 3 + row, c] = sums[row, c]
+            numbers[kind, 0, c] = sums[0, c]
+            if levels[kind, 0] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
+                numbers[kind, 4, c] = _sudden(grid, levels[kind, 1], c, sums[1, c], sums[3, c])
+    tolerance = np.empty(C)
+    for c in range(C):
+        total = 0.0
+        for kind in range(_PIECES):
+            total += numbers[kind, 1, c] if switches[kind, _DONE] else numbers[kind, 0, c]
+        tolerance[c] = max(atol[k], rtol[k] * abs(total)) / _PIECES
+    for kind in range(_PIECES):
+        if not switches[kind, _ALIVE]:
+            continue
+        within, more_b, more_u, larger_b = True, False, False, False
+        ratio_b = ratio_u = 0.0
+        for c in range(C):
+            e_b, e_u, magnitude = numbers[kind, 4, c], numbers[kind, 5, c], numbers[kind, 6, c]
+            floor = FLOOR * magnitude
+            if not e_b + e_u + floor <= tolerance[c]:
+                within = False
+            share = max(tolerance[c] - floor, 0.0) / 2
+            more_b |= e_b > share
+            more_u |= e_u > share
+            larger_b |= e_b >= e_u
+            ratio_b = max(ratio_b, _normalized(e_b, share))
+            ratio_u = max(ratio_u, _normalized(e_u, share))
+        finite = switches[kind, _FINITE]
+        lb, lu = levels[kind, 0], levels[kind, 1]
+        # never on the start azimuths (global_driver: their embedded rules are blind to what the 8 alias)
+        done = within and finite and lb > START_LEVELS[0]
+        if done:
+            for c in range(C):
+                numbers[kind, 1, c] = numbers[kind, 3, c]
+                numbers[kind, 2, c] = numbers[kind, 4, c] + numbers[kind, 5, c] + FLOOR * numbers[kind, 6, c]
+            switches[kind, _DONE] = True
+        if lb == START_LEVELS[0]:  # (confirmed along β there, as the numpy driver does)
+            larger_b = True
+        if not (more_b or more_u):
+            more_b, more_u = larger_b, not larger_b
+        size = 2 ** (lb + more_b) * (2 ** (lu + more_u) - 1)
+        need_b, need_u = _doublings(ratio_b, lasts[kind, 0]), _doublings(ratio_u, lasts[kind, 1])
+        # (int64 powers, as the numpy driver's)
+        hopeless = (need_b + lb > MAX_LEVEL_B) or (np.int64(2) ** (lb + need_b)
+                                                   * (np.int64(2) ** (lu + need_u) - 1) > max_nodes)
+        hopeless = hopeless and (lb >= graded_predicts or width[k] == 0)
+        go_on = finite and not done and size <= max_nodes and not hopeless and not failed
+        if finite and not done and not go_on:
+            failed = True
+        switches[kind, _ALIVE] = go_on
+        switches[kind, _MORE_B], switches[kind, _MORE_U] = more_b, more_u
+        if go_on:  # the ratios this doubling extrapolates from (the first from the start is skipped)
+            if more_b and lb > START_LEVELS[0]:
+                lasts[kind, 0] = ratio_b
+            if more_u and lu > START_LEVELS[1]:
+                lasts[kind, 1] = ratio_u
+    alive = False
+    for kind in range(_PIECES):
+        alive |= switches[kind, _ALIVE]
+    if alive and not failed:
+        return False
+    ok = not failed
+    for kind in range(_PIECES):
+        ok &= switches[kind, _DONE]
+    for c in range(C):
+        total_value = total_error = 0.0
+        for kind in range(_PIECES):
+            total_value += numbers[kind, 1, c]
+            total_error += numbers[kind, 2, c]
+        out_value[k, c], out_error[k, c] = total_value, total_error
+        if not total_error <= max(atol[k], rtol[k] * abs(total_value)):
+            ok = False
+    settled[k] = ok
+    return True
+
+
 @njit(error_model="numpy", inline="always")
 def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                beckmann, geometry, case, value, extra, largest, flags, outputs):  # pragma: no cover - compiled
@@ -219,140 +365,41 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
     Not cached and always inlined, like :func:`.slopes.slope_loop`: ``case`` and ``value`` are first-class function
     arguments; each cached caller (:func:`fused_global` for the microfacet lobes,
     :func:`shader_global` for the shaders, which calls the shader through a first-class function) compiles the
-    loop with its weight. One call site of :func:`_fill` (which inlines the weight): the first grids and both
-    doublings; no array assigned to a slice (Numba compiles the shape-mismatch error's message for each: ~5 of
-    11.6 s of compile)."""
+    loop with its weight. Only the node filling depends on the weight: the state, the doubled grids, the sums,
+    estimates and decisions are the cached kernels :func:`_begin`, :func:`_grown` and :func:`_settle`, compiled
+    once and shared by both callers (inlined, the loop cost each caller ~5 s of CPU more to compile). One call site
+    of :func:`_fill` (which inlines the weight): the first grids and both doublings; no array assigned to a slice
+    (Numba compiles the shape-mismatch error's message for each)."""
     out_value, out_error, evaluations, settled = outputs
-    pieces = 3
     C = out_value.shape[1]
-    sums = np.empty((4, C))
-    M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
     for n in range(cases.size):
         k = cases[n]
-        mirrored = symmetric[k]
-        level_b = np.full(pieces, START_LEVELS[0])
-        level_u = np.full(pieces, START_LEVELS[1])
-        last_b, last_u = np.full(pieces, np.inf), np.full(pieces, np.inf)
-        alive = np.ones(pieces, dtype=np.bool_)
-        done_piece = np.zeros(pieces, dtype=np.bool_)
-        latest, piece_value, piece_error = np.zeros((pieces, C)), np.zeros((pieces, C)), np.zeros((pieces, C))
-        results = np.zeros((pieces, 4, C))
-        finite = np.ones(pieces, dtype=np.bool_)
-        more = np.zeros((pieces, 2), dtype=np.bool_)
-        grids = []  # (no comprehension: a closure, which the inlining refuses)
-        for _ in range(pieces):
-            grids.append(np.empty((M0, N0, C)))
-        first, failed = True, False
-        while first or alive.any():
+        levels, lasts, switches, numbers, grid0, grid1, grid2 = _begin(C)
+        first = True
+        while True:
             # the grids: the first ones, then each piece's doublings along t (1) and u (2), one _fill call site
-            for kind in range(pieces):
-                if not alive[kind]:
+            for kind in range(_PIECES):
+                if not switches[kind, _ALIVE]:
                     continue
-                grid = grids[kind]
+                grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
                 for step in range(3):
-                    if (step == 0) != first or (step == 1 and not more[kind, 0]) or (step == 2 and not more[kind, 1]):
+                    if (step == 0) != first or (step > 0 and not switches[kind, _MORE_B + step - 1]):
                         continue
-                    M, N1 = 2 ** level_b[kind], 2 ** level_u[kind] - 1
-                    if step == 0:
-                        target, rows, M_fill, col_step, radial = grid, np.arange(M), M, 1, _NODES[level_u[kind]][:N1]
-                    elif step == 1:
-                        target = np.empty((2 * M, N1, C))
-                        for i in range(M):
-                            for j in range(N1):
-                                for c in range(C):
-                                    target[2 * i, j, c] = grid[i, j, c]
-                        rows, M_fill, col_step, radial = 2 * np.arange(M) + 1, 2 * M, 1, _NODES[level_u[kind]][:N1]
-                        level_b[kind] += 1
-                    else:
-                        target = np.empty((M, 2 * N1 + 1, C))
-                        for i in range(M):
-                            for j in range(N1):
-                                for c in range(C):
-                                    target[i, 2 * j + 1, c] = grid[i, j, c]
-                        lu = level_u[kind] + 1
-                        rows, M_fill, col_step, radial = np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
-                        level_u[kind] = lu
-                    evaluations[k] += _fill(target, rows, M_fill, col_step, radial, k, kind, mirrored, lam[k],
+                    target, rows, M, col_step, radial = _grown(grid, step, kind, levels)
+                    evaluations[k] += _fill(target, rows, M, col_step, radial, k, kind, symmetric[k], lam[k],
                                             width[k], scale[k], linear, log_horizon, beckmann, geometry, case,
                                             value, extra, largest, flags)
                     grid = target
-                grids[kind] = grid
+                if kind == 0:
+                    grid0 = grid
+                elif kind == 1:
+                    grid1 = grid
+                else:
+                    grid2 = grid
             first = False
-            for kind in range(pieces):
-                if not alive[kind]:
-                    continue
-                grid = grids[kind]
-                finite[kind] = np.isfinite(grid).all()
-                if not finite[kind]:
-                    grid.fill(0.0)
-                    failed = True
-                _sums(grid, 2 ** level_b[kind], level_u[kind], sums)
-                for c in range(C):
-                    for row in range(4):
-                        results[kind, row, c] = sums[row, c]
-                    latest[kind, c] = sums[0, c]
-                    if level_b[kind] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
-                        results[kind, 1, c] = _sudden(grid, level_u[kind], c, sums[1, c], sums[3, c])
-            tolerance = np.empty(C)
-            for c in range(C):
-                total = 0.0
-                for kind in range(pieces):
-                    total += piece_value[kind, c] if done_piece[kind] else latest[kind, c]
-                tolerance[c] = max(atol[k], rtol[k] * abs(total)) / pieces
-            for kind in range(pieces):
-                if not alive[kind]:
-                    continue
-                within, more_b, more_u, larger_b = True, False, False, False
-                ratio_b = ratio_u = 0.0
-                for c in range(C):
-                    e_b, e_u, magnitude = results[kind, 1, c], results[kind, 2, c], results[kind, 3, c]
-                    floor = FLOOR * magnitude
-                    if not e_b + e_u + floor <= tolerance[c]:
-                        within = False
-                    share = max(tolerance[c] - floor, 0.0) / 2
-                    more_b |= e_b > share
-                    more_u |= e_u > share
-                    larger_b |= e_b >= e_u
-                    ratio_b = max(ratio_b, _normalized(e_b, share))
-                    ratio_u = max(ratio_u, _normalized(e_u, share))
-                # never on the start azimuths (global_driver: their embedded rules are blind to what the 8 alias)
-                done = within and finite[kind] and level_b[kind] > START_LEVELS[0]
-                if done:
-                    for c in range(C):
-                        piece_value[kind, c] = results[kind, 0, c]
-                        piece_error[kind, c] = (results[kind, 1, c] + results[kind, 2, c]
-                                                + FLOOR * results[kind, 3, c])
-                    done_piece[kind] = True
-                if level_b[kind] == START_LEVELS[0]:  # (confirmed along β there, as the numpy driver does)
-                    larger_b = True
-                if not (more_b or more_u):
-                    more_b, more_u = larger_b, not larger_b
-                lb, lu = level_b[kind], level_u[kind]
-                size = 2 ** (lb + more_b) * (2 ** (lu + more_u) - 1)
-                need_b, need_u = _doublings(ratio_b, last_b[kind]), _doublings(ratio_u, last_u[kind])
-                # (int64 powers, as the numpy driver's)
-                hopeless = (need_b + lb > MAX_LEVEL_B) or (np.int64(2) ** (lb + need_b)
-                                                           * (np.int64(2) ** (lu + need_u) - 1) > max_nodes)
-                hopeless = hopeless and (lb >= graded_predicts or width[k] == 0)
-                go_on = finite[kind] and not done and size <= max_nodes and not hopeless and not failed
-                if finite[kind] and not done and not go_on:
-                    failed = True
-                alive[kind] = go_on
-                more[kind, 0], more[kind, 1] = more_b, more_u
-                if go_on:  # the ratios this doubling extrapolates from (the first from the start is skipped)
-                    if more_b and lb > START_LEVELS[0]:
-                        last_b[kind] = ratio_b
-                    if more_u and lu > START_LEVELS[1]:
-                        last_u[kind] = ratio_u
-            if failed:
+            if _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
+                       graded_predicts, out_value, out_error, settled):
                 break
-        ok = (not failed) and done_piece.all()
-        for c in range(C):
-            out_value[k, c] = piece_value[:, c].sum()
-            out_error[k, c] = piece_error[:, c].sum()
-            if not out_error[k, c] <= max(atol[k], rtol[k] * abs(out_value[k, c])):
-                ok = False
-        settled[k] = ok
 
 
 @njit(**_OPTIONS)
