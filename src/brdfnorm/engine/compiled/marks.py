@@ -63,11 +63,22 @@ def holder(mark: Path) -> int | None:
     return pid
 
 
+#: The Numba event (:mod:`numba.core.event`) around each wait on another process's mark, with the mark's name as
+#: its data: benchmarks/bench_report.py's timeline records it beside the ``numba:compile`` events.
+AWAIT_EVENT = "brdfnorm:await"
+
+
 def await_other(mark: Path, patience: float = PATIENCE) -> float:
-    """Wait while another live process holds ``mark``, at most ``patience`` seconds; returns the seconds waited."""
+    """Wait while another live process holds ``mark``, at most ``patience`` seconds; returns the seconds waited
+    (within an :data:`AWAIT_EVENT` where it waits at all)."""
     start = time.monotonic()
-    while holder(mark) is not None and time.monotonic() - start < patience:
-        time.sleep(_POLL)
+    if holder(mark) is None:
+        return 0.0
+    from numba.core import event
+
+    with event.trigger_event(AWAIT_EVENT, data={"mark": mark.name}):
+        while holder(mark) is not None and time.monotonic() - start < patience:
+            time.sleep(_POLL)
     return time.monotonic() - start
 
 
