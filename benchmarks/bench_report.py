@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import collections
 import filecmp
+import math
 import os
 import resource
 import subprocess
@@ -36,13 +37,13 @@ ROOT = Path(__file__).resolve().parent.parent
 #: The compile log's hook: per process, one line per compile (name, CPU s less nested compiles, depth, wall start and
 #: end, CPU s with nested compiles) and per wait on another process's compile mark (marks.AWAIT_EVENT).
 _HOOK = """\
-import os, time
+import atexit, os, signal, time
 from numba.core import event
 _stack = []
-def _write(kind, name, own, start, spent):
+def _write(kind, name, own, start, spent, clock):
     # (written at once: the child is stopped, not left to exit, where the command ends first)
     with open(os.path.join(os.environ["BRDFNORM_BENCH_COMPILES"], f"{os.getpid()}.tsv"), "a") as out:
-        out.write(f"{kind}\\t{name}\\t{own:.3f}\\t{len(_stack)}\\t{start:.3f}\\t{time.time():.3f}\\t{spent:.3f}\\n")
+        out.write(f"{kind}\\t{name}\\t{own:.3f}\\t{len(_stack)}\\t{start:.3f}\\t{time.time():.3f}\\t{spent:.3f}\\t{clock:.3f}\\n")
 class _Compiles(event.Listener):
     def on_start(self, ev):
         f = ev.data["dispatcher"].py_func
@@ -52,14 +53,20 @@ class _Compiles(event.Listener):
         spent = time.process_time() - start
         if _stack:
             _stack[-1][2] += spent
-        _write("compile", name, spent - inner, wall, spent)
+        _write("compile", name, spent - inner, wall, spent, start)
 class _Waits(event.Listener):
     def on_start(self, ev):
         self.wall, self.cpu = time.time(), time.process_time()
     def on_end(self, ev):
-        _write("await", ev.data["mark"], 0.0, self.wall, time.process_time() - self.cpu)
+        _write("await", ev.data["mark"], 0.0, self.wall, time.process_time() - self.cpu, self.cpu)
 event.register("numba:compile", _Compiles())
 event.register("brdfnorm:await", _Waits())
+def _end(*_):
+    _write("end", "-", 0.0, time.time(), time.process_time(), time.process_time())
+    if _:  # stopped (SIGTERM): the child, whose command ended first
+        os._exit(0)
+atexit.register(_end)
+signal.signal(signal.SIGTERM, _end)
 """
 
 
@@ -91,24 +98,30 @@ def _kernels(log: Path, started: float) -> None:
     start, with its CPU seconds (nested compiles included)."""
     files = sorted(log.glob("*.tsv"), key=lambda path: int(path.stem))
     for role, path in zip(("command", "child"), files, strict=False):
-        spent, timeline = collections.Counter(), []
+        spent, timeline, ended = collections.Counter(), [], (math.nan, math.nan)
         for line in path.read_text(encoding="utf-8").splitlines():
-            kind, name, own, depth, start, end, cpu = line.split("\t")
+            kind, name, own, depth, start, end, cpu, clock = line.split("\t")
+            if kind == "end":
+                ended = (float(start) - started, float(cpu))
+                continue
             if kind == "compile":
                 spent[_short(name)] += float(own)
             if int(depth) == 0 or kind == "await":
-                timeline.append((float(start) - started, float(end) - started, float(cpu), kind, _short(name)))
+                timeline.append((float(start) - started, float(end) - started, float(cpu), float(clock), kind,
+                                 _short(name)))
         total = sum(spent.values())
-        waited = sum(end - start for start, end, _, kind, _ in timeline if kind == "await")
-        print(f"  {role}: {total:.1f} CPU s of compile, {waited:.1f} s waiting on the other's marks", flush=True)
+        waited = sum(end - start for start, end, _, _, kind, _ in timeline if kind == "await")
+        print(f"  {role}: {total:.1f} CPU s of compile, {waited:.1f} s waiting on the other's marks; ended at "
+              f"{ended[0]:.1f} s wall, {ended[1]:.1f} CPU s in all", flush=True)
         for name, seconds in spent.most_common():
             if seconds >= 0.2:
                 print(f"    {seconds:6.2f}  {name}")
-        print(f"  {role}'s timeline (wall s from the command's start; CPU s; outermost compiles >= 0.3 s, waits):")
-        for start, end, cpu, kind, name in sorted(timeline):
+        print(f"  {role}'s timeline (wall s from the command's start; the process's CPU clock then, which is its wall "
+              "clock on an idle machine less its waits; CPU s; outermost compiles >= 0.3 s, and waits):")
+        for start, end, cpu, clock, kind, name in sorted(timeline):
             if kind == "await" or cpu >= 0.3:
                 what = f"waits on {name}" if kind == "await" else name
-                print(f"    {start:6.1f} – {end:6.1f}  {cpu:6.2f}  {what}")
+                print(f"    {start:6.1f} – {end:6.1f}  clock {clock:6.1f}  {cpu:6.2f}  {what}")
 
 
 def main() -> None:

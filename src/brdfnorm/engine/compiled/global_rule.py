@@ -24,13 +24,14 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import numba
 import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
-from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding
+from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
@@ -449,8 +450,34 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
     if argtypes not in shader_global.overloads:
         if _LEFT["to_others"] and shader_global._cache.load_overload(argtypes, shader_global.targetctx) is None:
             raise NumbaError("the shaders' global rule is left to the command to compile")
+        if not in_cache(shader_global, argtypes):
+            shared_kernels()
         compile_marked(shader_global, "shader_global", argtypes)
     return shader_global.overloads[argtypes].entry_point
+
+
+def shared_kernels() -> None:
+    """Compile (or load) :func:`_begin`, :func:`_grown` and :func:`_settle`, which :func:`fused_global` and
+    :func:`shader_global` both call, for the types those callers give them (~2.5 s of CPU, once per machine), under
+    one mark beside Numba's cache: on a fresh machine :mod:`brdfnorm.parallel.warm`'s child (compiling
+    :func:`fused_global`) and the command (:func:`shader_global`) reach them a few seconds apart, and the second
+    loads the first's instead of compiling them beside it."""
+    if _settle.overloads:
+        return
+    from numba import types
+
+    real, whole, truth = types.float64, types.int64, types.boolean
+    grid, vector = types.Array(real, 3, "C"), types.Array(real, 1, "C")
+    plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
+            (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
+                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
+                       types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
+    mark = cache_mark(_settle, "global_rule_shared", plan[-1][1])
+    if mark is not None:
+        await_other(mark)
+    with holding(mark) if mark is not None else contextlib.nullcontext():
+        for kernel, argtypes in plan:
+            kernel.compile(argtypes)
 
 
 _LEFT = {"to_others": False}
@@ -510,6 +537,8 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
             if mark is not None:
                 await_other(mark)
                 with holding(mark):
+                    if not in_cache(fused_global, tuple(numba.typeof(x) for x in every)):
+                        shared_kernels()
                     fused_global(*every)
                 return value, error, evaluations, settled
         kernel = fused_global

@@ -111,6 +111,16 @@ def cache_mark(kernel, name: str, argtypes: tuple) -> Path | None:
     return Path(directory) / f"{name}-{digest}.compiling"
 
 
+def in_cache(kernel, argtypes: tuple) -> bool:
+    """Whether Numba's disk cache holds ``kernel`` (a dispatcher) for ``argtypes``, fresh: whether a call would load
+    it rather than compile it (False where Numba caches nothing, or keeps its index otherwise than 0.6x does)."""
+    cache = getattr(kernel, "_cache", None)
+    try:
+        return cache._index_key(argtypes, kernel.targetctx.codegen()) in cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - a Numba without this index: "not cached" only costs loading what is cached
+        return False
+
+
 def compile_marked(kernel, name: str, argtypes: tuple) -> None:
     """Compile ``kernel`` for ``argtypes`` under its :func:`cache_mark`: where another process is compiling the same
     signature, wait for it first (Numba then loads its result from the cache instead of compiling it beside it)."""
