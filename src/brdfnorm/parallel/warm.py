@@ -147,10 +147,14 @@ def pending(needs: Sequence[Need]) -> list[Job]:
 
 
 def order(jobs: Sequence[Job]) -> list[Job]:
-    """The child's order of ``jobs`` (in the order first needed): from the first route job on in that order, then
-    the lobes before it from the last back (all from the last back where no route job)."""
-    first = next((i for i, job in enumerate(jobs) if job.method in ROUTE_KERNELS), len(jobs))
-    return list(jobs[first:]) + list(reversed(jobs[:first]))
+    """The child's order of ``jobs`` (in the order first needed): the route jobs first, then the lobes in the order
+    needed from the second on, the first last (the command compiles it at once); where no route job, all from the
+    last back (the command compiles the first lobes as it reaches them, the child the last)."""
+    routes = [job for job in jobs if job.method in ROUTE_KERNELS]
+    if not routes:
+        return list(reversed(jobs))
+    lobes = [job for job in jobs if job.method not in ROUTE_KERNELS]
+    return routes + lobes[1:] + lobes[:1]
 
 
 @contextlib.contextmanager
