@@ -104,7 +104,7 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
     flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
-    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+    vz, ax, ay = geometry[0], geometry[4], geometry[5]
     C = grid.shape[2] - 1 if largest else grid.shape[2]
     parameters = case(q, extra)
     count = 0
@@ -112,12 +112,9 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
         index = rows[a]
         if mirrored and _canonical(index, M) != index:
             continue
-        phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
-        factor = dphi * scale
-        dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
-            phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
-            multiplicity[q], vz[q], beckmann)
-        start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+        # (bool(): shader_global's beckmann is the literal False, which would be another signature of _row)
+        factor, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio = _row(
+            index, M, kind, q, lam, width, scale, linear, log_horizon, bool(beckmann), geometry)
         for j in range(radial.size):
             s, weight_t, one_sp, n2, Lz = slope_node(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h,
                                                      s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
@@ -134,14 +131,35 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
                 grid[index, col_step * j, C] = most * factor
         count += radial.size
     if mirrored:
-        for a in range(rows.size):
-            index = rows[a]
-            source = _canonical(index, M)
-            if source != index:
-                for j in range(radial.size):
-                    for c in range(grid.shape[2]):
-                        grid[index, col_step * j, c] = grid[source, col_step * j, c]
+        _mirror(grid, rows, M, col_step, radial.size)
     return count
+
+
+@njit(**_OPTIONS)
+def _row(index, M, kind, q, lam, width, scale, linear, log_horizon, beckmann, geometry):  # pragma: no cover
+    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of case ``q``: the azimuth
+    map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s values but s_middle, and
+    :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per node): compiled once and
+    shared by :func:`fused_global` and :func:`shader_global`, not inlined into each."""
+    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+    phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
+    dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+        phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
+        multiplicity[q], vz[q], beckmann)
+    start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+    return dphi * scale, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio
+
+
+@njit(**_OPTIONS)
+def _mirror(grid, rows, M, col_step, N):  # pragma: no cover - compiled
+    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values (:func:`_fill`)."""
+    for a in range(rows.size):
+        index = rows[a]
+        source = _canonical(index, M)
+        if source != index:
+            for j in range(N):
+                for c in range(grid.shape[2]):
+                    grid[index, col_step * j, c] = grid[source, col_step * j, c]
 
 
 @njit(**_OPTIONS, inline="always")
@@ -457,8 +475,9 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
 
 
 def shared_kernels() -> None:
-    """Compile (or load) :func:`_begin`, :func:`_grown` and :func:`_settle`, which :func:`fused_global` and
-    :func:`shader_global` both call, for the types those callers give them (~2.5 s of CPU, once per machine), under
+    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_mirror` and :func:`_settle`, which
+    :func:`fused_global` and :func:`shader_global` both call, for the types those callers give them (~3.5 s of CPU,
+    once per machine), under
     one mark beside Numba's cache: on a fresh machine :mod:`brdfnorm.parallel.warm`'s child (compiling
     :func:`fused_global`) and the command (:func:`shader_global`) reach them a few seconds apart, and the second
     loads the first's instead of compiling them beside it."""
@@ -467,8 +486,10 @@ def shared_kernels() -> None:
     from numba import types
 
     real, whole, truth = types.float64, types.int64, types.boolean
-    grid, vector = types.Array(real, 3, "C"), types.Array(real, 1, "C")
+    grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
     plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
+            (_row, (whole, whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(vector, 10))),
+            (_mirror, (grid, indices, whole, whole, whole)),
             (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
                        types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
                        types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
