@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.paths import EXAMPLES
 from numba import types
 
 from brdfnorm.engine.compiled import global_rule, marks
 
 SHARED = ("_begin", "_grown", "_row", "_mirror", "_settle")
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 class _Kernel:

@@ -9,15 +9,17 @@ on one core, while the other core idled (docs/performance.md).
 
 :func:`ahead` starts one child process (``python -m brdfnorm.parallel.warm``) that compiles, into the same disk
 caches, the kernels of the given models that are not there yet. The models come in the order the command first
-needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
-compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
-order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them
-(the first with the shaders' global rule, :func:`brdfnorm.engine.compiled.global_rule.shader_global`, which the
-child leaves to it), the child the rest. Whoever compiles a lobe's or a route's kernels holds a mark in the cache
-(:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is compiling, it waits for it
-and loads it; before each job, the child looks again and skips what the command compiled, or is compiling,
-meanwhile. The child's results are only compiled code: every albedo is
-still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
+needs them, each with the method that integrates it; the child takes the route's kernels first (the longest
+compile, with the global rules' shared kernels, :func:`brdfnorm.engine.compiled.global_rule.shared_kernels`, which
+the command's :func:`~brdfnorm.engine.compiled.global_rule.shader_global` then loads; a command reaches the route
+only after its first lobes), then the lobes in the order the command needs them from the second on, the first last:
+the command compiles its first lobe itself at once, with the shaders' global rule, which the child leaves to it, and
+by the time the child is through the route the command is at its next lobes, which the child then compiles just
+ahead of it (docs/performance.md, the seventh round's timeline). Whoever compiles a lobe's or a route's kernels
+holds a mark in the cache (:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is
+compiling, it waits for it and loads it; before each job, the child looks again and skips what the command
+compiled, or is compiling, meanwhile. The child's results are only compiled code: every albedo is still computed
+by the command, so its numbers do not depend on whether or when the child ran. Numba and
 :func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
 compile is written whole by one.
 
