@@ -14,6 +14,12 @@ graded map's late prediction. Why: the numpy driver's interleaving of old and ne
 the grids of all cases cost ~30 % of a 32 × 32 DFG table under the compiled backend (docs/performance.md); per case,
 the grids stay in cache. The values differ from the numpy driver's by the rounding of the transcendental functions
 (libm against numpy's), well within the estimates (tests/engine/test_compiled_global_rule.py).
+
+Compiled in pieces: only the loop over a row's radial nodes, which calls the weight, is inlined into each of the two
+cached callers (:func:`fused_global`, :func:`shader_global`); the case state, the doubled grids, the per-azimuth
+map, the mirror copies, the sums, estimates and decisions are small cached kernels that both share, compiled once
+per machine (:func:`shared_kernels`): inlined whole, the loop cost each caller 7–10 s of CPU to compile, now 2.6–3.1
+(docs/performance.md, seventh round); the values are bit-identical.
 """
 
 from __future__ import annotations
