@@ -12,7 +12,9 @@ processes' shares balance (docs/performance.md has the timeline).
 ``--kernels``: the first run's empty-cache pass also lists every function Numba compiled, per process (the command,
 the child), with its CPU seconds of compile less those of the functions compiled within it (Numba's
 ``numba:compile`` events, recorded by a ``sitecustomize`` hook put first on the command's path; loads from a cache
-are not compiles and are not listed).
+are not compiles and are not listed), then each process's timeline: its outermost compiles and its waits on the
+other's compile marks (:data:`brdfnorm.engine.compiled.marks.AWAIT_EVENT`), in wall seconds from the command's start,
+with their CPU seconds: who waited on what, and for how long against the other's work.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 import argparse
 import collections
 import filecmp
+import math
 import os
 import resource
 import subprocess
@@ -31,24 +34,39 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-#: The compile log's hook: per process, one line per compile (name, CPU s less nested compiles, depth).
+#: The compile log's hook: per process, one line per compile (name, CPU s less nested compiles, depth, wall start and
+#: end, CPU s with nested compiles) and per wait on another process's compile mark (marks.AWAIT_EVENT).
 _HOOK = """\
-import os, time
+import atexit, os, signal, time
 from numba.core import event
 _stack = []
-class _Listener(event.Listener):
+def _write(kind, name, own, start, spent, clock):
+    # (written at once: the child is stopped, not left to exit, where the command ends first)
+    with open(os.path.join(os.environ["BRDFNORM_BENCH_COMPILES"], f"{os.getpid()}.tsv"), "a") as out:
+        out.write(f"{kind}\\t{name}\\t{own:.3f}\\t{len(_stack)}\\t{start:.3f}\\t{time.time():.3f}\\t{spent:.3f}\\t{clock:.3f}\\n")
+class _Compiles(event.Listener):
     def on_start(self, ev):
         f = ev.data["dispatcher"].py_func
-        _stack.append([f"{f.__module__}.{f.__qualname__}", time.process_time(), 0.0])
+        _stack.append([f"{f.__module__}.{f.__qualname__}", time.process_time(), 0.0, time.time()])
     def on_end(self, ev):
-        name, start, inner = _stack.pop()
+        name, start, inner, wall = _stack.pop()
         spent = time.process_time() - start
         if _stack:
             _stack[-1][2] += spent
-        # (written at once: the child is stopped, not left to exit, where the command ends first)
-        with open(os.path.join(os.environ["BRDFNORM_BENCH_COMPILES"], f"{os.getpid()}.tsv"), "a") as out:
-            out.write(f"{name}\\t{spent - inner:.3f}\\t{len(_stack)}\\n")
-event.register("numba:compile", _Listener())
+        _write("compile", name, spent - inner, wall, spent, start)
+class _Waits(event.Listener):
+    def on_start(self, ev):
+        self.wall, self.cpu = time.time(), time.process_time()
+    def on_end(self, ev):
+        _write("await", ev.data["mark"], 0.0, self.wall, time.process_time() - self.cpu, self.cpu)
+event.register("numba:compile", _Compiles())
+event.register("brdfnorm:await", _Waits())
+def _end(*_):
+    _write("end", "-", 0.0, time.time(), time.process_time(), time.process_time())
+    if _:  # stopped (SIGTERM): the child, whose command ended first
+        os._exit(0)
+atexit.register(_end)
+signal.signal(signal.SIGTERM, _end)
 """
 
 
@@ -61,28 +79,49 @@ def _run(caches: Path, out: Path, log: Path | None = None) -> dict:
         env.update(PYTHONPATH=f"{log}{os.pathsep}{ROOT / 'src'}", BRDFNORM_BENCH_COMPILES=str(log))
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
+    start, started = time.perf_counter(), time.time()
     subprocess.run([sys.executable, "-m", "brdfnorm", "report", "-o", str(out)], env=env, check=True,
                    capture_output=True)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)  # the command and its child
-    return {"wall_s": wall, "cpu_s": cpu, "load": load}
+    return {"wall_s": wall, "cpu_s": cpu, "load": load, "started": started}
 
 
-def _kernels(log: Path) -> None:
-    """The compile log of one run: per process (the first to start is the command), CPU s per function."""
+def _short(name: str) -> str:
+    return name.replace("numba.np.", "").replace("brdfnorm.engine.compiled.", "").split(".<locals>")[0]
+
+
+def _kernels(log: Path, started: float) -> None:
+    """The compile log of one run: per process (the first to start is the command), CPU s per function, then its
+    timeline: each outermost compile and each wait on the other's compile mark, in wall seconds from the command's
+    start, with its CPU seconds (nested compiles included)."""
     files = sorted(log.glob("*.tsv"), key=lambda path: int(path.stem))
     for role, path in zip(("command", "child"), files, strict=False):
-        spent = collections.Counter()
+        spent, timeline, ended = collections.Counter(), [], (math.nan, math.nan)
         for line in path.read_text(encoding="utf-8").splitlines():
-            name, seconds, _ = line.split("\t")
-            spent[name.replace("numba.np.", "").split(".<locals>")[0]] += float(seconds)
+            kind, name, own, depth, start, end, cpu, clock = line.split("\t")
+            if kind == "end":
+                ended = (float(start) - started, float(cpu))
+                continue
+            if kind == "compile":
+                spent[_short(name)] += float(own)
+            if int(depth) == 0 or kind == "await":
+                timeline.append((float(start) - started, float(end) - started, float(cpu), float(clock), kind,
+                                 _short(name)))
         total = sum(spent.values())
-        print(f"  {role}: {total:.1f} CPU s of compile", flush=True)
+        waited = sum(end - start for start, end, _, _, kind, _ in timeline if kind == "await")
+        print(f"  {role}: {total:.1f} CPU s of compile, {waited:.1f} s waiting on the other's marks; ended at "
+              f"{ended[0]:.1f} s wall, {ended[1]:.1f} CPU s in all", flush=True)
         for name, seconds in spent.most_common():
             if seconds >= 0.2:
                 print(f"    {seconds:6.2f}  {name}")
+        print(f"  {role}'s timeline (wall s from the command's start; the process's CPU clock then, which is its wall "
+              "clock on an idle machine less its waits; CPU s; outermost compiles >= 0.3 s, and waits):")
+        for start, end, cpu, clock, kind, name in sorted(timeline):
+            if kind == "await" or cpu >= 0.3:
+                what = f"waits on {name}" if kind == "await" else name
+                print(f"    {start:6.1f} – {end:6.1f}  clock {clock:6.1f}  {cpu:6.2f}  {what}")
 
 
 def main() -> None:
@@ -105,7 +144,7 @@ def main() -> None:
                 print(f"run {index + 1}, {state}: {row['wall_s']:.1f} s wall, {row['cpu_s']:.1f} CPU s "
                       f"(load {row['load']:.2f} before), {same}", flush=True)
                 if log is not None:
-                    _kernels(log)
+                    _kernels(log, row["started"])
 
 
 if __name__ == "__main__":

@@ -103,10 +103,10 @@ def _job(name: str, method: str = "quadrature") -> warm.Job:
     return warm.Job(ModelSource("builtin", name), method)
 
 
-def test_the_child_takes_the_route_first_then_what_follows_then_the_rest_backwards():
+def test_the_child_takes_the_route_first_then_the_lobes_in_order_from_the_second():
     a, b, c, d, e = (_job(n) for n in ("phong", "blinn-phong", "charlie", "fon", "ggx"))
     route = _job("ggx", "microfacet")
-    assert warm.order([a, b, route, c, d, e]) == [route, c, d, e, b, a]
+    assert warm.order([a, b, route, c, d, e]) == [route, b, c, d, e, a]
     assert warm.order([a, b, c]) == [c, b, a]  # no route: last-needed first
 
 

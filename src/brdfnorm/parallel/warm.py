@@ -9,15 +9,17 @@ on one core, while the other core idled (docs/performance.md).
 
 :func:`ahead` starts one child process (``python -m brdfnorm.parallel.warm``) that compiles, into the same disk
 caches, the kernels of the given models that are not there yet. The models come in the order the command first
-needs them, each with the method that integrates it; the child takes the first route's kernels first (the longest
-compile, and a command reaches them only after its first lobes), then the lobes the command needs after it, in that
-order, then the earlier lobes from the last back: the command compiles its first lobes itself as it reaches them
-(the first with the shaders' global rule, :func:`brdfnorm.engine.compiled.global_rule.shader_global`, which the
-child leaves to it), the child the rest. Whoever compiles a lobe's or a route's kernels holds a mark in the cache
-(:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is compiling, it waits for it
-and loads it; before each job, the child looks again and skips what the command compiled, or is compiling,
-meanwhile. The child's results are only compiled code: every albedo is
-still computed by the command, so its numbers do not depend on whether or when the child ran. Numba and
+needs them, each with the method that integrates it; the child takes the route's kernels first (the longest
+compile, with the global rules' shared kernels, :func:`brdfnorm.engine.compiled.global_rule.shared_kernels`, which
+the command's :func:`~brdfnorm.engine.compiled.global_rule.shader_global` then loads; a command reaches the route
+only after its first lobes), then the lobes in the order the command needs them from the second on, the first last:
+the command compiles its first lobe itself at once, with the shaders' global rule, which the child leaves to it, and
+by the time the child is through the route the command is at its next lobes, which the child then compiles just
+ahead of it (docs/performance.md, the seventh round's timeline). Whoever compiles a lobe's or a route's kernels
+holds a mark in the cache (:mod:`brdfnorm.engine.compiled.marks`): where the command reaches a lobe the child is
+compiling, it waits for it and loads it; before each job, the child looks again and skips what the command
+compiled, or is compiling, meanwhile. The child's results are only compiled code: every albedo is still computed
+by the command, so its numbers do not depend on whether or when the child ran. Numba and
 :func:`~brdfnorm.engine.compiled.drivers.kernels_file` write their cache files by atomic renames, so a kernel both
 compile is written whole by one.
 
@@ -147,10 +149,14 @@ def pending(needs: Sequence[Need]) -> list[Job]:
 
 
 def order(jobs: Sequence[Job]) -> list[Job]:
-    """The child's order of ``jobs`` (in the order first needed): from the first route job on in that order, then
-    the lobes before it from the last back (all from the last back where no route job)."""
-    first = next((i for i, job in enumerate(jobs) if job.method in ROUTE_KERNELS), len(jobs))
-    return list(jobs[first:]) + list(reversed(jobs[:first]))
+    """The child's order of ``jobs`` (in the order first needed): the route jobs first, then the lobes in the order
+    needed from the second on, the first last (the command compiles it at once); where no route job, all from the
+    last back (the command compiles the first lobes as it reaches them, the child the last)."""
+    routes = [job for job in jobs if job.method in ROUTE_KERNELS]
+    if not routes:
+        return list(reversed(jobs))
+    lobes = [job for job in jobs if job.method not in ROUTE_KERNELS]
+    return routes + lobes[1:] + lobes[:1]
 
 
 @contextlib.contextmanager

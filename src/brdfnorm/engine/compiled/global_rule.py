@@ -14,6 +14,12 @@ graded map's late prediction. Why: the numpy driver's interleaving of old and ne
 the grids of all cases cost ~30 % of a 32 × 32 DFG table under the compiled backend (docs/performance.md); per case,
 the grids stay in cache. The values differ from the numpy driver's by the rounding of the transcendental functions
 (libm against numpy's), well within the estimates (tests/engine/test_compiled_global_rule.py).
+
+Compiled in pieces: only the loop over a row's radial nodes, which calls the weight, is inlined into each of the two
+cached callers (:func:`fused_global`, :func:`shader_global`); the case state, the doubled grids, the per-azimuth
+map, the mirror copies, the sums, estimates and decisions are small cached kernels that both share, compiled once
+per machine (:func:`shared_kernels`): inlined whole, the loop cost each caller 7–10 s of CPU to compile, now 2.6–3.1
+(docs/performance.md, seventh round); the values are bit-identical.
 """
 
 from __future__ import annotations
@@ -24,13 +30,14 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import numba
 import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
-from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding
+from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
@@ -40,6 +47,9 @@ _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).
 _EPS = np.finfo(np.float64).eps
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
+#: The radial pieces of a case (pole, tail, horizon layer), and the columns of a case's switches (:func:`_begin`).
+_PIECES = 3
+_ALIVE, _DONE, _FINITE, _MORE_B, _MORE_U = range(5)
 
 
 def fejer_fft(level: int) -> tuple[np.ndarray, np.ndarray]:
@@ -100,7 +110,7 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
     flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
-    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+    vz, ax, ay = geometry[0], geometry[4], geometry[5]
     C = grid.shape[2] - 1 if largest else grid.shape[2]
     parameters = case(q, extra)
     count = 0
@@ -108,12 +118,9 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
         index = rows[a]
         if mirrored and _canonical(index, M) != index:
             continue
-        phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
-        factor = dphi * scale
-        dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
-            phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
-            multiplicity[q], vz[q], beckmann)
-        start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+        # (bool(): shader_global's beckmann is the literal False, which would be another signature of _row)
+        factor, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio = _row(
+            index, M, kind, q, lam, width, scale, linear, log_horizon, bool(beckmann), geometry)
         for j in range(radial.size):
             s, weight_t, one_sp, n2, Lz = slope_node(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h,
                                                      s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
@@ -130,14 +137,35 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
                 grid[index, col_step * j, C] = most * factor
         count += radial.size
     if mirrored:
-        for a in range(rows.size):
-            index = rows[a]
-            source = _canonical(index, M)
-            if source != index:
-                for j in range(radial.size):
-                    for c in range(grid.shape[2]):
-                        grid[index, col_step * j, c] = grid[source, col_step * j, c]
+        _mirror(grid, rows, M, col_step, radial.size)
     return count
+
+
+@njit(**_OPTIONS)
+def _row(index, M, kind, q, lam, width, scale, linear, log_horizon, beckmann, geometry):  # pragma: no cover
+    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of case ``q``: the azimuth
+    map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s values but s_middle, and
+    :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per node): compiled once and
+    shared by :func:`fused_global` and :func:`shader_global`, not inlined into each."""
+    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+    phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
+    dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
+        phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
+        multiplicity[q], vz[q], beckmann)
+    start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
+    return dphi * scale, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio
+
+
+@njit(**_OPTIONS)
+def _mirror(grid, rows, M, col_step, N):  # pragma: no cover - compiled
+    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values (:func:`_fill`)."""
+    for a in range(rows.size):
+        index = rows[a]
+        source = _canonical(index, M)
+        if source != index:
+            for j in range(N):
+                for c in range(grid.shape[2]):
+                    grid[index, col_step * j, c] = grid[source, col_step * j, c]
 
 
 @njit(**_OPTIONS, inline="always")
@@ -209,6 +237,149 @@ def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
     return e_b
 
 
+@njit(**_OPTIONS)
+def _begin(C):  # pragma: no cover - compiled
+    """A case's state at its start: levels (pieces, 2: β, u), the ratios last extrapolated from (pieces, 2),
+    switches (pieces, 5: alive, done, finite, more along β, more along u), numbers (pieces, 7, C: the latest value,
+    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid."""
+    levels = np.empty((_PIECES, 2), dtype=np.int64)
+    lasts = np.empty((_PIECES, 2))
+    switches = np.zeros((_PIECES, 5), dtype=np.bool_)
+    for kind in range(_PIECES):
+        levels[kind, 0], levels[kind, 1] = START_LEVELS[0], START_LEVELS[1]
+        lasts[kind, 0] = lasts[kind, 1] = np.inf
+        switches[kind, _ALIVE] = switches[kind, _FINITE] = True
+    M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
+    return (levels, lasts, switches, np.zeros((_PIECES, 7, C)), np.empty((M0, N0, C)), np.empty((M0, N0, C)),
+            np.empty((M0, N0, C)))
+
+
+@njit(**_OPTIONS)
+def _grown(grid, step, kind, levels):  # pragma: no cover - compiled
+    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, rows, M, col_step, radial) — the first grid
+    (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place, whose level it raises."""
+    C = grid.shape[2]
+    M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
+    if step == 0:
+        return grid, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
+    if step == 1:
+        target = np.empty((2 * M, N1, C))
+        for i in range(M):
+            for j in range(N1):
+                for c in range(C):
+                    target[2 * i, j, c] = grid[i, j, c]
+        levels[kind, 0] += 1
+        return target, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
+    target = np.empty((M, 2 * N1 + 1, C))
+    for i in range(M):
+        for j in range(N1):
+            for c in range(C):
+                target[i, 2 * j + 1, c] = grid[i, j, c]
+    lu = levels[kind, 1] + 1
+    levels[kind, 1] = lu
+    return target, np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
+
+
+@njit(**_OPTIONS)
+def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
+            graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
+    """After a round of grids: each live piece's sums and estimates, the tolerance, and per piece whether it is
+    done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
+    outputs then written."""
+    C = numbers.shape[2]
+    sums = np.empty((4, C))
+    failed = False
+    for kind in range(_PIECES):
+        if not switches[kind, _ALIVE]:
+            continue
+        grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
+        finite = True
+        for x in grid.flat:
+            if not math.isfinite(x):
+                finite = False
+                break
+        switches[kind, _FINITE] = finite
+        if not finite:
+            grid.fill(0.0)
+            failed = True
+        _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums)
+        for c in range(C):
+            for row in range(4):
+                numbers[kind, 3 + row, c] = sums[row, c]
+            numbers[kind, 0, c] = sums[0, c]
+            if levels[kind, 0] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
+                numbers[kind, 4, c] = _sudden(grid, levels[kind, 1], c, sums[1, c], sums[3, c])
+    tolerance = np.empty(C)
+    for c in range(C):
+        total = 0.0
+        for kind in range(_PIECES):
+            total += numbers[kind, 1, c] if switches[kind, _DONE] else numbers[kind, 0, c]
+        tolerance[c] = max(atol[k], rtol[k] * abs(total)) / _PIECES
+    for kind in range(_PIECES):
+        if not switches[kind, _ALIVE]:
+            continue
+        within, more_b, more_u, larger_b = True, False, False, False
+        ratio_b = ratio_u = 0.0
+        for c in range(C):
+            e_b, e_u, magnitude = numbers[kind, 4, c], numbers[kind, 5, c], numbers[kind, 6, c]
+            floor = FLOOR * magnitude
+            if not e_b + e_u + floor <= tolerance[c]:
+                within = False
+            share = max(tolerance[c] - floor, 0.0) / 2
+            more_b |= e_b > share
+            more_u |= e_u > share
+            larger_b |= e_b >= e_u
+            ratio_b = max(ratio_b, _normalized(e_b, share))
+            ratio_u = max(ratio_u, _normalized(e_u, share))
+        finite = switches[kind, _FINITE]
+        lb, lu = levels[kind, 0], levels[kind, 1]
+        # never on the start azimuths (global_driver: their embedded rules are blind to what the 8 alias)
+        done = within and finite and lb > START_LEVELS[0]
+        if done:
+            for c in range(C):
+                numbers[kind, 1, c] = numbers[kind, 3, c]
+                numbers[kind, 2, c] = numbers[kind, 4, c] + numbers[kind, 5, c] + FLOOR * numbers[kind, 6, c]
+            switches[kind, _DONE] = True
+        if lb == START_LEVELS[0]:  # (confirmed along β there, as the numpy driver does)
+            larger_b = True
+        if not (more_b or more_u):
+            more_b, more_u = larger_b, not larger_b
+        size = 2 ** (lb + more_b) * (2 ** (lu + more_u) - 1)
+        need_b, need_u = _doublings(ratio_b, lasts[kind, 0]), _doublings(ratio_u, lasts[kind, 1])
+        # (int64 powers, as the numpy driver's)
+        hopeless = (need_b + lb > MAX_LEVEL_B) or (np.int64(2) ** (lb + need_b)
+                                                   * (np.int64(2) ** (lu + need_u) - 1) > max_nodes)
+        hopeless = hopeless and (lb >= graded_predicts or width[k] == 0)
+        go_on = finite and not done and size <= max_nodes and not hopeless and not failed
+        if finite and not done and not go_on:
+            failed = True
+        switches[kind, _ALIVE] = go_on
+        switches[kind, _MORE_B], switches[kind, _MORE_U] = more_b, more_u
+        if go_on:  # the ratios this doubling extrapolates from (the first from the start is skipped)
+            if more_b and lb > START_LEVELS[0]:
+                lasts[kind, 0] = ratio_b
+            if more_u and lu > START_LEVELS[1]:
+                lasts[kind, 1] = ratio_u
+    alive = False
+    for kind in range(_PIECES):
+        alive |= switches[kind, _ALIVE]
+    if alive and not failed:
+        return False
+    ok = not failed
+    for kind in range(_PIECES):
+        ok &= switches[kind, _DONE]
+    for c in range(C):
+        total_value = total_error = 0.0
+        for kind in range(_PIECES):
+            total_value += numbers[kind, 1, c]
+            total_error += numbers[kind, 2, c]
+        out_value[k, c], out_error[k, c] = total_value, total_error
+        if not total_error <= max(atol[k], rtol[k] * abs(total_value)):
+            ok = False
+    settled[k] = ok
+    return True
+
+
 @njit(error_model="numpy", inline="always")
 def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, graded_predicts, linear, log_horizon,
                beckmann, geometry, case, value, extra, largest, flags, outputs):  # pragma: no cover - compiled
@@ -219,140 +390,41 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
     Not cached and always inlined, like :func:`.slopes.slope_loop`: ``case`` and ``value`` are first-class function
     arguments; each cached caller (:func:`fused_global` for the microfacet lobes,
     :func:`shader_global` for the shaders, which calls the shader through a first-class function) compiles the
-    loop with its weight. One call site of :func:`_fill` (which inlines the weight): the first grids and both
-    doublings; no array assigned to a slice (Numba compiles the shape-mismatch error's message for each: ~5 of
-    11.6 s of compile)."""
+    loop with its weight. Only the node filling depends on the weight: the state, the doubled grids, the sums,
+    estimates and decisions are the cached kernels :func:`_begin`, :func:`_grown` and :func:`_settle`, compiled
+    once and shared by both callers (inlined, the loop cost each caller ~5 s of CPU more to compile). One call site
+    of :func:`_fill` (which inlines the weight): the first grids and both doublings; no array assigned to a slice
+    (Numba compiles the shape-mismatch error's message for each)."""
     out_value, out_error, evaluations, settled = outputs
-    pieces = 3
     C = out_value.shape[1]
-    sums = np.empty((4, C))
-    M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
     for n in range(cases.size):
         k = cases[n]
-        mirrored = symmetric[k]
-        level_b = np.full(pieces, START_LEVELS[0])
-        level_u = np.full(pieces, START_LEVELS[1])
-        last_b, last_u = np.full(pieces, np.inf), np.full(pieces, np.inf)
-        alive = np.ones(pieces, dtype=np.bool_)
-        done_piece = np.zeros(pieces, dtype=np.bool_)
-        latest, piece_value, piece_error = np.zeros((pieces, C)), np.zeros((pieces, C)), np.zeros((pieces, C))
-        results = np.zeros((pieces, 4, C))
-        finite = np.ones(pieces, dtype=np.bool_)
-        more = np.zeros((pieces, 2), dtype=np.bool_)
-        grids = []  # (no comprehension: a closure, which the inlining refuses)
-        for _ in range(pieces):
-            grids.append(np.empty((M0, N0, C)))
-        first, failed = True, False
-        while first or alive.any():
+        levels, lasts, switches, numbers, grid0, grid1, grid2 = _begin(C)
+        first = True
+        while True:
             # the grids: the first ones, then each piece's doublings along t (1) and u (2), one _fill call site
-            for kind in range(pieces):
-                if not alive[kind]:
+            for kind in range(_PIECES):
+                if not switches[kind, _ALIVE]:
                     continue
-                grid = grids[kind]
+                grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
                 for step in range(3):
-                    if (step == 0) != first or (step == 1 and not more[kind, 0]) or (step == 2 and not more[kind, 1]):
+                    if (step == 0) != first or (step > 0 and not switches[kind, _MORE_B + step - 1]):
                         continue
-                    M, N1 = 2 ** level_b[kind], 2 ** level_u[kind] - 1
-                    if step == 0:
-                        target, rows, M_fill, col_step, radial = grid, np.arange(M), M, 1, _NODES[level_u[kind]][:N1]
-                    elif step == 1:
-                        target = np.empty((2 * M, N1, C))
-                        for i in range(M):
-                            for j in range(N1):
-                                for c in range(C):
-                                    target[2 * i, j, c] = grid[i, j, c]
-                        rows, M_fill, col_step, radial = 2 * np.arange(M) + 1, 2 * M, 1, _NODES[level_u[kind]][:N1]
-                        level_b[kind] += 1
-                    else:
-                        target = np.empty((M, 2 * N1 + 1, C))
-                        for i in range(M):
-                            for j in range(N1):
-                                for c in range(C):
-                                    target[i, 2 * j + 1, c] = grid[i, j, c]
-                        lu = level_u[kind] + 1
-                        rows, M_fill, col_step, radial = np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
-                        level_u[kind] = lu
-                    evaluations[k] += _fill(target, rows, M_fill, col_step, radial, k, kind, mirrored, lam[k],
+                    target, rows, M, col_step, radial = _grown(grid, step, kind, levels)
+                    evaluations[k] += _fill(target, rows, M, col_step, radial, k, kind, symmetric[k], lam[k],
                                             width[k], scale[k], linear, log_horizon, beckmann, geometry, case,
                                             value, extra, largest, flags)
                     grid = target
-                grids[kind] = grid
+                if kind == 0:
+                    grid0 = grid
+                elif kind == 1:
+                    grid1 = grid
+                else:
+                    grid2 = grid
             first = False
-            for kind in range(pieces):
-                if not alive[kind]:
-                    continue
-                grid = grids[kind]
-                finite[kind] = np.isfinite(grid).all()
-                if not finite[kind]:
-                    grid.fill(0.0)
-                    failed = True
-                _sums(grid, 2 ** level_b[kind], level_u[kind], sums)
-                for c in range(C):
-                    for row in range(4):
-                        results[kind, row, c] = sums[row, c]
-                    latest[kind, c] = sums[0, c]
-                    if level_b[kind] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
-                        results[kind, 1, c] = _sudden(grid, level_u[kind], c, sums[1, c], sums[3, c])
-            tolerance = np.empty(C)
-            for c in range(C):
-                total = 0.0
-                for kind in range(pieces):
-                    total += piece_value[kind, c] if done_piece[kind] else latest[kind, c]
-                tolerance[c] = max(atol[k], rtol[k] * abs(total)) / pieces
-            for kind in range(pieces):
-                if not alive[kind]:
-                    continue
-                within, more_b, more_u, larger_b = True, False, False, False
-                ratio_b = ratio_u = 0.0
-                for c in range(C):
-                    e_b, e_u, magnitude = results[kind, 1, c], results[kind, 2, c], results[kind, 3, c]
-                    floor = FLOOR * magnitude
-                    if not e_b + e_u + floor <= tolerance[c]:
-                        within = False
-                    share = max(tolerance[c] - floor, 0.0) / 2
-                    more_b |= e_b > share
-                    more_u |= e_u > share
-                    larger_b |= e_b >= e_u
-                    ratio_b = max(ratio_b, _normalized(e_b, share))
-                    ratio_u = max(ratio_u, _normalized(e_u, share))
-                # never on the start azimuths (global_driver: their embedded rules are blind to what the 8 alias)
-                done = within and finite[kind] and level_b[kind] > START_LEVELS[0]
-                if done:
-                    for c in range(C):
-                        piece_value[kind, c] = results[kind, 0, c]
-                        piece_error[kind, c] = (results[kind, 1, c] + results[kind, 2, c]
-                                                + FLOOR * results[kind, 3, c])
-                    done_piece[kind] = True
-                if level_b[kind] == START_LEVELS[0]:  # (confirmed along β there, as the numpy driver does)
-                    larger_b = True
-                if not (more_b or more_u):
-                    more_b, more_u = larger_b, not larger_b
-                lb, lu = level_b[kind], level_u[kind]
-                size = 2 ** (lb + more_b) * (2 ** (lu + more_u) - 1)
-                need_b, need_u = _doublings(ratio_b, last_b[kind]), _doublings(ratio_u, last_u[kind])
-                # (int64 powers, as the numpy driver's)
-                hopeless = (need_b + lb > MAX_LEVEL_B) or (np.int64(2) ** (lb + need_b)
-                                                           * (np.int64(2) ** (lu + need_u) - 1) > max_nodes)
-                hopeless = hopeless and (lb >= graded_predicts or width[k] == 0)
-                go_on = finite[kind] and not done and size <= max_nodes and not hopeless and not failed
-                if finite[kind] and not done and not go_on:
-                    failed = True
-                alive[kind] = go_on
-                more[kind, 0], more[kind, 1] = more_b, more_u
-                if go_on:  # the ratios this doubling extrapolates from (the first from the start is skipped)
-                    if more_b and lb > START_LEVELS[0]:
-                        last_b[kind] = ratio_b
-                    if more_u and lu > START_LEVELS[1]:
-                        last_u[kind] = ratio_u
-            if failed:
+            if _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
+                       graded_predicts, out_value, out_error, settled):
                 break
-        ok = (not failed) and done_piece.all()
-        for c in range(C):
-            out_value[k, c] = piece_value[:, c].sum()
-            out_error[k, c] = piece_error[:, c].sum()
-            if not out_error[k, c] <= max(atol[k], rtol[k] * abs(out_value[k, c])):
-                ok = False
-        settled[k] = ok
 
 
 @njit(**_OPTIONS)
@@ -402,8 +474,37 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
     if argtypes not in shader_global.overloads:
         if _LEFT["to_others"] and shader_global._cache.load_overload(argtypes, shader_global.targetctx) is None:
             raise NumbaError("the shaders' global rule is left to the command to compile")
+        if not in_cache(shader_global, argtypes):
+            shared_kernels()
         compile_marked(shader_global, "shader_global", argtypes)
     return shader_global.overloads[argtypes].entry_point
+
+
+def shared_kernels() -> None:
+    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_mirror` and :func:`_settle`, which
+    :func:`fused_global` and :func:`shader_global` both call, for the types those callers give them (~3.5 s of CPU,
+    once per machine), under
+    one mark beside Numba's cache: on a fresh machine :mod:`brdfnorm.parallel.warm`'s child (compiling
+    :func:`fused_global`) and the command (:func:`shader_global`) reach them a few seconds apart, and the second
+    loads the first's instead of compiling them beside it."""
+    if _settle.overloads:
+        return
+    from numba import types
+
+    real, whole, truth = types.float64, types.int64, types.boolean
+    grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
+    plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
+            (_row, (whole, whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(vector, 10))),
+            (_mirror, (grid, indices, whole, whole, whole)),
+            (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
+                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
+                       types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
+    mark = cache_mark(_settle, "global_rule_shared", plan[-1][1])
+    if mark is not None:
+        await_other(mark)
+    with holding(mark) if mark is not None else contextlib.nullcontext():
+        for kernel, argtypes in plan:
+            kernel.compile(argtypes)
 
 
 _LEFT = {"to_others": False}
@@ -463,6 +564,8 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
             if mark is not None:
                 await_other(mark)
                 with holding(mark):
+                    if not in_cache(fused_global, tuple(numba.typeof(x) for x in every)):
+                        shared_kernels()
                     fused_global(*every)
                 return value, error, evaluations, settled
         kernel = fused_global

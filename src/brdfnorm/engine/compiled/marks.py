@@ -64,11 +64,22 @@ def holder(mark: Path) -> int | None:
     return pid
 
 
+#: The Numba event (:mod:`numba.core.event`) around each wait on another process's mark, with the mark's name as
+#: its data: benchmarks/bench_report.py's timeline records it beside the ``numba:compile`` events.
+AWAIT_EVENT = "brdfnorm:await"
+
+
 def await_other(mark: Path, patience: float = PATIENCE) -> float:
-    """Wait while another live process holds ``mark``, at most ``patience`` seconds; returns the seconds waited."""
+    """Wait while another live process holds ``mark``, at most ``patience`` seconds; returns the seconds waited
+    (within an :data:`AWAIT_EVENT` where it waits at all)."""
     start = time.monotonic()
-    while holder(mark) is not None and time.monotonic() - start < patience:
-        time.sleep(_POLL)
+    if holder(mark) is None:
+        return 0.0
+    from numba.core import event
+
+    with event.trigger_event(AWAIT_EVENT, data={"mark": mark.name}):
+        while holder(mark) is not None and time.monotonic() - start < patience:
+            time.sleep(_POLL)
     return time.monotonic() - start
 
 
@@ -99,6 +110,16 @@ def cache_mark(kernel, name: str, argtypes: tuple) -> Path | None:
         return None
     digest = hashlib.sha256(str(argtypes).encode()).hexdigest()[:16]
     return Path(directory) / f"{name}-{digest}.compiling"
+
+
+def in_cache(kernel, argtypes: tuple) -> bool:
+    """Whether Numba's disk cache holds ``kernel`` (a dispatcher) for ``argtypes``, fresh: whether a call would load
+    it rather than compile it (False where Numba caches nothing, or keeps its index otherwise than 0.6x does)."""
+    cache = getattr(kernel, "_cache", None)
+    try:
+        return cache._index_key(argtypes, kernel.targetctx.codegen()) in cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - a Numba without this index: "not cached" only costs loading what is cached
+        return False
 
 
 def compile_marked(kernel, name: str, argtypes: tuple) -> None:
