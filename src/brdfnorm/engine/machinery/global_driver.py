@@ -170,15 +170,7 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
             hopeless &= grid.may_predict(group)
             go_on = finite & ~done & (size <= max_nodes) & ~hopeless & ~failed[group.case]
             failed[group.case[finite & ~done & ~go_on]] = True
-            # Where both directions would be doubled and one more doubling of u is predicted to settle it (from
-            # the second doubling of u on), β is, and u is measured on the azimuths already there (_refine_half);
-            # where u was measured so at this radial level already, u is doubled (on the check's nodes), and a
-            # doubling of β alone takes the check along to the new half of the azimuths.
-            half = None
-            if group.checked:
-                half = more_b & ~more_u
-            elif grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM and group.level_u > START_LEVELS[1]:
-                half = more_b & more_u & ~short & (needed_u <= HALF_AZIMUTH_NEEDED) & np.isfinite(group.last_u)
+            half = _halves(grid, group, more_b, more_u, short, needed_u)
             schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
                                lambda g, pick, b, u: _refine(grid, g, pick, b, u, evaluations),
                                half, lambda g, pick: _refine_half(grid, g, pick, evaluations))
@@ -221,6 +213,21 @@ def _directions(grid: GlobalGrid, group: Group, short, e_b, e_u, share):
     needed_u = np.maximum(np.where(lone_b & ~short, 0, doublings(ratio_u, group.last_u)),
                           grid.min_level_u(group) - group.level_u)
     return more_b, more_u, ratio_b, ratio_u, needed_b, needed_u
+
+
+def _halves(grid: GlobalGrid, group: Group, more_b, more_u, short, needed_u) -> np.ndarray | None:
+    """The units to refine by :func:`_refine_half` (β doubled, u measured on the azimuths already there), or None:
+    where both directions would be doubled and one more doubling of u is predicted to settle the unit (from the
+    second doubling of u on, :func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), on a grid that allows it
+    (:attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`). Where u was measured so at this
+    radial level already, u is doubled (:func:`_refine`, on the check's nodes), and a doubling of β alone takes
+    the check along to the new half of the azimuths (else the next level's u estimate would fall back to the
+    coarser rule's, and its value move along u alone, which the stall check reads as a stall)."""
+    if group.checked:
+        return more_b & ~more_u
+    if grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM and group.level_u > START_LEVELS[1]:
+        return more_b & more_u & ~short & (needed_u <= HALF_AZIMUTH_NEEDED) & np.isfinite(group.last_u)
+    return None
 
 
 def schedule_doublings(group: Group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine,

@@ -361,7 +361,7 @@ class LobeAlignedGrid(GlobalGrid):
         # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
         e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u, magnitude,
                                            floor + noise, self.frame[0][group.case, 2], self.widths[group.case],
-                                           self.grading[group.case] == HEAVY_TAIL_GRADING, group.deviations)
+                                           self.grading[group.case] == HEAVY_TAIL_GRADING, d=group.deviations)
         if self.azimuthal_tail[group.case].any():
             tail = np.where(self.azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
             e_b = np.maximum(e_b, tail)
