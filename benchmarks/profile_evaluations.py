@@ -8,17 +8,17 @@ extrapolation), each over its share of the tolerance, the direction(s) doubled n
 measured on the azimuths already there, the half-azimuth check of ``global_driver._refine_half``), and — where a
 reference is given — the grid's true error. The grid is nested and refined as a whole (no local refinement along β
 or u), so a view's evaluations are its final grid, the nodes of its half-azimuth check (``check``) and the per-call
-probes (lobe search, isotropy test, rounding-noise probe, heavy-tail test), the same for every view. Views that another route or grid settles (the half-vector
-rectangle, tried first for broad lobes, or the adaptive panels after the global rule) are not profiled: their
-``levels`` are empty, or end where the lobe-aligned rule gave them up.
+probes (lobe search, isotropy test, rounding-noise probe, heavy-tail test), the same for every view. Views that
+another route or grid settles (the half-vector rectangle, tried first for broad lobes, or the adaptive panels after
+the global rule) are not profiled: their ``levels`` are empty, or end where the lobe-aligned rule gave them up.
 
 ``oracle=True`` replaces each estimate by the grid's true error (split over β and u in the estimates'
 proportions, so the driver's choice of direction is kept): the evaluations the same rule and coordinates need to
 *reach* the tolerance, against those they spend to *prove* it.
 
 The profile observes the driver through three of its internals (the grid's ``estimate`` and the driver's
-``_directions`` and ``_halves``), patched for the call only; ``tests/engine/test_profile_evaluations.py`` checks that what it
-records adds up to the evaluations and estimates the call reports.
+``_directions`` and ``_halves``), patched for the call only; ``tests/engine/test_profile_evaluations.py`` checks
+that what it records adds up to the evaluations and estimates the call reports.
 
 Run alone: ``.venv/bin/python benchmarks/profile_evaluations.py [--n 100] [--rtol 1e-9] [--oracle]``.
 """
