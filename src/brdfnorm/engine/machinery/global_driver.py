@@ -19,7 +19,12 @@ each step below). This module runs it, level by level, for many cases at once:
    (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), and the units predicted hopeless within the node
    cap — those, and the non-finite ones, are left unsettled for the caller's adaptive panels;
 4. the doublings (:func:`schedule_doublings`), the refined units merged into one group per pair of levels, and
-   batches of cases bounded in memory.
+   batches of cases bounded in memory. Where both directions would be doubled and one more doubling of u is
+   predicted to settle the unit, a lobe-aligned grid doubles β alone and measures u on the azimuths it already has
+   (:func:`_refine_half`, the *half-azimuth check*): the unit's estimate at (2M, N) is then its β estimate plus
+   the error of the N-node radial rule measured on M azimuths, |Q(M, 2N) − Q(M, N)| with its margin, and Q(2M, N)
+   the value (Blinn-Phong n = 100, θ_o = 0…89°, rtol 1e-9: 7 013 → 5 921 evaluations per albedo; the randomized
+   sweeps are in docs/performance.md, sixth session).
 
 What differs between coordinate systems is a grid,
 :class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
@@ -38,8 +43,14 @@ import numpy as np
 
 from . import grid_estimate
 from .result import RouteResult
-from .tensor_rule import (BATCH_NODES, HALF_AZIMUTH_FROM, HALF_AZIMUTH_NEEDED, MAX_LEVEL_B, START_LEVELS, GlobalGrid,
-                          doublings, fejer, normalized)
+from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
+
+#: The half-azimuth check of u (:func:`_refine_half`) from grids of at least 2^HALF_AZIMUTH_FROM azimuths (where
+#: the grid allows it, :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`) ...
+HALF_AZIMUTH_FROM = 3
+#: ... where at most this many more doublings of u are predicted to settle the unit
+#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`).
+HALF_AZIMUTH_NEEDED = 1
 
 
 @dataclass

@@ -108,11 +108,6 @@ SAFETY = 9.0
 STALL = 0.5
 #: Rounding floor per node sum, as QUADPACK's on |K − G|.
 FLOOR = 50.0 * _EPS
-#: The half-azimuth check of u (:func:`brdfnorm.engine.machinery.global_driver._refine_half`) from grids of at
-#: least 2^HALF_AZIMUTH_FROM azimuths (where the grid allows it, :attr:`GlobalGrid.half_azimuth`).
-HALF_AZIMUTH_FROM = 3
-#: ... where one more doubling of u is predicted to settle it (:func:`doublings`).
-HALF_AZIMUTH_NEEDED = 1
 
 
 def neck_u(frame, widths, supports, width_scale=1.0, grading=2) -> np.ndarray:
