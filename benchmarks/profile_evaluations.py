@@ -4,20 +4,21 @@
 Per view, the lobe-aligned global rule's path (:class:`brdfnorm.engine.machinery.tensor_rule.LobeAlignedGrid`, run
 by :mod:`brdfnorm.engine.machinery.global_driver`): at every level the grid M × (N − 1), the plain deviations along
 β and u (d₁ + min(d₂, 9 d₁)), the estimates the driver used (after :mod:`brdfnorm.engine.machinery.grid_estimate`'s
-extrapolation), each over its share of the tolerance, the direction(s) doubled next, and — where a reference is
-given — the grid's true error. The grid is nested and refined as a whole (no local refinement along β or u), so a
-view's evaluations are its final grid plus the per-call probes (lobe search, isotropy test, rounding-noise probe,
-heavy-tail test), the same for every view. Views that another route or grid settles (the half-vector
-rectangle, tried first for broad lobes, or the adaptive panels after the global rule) are not profiled: their
-``levels`` are empty, or end where the lobe-aligned rule gave them up.
+extrapolation), each over its share of the tolerance, the direction(s) doubled next ("β½": β doubled and u
+measured on the azimuths already there, the half-azimuth check of ``global_driver._refine_half``), and — where a
+reference is given — the grid's true error. The grid is nested and refined as a whole (no local refinement along β
+or u), so a view's evaluations are its final grid, the nodes of its half-azimuth check (``check``) and the per-call
+probes (lobe search, isotropy test, rounding-noise probe, heavy-tail test), the same for every view. Views that
+another route or grid settles (the half-vector rectangle, tried first for broad lobes, or the adaptive panels after
+the global rule) are not profiled: their ``levels`` are empty, or end where the lobe-aligned rule gave them up.
 
 ``oracle=True`` replaces each estimate by the grid's true error (split over β and u in the estimates'
 proportions, so the driver's choice of direction is kept): the evaluations the same rule and coordinates need to
 *reach* the tolerance, against those they spend to *prove* it.
 
-The profile observes the driver through two of its internals (the grid's ``estimate`` and the driver's
-``_directions``), patched for the call only; ``tests/engine/test_profile_evaluations.py`` checks that what it
-records adds up to the evaluations and estimates the call reports.
+The profile observes the driver through three of its internals (the grid's ``estimate`` and the driver's
+``_directions`` and ``_halves``), patched for the call only; ``tests/engine/test_profile_evaluations.py`` checks
+that what it records adds up to the evaluations and estimates the call reports.
 
 Run alone: ``.venv/bin/python benchmarks/profile_evaluations.py [--n 100] [--rtol 1e-9] [--oracle]``.
 """
@@ -46,7 +47,7 @@ def profile(n: float, theta: np.ndarray, rtol: float, *, truth: np.ndarray | Non
         raise ValueError("oracle needs truth")
     levels: dict[int, list[dict]] = {}
     estimate = tensor_rule.LobeAlignedGrid.estimate
-    directions = global_driver._directions
+    directions, halves = global_driver._directions, global_driver._halves
 
     def observed_estimate(grid, group, F, q, e_b, e_u, magnitude):
         plain_b, plain_u = e_b[:, 0].copy(), e_u[:, 0].copy()
@@ -61,7 +62,8 @@ def profile(n: float, theta: np.ndarray, rtol: float, *, truth: np.ndarray | Non
             levels.setdefault(int(case), []).append({
                 "M": 2**group.level_b, "N": 2**group.level_u - 1, "plain_b": float(plain_b[i]),
                 "plain_u": float(plain_u[i]), "e_b": float(e_b[i, 0]), "e_u": float(e_u[i, 0]),
-                "estimate": float(total[i, 0]), "true": None if true is None else float(true[i])})
+                "estimate": float(total[i, 0]), "true": None if true is None else float(true[i]),
+                "check": 0 if group.check is None else 2**group.check_b * 2**group.level_u})
         return e_b, e_u, floor, noise, total
 
     def observed_directions(grid, group, short, e_b, e_u, share):
@@ -75,8 +77,17 @@ def profile(n: float, theta: np.ndarray, rtol: float, *, truth: np.ndarray | Non
                          next=("β" if more_b[i] else "") + ("u" if more_u[i] else ""))
         return out
 
+    def observed_halves(grid, group, more_b, more_u, short, needed_u):
+        half = halves(grid, group, more_b, more_u, short, needed_u)
+        if half is not None and isinstance(grid, tensor_rule.LobeAlignedGrid):
+            for i, case in enumerate(group.case):
+                if half[i]:
+                    levels[int(case)][-1]["next"] = "β½"
+        return half
+
     with mock.patch.object(tensor_rule.LobeAlignedGrid, "estimate", observed_estimate), \
-            mock.patch.object(global_driver, "_directions", observed_directions):
+            mock.patch.object(global_driver, "_directions", observed_directions), \
+            mock.patch.object(global_driver, "_halves", observed_halves):
         result = bn.albedo(bn.load("blinn-phong", n=n), theta, method="quadrature", rtol=rtol, backend=backend)
     return {"levels": [levels.get(k, []) for k in range(theta.size)], "evaluations": np.asarray(result.evaluations),
             "value": np.ravel(result.value), "error": np.ravel(result.error)}

@@ -19,7 +19,12 @@ each step below). This module runs it, level by level, for many cases at once:
    (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), and the units predicted hopeless within the node
    cap — those, and the non-finite ones, are left unsettled for the caller's adaptive panels;
 4. the doublings (:func:`schedule_doublings`), the refined units merged into one group per pair of levels, and
-   batches of cases bounded in memory.
+   batches of cases bounded in memory. Where both directions would be doubled and one more doubling of u is
+   predicted to settle the unit, a lobe-aligned grid doubles β alone and measures u on the azimuths it already has
+   (:func:`_refine_half`, the *half-azimuth check*): the unit's estimate at (2M, N) is then its β estimate plus
+   the error of the N-node radial rule measured on M azimuths, |Q(M, 2N) − Q(M, N)| with its margin, and Q(2M, N)
+   the value (Blinn-Phong n = 100, θ_o = 0…89°, rtol 1e-9: 7 013 → 5 921 evaluations per albedo; the randomized
+   sweeps are in docs/performance.md, sixth session).
 
 What differs between coordinate systems is a grid,
 :class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
@@ -40,6 +45,15 @@ from . import grid_estimate
 from .result import RouteResult
 from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
 
+#: The half-azimuth check of u (:func:`_refine_half`) from grids of at least 2^HALF_AZIMUTH_FROM azimuths (where
+#: the grid allows it, :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured
+#: on the 8 start azimuths alone, whose embedded rules the driver does not trust either (module docstring, step 2;
+#: 3, 4 and 5 cost the same on Blinn-Phong n = 100 at rtol 1e-9) ...
+HALF_AZIMUTH_FROM = 4
+#: ... where at most this many more doublings of u are predicted to settle the unit
+#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`).
+HALF_AZIMUTH_NEEDED = 1
+
 
 @dataclass
 class Group:
@@ -56,10 +70,23 @@ class Group:
     last_b: np.ndarray  # (n,)
     last_u: np.ndarray  # (n,)
     earlier: np.ndarray | None = None
+    #: The half-azimuth check of u (:func:`_refine_half`): the grid's radial rule one level up, (n, 2^check_b,
+    #: 2N − 1, C), on every (M / 2^check_b)-th azimuth; None where there is none.
+    check: np.ndarray | None = None
+    check_b: int = -1
+    #: :func:`brdfnorm.engine.machinery.grid_estimate.deviations` of ``grid``, where the driver computed them.
+    deviations: tuple | None = None
 
     def take(self, keep: np.ndarray) -> Group:
         return Group(self.case[keep], self.piece[keep], self.level_b, self.level_u, self.grid[keep],
-                     self.last_b[keep], self.last_u[keep], None if self.earlier is None else self.earlier[keep])
+                     self.last_b[keep], self.last_u[keep], None if self.earlier is None else self.earlier[keep],
+                     None if self.check is None else self.check[keep], self.check_b)
+
+    @property
+    def checked(self) -> bool:
+        """Whether the half-azimuth check measures u on half the grid's azimuths (then it takes part in the
+        estimate; after a further doubling of β alone it is kept for its nodes only)."""
+        return self.check is not None and self.check_b == self.level_b - 1
 
 
 def integrate_global(grid: GlobalGrid, K: int, cases: np.ndarray, *, rtol, atol, max_nodes: int) -> RouteResult:
@@ -107,28 +134,41 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
         rules = []
         for group in groups:
             finite = np.isfinite(group.grid).all(axis=(1, 2, 3))
+            if group.check is not None:
+                finite &= np.isfinite(group.check).all(axis=(1, 2, 3))
             with np.errstate(invalid="ignore", over="ignore"):
                 F = group.grid if finite.all() else np.where(finite[:, None, None, None], group.grid, 0.0)
                 q, e_b, e_u, magnitude = grid.sums(F, group.level_u)
+                trend = q  # (the value whose level-to-level changes grid.may_settle watches)
+                if group.checked:
+                    # u of the grid's own radial rule, measured on half its azimuths (_refine_half); the trend
+                    # is Q(2M, N) + Q(M, 2N) − Q(M, N), the combination technique's Q(2M, 2N), as if u had been
+                    # doubled with β (a level that doubled β alone would otherwise look like a stall)
+                    check = group.check if finite.all() else np.where(finite[:, None, None, None], group.check, 0.0)
+                    q_check, _, e_check, _ = grid.sums(check, group.level_u + 1)
+                    e_u = np.minimum(e_u, e_check)
+                    trend = q + (q_check - grid.sums(check[:, :, 1::2], group.level_u)[0])
+                weights = [fejer(group.level_u - k)[1] for k in range(4)]
+                # (the deviations at 16 azimuths, where grid_estimate.sudden needs them, computed once)
+                group.deviations = grid_estimate.deviations(F, weights) if F.shape[1] == 16 else None
                 e_b, e_u, floor, noise, estimate = grid.estimate(group, F, q, e_b, e_u, magnitude)
                 # A sudden agreement is no evidence of convergence (grid_estimate.sudden): on every grid.
-                raised_b, raised_u = grid_estimate.sudden(F, [fejer(group.level_u - k)[1] for k in range(4)],
-                                                          e_b, e_u, magnitude)
+                raised_b, raised_u = grid_estimate.sudden(F, weights, e_b, e_u, magnitude, group.deviations)
                 estimate = estimate + (raised_b - e_b) + (raised_u - e_u)
                 e_b, e_u = raised_b, raised_u
             latest[group.case, group.piece] = q
             failed[group.case[~finite]] = True
-            rules.append((finite, q, e_b, e_u, floor, noise, estimate))
+            rules.append((finite, q, e_b, e_u, floor, noise, estimate, trend))
         # A case's tolerance, shared by its pieces, is on its value: the settled pieces' and the others' latest.
         total = np.where(done_piece[..., None], value, latest).sum(axis=1)
         case_tolerance = np.maximum(atol[:, None], rtol * np.abs(total)) / P
         refined: dict[tuple[int, int], list[Group]] = {}
-        for group, (finite, q, e_b, e_u, floor, noise, estimate) in zip(groups, rules, strict=True):
+        for group, (finite, q, e_b, e_u, floor, noise, estimate, trend) in zip(groups, rules, strict=True):
             tolerance = case_tolerance[group.case]
             short = grid.short(group)  # (the neck lies below the coarse rules' nodes: tensor_rule.neck_u)
             # Never on the start azimuths: their embedded 4- and 2-azimuth rules are blind to a feature the 8
             # azimuths alias, and agree on the miss (module docstring, step 2).
-            done = (np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, q) & ~short
+            done = (np.all(estimate <= tolerance, axis=1) & finite & grid.may_settle(group, trend) & ~short
                     & (group.level_b > START_LEVELS[0]))
             value[group.case[done], group.piece[done]] = q[done]
             error[group.case[done], group.piece[done]] = estimate[done]
@@ -143,8 +183,10 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
             hopeless &= grid.may_predict(group)
             go_on = finite & ~done & (size <= max_nodes) & ~hopeless & ~failed[group.case]
             failed[group.case[finite & ~done & ~go_on]] = True
+            half = _halves(grid, group, more_b, more_u, short, needed_u)
             schedule_doublings(group, go_on, more_b, more_u, ratio_b, ratio_u, refined,
-                               lambda g, pick, b, u: _refine(grid, g, pick, b, u, evaluations))
+                               lambda g, pick, b, u: _refine(grid, g, pick, b, u, evaluations),
+                               half, lambda g, pick: _refine_half(grid, g, pick, evaluations))
         groups = [_merge(parts) for parts in refined.values()]
         groups = [g if keep.all() else g.take(keep) for g in groups if (keep := ~failed[g.case]).any()]
     # A case is settled when all its pieces are and their summed estimate meets the final tolerance.
@@ -186,31 +228,61 @@ def _directions(grid: GlobalGrid, group: Group, short, e_b, e_u, share):
     return more_b, more_u, ratio_b, ratio_u, needed_b, needed_u
 
 
-def schedule_doublings(group: Group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine) -> None:
+def _halves(grid: GlobalGrid, group: Group, more_b, more_u, short, needed_u) -> np.ndarray | None:
+    """The units to refine by :func:`_refine_half` (β doubled, u measured on the azimuths already there), or None:
+    where both directions would be doubled and one more doubling of u is predicted to settle the unit (from the
+    second doubling of u on, :func:`~brdfnorm.engine.machinery.tensor_rule.doublings`), on a grid that allows it
+    (:attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`). Where u was measured so at this
+    radial level already, u is doubled (:func:`_refine`, on the check's nodes), and a doubling of β alone takes
+    the check along to the new half of the azimuths (else the next level's u estimate would fall back to the
+    coarser rule's, and its value move along u alone, which the stall check reads as a stall)."""
+    if group.checked:
+        return more_b & ~more_u
+    if grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM and group.level_u > START_LEVELS[1]:
+        return more_b & more_u & ~short & (needed_u <= HALF_AZIMUTH_NEEDED) & np.isfinite(group.last_u)
+    return None
+
+
+def schedule_doublings(group: Group, go_on, more_b, more_u, ratio_b, ratio_u, refined: dict, refine,
+                       half=None, refine_half=None) -> None:
     """Double the units ``go_on`` of ``group`` along β (``more_b``), u (``more_u``) or both:
     ``refine(group, pick, b, u)`` makes the finer group of the picked units, filed in ``refined`` by its levels
     with the ratios it was doubled on (the extrapolation of
-    :func:`~brdfnorm.engine.machinery.tensor_rule.doublings`)."""
+    :func:`~brdfnorm.engine.machinery.tensor_rule.doublings`); the units ``half`` (of those doubled along β)
+    are refined by ``refine_half(group, pick)`` instead (β doubled, u checked on half the azimuths: its next
+    estimate is that of one radial level up, so its ratio counts as a doubling of u)."""
+    half = np.zeros(group.case.size, dtype=bool) if half is None else half & go_on
     for b in (False, True):
         for u in (False, True):
-            pick = go_on & (more_b == b) & (more_u == u)
-            if not pick.any():
-                continue
-            new = refine(group, pick, b, u)
-            # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
-            if b and group.level_b > START_LEVELS[0]:
-                new.last_b = ratio_b[pick]
-            if u and group.level_u > START_LEVELS[1]:
-                new.last_u = ratio_u[pick]
-            refined.setdefault((new.level_b, new.level_u), []).append(new)
+            for by_half in ((False, True) if b else (False,)):
+                pick = go_on & (more_b == b) & (more_u == u) & (half == by_half)
+                if not pick.any():
+                    continue
+                new = refine_half(group, pick) if by_half else refine(group, pick, b, u)
+                # The first doubling from the start is often pre-asymptotic: extrapolate from the second on.
+                if b and group.level_b > START_LEVELS[0]:
+                    new.last_b = ratio_b[pick]
+                # (a unit whose u was checked on half the azimuths had its estimate of the next radial level
+                # already: the ratio it was doubled on is that of the level before)
+                if u and group.level_u > START_LEVELS[1] and not group.checked:
+                    new.last_u = ratio_u[pick]
+                refined.setdefault((new.level_b, new.level_u, new.check_b), []).append(new)
 
 
 def _refine(grid: GlobalGrid, group: Group, pick, along_b: bool, along_u: bool, evaluations) -> Group:
-    """The picked units of ``group`` with their grid doubled along β and/or u (only the new nodes evaluated)."""
+    """The picked units of ``group`` with their grid doubled along β and/or u (only the new nodes evaluated; along
+    u, not those the half-azimuth check holds)."""
     every = pick.all()  # (all picked: the group's arrays as they are, no copy of its grid)
     case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
     F = group.grid if every else group.grid[pick]
     level_b, level_u = group.level_b, group.level_u
+    check = None if group.check is None else (group.check if every else group.check[pick])
+    if along_u and check is not None:
+        # u first, from the check's nodes where it has them; the check is then spent
+        new = _new_radial(grid, case, piece, level_b, level_u, check, group.check_b, evaluations)
+        refined = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+        refined[:, :, 1::2], refined[:, :, 0::2] = F, new
+        F, level_u, check, along_u = refined, level_u + 1, None, False
     if along_b:
         M = 2**level_b
         index = 2 * np.arange(M) + 1
@@ -227,7 +299,51 @@ def _refine(grid: GlobalGrid, group: Group, pick, along_b: bool, along_u: bool, 
         F, level_u = refined, level_u + 1
         np.add.at(evaluations, case, grid.count(case, np.arange(M), M) * new.shape[2])
     return Group(case, piece, level_b, level_u, F, group.last_b[pick], group.last_u[pick],
-                 None if group.earlier is None else group.earlier[pick])
+                 None if group.earlier is None else group.earlier[pick], check,
+                 group.check_b if check is not None else -1)
+
+
+def _new_radial(grid: GlobalGrid, case, piece, level_b: int, level_u: int, check, check_b: int,
+                evaluations) -> np.ndarray:
+    """The weighted integrand (n, M, N, C) at the radial nodes one level up that the grid (M = 2^level_b
+    azimuths, radial level ``level_u``) lacks, on all its azimuths: from ``check`` (the half-azimuth check, on
+    every (M / 2^check_b)-th azimuth) where it holds them, evaluated elsewhere."""
+    M, u = 2**level_b, fejer(level_u + 1)[0][0::2]
+    every = M if check is None else M >> check_b
+    index = np.arange(M) if check is None else np.flatnonzero(np.arange(M) % every)
+    values = grid.evaluate(case, piece, index, M, u) if index.size else None
+    if values is not None:
+        np.add.at(evaluations, case, grid.count(case, index, M) * values.shape[2])
+    if check is None:
+        return values
+    out = np.empty((case.size, M, u.size, check.shape[3]))
+    out[:, ::every] = check[:, :, 0::2]
+    if values is not None:
+        out[:, index] = values
+    return out
+
+
+def _refine_half(grid: GlobalGrid, group: Group, pick, evaluations) -> Group:
+    """The half-azimuth check of u (issue 39, item 5): for the picked units of ``group`` at (M, N), where the
+    driver would double both directions, β is doubled to (2M, N) and u measured on the M azimuths already there,
+    (M, 2N) — M·N new nodes instead of 2M·N. The unit's estimate at (2M, N) is then its plain β estimate plus the
+    u estimate of the N-node rule itself, |Q(M, 2N) − Q(M, N)| with its margin (the driver's loop): both bound
+    errors of the reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the M azimuths
+    measure as the 2M would unless a feature along β that only the finer azimuths resolve changes how the
+    radial rule converges (the mixed term of the combination technique, Griebel, Schneider & Zenger 1992; the
+    randomized sweeps of tests/engine/test_half_azimuth_check.py look for one)."""
+    every = pick.all()
+    case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
+    F = group.grid if every else group.grid[pick]
+    old = None if group.check is None else (group.check if every else group.check[pick])
+    new = _new_radial(grid, case, piece, group.level_b, group.level_u, old, group.check_b, evaluations)
+    check = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+    check[:, :, 1::2], check[:, :, 0::2] = F, new
+    halved = Group(case, piece, group.level_b, group.level_u, F, group.last_b[pick], group.last_u[pick],
+                   None if group.earlier is None else group.earlier[pick])
+    refined = _refine(grid, halved, np.ones(case.size, dtype=bool), True, False, evaluations)
+    refined.check, refined.check_b = check, group.level_b
+    return refined
 
 
 def _merge(parts: list[Group]) -> Group:
@@ -237,4 +353,5 @@ def _merge(parts: list[Group]) -> Group:
     return Group(np.concatenate([p.case for p in parts]), np.concatenate([p.piece for p in parts]), first.level_b,
                  first.level_u, np.concatenate([p.grid for p in parts]), np.concatenate([p.last_b for p in parts]),
                  np.concatenate([p.last_u for p in parts]),
-                 None if first.earlier is None else np.concatenate([p.earlier for p in parts]))
+                 None if first.earlier is None else np.concatenate([p.earlier for p in parts]),
+                 None if first.check is None else np.concatenate([p.check for p in parts]), first.check_b)

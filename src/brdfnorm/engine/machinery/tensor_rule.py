@@ -247,6 +247,9 @@ class GlobalGrid:
     pieces = 1
     #: Whether one direction may be doubled alone where the other is within the whole tolerance on its own.
     lone = False
+    #: Whether, where both directions would be doubled, β is doubled and u checked on half the azimuths
+    #: (:func:`brdfnorm.engine.machinery.global_driver._refine_half`).
+    half_azimuth = False
 
     def evaluate(self, case: np.ndarray, piece: np.ndarray, index: np.ndarray, M: int, u: np.ndarray) -> np.ndarray:
         """Weighted integrand values (n, len(index), len(u), C) at the azimuth parameters t = 2π·index/M and the
@@ -298,6 +301,7 @@ class LobeAlignedGrid(GlobalGrid):
     ``azimuthal_tail`` (K,) marks the lobes that are not rotation-invariant."""
 
     lone = True
+    half_azimuth = True
 
     def __init__(self, integrand, frame, widths, supports, noise_amplitude, noise_bound, max_nodes_per_call: int,
                  azimuthal_tail: np.ndarray | None):
@@ -352,7 +356,7 @@ class LobeAlignedGrid(GlobalGrid):
         # The reported grid's own error where its convergence is shown to be geometric (grid_estimate).
         e_b, e_u = grid_estimate.own_error(F, [fejer(group.level_u - k)[1] for k in range(4)], e_b, e_u, magnitude,
                                            floor + noise, self.frame[0][group.case, 2], self.widths[group.case],
-                                           self.grading[group.case] == HEAVY_TAIL_GRADING)
+                                           self.grading[group.case] == HEAVY_TAIL_GRADING, d=group.deviations)
         if self.azimuthal_tail[group.case].any():
             tail = np.where(self.azimuthal_tail[group.case][:, None], _azimuthal_tail(F, group.level_u), 0.0)
             e_b = np.maximum(e_b, tail)
