@@ -109,26 +109,27 @@ def test_brdf_table_on_two_threads_equals_one_thread_cold_and_warm(monkeypatch, 
 def test_batch_dependent_route_gives_the_same_table_on_two_threads(monkeypatch, spy):
     """oren-nayar's generic panels settle some E_avg nodes differently within a batch than alone (at ~1e-11, within
     their estimates): the tasks must not depend on the number of threads (a split by thread count failed this)."""
-    monkeypatch.setattr(executors, "local_cores", lambda: 2)
-    axes = {"mu": np.linspace(0.0, 1.0, 6), "sigma": np.array([0.2, 0.9])}
-    settings = dict(clamp={"mu": 1e-4}, rtol=1e-8, backend="compiled")
-    two = table.compute(bn.load("oren-nayar"), axes, workers=None, **settings)
-    assert max(spy["threads"]) == 2
-    one = table.compute(bn.load("oren-nayar"), axes, workers=1, **settings)
-    for name, values in _tables(two).items():
-        np.testing.assert_array_equal(values, _tables(one)[name], err_msg=name)
+    _assert_two_threads_equal_one(monkeypatch, spy, "oren-nayar",
+                                  {"mu": np.linspace(0.0, 1.0, 6), "sigma": np.array([0.2, 0.9])},
+                                  clamp={"mu": 1e-4}, rtol=1e-8)
 
 
 def test_builtin_dfg_table_on_two_threads_equals_one_thread(monkeypatch, spy):
     """The built-in GGX's split-sum channels (its fused microfacet global rule): the same tables on two threads."""
+    _assert_two_threads_equal_one(monkeypatch, spy, "ggx",
+                                  {"mu": np.linspace(0.05, 1.0, 5), "alpha": np.array([0.1, 0.5, 0.9])},
+                                  rtol=1e-9, channels=("dfg",))
+
+
+def _assert_two_threads_equal_one(monkeypatch, spy, name: str, axes: dict, **settings) -> None:
+    """The compiled backend's table of built-in ``name`` on two threads (checked to have used them) equals, array for
+    array, the one on one thread."""
     monkeypatch.setattr(executors, "local_cores", lambda: 2)
-    axes = {"mu": np.linspace(0.05, 1.0, 5), "alpha": np.array([0.1, 0.5, 0.9])}
-    settings = dict(rtol=1e-9, channels=("dfg",), backend="compiled")
-    two = table.compute(bn.load("ggx"), axes, workers=None, **settings)
+    two = table.compute(bn.load(name), axes, workers=None, backend="compiled", **settings)
     assert max(spy["threads"]) == 2
-    one = table.compute(bn.load("ggx"), axes, workers=1, **settings)
-    for name, values in _tables(two).items():
-        np.testing.assert_array_equal(values, _tables(one)[name], err_msg=name)
+    one = table.compute(bn.load(name), axes, workers=1, backend="compiled", **settings)
+    for table_name, values in _tables(two).items():
+        np.testing.assert_array_equal(values, _tables(one)[table_name], err_msg=table_name)
 
 
 def test_numpy_backend_keeps_one_thread(monkeypatch, spy):
