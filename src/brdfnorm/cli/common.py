@@ -87,7 +87,8 @@ class Spread:
 #: The parallel layer's options, declared once (:func:`parallel_options` adds them to a command).
 PARALLEL_OPTIONS = {
     "workers": (int, typer.Option(None, "--workers", min=1, metavar="N",
-                                  help="Local processes computing the cells (default: all cores; 1: this process).",
+                                  help="Local processes computing the cells (default: all cores, as threads for lut; "
+                                  "1: this process).",
                                   rich_help_panel=PARALLEL_PANEL)),
     "scheduler": (str, typer.Option(None, "--scheduler", envvar="DASK_SCHEDULER_ADDRESS", metavar="tcp://HOST:PORT",
                                     help="Compute the cells on a Dask cluster (`dask scheduler`, `dask worker`) "
