@@ -183,3 +183,18 @@ def test_an_edited_inlined_helper_reaches_the_cached_kernel_only_after_a_refresh
     (tmp_path / "helper.py").write_text(helper.format(3.0))
     # Numba alone (refresh False) loads the cached kernel with the old helper inside: the bug this module fixes.
     assert run() == ("3.0" if refresh else "2.0"), numba.__version__
+
+
+def test_the_anisotropic_route_refreshes_before_its_kernels_load():
+    """routes/anisotropic.py loads its cached kernels without the compiled backend's loading: its import refreshes."""
+    pytest.importorskip("numba")
+    import subprocess
+    import sys
+
+    script = ("import brdfnorm.engine.compiled.staleness as s\ncalls = []\ns.refresh = lambda: calls.append(1) or []\n"
+              "import brdfnorm.engine.routes.anisotropic\nprint(len(calls))")
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                          env=environment)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1"]

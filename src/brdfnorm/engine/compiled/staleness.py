@@ -53,6 +53,7 @@ CACHED = (
 #: What the stamp hashes: :data:`CACHED` and every module of the package one of them imports (what their machine code
 #: may hold: tests/engine/test_kernel_staleness.py keeps the list complete).
 SOURCES = CACHED + (
+    "engine/compiled/backend.py",
     "engine/compiled/marks.py",
     "engine/machinery/grid_estimate.py",
     "engine/machinery/kronrod.py",

@@ -81,6 +81,7 @@ import numpy as np
 
 from ...errors import ArgumentError
 from ...models.microfacet import SHADOWING
+from ..compiled.backend import numba_available
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
 
 DISTRIBUTIONS = ("ggx", "beckmann")
@@ -110,6 +111,10 @@ _SQRT_PI = math.sqrt(math.pi)
 _X = NODES.copy()
 _WK = KRONROD.copy()
 _WG = GAUSS.copy()
+
+# This module's kernels are loaded from Numba's cache at their first call, which need not pass through the compiled
+# backend's loading: the cache of kernels whose inlined sources changed is refreshed here first (staleness.py).
+numba_available()
 
 
 @numba.njit(cache=True, fastmath=False)
