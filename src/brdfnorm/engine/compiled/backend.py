@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import threading
 from collections.abc import Iterator
 from contextvars import ContextVar
 from functools import cache
@@ -24,7 +25,8 @@ BACKENDS = ("numpy", "compiled")
 #: The environment variable that chooses the backend where no argument does.
 ENVIRONMENT = "BRDFNORM_BACKEND"
 
-_NOTICES: set[str] = set()
+_TOLD: set[str] = set()
+_TOLD_LOCK = threading.Lock()
 _SCOPE: ContextVar[str | None] = ContextVar("brdfnorm_backend", default=None)
 
 
@@ -40,11 +42,19 @@ def scope(backend: str | None) -> Iterator[None]:
         _SCOPE.reset(token)
 
 
+def tell_once(message: str) -> None:
+    """``message`` as one line on stderr, once per process, however many threads reach it at once (a table's
+    cells run on a thread per core: :mod:`brdfnorm.parallel.threads`)."""
+    with _TOLD_LOCK:
+        if message in _TOLD:
+            return
+        _TOLD.add(message)
+    print(message, file=sys.stderr)
+
+
 def notice(message: str) -> None:
-    """One line on stderr, once per process for each message (why the numpy backend computes)."""
-    if message not in _NOTICES:
-        _NOTICES.add(message)
-        print(f"brdfnorm: {message}; using the numpy backend", file=sys.stderr)
+    """Why the numpy backend computes, once per process (:func:`tell_once`)."""
+    tell_once(f"brdfnorm: {message}; using the numpy backend")
 
 
 @cache

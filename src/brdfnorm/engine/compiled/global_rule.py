@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -37,6 +36,7 @@ from numba.core.errors import NumbaError
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
+from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
 from .rules import grid_sums
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
@@ -573,17 +573,9 @@ def integrate(cases: np.ndarray, lam: np.ndarray, width: np.ndarray, symmetric: 
         try:
             kernel = shader_kernel(every, 9 + len(arguments) - 2, max(channels - 1, PADDED))
         except NumbaError as failure:  # (settling no case here, the route's panels compute them all)
-            _tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
+            tell_once(f"brdfnorm: the fused global rule does not compile for this shader ({type(failure).__name__})"
                        "; its panels compute")
             return value, error, evaluations, settled
     kernel(*every)
     return value, error, evaluations, settled
 
-
-_TOLD: set[str] = set()
-
-
-def _tell_once(message: str) -> None:
-    if message not in _TOLD:
-        _TOLD.add(message)
-        print(message, file=sys.stderr)
