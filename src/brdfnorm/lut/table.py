@@ -45,9 +45,9 @@ from . import glass
 from .axes import axis_parameter, checked_axes, per_cell
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
 from .cloth import cloth_model
+from .lookup import GRIDS, Lut, grid_values, plain_params  # noqa: F401 — re-exported
 from .splitsum import SchlickWeighted, split_sum_models  # noqa: F401 — re-exported (audit.reference)
 
-GRIDS = ("node", "texel")
 CHANNELS = ("dfg",)
 #: Cells per batched albedo call: large enough to amortize numpy's overhead, small enough for a progress bar
 #: that moves and for memory that stays bounded (the integrator holds a few hundred nodes per cell).
@@ -65,9 +65,22 @@ RULE_SAFETY = 2.0
 RULE_POWER = 0.75
 #: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
 MU_FLOOR = 1e-7
-#: E_avg's albedos at nodes of small weight are computed to looser tolerances, in steps of this factor, never
-#: looser than NODE_RTOL_MAX (see average_over_mu).
+#: E_avg's node albedos are asked NODE_SHARE·rtol divided by their share of the integral (n·w·4x³ for the n-interval
+#: rule: 1 for an average node), where that share is below 1, in steps of NODE_RTOL_STEP, never looser than
+#: NODE_RTOL_MAX (see _node_albedos). The routes' estimates come back 10–50× under what was asked, so that
+#: NODE_SHARE = 2.5 still leaves their sum at 10–80 % of rtol·E_avg (the 32 × 32 examples/ggx.brdf table; at 1/4, the
+#: old setting, at 2–10 %: E_avg took 17.9 M evaluations against 14.3 M now, for the same albedos).
 NODE_RTOL_STEP = 10.0
+NODE_RTOL_MAX = 1e-4
+NODE_SHARE = 2.5
+#: The same for the adaptive route's panels (_average_adaptive), where a node's weight is the density 4x³ and
+#: bisection does not shrink the nodes' estimates: their sum is kept within a quarter of rtol·(E_avg + ∫ |E|).
+PANEL_SHARE = 0.25
+#: A combination whose rule error is within RULE_SHARE·rtol·|E_avg| but whose total is not has its heaviest nodes
+#: asked again, each for TIGHTEN_FILL of an equal share of what is left (see _tighten), instead of a finer rule
+#: (whose new nodes would not shrink the old nodes' estimates) or the adaptive route afresh.
+RULE_SHARE = 0.5
+TIGHTEN_FILL = 0.5
 NODE_RTOL_MAX = 1e-4
 #: A combination whose node albedo came back "rounding-limited" (the shader's float64 noise above the node's
 #: tolerance) asks its later nodes for no less than this times that node's relative estimate: a tolerance below
@@ -75,18 +88,6 @@ NODE_RTOL_MAX = 1e-4
 #: examples/ggx.brdf: 65 000–350 000 evaluations per node at rtol/4 = 2.5e-11 against 11 000–21 000 at 1e-10,
 #: with the same estimates, 5–8e-11, which are the noise bound).
 NOISE_FLOOR_FACTOR = 1.0
-
-def grid_values(start: float, stop: float, count: int, grid: str = "node") -> np.ndarray:
-    """``count`` values over [start, stop]: at i/(N−1) (``node``, the default) or at (i + ½)/N (``texel``,
-    where a GPU samples texel i of an N-texel texture)."""
-    if grid not in GRIDS:
-        raise ArgumentError(f"unknown grid {grid!r} (known: {', '.join(GRIDS)})", where="grid")
-    if count < 1:
-        raise ArgumentError(f"an axis needs at least one value, got {count}", where="axes")
-    if grid == "node":
-        return np.linspace(start, stop, count)
-    return start + (np.arange(count) + 0.5) / count * (stop - start)
-
 
 @dataclass(frozen=True)
 class CellResult:
@@ -193,25 +194,29 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
 
 
 def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params: Mapping[str, np.ndarray],
-                  rtol: float, method: str, floor: np.ndarray | None = None, threads: int = 1
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """E at max(μ, MU_FLOOR) for E_avg's nodes μ (N,) with per-node parameter values: (value, error, ok, noisy).
+                  rtol: float, method: str, floor: np.ndarray | None = None, threads: int = 1,
+                  tolerance: np.ndarray | None = None, share: float = PANEL_SHARE
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """E at max(μ, MU_FLOOR) for E_avg's nodes μ (N,) with per-node parameter values: (value, error, ok, noisy,
+    tolerance asked).
 
-    A node's albedo enters the integral through its ``weight`` (N,), the density of its rule's variable (4x³ in
-    x = √μ here; ≤ 1 below x = 4^(-1/3)): it needs rtol/(4·min(1, weight)), which keeps Σ weight·error ≤
-    (rtol/4)(E_avg + ∫ |E|) — rounded down to powers of NODE_RTOL_STEP so that the nodes go in a few batched calls
-    (the grazing ones, the costliest albedos, are the loosest). ``floor`` (N,): a relative tolerance below which
-    a node is not asked, its combination's float64 noise (see average_over_mu), rounded up to a power of two.
+    A node's albedo enters the integral through its ``weight`` (N,): its share of the integral relative to an
+    average node of its rule (n·w·4x³ for the n-interval rule in x = √μ; the density 4x³ for a panel's rule). It
+    is asked ``share``·rtol/min(1, weight) (at most NODE_RTOL_MAX), which keeps Σ w·4x³·error ≤
+    share·rtol·(E_avg + mean |E| over the nodes) — rounded down to powers of NODE_RTOL_STEP so that the nodes
+    go in a few batched calls (the grazing ones, the costliest albedos, are the loosest); or ``tolerance`` (N,)
+    where given (:func:`_tighten`). ``floor`` (N,): a relative tolerance below which a node is not asked, its
+    combination's float64 noise (see average_over_mu), rounded up to a power of two.
 
     ``ok``: the node's estimate is final — converged, or stopped "rounding-limited" (the route then carries its
     rounding-noise bound in the estimate, which more nodes cannot shrink); ``noisy``: the latter."""
-    ratio = 1.0 / np.minimum(1.0, np.maximum(weight, 1e-300))
-    cap = np.log(NODE_RTOL_MAX / (rtol / 4)) / np.log(NODE_RTOL_STEP)
-    level = np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
-    tolerance = np.maximum(rtol / 4, np.minimum(rtol / 4 * NODE_RTOL_STEP**level, NODE_RTOL_MAX))
-    if floor is not None:
-        with np.errstate(divide="ignore"):
-            tolerance = np.maximum(tolerance, np.where(floor > 0, 2.0 ** np.ceil(np.log2(floor)), 0.0))
+    if tolerance is None:
+        ratio = 1.0 / np.minimum(1.0, np.maximum(weight, 1e-300))
+        base = share * rtol
+        cap = np.log(NODE_RTOL_MAX / base) / np.log(NODE_RTOL_STEP)
+        level = np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
+        tolerance = np.maximum(base, np.minimum(base * NODE_RTOL_STEP**level, NODE_RTOL_MAX))
+    tolerance = _floored(tolerance, floor)
     theta = np.arccos(np.clip(np.maximum(mu, MU_FLOOR), 0.0, 1.0))
     value, error = np.empty(mu.size), np.empty(mu.size)
     converged, noisy = np.empty(mu.size, dtype=bool), np.zeros(mu.size, dtype=bool)
@@ -223,7 +228,16 @@ def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params:
         converged[nodes] = cells.converged
         if cells.reason is not None:
             noisy[nodes] = ~cells.converged & (cells.reason == "rounding-limited")
-    return value, error, converged | noisy, noisy
+    return value, error, converged | noisy, noisy, tolerance
+
+
+def _floored(tolerance: np.ndarray, floor: np.ndarray | None) -> np.ndarray:
+    """``tolerance`` raised to ``floor`` (0: none) rounded up to a power of two (see :func:`_node_albedos`)."""
+    if floor is None:
+        return np.asarray(tolerance, dtype=float)
+    with np.errstate(divide="ignore"):
+        return np.maximum(tolerance, np.where(floor > 0, 2.0 ** np.ceil(np.log2(np.where(floor > 0, floor, 1.0))),
+                                              0.0))
 
 
 def clenshaw_curtis(intervals: int) -> tuple[np.ndarray, np.ndarray]:
@@ -263,55 +277,66 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
     n = CC_FIRST
-    x, _ = clenshaw_curtis(n)
-    values = np.zeros((M, n + 1))  # x = 0 has weight 4x³ = 0: never evaluated
-    errors = np.zeros((M, n + 1))
-    albedo_ok = np.ones(M, dtype=bool)
+    x, w = clenshaw_curtis(n)
+    # Per node (x = 0 has weight 4x³ = 0: never evaluated): value, error, the tolerance asked, and whether its
+    # estimate is final (ok) or the route's rounding-noise bound (noisy).
+    node = {"value": np.zeros((M, n + 1)), "error": np.zeros((M, n + 1)), "asked": np.full((M, n + 1), np.inf),
+            "ok": np.ones((M, n + 1), dtype=bool), "noisy": np.zeros((M, n + 1), dtype=bool)}
     open_ = np.ones(M, dtype=bool)
-    largest_e = np.zeros(M)
     noise = np.zeros(M)  # per combination: the largest relative estimate of its rounding-limited nodes
     integrals = 0
 
-    def fill(rows: np.ndarray, columns: np.ndarray, nodes: np.ndarray) -> None:
+    def fill(rows: np.ndarray, columns: np.ndarray, share: np.ndarray, tolerance: np.ndarray | None = None) -> None:
+        """Node albedos at ``columns`` of ``rows`` (or the (rows, columns) pairs where ``columns`` is 2-D)."""
         nonlocal integrals
-        owner = np.repeat(rows, columns.size)
-        x = np.tile(nodes[columns], rows.size)
-        value, error, ok, noisy = _node_albedos(model, x * x, 4.0 * x**3, {k: v[owner] for k, v in flat.items()},
-                                                rtol, method, NOISE_FLOOR_FACTOR * noise[owner], threads)
-        _learn_noise(noise, owner, value, error, noisy)
-        values[np.ix_(rows, columns)] = value.reshape(rows.size, columns.size)
-        errors[np.ix_(rows, columns)] = error.reshape(rows.size, columns.size)
-        albedo_ok[rows[~ok.reshape(rows.size, columns.size).all(axis=1)]] = False
-        largest_e[rows] = np.maximum(largest_e[rows], np.abs(value).reshape(rows.size, columns.size).max(axis=1))
-        integrals += value.size
+        rows_, columns_ = np.broadcast_arrays(rows[:, None], columns if columns.ndim == 2 else columns[None, :])
+        rows_, columns_ = rows_.ravel(), columns_.ravel()
+        mu = x[columns_] ** 2
+        result = _node_albedos(model, mu, share.ravel(), {k: v[rows_] for k, v in flat.items()}, rtol, method,
+                               NOISE_FLOOR_FACTOR * noise[rows_], threads,
+                               None if tolerance is None else tolerance.ravel(), NODE_SHARE)
+        _learn_noise(noise, rows_, *result[:2], result[3])
+        for key, part in zip(("value", "error", "ok", "noisy", "asked"), result, strict=True):
+            node[key][rows_, columns_] = part
+        integrals += rows_.size
+
+    def level_share(columns: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """The nodes' shares of the rule they enter (n·w·4x³), one row per combination."""
+        return np.broadcast_to(n * w[columns] * 4.0 * x[columns] ** 3, (rows.size, columns.size))
 
     # The node at μ = 1 first: where the shader's noise is above the nodes' tolerance it shows there (see
     # NOISE_FLOOR_FACTOR), before the other nodes are asked for what the noise does not allow.
-    fill(np.arange(M), np.array([n]), x)
-    fill(np.arange(M), np.arange(1, n), x)
+    everyone = np.arange(M)
+    fill(everyone, np.array([n]), level_share(np.array([n]), everyone))
+    fill(everyone, np.arange(1, n), level_share(np.arange(1, n), everyone))
     total, total_error = np.zeros(M), np.zeros(M)
-    previous = values @ (clenshaw_curtis(n)[1] * 4.0 * x**3)
     # The first rule's every other and every fourth node: |Q_n − Q_n/2| and |Q_n/2 − Q_n/4| for free.
-    half, quarter = ((values[:, ::step] @ (w_ * 4.0 * x_**3)) for step, (x_, w_) in
-                     ((2, clenshaw_curtis(n // 2)), (4, clenshaw_curtis(n // 4))))
-    change, earlier_change = np.abs(previous - half), np.abs(half - quarter)
+    first, half, quarter = ((node["value"][:, ::step] @ (w_ * 4.0 * x_**3)) for step, (x_, w_) in
+                            ((1, (x, w)), (2, clenshaw_curtis(n // 2)), (4, clenshaw_curtis(n // 4))))
+    change, earlier_change = np.abs(first - half), np.abs(half - quarter)
     while n < CC_MAX and open_.any():
-        coarse_values, coarse_errors = values, errors
         n *= 2
         x, w = clenshaw_curtis(n)
-        values, errors = np.zeros((M, n + 1)), np.zeros((M, n + 1))
-        values[:, ::2], errors[:, ::2] = coarse_values, coarse_errors
+        for key, coarse in node.items():  # (the new nodes of closed combinations are never read)
+            node[key] = np.full((M, n + 1), {"asked": np.inf, "ok": True}.get(key, 0), dtype=coarse.dtype)
+            node[key][:, ::2] = coarse
         rows = np.flatnonzero(open_)
-        fill(rows, np.arange(1, n + 1, 2), x)
+        fill(rows, np.arange(1, n + 1, 2), level_share(np.arange(1, n + 1, 2), rows))
         weight = w * 4.0 * x**3  # dμ 2μ = 4x³ dx
-        fine = values[rows] @ weight
-        total[rows] = fine
-        difference = np.abs(fine - previous[rows])
-        total_error[rows] = (rule_error(difference, change[rows], earlier_change[rows])
-                             + errors[rows] @ np.abs(weight))
-        previous[rows], change[rows], earlier_change[rows] = fine, difference, change[rows]
+        coarse_weight = clenshaw_curtis(n // 2)[1] * 4.0 * x[::2] ** 3
+        fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
+        # Where the rule has settled but the nodes' estimates have not, the few nodes that hold most of the sum are
+        # asked again, tighter (:func:`_tighten`): cheaper than a finer rule, whose new nodes would not shrink them.
+        redo = (rule + nodes > rtol * np.abs(fine)) & (rule <= RULE_SHARE * rtol * np.abs(fine))
+        if redo.any() and _tighten(node, rows[redo], rtol * np.abs(fine[redo]) - rule[redo], weight, noise,
+                                   fill):
+            fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
+        total[rows], total_error[rows] = fine, rule + nodes
+        change[rows], earlier_change[rows] = difference, change[rows]
         open_[rows] = total_error[rows] > rtol * np.abs(fine)
+    largest_e = np.abs(node["value"]).max(axis=1)
     total_error += MU_FLOOR**2 * largest_e  # nodes below MU_FLOOR evaluated there
+    albedo_ok = node["ok"].all(axis=1)
     converged = albedo_ok & ~open_
     rest = np.flatnonzero(open_)
     if rest.size:
@@ -320,6 +345,39 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
             noise=noise[rest], threads=threads)
         integrals += count
     return total, total_error, converged, integrals
+
+
+def _estimate(node: dict[str, np.ndarray], rows: np.ndarray, weight: np.ndarray, coarse_weight: np.ndarray,
+              change: np.ndarray, earlier_change: np.ndarray):
+    """E_avg of ``rows`` by the rule of ``weight`` and by the rule of every other node (``coarse_weight``): (Q_2n,
+    |Q_2n − Q_n|, the rule's error estimate (:func:`rule_error`), Σ |weight|·node error)."""
+    fine = node["value"][rows] @ weight
+    difference = np.abs(fine - node["value"][rows][:, ::2] @ coarse_weight)
+    return (fine, difference, rule_error(difference, change[rows], earlier_change[rows]),
+            node["error"][rows] @ np.abs(weight))
+
+
+def _tighten(node: dict[str, np.ndarray], rows: np.ndarray, budget: np.ndarray, weight: np.ndarray,
+             noise: np.ndarray, fill: Callable) -> bool:
+    """Ask again, tighter, the nodes of ``rows`` whose share of Σ |weight|·error exceeds TIGHTEN_FILL·budget/n
+    (``budget`` (R,): what the rule's error leaves of rtol·|E_avg|), each for that allowance through its weight
+    and value, rounded down to a power of NODE_RTOL_STEP. Nodes already asked that tightly, or whose estimate is
+    their combination's float64 noise (``noisy``; see average_over_mu), are left. Returns whether any was asked."""
+    count = weight.size - 1
+    allowance = TIGHTEN_FILL * budget[:, None] / count
+    share = node["error"][rows] * np.abs(weight)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        wanted = allowance / (np.abs(weight) * np.abs(node["value"][rows]))
+        wanted = NODE_RTOL_STEP ** np.floor(np.log(wanted) / np.log(NODE_RTOL_STEP))
+    floor = NOISE_FLOOR_FACTOR * noise[rows][:, None]
+    wanted = np.where(np.isfinite(wanted) & (wanted > 0), wanted, np.inf)
+    wanted = _floored(wanted, np.broadcast_to(floor, wanted.shape))
+    again = (share > allowance) & ~node["noisy"][rows] & (wanted < node["asked"][rows]) & (weight > 0)
+    if not again.any():
+        return False
+    which, columns = np.nonzero(again)
+    fill(rows[which], columns[:, None], np.ones((which.size, 1)), wanted[which, columns][:, None])
+    return True
 
 
 def rule_error(difference: np.ndarray, previous: np.ndarray, earlier: np.ndarray) -> np.ndarray:
@@ -381,7 +439,7 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         nonlocal integrals
         mu, density = x * x, 4.0 * x**3  # dμ 2μ = 4x³ dx
         which = np.broadcast_to(owner[:, None], x.shape)
-        E, E_error, good, noisy = _node_albedos(
+        E, E_error, good, noisy, _ = _node_albedos(
             model, mu.ravel(), density.ravel(), {n: v[which.ravel()] for n, v in flat.items()}, rtol, method,
             NOISE_FLOOR_FACTOR * noise[which.ravel()], threads)
         _learn_noise(noise, which.ravel(), E, E_error, noisy)
@@ -485,53 +543,6 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     return Computed(tables, table_axes, converged, avg_converged, int(evaluations.sum()), dfg)
 
 
-class Lut(Mapping):
-    """A lookup table: a mapping table name (``E``, ``E_error``, ``E_avg``, ``1-E``, ``DFG_f0`` …) -> array.
-
-    ``axes`` maps axis name -> values in the order the arrays are indexed (the nominal grid values; clamped
-    values are what was evaluated, see ``meta["clamp"]``); ``table_axes`` names the axes of each table (E_avg
-    lacks the direction axis); ``meta`` holds the model, parameters, grid, clamps, tolerance and version.
-    """
-
-    def __init__(self, tables: Mapping[str, np.ndarray], axes: Mapping[str, Sequence[float]], meta: Mapping,
-                 table_axes: Mapping[str, Sequence[str]] | None = None) -> None:
-        self.axes = {name: np.asarray(values, dtype=float) for name, values in axes.items()}
-        self.table_axes = {name: tuple(table_axes[name]) if table_axes else tuple(self.axes) for name in tables}
-        self._tables = {}
-        for name, array in tables.items():
-            if list(self.table_axes[name]) != [a for a in self.axes if a in self.table_axes[name]]:
-                raise ArgumentError(f"table {name!r}: its axes {self.table_axes[name]} must be some of "
-                                    f"{tuple(self.axes)} in that order", where="tables")
-            expected = tuple(len(self.axes[a]) for a in self.table_axes[name])
-            array = np.asarray(array)  # a float32 file's tables stay float32
-            array = array if array.dtype in (np.float16, np.float32) else array.astype(float)
-            if array.shape != expected:
-                raise ArgumentError(f"table {name!r} has shape {array.shape}, its axes "
-                                    f"{self.table_axes[name]} need {expected}", where="tables")
-            self._tables[name] = array
-        self.meta = dict(meta)
-        self.meta["axes"] = list(self.axes)
-        self.meta["tables"] = {name: list(self.table_axes[name]) for name in self._tables}
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self._tables[name]
-
-    def __iter__(self):
-        return iter(self._tables)
-
-    def __len__(self) -> int:
-        return len(self._tables)
-
-    def __repr__(self) -> str:
-        axes = ", ".join(f"{n}[{len(v)}]" for n, v in self.axes.items())
-        return f"Lut({self.meta.get('model', '?')}; axes {axes}; tables {', '.join(self._tables)})"
-
-    def full(self, name: str) -> np.ndarray:
-        """Table ``name`` broadcast over every axis of the lut (E_avg repeated along μ)."""
-        index = tuple(slice(None) if a in self.table_axes[name] else None for a in self.axes)
-        return np.broadcast_to(self._tables[name][index], tuple(len(v) for v in self.axes.values()))
-
-
 def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
             rtol: float = DEFAULT_RTOL, method: str = "auto", channels: Sequence[str] = (), average: bool = True,
             grid: str | None = None, source: str | None = None, progress: ProgressCallback | None = None,
@@ -583,18 +594,3 @@ def compute(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping
     if aliased:
         meta["aliases"] = {name: text for name, (_, _, text) in aliased.items()}
     return Lut(result.tables, axes, meta, result.table_axes)
-
-
-def plain_params(params: Mapping[str, object]) -> dict:
-    """Parameter values as JSON data for a table's metadata (bools as bools, numbers as floats or lists)."""
-    out = {}
-    for name, value in params.items():
-        if isinstance(value, (bool, np.bool_)):
-            out[name] = bool(value)
-        elif isinstance(value, (tuple, list, np.ndarray)):
-            out[name] = [float(v) for v in np.ravel(value)]
-        elif isinstance(value, (int, float, np.number)):
-            out[name] = float(value)
-        else:
-            out[name] = str(value)
-    return out
