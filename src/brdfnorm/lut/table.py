@@ -81,6 +81,9 @@ PANEL_SHARE = 0.25
 #: (whose new nodes would not shrink the old nodes' estimates) or the adaptive route afresh.
 RULE_SHARE = 0.5
 TIGHTEN_FILL = 0.5
+#: Passes of _tighten per rule (a node's first estimate may be far under what it was asked; the second pass takes
+#: what the first left).
+TIGHTEN_PASSES = 2
 NODE_RTOL_MAX = 1e-4
 #: A combination whose node albedo came back "rounding-limited" (the shader's float64 noise above the node's
 #: tolerance) asks its later nodes for no less than this times that node's relative estimate: a tolerance below
@@ -325,11 +328,15 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         weight = w * 4.0 * x**3  # dμ 2μ = 4x³ dx
         coarse_weight = clenshaw_curtis(n // 2)[1] * 4.0 * x[::2] ** 3
         fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
-        # Where the rule has settled but the nodes' estimates have not, the few nodes that hold most of the sum are
-        # asked again, tighter (:func:`_tighten`): cheaper than a finer rule, whose new nodes would not shrink them.
-        redo = (rule + nodes > rtol * np.abs(fine)) & (rule <= RULE_SHARE * rtol * np.abs(fine))
-        if redo.any() and _tighten(node, rows[redo], rtol * np.abs(fine[redo]) - rule[redo], weight, noise,
-                                   fill):
+        # Where the rule has settled, or its differences may be the nodes' errors, but the nodes' estimates have
+        # not, the few nodes that hold most of their sum are asked again, tighter (:func:`_tighten`): cheaper than
+        # a finer rule, whose new nodes would not shrink them.
+        for _ in range(TIGHTEN_PASSES):
+            goal = rtol * np.abs(fine)
+            redo = (rule + nodes > goal) & ((rule <= RULE_SHARE * goal) | (nodes >= rule))
+            if not (redo.any() and _tighten(node, rows[redo], goal[redo] - np.minimum(rule, RULE_SHARE * goal)[redo],
+                                            weight, noise, fill)):
+                break
             fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
         total[rows], total_error[rows] = fine, rule + nodes
         change[rows], earlier_change[rows] = difference, change[rows]
