@@ -35,6 +35,7 @@ from ..models.base import Model
 from ..models.charlie import ALPHA_MIN as CLOTH_ALPHA_MIN
 from ..models.microfacet import SHADOWING
 from ..parallel.threads import local_threads
+from ..parallel.threads import scope as threads_scope
 from .conventions import (
     DIELECTRIC_MEANINGS,
     DIELECTRIC_SHADOWING,
@@ -113,6 +114,11 @@ class Reference:
                eta: np.ndarray | float = 0.0, k: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """(value, error estimate) of ``quantity`` at the pairs (mu, alpha) — triples with ``eta`` for
         E_dielectric and E_conductor (with the extinction ``k``) — broadcast together."""
+        with threads_scope(local_threads()):  # every batch of cells below on a thread per core
+            return self._values(quantity, shadowing, mu, alpha, eta, k)
+
+    def _values(self, quantity: str, shadowing: str, mu: np.ndarray, alpha: np.ndarray, eta: np.ndarray | float,
+                k: float) -> tuple[np.ndarray, np.ndarray]:
         mu, alpha, eta = np.broadcast_arrays(np.asarray(mu, dtype=float),
                                              np.clip(np.asarray(alpha, dtype=float), *self.alpha_range),
                                              np.asarray(eta, dtype=float))
@@ -126,8 +132,7 @@ class Reference:
             m = np.array([key[0] for key in missing])
             a = np.array([key[1] for key in missing])
             if quantity == "E_avg":
-                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol,
-                                                     threads=local_threads())
+                value, error, _, _ = average_over_mu(self._model("E", shadowing), {"alpha": a}, rtol=rtol)
             else:
                 cell_params = {"alpha": a}
                 if quantity in ("E_dielectric", "E_conductor"):
@@ -135,7 +140,7 @@ class Reference:
                 if quantity == "E_conductor":
                     cell_params["k"] = np.full(len(missing), float(k))
                 cells = compute_cells(self._model(quantity, shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                      cell_params, rtol=rtol, threads=local_threads())
+                                      cell_params, rtol=rtol)
                 value, error = cells.value[:, 0], cells.error[:, 0]
             self.computed[quantity] += len(missing)
             for key, v, e in zip(missing, value.tolist(), error.tolist(), strict=True):
@@ -157,7 +162,7 @@ class Reference:
         if missing:
             m, a, e = (np.array([key[i] for key in missing]) for i in range(3))
             cells = compute_cells(self._model("E", shadowing), np.arccos(np.clip(m, -1.0, 1.0)),
-                                  {"alpha": a, "eta": e}, rtol=rtol, threads=local_threads())
+                                  {"alpha": a, "eta": e}, rtol=rtol)
             error = cells.error.reshape(len(missing), -1)[:, 0].tolist()
             parts = {"E_glass": cells.value.reshape(len(missing), -1)[:, 0],
                      "R_glass": cells.reflected.reshape(len(missing), -1)[:, 0],

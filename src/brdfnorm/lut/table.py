@@ -25,7 +25,6 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 
 from __future__ import annotations
 
-import functools
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -39,7 +38,7 @@ from ..engine.machinery.interval import GaussKronrod, adaptive_interval
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..parallel.threads import cell_tasks, local_threads, run_tasks
+from ..parallel.threads import cell_tasks, current, local_threads, run_tasks, scoped
 from ..validate import DEFAULT_RTOL
 from . import glass
 from .axes import axis_parameter, checked_axes, per_cell
@@ -106,10 +105,11 @@ class CellResult:
 
 
 def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarray], *, rtol: float,
-                  method: str = "auto", over: str = "light", threads: int = 1) -> CellResult:
+                  method: str = "auto", over: str = "light", threads: int | None = None) -> CellResult:
     """E for K cells: view angles ``theta`` (K,) radians and per-cell parameter values (K,) — one albedo call per
     task of at most CHUNK_CELLS cells (strided subsets, :func:`brdfnorm.parallel.threads.cell_tasks`), the tasks on
-    ``threads`` threads of this process (the tasks, and so the values, the same for any number of threads).
+    ``threads`` threads of this process (None: those of the caller's :func:`brdfnorm.parallel.threads.scope`; the
+    tasks, and so the values, the same for any number of threads).
 
     A pure function of its arguments (the unit of work a process pool or a cluster computes).
     """
@@ -123,7 +123,7 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
     tasks = cell_tasks(theta.size, CHUNK_CELLS)  # (the same for any number of threads: so are the values)
     with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
         warnings.simplefilter("ignore", UserWarning)  # (set here, once: catch_warnings is not thread safe)
-        parts = run_tasks(chunk, tasks, threads)
+        parts = run_tasks(chunk, tasks, current() if threads is None else threads)
     back = np.argsort(np.concatenate(tasks), kind="stable")  # the cells' order from the tasks'
     keys = ("value", "error", "evaluations", "converged", "reflected", "transmitted", "reason")
     return CellResult(*(None if getattr(parts[0], k) is None else np.concatenate([getattr(r, k) for r in parts])[back]
@@ -146,13 +146,13 @@ def _theta_of(direction_axis: str, values: np.ndarray) -> np.ndarray:
 
 
 def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, total, progress, spread=None,
-              name="E", threads=1):
+              name="E"):
     """E, its error, convergence and evaluation counts over the full grid (and a BSDF's parts E_R, E_T).
 
     With ``spread`` (``workers``, ``scheduler``, ``checkpoint``) the cells go to :mod:`brdfnorm.parallel` — local
     processes or a Dask cluster, each table resumable in its own checkpoint directory — where the model has a
     source to travel as (built-ins and ``.brdf`` files; the split-sum weightings stay in this process).
-    Otherwise in this process, CHUNK_CELLS cells per albedo call on ``threads`` threads (:func:`compute_cells`).
+    Otherwise in this process, CHUNK_CELLS cells per albedo call on the scope's threads (:func:`compute_cells`).
     The values are the same either way."""
     K = int(np.prod(shape))
     theta_flat = np.broadcast_to(theta_grid, shape).ravel()
@@ -183,7 +183,7 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
     for start in range(0, K, BLOCK_CELLS):
         cells = slice(start, min(K, start + BLOCK_CELLS))
         result = compute_cells(model, theta_flat[cells], {n: v[cells] for n, v in flat.items()}, rtol=rtol,
-                               method=method, threads=threads)
+                               method=method)
         value[cells], error[cells] = _single_channel(result.value, result.error, model)
         if parts:
             parts["E_R"][cells] = result.reflected[:, 0]
@@ -197,7 +197,7 @@ def _tabulate(model: Model, shape, theta_grid, param_grids, rtol, method, done, 
 
 
 def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params: Mapping[str, np.ndarray],
-                  rtol: float, method: str, floor: np.ndarray | None = None, threads: int = 1,
+                  rtol: float, method: str, floor: np.ndarray | None = None,
                   tolerance: np.ndarray | None = None, share: float = PANEL_SHARE
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """E at max(μ, MU_FLOOR) for E_avg's nodes μ (N,) with per-node parameter values: (value, error, ok, noisy,
@@ -226,7 +226,7 @@ def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params:
     for step in np.unique(tolerance):
         nodes = np.flatnonzero(tolerance == step)
         cells = compute_cells(model, theta[nodes], {n: v[nodes] for n, v in node_params.items()}, rtol=float(step),
-                              method=method, threads=threads)
+                              method=method)
         value[nodes], error[nodes] = _single_channel(cells.value, cells.error, model)
         converged[nodes] = cells.converged
         if cells.reason is not None:
@@ -256,8 +256,9 @@ def clenshaw_curtis(intervals: int) -> tuple[np.ndarray, np.ndarray]:
     return (1.0 - np.cos(angle)) / 2.0, weights / 2.0
 
 
+@scoped
 def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
-                    max_panels: int = MAX_AVG_PANELS, threads: int = 1
+                    max_panels: int = MAX_AVG_PANELS, threads: int | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg = 2∫₀¹ E(μ) μ dμ = ∫₀¹ 4x³ E(x²) dx (x = √μ) for M parameter combinations (name -> (M,)).
 
@@ -296,8 +297,8 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         rows_, columns_ = rows_.ravel(), columns_.ravel()
         mu = x[columns_] ** 2
         result = _node_albedos(model, mu, share.ravel(), {k: v[rows_] for k, v in flat.items()}, rtol, method,
-                               NOISE_FLOOR_FACTOR * noise[rows_], threads,
-                               None if tolerance is None else tolerance.ravel(), NODE_SHARE)
+                               NOISE_FLOOR_FACTOR * noise[rows_],
+                               tolerance=None if tolerance is None else tolerance.ravel(), share=NODE_SHARE)
         _learn_noise(noise, rows_, *result[:2], result[3])
         for key, part in zip(("value", "error", "ok", "noisy", "asked"), result, strict=True):
             node[key][rows_, columns_] = part
@@ -349,7 +350,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     if rest.size:
         total[rest], total_error[rest], converged[rest], count = _average_adaptive(
             model, {k: v[rest] for k, v in flat.items()}, rtol=rtol, method=method, max_panels=max_panels,
-            noise=noise[rest], threads=threads)
+            noise=noise[rest])
         integrals += count
     return total, total_error, converged, integrals
 
@@ -420,7 +421,7 @@ def _learn_noise(noise: np.ndarray, owner: np.ndarray, value: np.ndarray, error:
 
 
 def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
-                      max_panels: int = MAX_AVG_PANELS, noise: np.ndarray | None = None, threads: int = 1
+                      max_panels: int = MAX_AVG_PANELS, noise: np.ndarray | None = None
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """E_avg = 2∫₀¹ E(μ) μ dμ for M parameter combinations (``params``: name -> (M,)), adaptive G7/K15.
 
@@ -448,7 +449,7 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         which = np.broadcast_to(owner[:, None], x.shape)
         E, E_error, good, noisy, _ = _node_albedos(
             model, mu.ravel(), density.ravel(), {n: v[which.ravel()] for n, v in flat.items()}, rtol, method,
-            NOISE_FLOOR_FACTOR * noise[which.ravel()], threads)
+            NOISE_FLOOR_FACTOR * noise[which.ravel()])
         _learn_noise(noise, which.ravel(), E, E_error, noisy)
         E, E_error, good = (a.reshape(x.shape) for a in (E, E_error, good))
         integrals += x.size
@@ -477,12 +478,14 @@ class Computed:
     dfg: str | None
 
 
+@scoped
 def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: Mapping[str, float] | None = None,
                    rtol: float = DEFAULT_RTOL, method: str = "auto", channels: Sequence[str] = (),
                    average: bool = True, progress: ProgressCallback | None = None,
-                   spread: Mapping[str, object] | None = None, threads: int = 1) -> Computed:
+                   spread: Mapping[str, object] | None = None, threads: int | None = None) -> Computed:
     """E, E_error, 1-E (and E_avg, E_avg_error over the direction axis; DFG_f0, DFG_f90 with their errors); the
-    cells ``spread`` does not take, on ``threads`` threads of this process (:func:`compute_cells`)."""
+    cells ``spread`` does not take, on ``threads`` threads of this process (None: the caller's
+    :func:`brdfnorm.parallel.threads.scope`; :func:`compute_cells`)."""
     clamp = dict(clamp or {})
     for channel in channels:
         if channel not in CHANNELS:
@@ -505,8 +508,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     total = cells * (1 + 3 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
     E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
-                                                                method, done, total, progress, spread, "E",
-                                                                threads)
+                                                                method, done, total, progress, spread, "E")
     tables = {"E": E, "E_error": E_error, **parts}
     table_axes: dict[str, tuple[str, ...]] = {name: tuple(names) for name in tables}
     avg_converged = None
@@ -515,11 +517,10 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
                       for n in others)
         if getattr(model, "transmits", False):  # glass: the 3-D route of lut.glass, spread like the cells
             avg, avg_error, avg_converged, _ = glass.average(
-                model, combos, rtol=rtol, generic=functools.partial(average_over_mu, threads=threads), method=method,
+                model, combos, rtol=rtol, generic=average_over_mu, method=method,
                 spread=spread)
         else:
-            avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method,
-                                                               threads=threads)
+            avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)
         avg_converged = avg_converged.reshape(avg_shape)
@@ -533,7 +534,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         dfg_models, dfg = split_sum_models(model)
         for name, weighted in dfg_models.items():
             value, error, ok, count, done, _ = _tabulate(weighted, shape, theta_grid, param_grids, rtol, method,
-                                                         done, total, progress, spread, name, threads)
+                                                         done, total, progress, spread, name)
             tables[name], tables[f"{name}_error"] = value, error
             table_axes[name] = table_axes[f"{name}_error"] = tuple(names)
             converged &= ok
@@ -541,7 +542,7 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
         cloth = cloth_model(param_grids)  # the third channel engines store beside the pair (lut.cloth)
         if cloth is not None:
             value, error, ok, count, done, _ = _tabulate(cloth[0], shape, theta_grid, cloth[1], rtol, "auto", done,
-                                                         total, progress, spread, "DFG_cloth", threads)
+                                                         total, progress, spread, "DFG_cloth")
             tables["DFG_cloth"], tables["DFG_cloth_error"] = value, error
             table_axes["DFG_cloth"] = table_axes["DFG_cloth_error"] = tuple(names)
             converged &= ok

@@ -34,8 +34,10 @@ short array operations) and for a Dask cluster (its workers compute the cells).
 
 from __future__ import annotations
 
+import contextlib
 import contextvars
-from collections.abc import Callable, Sequence
+import functools
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from numbers import Integral
 from typing import TypeVar
@@ -43,6 +45,11 @@ from typing import TypeVar
 import numpy as np
 
 Result = TypeVar("Result")
+Function = TypeVar("Function", bound=Callable)
+#: The threads a batch of cells runs on (:func:`scope`), as the backend's scope is carried
+#: (:func:`brdfnorm.engine.compiled.backend.scope`): set once where a table or an audit starts, read where the cells
+#: are cut into tasks (:func:`current`), through every stage between without being passed by hand.
+_THREADS: contextvars.ContextVar[int] = contextvars.ContextVar("brdfnorm_threads", default=1)
 
 #: Strided subsets per block of cells (module docstring): a constant, so that the batches do not depend on the
 #: number of threads.
@@ -62,6 +69,34 @@ def local_threads(workers: int | None = None, scheduler: object = None) -> int:
         return local_cores()
     # (a value that is not a whole number ≥ 1 is refused where the workers are validated: Workers)
     return int(workers) if isinstance(workers, Integral) and not isinstance(workers, bool) and workers > 1 else 1
+
+
+@contextlib.contextmanager
+def scope(threads: int | None) -> Iterator[None]:
+    """Within the block, batches of cells run on ``threads`` threads of this process (None: no change; outside
+    every scope, one: the caller's thread)."""
+    token = _THREADS.set(_THREADS.get() if threads is None else max(1, int(threads)))
+    try:
+        yield
+    finally:
+        _THREADS.reset(token)
+
+
+def current() -> int:
+    """The threads of the innermost :func:`scope` (1 outside every scope)."""
+    return _THREADS.get()
+
+
+def scoped(function: Function) -> Function:
+    """``function`` with its ``threads`` keyword (None: the caller's scope) setting :func:`scope` for its call —
+    public functions keep the argument, and nothing below them passes it on."""
+
+    @functools.wraps(function)
+    def within(*args, **kwargs):
+        with scope(kwargs.get("threads")):
+            return function(*args, **kwargs)
+
+    return within  # type: ignore[return-value]
 
 
 def cell_tasks(count: int, chunk: int, split: int = SPLIT) -> list[np.ndarray]:
