@@ -25,7 +25,7 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
 
 from __future__ import annotations
 
-import warnings
+import contextlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,7 +38,7 @@ from ..engine.machinery.interval import GaussKronrod, adaptive_interval
 from ..engine.methods import albedo
 from ..errors import ArgumentError
 from ..models.base import Model
-from ..parallel.threads import cell_tasks, current, local_threads, run_tasks, scoped
+from ..parallel.threads import albedo_warnings_ignored, beside, cell_tasks, current, local_threads, run_tasks, scoped
 from ..validate import DEFAULT_RTOL
 from . import glass
 from .axes import axis_parameter, checked_axes, per_cell
@@ -121,8 +121,7 @@ def compute_cells(model: Model, theta: np.ndarray, params: Mapping[str, np.ndarr
         return albedo(bound, theta[cells], over=over, rtol=rtol, method=method)
 
     tasks = cell_tasks(theta.size, CHUNK_CELLS)  # (the same for any number of threads: so are the values)
-    with warnings.catch_warnings():  # convergence is reported per cell by the caller, not once per chunk
-        warnings.simplefilter("ignore", UserWarning)  # (set here, once: catch_warnings is not thread safe)
+    with albedo_warnings_ignored():  # convergence is reported per cell by the caller, not once per chunk
         parts = run_tasks(chunk, tasks, current() if threads is None else threads)
     back = np.argsort(np.concatenate(tasks), kind="stable")  # the cells' order from the tasks'
     keys = ("value", "error", "evaluations", "converged", "reflected", "transmitted", "reason")
@@ -507,19 +506,29 @@ def compute_tables(model: Model, axes: Mapping[str, Sequence[float]], *, clamp: 
     cells = int(np.prod(shape))
     total = cells * (1 + 3 * ("dfg" in channels)) + (int(np.prod(avg_shape)) if average else 0)
     done = 0
-    E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
-                                                                method, done, total, progress, spread, "E")
+    combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
+                  for n in others) if average else {}
+    glassy = getattr(model, "transmits", False)  # glass: the 3-D route of lut.glass, spread like the cells
+    # E_avg beside E where both are computed here on more than one thread (they are independent): each stage's
+    # batches wait at their ends for their slowest task, and the other stage's tasks fill those gaps. The
+    # values do not change (the same albedo calls); progress is still given in stage order, from this thread.
+    paired = average and spread is None and current() > 1 and not glassy
+    avg_converged = None
+    with contextlib.ExitStack() as stack:
+        if paired:
+            stack.enter_context(albedo_warnings_ignored())  # (before the second thread starts: see there)
+            averaged = stack.enter_context(beside(average_over_mu, model, combos, rtol=rtol, method=method))
+        E, E_error, converged, evaluations, done, parts = _tabulate(model, shape, theta_grid, param_grids, rtol,
+                                                                    method, done, total, progress, spread, "E")
+        if paired:
+            avg, avg_error, avg_converged, _ = averaged()
     tables = {"E": E, "E_error": E_error, **parts}
     table_axes: dict[str, tuple[str, ...]] = {name: tuple(names) for name in tables}
-    avg_converged = None
     if average:
-        combos = dict(axis_parameter(model, n, np.broadcast_to(along(n, evaluated[n], others), avg_shape).ravel())
-                      for n in others)
-        if getattr(model, "transmits", False):  # glass: the 3-D route of lut.glass, spread like the cells
-            avg, avg_error, avg_converged, _ = glass.average(
-                model, combos, rtol=rtol, generic=average_over_mu, method=method,
-                spread=spread)
-        else:
+        if glassy:
+            avg, avg_error, avg_converged, _ = glass.average(model, combos, rtol=rtol, generic=average_over_mu,
+                                                             method=method, spread=spread)
+        elif not paired:
             avg, avg_error, avg_converged, _ = average_over_mu(model, combos, rtol=rtol, method=method)
         tables["E_avg"], tables["E_avg_error"] = avg.reshape(avg_shape), avg_error.reshape(avg_shape)
         table_axes["E_avg"] = table_axes["E_avg_error"] = tuple(others)

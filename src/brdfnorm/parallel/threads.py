@@ -37,6 +37,8 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import functools
+import threading
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from numbers import Integral
@@ -50,6 +52,14 @@ Function = TypeVar("Function", bound=Callable)
 #: (:func:`brdfnorm.engine.compiled.backend.scope`): set once where a table or an audit starts, read where the cells
 #: are cut into tasks (:func:`current`), through every stage between without being passed by hand.
 _THREADS: contextvars.ContextVar[int] = contextvars.ContextVar("brdfnorm_threads", default=1)
+#: Set where the albedo batches' UserWarnings are already being ignored (:func:`albedo_warnings_ignored`).
+_QUIET: contextvars.ContextVar[bool] = contextvars.ContextVar("brdfnorm_quiet", default=False)
+#: Set in a stage that runs beside another (:func:`beside`): its next batch of cells does not start once it is set.
+_STOP: contextvars.ContextVar[threading.Event | None] = contextvars.ContextVar("brdfnorm_stop", default=None)
+
+
+class Stopped(Exception):
+    """A stage running :func:`beside` the caller's was stopped because the caller's failed."""
 
 #: Strided subsets per block of cells (module docstring): a constant, so that the batches do not depend on the
 #: number of threads.
@@ -99,6 +109,45 @@ def scoped(function: Function) -> Function:
     return within  # type: ignore[return-value]
 
 
+@contextlib.contextmanager
+def albedo_warnings_ignored() -> Iterator[None]:
+    """Within the block, :func:`brdfnorm.albedo`'s UserWarnings (unconverged cells, which a table reports per cell)
+    are ignored. The filter is set by the first thread to enter, once, around everything under it, threads it
+    starts included: ``warnings.catch_warnings`` changes the process's filters and restores them on exit, so two
+    threads entering it at once can leave a filter behind or lift one early; threads whose context says the filter
+    is set (the tasks of :func:`run_tasks`, a stage :func:`beside`) enter nothing."""
+    if _QUIET.get():
+        yield
+        return
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        token = _QUIET.set(True)
+        try:
+            yield
+        finally:
+            _QUIET.reset(token)
+
+
+@contextlib.contextmanager
+def beside(function: Callable[..., Result], *args, **kwargs) -> Iterator[Callable[[], Result]]:
+    """``function(*args, **kwargs)`` on a thread of its own while the block runs (in a copy of the caller's context:
+    the scopes, the warning filter's flag); yields a callable that waits for it and returns its result or raises
+    its exception. Where the block fails, the other stage stops before its next batch of cells (:class:`Stopped`)
+    and is waited for (a compiled kernel cannot be stopped midway)."""
+    stop = threading.Event()
+    context = contextvars.copy_context()
+    context.run(_STOP.set, stop)
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="brdfnorm-stage")
+    future = pool.submit(context.run, function, *args, **kwargs)
+    try:
+        yield future.result
+    except BaseException:
+        stop.set()
+        raise
+    finally:
+        pool.shutdown(wait=True)
+
+
 def cell_tasks(count: int, chunk: int, split: int = SPLIT) -> list[np.ndarray]:
     """The cells 0 … count − 1 as tasks of at most ``chunk`` cells: blocks of ``split × chunk`` cells, each split
     into ``split`` strided subsets (module docstring)."""
@@ -115,6 +164,15 @@ def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarr
     (:class:`KeyboardInterrupt` in the calling thread), is raised here after the tasks not yet started are cancelled
     and the running ones have finished: a compiled kernel cannot be stopped midway, so Ctrl-C waits for at most one
     albedo call per thread (a 32 × 32 ``examples/ggx.brdf`` table's costliest, 256 grazing cells, ~0.7 s)."""
+    stop = _STOP.get()
+    if stop is not None:
+        original = function
+
+        def function(task: np.ndarray) -> Result:
+            if stop.is_set():
+                raise Stopped("stopped: the stage beside this one failed")
+            return original(task)
+
     if threads <= 1 or len(tasks) <= 1:
         return [function(task) for task in tasks]
     pool = ThreadPoolExecutor(max_workers=min(threads, len(tasks)), thread_name_prefix="brdfnorm-cells")
