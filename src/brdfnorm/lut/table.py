@@ -11,10 +11,13 @@ every cell. The tables are arrays indexed in the order of the axes given; tables
   process pool or a cluster can compute any chunk.
 * E_avg: the exact integral over μ ∈ [0, 1] in x = √μ, vectorized over the other axes — never a sum over the
   table's samples: nested Clenshaw–Curtis (16, 32, 64 intervals; error |Q₂ₙ − Qₙ|, or less where the last
-  two doublings' differences fell at least 16-fold, :func:`rule_error`), and for what that does not
+  two doublings' differences fell at least 16-fold, :func:`rule_error`; each node's albedo asked for its share
+  n·w·4x³ of the rule, re-asked tighter where the nodes' estimates rather than the rule's keep a value open,
+  :func:`_tighten`), and for what that does not
   settle a globally adaptive Gauss–Kronrod (G7/K15) quadrature (error |K15 − G7|, the G7 rule's, a deliberately
   pessimistic bound for the K15 value that is used, and at least half the parent panel's bisection discrepancy); both
-  add the albedo error estimates through |weights|.
+  add the albedo error estimates through |weights|. On more than one thread (:mod:`brdfnorm.parallel.threads`,
+  whose :func:`~brdfnorm.parallel.threads.scope` every stage reads) E_avg runs beside E.
 * DFG (``channels=("dfg",)``): the split-sum pair ∫ f cos (1 − (1 − V·H)⁵) dL (the coefficient of f0 in Schlick's
   Fresnel) and ∫ f cos (1 − V·H)⁵ dL (of f90), with the Fresnel off. For a model with a ``fresnel`` parameter and
   ``f0``/``f90`` these are exactly ``fresnel=schlick`` with (f0, f90) = (1, 0) and (0, 1); any other model is
@@ -45,6 +48,16 @@ from .axes import axis_parameter, checked_axes, per_cell
 from .cloth import DESCRIPTION as CLOTH_DESCRIPTION
 from .cloth import cloth_model
 from .lookup import GRIDS, Lut, grid_values, plain_params  # noqa: F401 — re-exported
+from .quadrature import (  # noqa: F401 — rule_error and its constants re-exported
+    RULE_CONVERGING,
+    RULE_POWER,
+    RULE_SAFETY,
+    clenshaw_curtis,
+    estimate,
+    floored,
+    learn_noise,
+    rule_error,
+)
 from .splitsum import SchlickWeighted, split_sum_models  # noqa: F401 — re-exported (audit.reference)
 
 CHANNELS = ("dfg",)
@@ -58,10 +71,6 @@ MAX_AVG_PANELS = 400
 #: E_avg's nested Clenshaw–Curtis rule in x = √μ: first and largest number of intervals (see average_over_mu).
 CC_FIRST = 16
 CC_MAX = 64
-#: E_avg's error estimate of the finer rule from two successive differences (see rule_error).
-RULE_CONVERGING = 16.0
-RULE_SAFETY = 2.0
-RULE_POWER = 0.75
 #: The smallest μ at which E_avg's quadrature evaluates the albedo (nodes below it use it; see average_over_mu).
 MU_FLOOR = 1e-7
 #: E_avg's node albedos are asked NODE_SHARE·rtol divided by their share of the integral (n·w·4x³ for the n-interval
@@ -218,7 +227,7 @@ def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params:
         cap = np.log(NODE_RTOL_MAX / base) / np.log(NODE_RTOL_STEP)
         level = np.clip(np.floor(np.log(ratio) / np.log(NODE_RTOL_STEP)), 0, max(np.ceil(cap), 0))
         tolerance = np.maximum(base, np.minimum(base * NODE_RTOL_STEP**level, NODE_RTOL_MAX))
-    tolerance = _floored(tolerance, floor)
+    tolerance = floored(tolerance, floor)
     theta = np.arccos(np.clip(np.maximum(mu, MU_FLOOR), 0.0, 1.0))
     value, error = np.empty(mu.size), np.empty(mu.size)
     converged, noisy = np.empty(mu.size, dtype=bool), np.zeros(mu.size, dtype=bool)
@@ -231,28 +240,6 @@ def _node_albedos(model: Model, mu: np.ndarray, weight: np.ndarray, node_params:
         if cells.reason is not None:
             noisy[nodes] = ~cells.converged & (cells.reason == "rounding-limited")
     return value, error, converged | noisy, noisy, tolerance
-
-
-def _floored(tolerance: np.ndarray, floor: np.ndarray | None) -> np.ndarray:
-    """``tolerance`` raised to ``floor`` (0: none) rounded up to a power of two (see :func:`_node_albedos`)."""
-    if floor is None:
-        return np.asarray(tolerance, dtype=float)
-    with np.errstate(divide="ignore"):
-        return np.maximum(tolerance, np.where(floor > 0, 2.0 ** np.ceil(np.log2(np.where(floor > 0, floor, 1.0))),
-                                              0.0))
-
-
-def clenshaw_curtis(intervals: int) -> tuple[np.ndarray, np.ndarray]:
-    """Clenshaw–Curtis nodes and weights on [0, 1] with ``intervals`` (even) cells: x_j = (1 − cos(πj/n))/2.
-
-    Exact for polynomials of degree n; the nodes of n are every other node of 2n (nested doubling)."""
-    n = intervals
-    angle = np.pi * np.arange(n + 1) / n
-    k = np.arange(1, n // 2 + 1)
-    b = np.where(k == n // 2, 1.0, 2.0)
-    weights = 1.0 - (b / (4.0 * k * k - 1.0)) @ np.cos(2.0 * np.outer(k, angle))
-    weights *= np.where((np.arange(n + 1) == 0) | (np.arange(n + 1) == n), 1.0, 2.0) / n
-    return (1.0 - np.cos(angle)) / 2.0, weights / 2.0
 
 
 @scoped
@@ -298,7 +285,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         result = _node_albedos(model, mu, share.ravel(), {k: v[rows_] for k, v in flat.items()}, rtol, method,
                                NOISE_FLOOR_FACTOR * noise[rows_],
                                tolerance=None if tolerance is None else tolerance.ravel(), share=NODE_SHARE)
-        _learn_noise(noise, rows_, *result[:2], result[3])
+        learn_noise(noise, rows_, *result[:2], result[3])
         for key, part in zip(("value", "error", "ok", "noisy", "asked"), result, strict=True):
             node[key][rows_, columns_] = part
         integrals += rows_.size
@@ -327,7 +314,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
         fill(rows, np.arange(1, n + 1, 2), level_share(np.arange(1, n + 1, 2), rows))
         weight = w * 4.0 * x**3  # dμ 2μ = 4x³ dx
         coarse_weight = clenshaw_curtis(n // 2)[1] * 4.0 * x[::2] ** 3
-        fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
+        fine, difference, rule, nodes = estimate(node, rows, weight, coarse_weight, change, earlier_change)
         # Where the rule has settled, or its differences may be the nodes' errors, but the nodes' estimates have
         # not, the few nodes that hold most of their sum are asked again, tighter (:func:`_tighten`): cheaper than
         # a finer rule, whose new nodes would not shrink them.
@@ -337,7 +324,7 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
             if not (redo.any() and _tighten(node, rows[redo], goal[redo] - np.minimum(rule, RULE_SHARE * goal)[redo],
                                             weight, noise, fill)):
                 break
-            fine, difference, rule, nodes = _estimate(node, rows, weight, coarse_weight, change, earlier_change)
+            fine, difference, rule, nodes = estimate(node, rows, weight, coarse_weight, change, earlier_change)
         total[rows], total_error[rows] = fine, rule + nodes
         change[rows], earlier_change[rows] = difference, change[rows]
         open_[rows] = total_error[rows] > rtol * np.abs(fine)
@@ -354,16 +341,6 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     return total, total_error, converged, integrals
 
 
-def _estimate(node: dict[str, np.ndarray], rows: np.ndarray, weight: np.ndarray, coarse_weight: np.ndarray,
-              change: np.ndarray, earlier_change: np.ndarray):
-    """E_avg of ``rows`` by the rule of ``weight`` and by the rule of every other node (``coarse_weight``): (Q_2n,
-    |Q_2n − Q_n|, the rule's error estimate (:func:`rule_error`), Σ |weight|·node error)."""
-    fine = node["value"][rows] @ weight
-    difference = np.abs(fine - node["value"][rows][:, ::2] @ coarse_weight)
-    return (fine, difference, rule_error(difference, change[rows], earlier_change[rows]),
-            node["error"][rows] @ np.abs(weight))
-
-
 def _tighten(node: dict[str, np.ndarray], rows: np.ndarray, budget: np.ndarray, weight: np.ndarray,
              noise: np.ndarray, fill: Callable) -> bool:
     """Ask again, tighter, the nodes of ``rows`` whose share of Σ |weight|·error exceeds TIGHTEN_FILL·budget/n
@@ -378,45 +355,13 @@ def _tighten(node: dict[str, np.ndarray], rows: np.ndarray, budget: np.ndarray, 
         wanted = NODE_RTOL_STEP ** np.floor(np.log(wanted) / np.log(NODE_RTOL_STEP))
     floor = NOISE_FLOOR_FACTOR * noise[rows][:, None]
     wanted = np.where(np.isfinite(wanted) & (wanted > 0), wanted, np.inf)
-    wanted = _floored(wanted, np.broadcast_to(floor, wanted.shape))
+    wanted = floored(wanted, np.broadcast_to(floor, wanted.shape))
     again = (share > allowance) & ~node["noisy"][rows] & (wanted < node["asked"][rows]) & (weight > 0)
     if not again.any():
         return False
     which, columns = np.nonzero(again)
     fill(rows[which], columns[:, None], np.ones((which.size, 1)), wanted[which, columns][:, None])
     return True
-
-
-def rule_error(difference: np.ndarray, previous: np.ndarray, earlier: np.ndarray) -> np.ndarray:
-    """The error estimate of Q_2n from d_2n = |Q_2n − Q_n| (``difference``), d_n = |Q_n − Q_n/2| (``previous``)
-    and d_n/2 = |Q_n/2 − Q_n/4| (``earlier``).
-
-    d_2n is the error of Q_n, far above Q_2n's when the rule converges. Where the differences fell by at least
-    RULE_CONVERGING at both of the last two doublings, Q_2n's error is taken as
-    RULE_SAFETY·d_2n·(d_2n/d_n)^RULE_POWER (never above d_2n). With a steady ratio r = e(2n)/e(n) that is
-    2r^0.75·e(n), above the true r·e(n) by 2r^(-1/4); for Clenshaw–Curtis on an analytic integrand the ratio falls at
-    each doubling (e(n) ~ ρ⁻ⁿ), which only widens the margin. It fails where the rule slows down by more than that
-    margin from one doubling to the next, i.e. before its asymptotic range, which is what the two tests and the
-    power < 1 guard against. Measured on a sweep of 90 lobes (GGX, Beckmann, Phong, Blinn-Phong, Oren–Nayar, Burley,
-    Charlie, FON, EON; E_avg's integrand 4x³E(x²) at 32 and 64 intervals against 128): within 0.18 of the estimates;
-    one test and the power 1 (d_2n²/d_n) were 165× optimistic on Phong n = 19 300 (a feature at μ ~ 1/√n that 16
-    and 32 intervals do not resolve: d_n/2, d_n, d_2n fell 1×, 1 800×, then the error only 5×), two tests and the
-    power 1 2× on GGX with Schlick's Fresnel (α = 0.025). A kink (Clenshaw–Curtis on |x − c| falls 4-fold per
-    doubling) or a pre-asymptotic sequence keeps d_2n. (Berntsen and Espelid 1991, "Error estimation in automatic
-    quadrature routines", decide by such ratios whether a rule is in its asymptotic range.)"""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        extrapolated = np.where(previous > 0, RULE_SAFETY * difference * (difference / previous) ** RULE_POWER,
-                                difference)
-    converging = (difference <= previous / RULE_CONVERGING) & (previous <= earlier / RULE_CONVERGING)
-    return np.where(converging, np.minimum(difference, extrapolated), difference)
-
-
-def _learn_noise(noise: np.ndarray, owner: np.ndarray, value: np.ndarray, error: np.ndarray,
-                 noisy: np.ndarray) -> None:
-    """Raise ``noise`` (M,) of each combination to the relative estimates of its rounding-limited nodes."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        relative = np.where(noisy & (value != 0), error / np.abs(value), 0.0)
-    np.maximum.at(noise, owner, np.where(np.isfinite(relative), relative, 0.0))
 
 
 def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str = "auto",
@@ -449,7 +394,7 @@ def _average_adaptive(model: Model, params: Mapping[str, np.ndarray], *, rtol: f
         E, E_error, good, noisy, _ = _node_albedos(
             model, mu.ravel(), density.ravel(), {n: v[which.ravel()] for n, v in flat.items()}, rtol, method,
             NOISE_FLOOR_FACTOR * noise[which.ravel()])
-        _learn_noise(noise, which.ravel(), E, E_error, noisy)
+        learn_noise(noise, which.ravel(), E, E_error, noisy)
         E, E_error, good = (a.reshape(x.shape) for a in (E, E_error, good))
         integrals += x.size
         albedo_converged[owner[~good.all(axis=1)]] = False

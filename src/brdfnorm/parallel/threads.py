@@ -28,6 +28,12 @@ context (the backend :func:`brdfnorm.engine.compiled.backend.scope`, numpy's err
 the warning filters are set once by the caller around the whole batch (``warnings.catch_warnings`` is not thread
 safe: per thread, it could leave a filter behind).
 
+How many threads: :func:`scope` (a context variable, as the backend's
+:func:`brdfnorm.engine.compiled.backend.scope`), set where a table or an audit starts and read where a batch is cut
+into tasks; no stage passes it on. Two stages that do not depend on each other (a table's E and E_avg) run at once
+with :func:`beside`: each batch waits at its end for its slowest task, and the other stage's tasks fill that gap;
+the warning filter the batches need is set once around both (:func:`albedo_warnings_ignored`).
+
 Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
 short array operations) and for a Dask cluster (its workers compute the cells).
 """
