@@ -125,3 +125,19 @@ def test_tighten_leaves_noisy_and_already_tight_nodes():
     assert tolerance == pytest.approx([1e-9, 1e-9])
     node["noisy"][0, 3:] = True
     assert not table._tighten(node, np.array([0]), np.array([1e-8]), weight, np.zeros(1), fill)
+
+
+@pytest.mark.parametrize("name, parameter, values", [
+    ("beckmann", "alpha", [0.02, 1.0]),
+    ("burley", "roughness", [0.2, 0.9]),
+    pytest.param("phong", "n", [5.0, 500.0], marks=pytest.mark.slow),  # its reference takes ~3 s
+])
+def test_other_lobes_within_their_estimates(name, parameter, values):
+    """Lobes on other routes, with the shares at rtol 1e-9, against the adaptive G7/K15 rule at rtol 1e-12 (its
+    nodes asked rtol/4 each): converged, within rtol, within their estimates."""
+    model, params = bn.load(name), {parameter: np.array(values)}
+    value, error, converged, _ = _quiet(table.average_over_mu, model, params, rtol=RTOL)
+    reference, reference_error, reference_converged, _ = _quiet(table._average_adaptive, model, params, rtol=1e-12)
+    assert reference_converged.all()
+    assert converged.all() and np.all(error <= RTOL * np.abs(value))
+    assert np.all(np.abs(value - reference) <= error + reference_error), np.abs(value - reference) / error
