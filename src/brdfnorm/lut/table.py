@@ -253,8 +253,12 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     successive differences show the rule converging) plus the albedo error estimates through |weights| is within
     rtol·|Q_2n| (Q_2n is kept). In x the weight 4x³ vanishes where E has its boundary layer (μ ≲ α), so a smooth
     E needs 32–64 albedos. Combinations not settled by CC_MAX (kinks, e.g. a critical angle) go to
-    :func:`_average_adaptive` afresh. Node albedos and MU_FLOOR as there, each batch of them on ``threads``
-    threads of this process (:func:`compute_cells`).
+    :func:`_average_adaptive` afresh. MU_FLOOR as there. Each node's albedo is asked for its share n·w·4x³ of
+    the rule it first enters (NODE_SHARE, :func:`_node_albedos`; the share does not change when the rule doubles);
+    where the rule has settled, or its differences may be the nodes' errors, but the sum of the nodes' estimates
+    keeps a combination open, the heaviest nodes are asked again (:func:`_tighten`). Each batch of albedos on
+    ``threads`` threads of this process (None: the caller's :func:`brdfnorm.parallel.threads.scope`;
+    :func:`compute_cells`).
 
     The node at μ = 1 goes first: where it comes back "rounding-limited" (the shader's float64 noise above its
     tolerance, e.g. examples/ggx.brdf at roughness 0.05) its relative estimate becomes its combination's floor,
