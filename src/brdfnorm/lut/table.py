@@ -92,7 +92,6 @@ TIGHTEN_FILL = 0.5
 #: Passes of _tighten per rule (a node's first estimate may be far under what it was asked; the second pass takes
 #: what the first left).
 TIGHTEN_PASSES = 2
-NODE_RTOL_MAX = 1e-4
 #: A combination whose node albedo came back "rounding-limited" (the shader's float64 noise above the node's
 #: tolerance) asks its later nodes for no less than this times that node's relative estimate: a tolerance below
 #: the noise only makes the route refine until its noise test stops it (at roughness 0.05, α = 0.0025, of
