@@ -1,0 +1,348 @@
+"""The lobe search of the generic route: where each case's integrand peaks, how wide each peak is — the main peak
+and every separated one the lattice sees.
+
+What it computes
+----------------
+For K cases of an integrand g(ω) ≥ 0 over the upper hemisphere with no model hint (a ``.brdf`` shader, a fitted
+model), :func:`search_lobes` samples one equal-area Fibonacci lattice (1024 directions, spacing h ≈ √(2π/1024) ≈
+0.078 rad) plus a few directions where a peak is likely (the mirror direction), and returns
+
+- the **main peak** (:func:`estimate_lobe`): the largest sample, its width the |g|-weighted RMS angle (or twice that
+  of the samples above half the peak), zoomed into on ever smaller polar caps while the lobe is narrower than the
+  lattice — what the lobe-aligned coordinates of :mod:`brdfnorm.engine.routes.hemisphere` are built about;
+- the **separated peaks** (:class:`Peaks`): strict local maxima of the same samples (above each of their
+  :data:`NEIGHBOURS` nearest lattice neighbours, the neighbour table of the fixed lattice computed once) that are
+  separated from every higher sample — the samples above half the candidate's value that are connected to it on
+  the lattice reach none higher (its half-level component; a sample on a slope or a ridge of a higher peak, or on a
+  noisy plateau, reaches one), and g on :data:`ARC_POINTS` points of the great-circle arc to the main peak falls
+  below half the candidate's value (a ridge thinner than the lattice along the arc). Each separated candidate is
+  zoomed into as the main peak is (starting on a cap of :data:`CANDIDATE_RADIUS` lattice spacings, so that the zoom
+  cannot climb onto another peak) unless its half-level component already spans several samples; candidates that
+  end within :data:`MERGE_WIDTHS` widths of a kept peak are merged into it, and at most :data:`MAX_PEAKS` peaks per
+  case are kept, ranked by the contribution estimate c ≈ g·2π·w². A separated peak beyond that cap is not
+  integrated about its own pole: :data:`CHARGE` · c joins the case's error estimate (``charge``), never dropped.
+
+Every evaluation the separated-peak search spends (arcs, zooms) is counted per case (``evaluations``); the lattice
+and the main peak's zoom are not (they were not before, and single-peak cases keep their counts).
+
+What it cannot see: a lobe narrower than the lattice spacing that is 0 (or below its neighbours) at every sample,
+away from the mirror direction; a bump on a broad base whose valley stays above half its top (it is on the base's
+slope). docs/numerics.md says what that means for an albedo.
+
+The integration of a case with several peaks is :mod:`brdfnorm.engine.machinery.partition`'s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from ..routes.hemisphere import lobe_frame
+
+#: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C).
+Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+#: Lattice directions of the search.
+SAMPLES = 1024
+#: Nearest lattice neighbours a local maximum must exceed.
+NEIGHBOURS = 8
+#: Points of the great-circle arc from a candidate to the main peak where g is evaluated.
+ARC_POINTS = 16
+#: A candidate is separated where g falls below this share of its value between it and any higher sample.
+SEPARATION = 0.5
+#: Starting radius of a candidate's zoom, in lattice spacings.
+CANDIDATE_RADIUS = 1.5
+#: Candidates per case tested (the largest first): a noisy plateau has many strict local maxima, none separated.
+MAX_CANDIDATES = 16
+#: Peaks per case (the main one included) integrated about their own poles.
+MAX_PEAKS = 8
+#: Peaks closer than this many widths (the larger) are one.
+MERGE_WIDTHS = 3.0
+#: A peak beyond :data:`MAX_PEAKS` is charged this multiple of its contribution estimate g·2π·w².
+CHARGE = 4.0
+#: Points of the polar cap a zoom samples (its centre besides).
+CAP_POINTS = 256
+
+
+@dataclass(frozen=True)
+class Peaks:
+    """The separated peaks of K cases besides each case's main one: per peak its ``case``, ``direction`` (3,),
+    ``width`` and sampled ``value`` (flat, E peaks); per case the error ``charge`` of the peaks beyond the cap and the
+    ``evaluations`` the search spent on them (K,)."""
+
+    case: np.ndarray
+    direction: np.ndarray
+    width: np.ndarray
+    value: np.ndarray
+    charge: np.ndarray
+    evaluations: np.ndarray
+
+    def count(self, cases: int) -> np.ndarray:
+        """Peaks per case (K,), the main one included."""
+        return 1 + np.bincount(self.case, minlength=cases)
+
+
+def fibonacci_hemisphere(count: int) -> np.ndarray:
+    """``count`` nearly uniform directions on the upper hemisphere (equal-area Fibonacci lattice)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - i / count  # equal-area: z uniform in (0, 1)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+@cache
+def lattice_neighbours(count: int, k: int = NEIGHBOURS) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` nearest neighbours of each direction of :func:`fibonacci_hemisphere` (count, k), and the symmetric
+    neighbour lists (count, d) (i is j's neighbour or j is i's; padded with i itself), computed once per lattice."""
+    from scipy.spatial import cKDTree  # (only cases without a hint search; keeps the engine's import light)
+
+    grid = fibonacci_hemisphere(count)
+    nearest = cKDTree(grid).query(grid, k + 1)[1][:, 1:]
+    pairs = {(int(i), int(j)) for i, row in enumerate(nearest) for j in row}
+    pairs |= {(j, i) for i, j in pairs}
+    lists = [[] for _ in range(count)]
+    for i, j in sorted(pairs):
+        lists[i].append(j)
+    width = max(len(row) for row in lists)
+    symmetric = np.array([row + [i] * (width - len(row)) for i, row in enumerate(lists)], dtype=np.intp)
+    nearest.flags.writeable = symmetric.flags.writeable = False
+    return nearest, symmetric
+
+
+def _magnitudes(integrand: Integrand, omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+    """max over channels of |g| (0 where not finite) at ``omega`` (k, m, 3) for the cases ``case`` (k,): (k, m)."""
+    index = np.broadcast_to(case[:, None], omega.shape[:2])
+    with np.errstate(all="ignore"):
+        g = np.abs(np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float))
+    return np.where(np.isfinite(g), g, 0.0).max(axis=-1).reshape(omega.shape[:2])
+
+
+def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """Angles (k, m) between ``omega`` (k, m, 3) and ``centre`` (k, 3): atan2(|ω × P|, ω·P), since arccos would not
+    resolve angles below √ε."""
+    return np.arctan2(np.linalg.norm(np.cross(omega, centre[:, None, :]), axis=-1),
+                      np.einsum("kmi,ki->km", omega, centre))
+
+
+def _locate(omega: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The largest sample's direction (k, 3) and the width about it (k,) from samples ``g`` (k, m) at ``omega``."""
+    best = omega[np.arange(g.shape[0]), np.argmax(g, axis=1)]
+    angle = _angles(omega, best)
+    total = g.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rms = np.sqrt((g * angle**2).sum(axis=1) / total)
+    # The RMS angle of the samples above half the peak measures the core: heavy tails (GGX at grazing views) make
+    # the RMS angle of all samples far wider than the core that rounding noise lives in. (0 where only the peak
+    # sample is above half: the core is unresolved, and zoomed into.)
+    core = g >= 0.5 * g.max(axis=1, keepdims=True)
+    core_rms = np.sqrt(np.where(core, angle**2, 0.0).sum(axis=1) / np.maximum(core.sum(axis=1), 1))
+    return best, np.where(total > 0, np.minimum(rms, 2.0 * core_rms), 1.0)
+
+
+def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarray], count: int,
+            subset: np.ndarray, max_nodes_per_call: int,
+            seen: Callable[[np.ndarray, np.ndarray], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_locate` on ``count`` directions per case of ``subset`` (``directions_of(cases)`` (k, count, 3)), in
+    bounded chunks; ``seen(cases, g)`` is shown each chunk's samples."""
+    per_call = max(1, max_nodes_per_call // count)
+    peaks, widths = [], []
+    for start in range(0, subset.size, per_call):
+        case = subset[start:start + per_call]
+        omega = directions_of(case)
+        g = _magnitudes(integrand, omega, case)
+        if seen is not None:
+            seen(case, g)
+        best, width = _locate(omega, g)
+        peaks.append(best)
+        widths.append(width)
+    return np.concatenate(peaks), np.concatenate(widths)
+
+
+@cache
+def _cap() -> tuple[np.ndarray, np.ndarray, float]:
+    """Polar angles and azimuths of a cap of unit radius (its centre first: a zoom that finds nothing else above 0
+    keeps the peak so far rather than moving to an arbitrary point), and its mean spacing (area ≈ π)."""
+    cap = fibonacci_hemisphere(CAP_POINTS)
+    angle = np.concatenate([[0.0], np.arccos(cap[:, 2]) / (np.pi / 2)])
+    phi = np.concatenate([[0.0], np.arctan2(cap[:, 1], cap[:, 0])])
+    return angle, phi, float(np.sqrt(np.pi / CAP_POINTS))
+
+
+def _zoom(integrand: Integrand, peak: np.ndarray, width: np.ndarray, unresolved: np.ndarray, radius: np.ndarray,
+          max_nodes_per_call: int, spent: np.ndarray | None = None) -> None:
+    """Zoom into the lobes ``unresolved`` (indices into ``peak`` (k, 3) and ``width`` (k,), updated in place): a
+    polar lattice on a cap of ``radius`` about the peak relocates it and measures it again, and the cap shrinks
+    threefold until the lobe spans several of its points. ``spent`` (k,), where given, counts the evaluations."""
+    cap_angle, cap_phi, cap_spacing = _cap()
+    while unresolved.size and radius[unresolved].max() > 1e-10:
+        around_peak = _cap_lattice(peak, unresolved, radius, cap_angle, cap_phi)
+        peak[unresolved], width[unresolved] = _sample(integrand, around_peak, cap_angle.size, unresolved,
+                                                      max_nodes_per_call)
+        if spent is not None:
+            spent[unresolved] += cap_angle.size
+        resolved = width[unresolved] >= 2.0 * cap_spacing * radius[unresolved]
+        radius[unresolved] /= 3.0
+        unresolved = unresolved[~resolved]
+
+
+def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
+                  candidates: np.ndarray | None = None,
+                  seen: Callable[[np.ndarray, np.ndarray], None] | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Find the peak direction and angular width of each case's integrand by sampling (no model hint).
+
+    A Fibonacci lattice of ``samples`` directions locates the maximum of |g| to within the lattice spacing
+    h ≈ √(2π/samples), together with ``candidates`` (K, m, 3), directions where a peak is likely (the mirror
+    direction: a lobe narrower than h, Blinn-Phong at n = 1e7, underflows to 0 at every lattice point, and an
+    integrand that is 0 at every sample would be integrated to 0 with a zero error estimate). The
+    |g|-weighted RMS angle about the maximum estimates the width. A lobe narrower than the
+    lattice (the RMS, or twice the RMS angle of the samples above half the peak, < 2h) is then zoomed into: a
+    polar lattice on a cap of radius 3h around the peak relocates it and measures it again, and the cap shrinks
+    threefold until the lobe spans several of its points (GGX at roughness 0.01 is 1e-4 rad wide; at α = 1e-8,
+    1e-8 rad). The width is the smaller of the two RMS measures. The quadrature's efficiency
+    depends on these numbers, and so does where :func:`rounding_noise` looks for noise (which is why the core,
+    not the tails, must be found); the adaptivity and the quadrature error estimate do not. ``seen(cases, g)`` is
+    shown the lattice's samples (k, samples + m) chunk by chunk (the separated-peak search reads them).
+    """
+    spacing = np.sqrt(2.0 * np.pi / samples)
+    grid = fibonacci_hemisphere(samples)
+    extra = np.zeros((cases, 0, 3)) if candidates is None else np.asarray(candidates, dtype=float)
+
+    def lattice(case: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.broadcast_to(grid, (case.size,) + grid.shape), extra[case]], axis=1)
+
+    peak, width = _sample(integrand, lattice, samples + extra.shape[1], np.arange(cases), max_nodes_per_call, seen)
+    _zoom(integrand, peak, width, np.flatnonzero(width < 2.0 * spacing), np.full(cases, 3.0 * spacing),
+          max_nodes_per_call)
+    return peak, np.clip(width, 1e-12, 1.0), np.full(cases, np.pi)
+
+
+def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
+                 candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
+    """:func:`estimate_lobe`'s main peak per case (poles, widths, supports) and the separated :class:`Peaks`
+    besides it (the module's docstring says how they are found)."""
+    nearest, _ = lattice_neighbours(samples)
+    rows, lattices, maxima = [], [], []  # per chunk: the cases with candidates, their samples, their local maxima
+
+    def seen(case: np.ndarray, g: np.ndarray) -> None:
+        on_lattice = g[:, :samples]
+        strict = (on_lattice > on_lattice[:, nearest].max(axis=-1)) & (on_lattice > 0)
+        main = np.argmax(g, axis=1)
+        on = main < samples
+        strict[np.flatnonzero(on), main[on]] = False  # the main peak's own sample
+        some = strict.any(axis=1)
+        rows.append(case[some])
+        lattices.append(on_lattice[some])
+        maxima.append(strict[some])
+
+    poles, widths, supports = estimate_lobe(integrand, cases, samples, max_nodes_per_call, candidates, seen)
+    peaks = _separated(integrand, cases, poles, widths, np.concatenate(rows), np.concatenate(lattices),
+                       np.concatenate(maxima), samples, max_nodes_per_call)
+    return poles, widths, supports, peaks
+
+
+def _separated(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.ndarray, rows: np.ndarray,
+               g: np.ndarray, strict: np.ndarray, samples: int, max_nodes_per_call: int) -> Peaks:
+    """The separated peaks of the cases ``rows`` whose lattice samples ``g`` (k, samples) have strict local maxima
+    ``strict`` (k, samples) besides the main peak's sample."""
+    evaluations = np.zeros(cases, dtype=np.int64)
+    charge = np.zeros(cases)
+    none = Peaks(np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), charge, evaluations)
+    if not rows.size:
+        return none
+    _, symmetric = lattice_neighbours(samples)
+    grid = fibonacci_hemisphere(samples)
+    spacing = np.sqrt(2.0 * np.pi / samples)
+    # Candidates: the largest MAX_CANDIDATES strict local maxima per case.
+    row, index = np.nonzero(strict)
+    order = np.lexsort((-g[row, index], row))
+    row, index = row[order], index[order]
+    rank = np.arange(row.size) - np.searchsorted(row, row)
+    keep = rank < MAX_CANDIDATES
+    row, index = row[keep], index[keep]
+    if not row.size:
+        return none
+    # The half-level component of each candidate on the lattice: separated where it reaches no higher sample.
+    level = g[row, index]
+    above = g[row] >= SEPARATION * level[:, None]
+    reach = np.zeros_like(above)
+    reach[np.arange(row.size), index] = True
+    while True:
+        grown = reach | (above & reach[:, symmetric].any(axis=-1))
+        if (grown == reach).all():
+            break
+        reach = grown
+    alone = ~np.any(reach & (g[row] > level[:, None]), axis=1)
+    row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
+    case = rows[row]
+    # The arc to the main peak: a ridge thinner than the lattice joins them there.
+    direction = grid[index]
+    t = np.arange(1, ARC_POINTS + 1) / (ARC_POINTS + 1)
+    arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
+    arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
+    on_arc = _magnitudes(integrand, arc, case) if case.size else np.zeros((0, ARC_POINTS))
+    np.add.at(evaluations, case, ARC_POINTS)
+    apart = on_arc.min(axis=1, initial=np.inf) < SEPARATION * level
+    case, direction, level, reach = case[apart], direction[apart], level[apart], reach[apart]
+    # Width: twice the RMS angle of its half-level component where that spans several samples, else zoomed into.
+    angle = _angles(np.broadcast_to(grid, (case.size,) + grid.shape), direction)
+    width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
+    direction = direction.copy()
+
+    def at_case(omega: np.ndarray, peak: np.ndarray) -> np.ndarray:
+        return integrand(omega, case[peak])
+
+    _zoom(at_case, direction, width, np.flatnonzero(width < 2.0 * spacing),
+          np.full(case.size, CANDIDATE_RADIUS * spacing), max_nodes_per_call, spent := np.zeros(case.size, np.int64))
+    np.add.at(evaluations, case, spent)
+    width = np.clip(width, 1e-12, 1.0)
+    value = _magnitudes(at_case, direction[:, None, :], np.arange(case.size))[:, 0]
+    np.add.at(evaluations, case, 1)
+    return _merged(case, direction, width, value, poles, widths, charge, evaluations)
+
+
+def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: np.ndarray, poles: np.ndarray,
+            widths: np.ndarray, charge: np.ndarray, evaluations: np.ndarray) -> Peaks:
+    """Candidates merged into a kept peak within :data:`MERGE_WIDTHS` widths (the main one first, then by value), at
+    most :data:`MAX_PEAKS` per case by contribution; the others' contributions charged."""
+    kept = np.zeros(case.size, dtype=bool)
+    contribution = value * 2.0 * np.pi * width**2
+    for c in np.unique(case):
+        mine = np.flatnonzero(case == c)
+        mine = mine[np.argsort(-value[mine], kind="stable")]
+        centres, sizes = [poles[c]], [widths[c]]
+        for i in mine:
+            apart = [np.arctan2(np.linalg.norm(np.cross(direction[i], p)), direction[i] @ p) > MERGE_WIDTHS * max(
+                width[i], w) for p, w in zip(centres, sizes, strict=True)]
+            if all(apart):
+                kept[i] = True
+                centres.append(direction[i])
+                sizes.append(width[i])
+        chosen = mine[kept[mine]]
+        over = chosen[np.argsort(-contribution[chosen], kind="stable")][MAX_PEAKS - 1:]
+        kept[over] = False
+        charge[c] += CHARGE * contribution[over].sum()
+    return Peaks(case[kept], direction[kept], width[kept], value[kept], charge, evaluations)
+
+
+def _cap_lattice(peak: np.ndarray, cases: np.ndarray, radius: np.ndarray, cap_angle: np.ndarray,
+                 cap_phi: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """Directions of a polar lattice (unit-radius angles ``cap_angle``, azimuths ``cap_phi``) scaled to each
+    case's ``radius`` and rotated onto its ``peak``, as a function of case indices drawn from ``cases``."""
+    P, T, B = lobe_frame(peak[cases])
+    position = np.empty(radius.size, dtype=np.intp)
+    position[cases] = np.arange(cases.size)
+
+    def directions(case: np.ndarray) -> np.ndarray:
+        i = position[case]
+        angle = cap_angle[None, :] * radius[case][:, None]
+        radial = np.cos(cap_phi)[None, :, None] * T[i][:, None] + np.sin(cap_phi)[None, :, None] * B[i][:, None]
+        omega = np.cos(angle)[..., None] * P[i][:, None] + np.sin(angle)[..., None] * radial
+        omega[..., 2] = np.maximum(omega[..., 2], 1e-9)
+        return omega / np.linalg.norm(omega, axis=-1, keepdims=True)
+
+    return directions
