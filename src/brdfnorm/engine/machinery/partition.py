@@ -63,9 +63,10 @@ class SubCases:
         return 1.0 / total
 
     def wrap(self, integrand):
-        """g·ψ of each sub-case, from ``integrand(omega, case)`` over the owners' case indices."""
+        """g·ψ of each sub-case, from ``integrand(omega, sub)``, g of the sub-cases' owners (a batch whose case i is
+        sub-case i's owner)."""
         def weighted(omega: np.ndarray, sub: np.ndarray) -> np.ndarray:
-            values = np.asarray(integrand(omega, self.owner[sub]), dtype=float)
+            values = np.asarray(integrand(omega, sub), dtype=float)
             return values * self.weight(omega, sub)[:, None]
 
         return weighted
