@@ -44,6 +44,8 @@ from ..routes.hemisphere import lobe_frame
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: What a search is shown of each chunk of samples: (case indices (k,), directions (k, m, 3), max |g| (k, m)).
+Seen = Callable[[np.ndarray, np.ndarray, np.ndarray], None]
 
 #: Lattice directions of the search.
 SAMPLES = 1024
@@ -95,13 +97,19 @@ def fibonacci_hemisphere(count: int) -> np.ndarray:
 
 
 @cache
-def lattice_neighbours(count: int, k: int = NEIGHBOURS) -> tuple[np.ndarray, np.ndarray]:
-    """The ``k`` nearest neighbours of each direction of :func:`fibonacci_hemisphere` (count, k), and the symmetric
-    neighbour lists (count, d) (i is j's neighbour or j is i's; padded with i itself), computed once per lattice."""
+def lattice_neighbours(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The :data:`NEIGHBOURS` nearest neighbours of each direction of :func:`fibonacci_hemisphere` (count, k), and
+    the symmetric neighbour lists (count, d) (i is j's neighbour or j is i's; padded with i itself), computed once
+    per lattice."""
     from scipy.spatial import cKDTree  # (only cases without a hint search; keeps the engine's import light)
 
-    grid = fibonacci_hemisphere(count)
-    nearest = cKDTree(grid).query(grid, k + 1)[1][:, 1:]
+    return _neighbour_lists(cKDTree(fibonacci_hemisphere(count)))
+
+
+def _neighbour_lists(tree) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest and the symmetric neighbour lists of the points of a ``cKDTree``."""
+    count = tree.data.shape[0]
+    nearest = tree.query(tree.data, NEIGHBOURS + 1)[1][:, 1:]
     pairs = {(int(i), int(j)) for i, row in enumerate(nearest) for j in row}
     pairs |= {(j, i) for i, j in pairs}
     lists = [[] for _ in range(count)]
@@ -145,9 +153,9 @@ def _locate(omega: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarray], count: int,
             subset: np.ndarray, max_nodes_per_call: int,
-            seen: Callable[[np.ndarray, np.ndarray], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
+            seen: Seen | None = None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_locate` on ``count`` directions per case of ``subset`` (``directions_of(cases)`` (k, count, 3)), in
-    bounded chunks; ``seen(cases, g)`` is shown each chunk's samples."""
+    bounded chunks; ``seen(cases, omega, g)`` is shown each chunk's samples."""
     per_call = max(1, max_nodes_per_call // count)
     peaks, widths = [], []
     for start in range(0, subset.size, per_call):
@@ -155,7 +163,7 @@ def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarr
         omega = directions_of(case)
         g = _magnitudes(integrand, omega, case)
         if seen is not None:
-            seen(case, g)
+            seen(case, omega, g)
         best, width = _locate(omega, g)
         peaks.append(best)
         widths.append(width)
@@ -173,15 +181,18 @@ def _cap() -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def _zoom(integrand: Integrand, peak: np.ndarray, width: np.ndarray, unresolved: np.ndarray, radius: np.ndarray,
-          max_nodes_per_call: int, spent: np.ndarray | None = None) -> None:
+          max_nodes_per_call: int, spent: np.ndarray | None = None,
+          seen: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None] | None = None) -> None:
     """Zoom into the lobes ``unresolved`` (indices into ``peak`` (k, 3) and ``width`` (k,), updated in place): a
     polar lattice on a cap of ``radius`` about the peak relocates it and measures it again, and the cap shrinks
-    threefold until the lobe spans several of its points. ``spent`` (k,), where given, counts the evaluations."""
+    threefold until the lobe spans several of its points. ``spent`` (k,), where given, counts the evaluations;
+    ``seen(indices, omega, g, spacing)`` is shown each cap's samples and their spacing."""
     cap_angle, cap_phi, cap_spacing = _cap()
     while unresolved.size and radius[unresolved].max() > 1e-10:
         around_peak = _cap_lattice(peak, unresolved, radius, cap_angle, cap_phi)
+        shown = None if seen is None else lambda i, omega, g: seen(i, omega, g, cap_spacing * radius[i])
         peak[unresolved], width[unresolved] = _sample(integrand, around_peak, cap_angle.size, unresolved,
-                                                      max_nodes_per_call)
+                                                      max_nodes_per_call, shown)
         if spent is not None:
             spent[unresolved] += cap_angle.size
         resolved = width[unresolved] >= 2.0 * cap_spacing * radius[unresolved]
@@ -191,7 +202,7 @@ def _zoom(integrand: Integrand, peak: np.ndarray, width: np.ndarray, unresolved:
 
 def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
                   candidates: np.ndarray | None = None,
-                  seen: Callable[[np.ndarray, np.ndarray], None] | None = None,
+                  seen: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None] | None = None,
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Find the peak direction and angular width of each case's integrand by sampling (no model hint).
 
@@ -205,8 +216,9 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_
     threefold until the lobe spans several of its points (GGX at roughness 0.01 is 1e-4 rad wide; at α = 1e-8,
     1e-8 rad). The width is the smaller of the two RMS measures. The quadrature's efficiency
     depends on these numbers, and so does where :func:`rounding_noise` looks for noise (which is why the core,
-    not the tails, must be found); the adaptivity and the quadrature error estimate do not. ``seen(cases, g)`` is
-    shown the lattice's samples (k, samples + m) chunk by chunk (the separated-peak search reads them).
+    not the tails, must be found); the adaptivity and the quadrature error estimate do not.
+    ``seen(cases, omega, g, spacing)`` is shown every sample, chunk by chunk, with the spacing of its lattice or cap
+    (the separated-peak search reads them).
     """
     spacing = np.sqrt(2.0 * np.pi / samples)
     grid = fibonacci_hemisphere(samples)
@@ -215,58 +227,52 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_
     def lattice(case: np.ndarray) -> np.ndarray:
         return np.concatenate([np.broadcast_to(grid, (case.size,) + grid.shape), extra[case]], axis=1)
 
-    peak, width = _sample(integrand, lattice, samples + extra.shape[1], np.arange(cases), max_nodes_per_call, seen)
+    shown = None if seen is None else lambda case, omega, g: seen(case, omega, g, np.full(case.size, spacing))
+    peak, width = _sample(integrand, lattice, samples + extra.shape[1], np.arange(cases), max_nodes_per_call, shown)
     _zoom(integrand, peak, width, np.flatnonzero(width < 2.0 * spacing), np.full(cases, 3.0 * spacing),
-          max_nodes_per_call)
+          max_nodes_per_call, seen=seen)
     return peak, np.clip(width, 1e-12, 1.0), np.full(cases, np.pi)
 
 
 def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
                  candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
     """:func:`estimate_lobe`'s main peak per case (poles, widths, supports) and the separated :class:`Peaks`
-    besides it (the module's docstring says how they are found)."""
-    nearest, _ = lattice_neighbours(samples)
-    rows, lattices, maxima = [], [], []  # per chunk: the cases with candidates, their samples, their local maxima
+    besides it (the module's docstring says how they are found): the candidates come from the lattice's samples and
+    from those of every cap the main peak's zoom samples."""
+    found = []
 
-    def seen(case: np.ndarray, g: np.ndarray) -> None:
-        on_lattice = g[:, :samples]
-        strict = (on_lattice > on_lattice[:, nearest].max(axis=-1)) & (on_lattice > 0)
-        main = np.argmax(g, axis=1)
-        on = main < samples
-        strict[np.flatnonzero(on), main[on]] = False  # the main peak's own sample
+    def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
+        nearest, symmetric = _cap_neighbours() if g.shape[1] == CAP_POINTS + 1 else lattice_neighbours(samples)
+        on = g[:, :nearest.shape[0]]  # (the lattice's samples, not the likely directions after them)
+        strict = (on > on[:, nearest].max(axis=-1)) & (on > 0)
+        # Not the main peak's own sample (where the main peak is a likely direction off the lattice, the lattice's
+        # largest sample is a candidate: the arc test says whether it lies on the main peak's slope).
+        best = np.argmax(g, axis=1)
+        own = np.flatnonzero(best < on.shape[1])
+        strict[own, best[own]] = False
         some = strict.any(axis=1)
-        rows.append(case[some])
-        lattices.append(on_lattice[some])
-        maxima.append(strict[some])
+        if some.any():
+            found.append(_candidates(case[some], omega[some, :on.shape[1]], on[some], strict[some], symmetric,
+                                     spacing[some]))
 
     poles, widths, supports = estimate_lobe(integrand, cases, samples, max_nodes_per_call, candidates, seen)
-    peaks = _separated(integrand, cases, poles, widths, np.concatenate(rows), np.concatenate(lattices),
-                       np.concatenate(maxima), samples, max_nodes_per_call)
-    return poles, widths, supports, peaks
+    case, direction, level, width, spacing = (np.concatenate(part) for part in zip(*found, strict=True)) if found \
+        else (np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0))
+    return poles, widths, supports, _confirmed(integrand, cases, poles, widths, case, direction, level, width,
+                                               spacing, max_nodes_per_call)
 
 
-def _separated(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.ndarray, rows: np.ndarray,
-               g: np.ndarray, strict: np.ndarray, samples: int, max_nodes_per_call: int) -> Peaks:
-    """The separated peaks of the cases ``rows`` whose lattice samples ``g`` (k, samples) have strict local maxima
-    ``strict`` (k, samples) besides the main peak's sample."""
-    evaluations = np.zeros(cases, dtype=np.int64)
-    charge = np.zeros(cases)
-    none = Peaks(np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), charge, evaluations)
-    if not rows.size:
-        return none
-    _, symmetric = lattice_neighbours(samples)
-    grid = fibonacci_hemisphere(samples)
-    spacing = np.sqrt(2.0 * np.pi / samples)
-    # Candidates: the largest MAX_CANDIDATES strict local maxima per case.
+def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, strict: np.ndarray, symmetric: np.ndarray,
+                spacing: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Of the strict local maxima ``strict`` (k, m) of samples ``g`` at ``omega`` (k, m, 3), the largest
+    :data:`MAX_CANDIDATES` per row, those whose half-level component (on the neighbour lists ``symmetric``) reaches
+    no higher sample: their case, direction, value, width (twice the RMS angle of that component; 0 where it is
+    that sample alone) and their samples' ``spacing``."""
     row, index = np.nonzero(strict)
     order = np.lexsort((-g[row, index], row))
     row, index = row[order], index[order]
-    rank = np.arange(row.size) - np.searchsorted(row, row)
-    keep = rank < MAX_CANDIDATES
+    keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES
     row, index = row[keep], index[keep]
-    if not row.size:
-        return none
-    # The half-level component of each candidate on the lattice: separated where it reaches no higher sample.
     level = g[row, index]
     above = g[row] >= SEPARATION * level[:, None]
     reach = np.zeros_like(above)
@@ -278,31 +284,47 @@ def _separated(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
         reach = grown
     alone = ~np.any(reach & (g[row] > level[:, None]), axis=1)
     row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
-    case = rows[row]
-    # The arc to the main peak: a ridge thinner than the lattice joins them there.
-    direction = grid[index]
+    direction = omega[row, index]
+    angle = _angles(omega[row], direction)
+    width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
+    return case[row], direction, level, width, spacing[row]
+
+
+def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.ndarray, case: np.ndarray,
+               direction: np.ndarray, level: np.ndarray, width: np.ndarray, spacing: np.ndarray,
+               max_nodes_per_call: int) -> Peaks:
+    """The candidates that the arc to their case's main peak separates from it, zoomed into and merged."""
+    evaluations = np.zeros(cases, dtype=np.int64)
+    # The arc to the main peak: a ridge thinner than the samples joins them there.
     t = np.arange(1, ARC_POINTS + 1) / (ARC_POINTS + 1)
     arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
     arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
     on_arc = _magnitudes(integrand, arc, case) if case.size else np.zeros((0, ARC_POINTS))
     np.add.at(evaluations, case, ARC_POINTS)
     apart = on_arc.min(axis=1, initial=np.inf) < SEPARATION * level
-    case, direction, level, reach = case[apart], direction[apart], level[apart], reach[apart]
-    # Width: twice the RMS angle of its half-level component where that spans several samples, else zoomed into.
-    angle = _angles(np.broadcast_to(grid, (case.size,) + grid.shape), direction)
-    width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
-    direction = direction.copy()
+    case, direction, width, spacing = case[apart], direction[apart].copy(), width[apart], spacing[apart]
 
     def at_case(omega: np.ndarray, peak: np.ndarray) -> np.ndarray:
         return integrand(omega, case[peak])
 
-    _zoom(at_case, direction, width, np.flatnonzero(width < 2.0 * spacing),
-          np.full(case.size, CANDIDATE_RADIUS * spacing), max_nodes_per_call, spent := np.zeros(case.size, np.int64))
+    spent = np.zeros(case.size, dtype=np.int64)
+    _zoom(at_case, direction, width, np.flatnonzero(width < 2.0 * spacing), CANDIDATE_RADIUS * spacing,
+          max_nodes_per_call, spent)
     np.add.at(evaluations, case, spent)
     width = np.clip(width, 1e-12, 1.0)
-    value = _magnitudes(at_case, direction[:, None, :], np.arange(case.size))[:, 0]
+    value = _magnitudes(at_case, direction[:, None, :], np.arange(case.size))[:, 0] if case.size else np.zeros(0)
     np.add.at(evaluations, case, 1)
-    return _merged(case, direction, width, value, poles, widths, charge, evaluations)
+    return _merged(case, direction, width, value, poles, widths, np.zeros(cases), evaluations)
+
+
+@cache
+def _cap_neighbours() -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lattice_neighbours` of the zoom's cap (its centre and :data:`CAP_POINTS` points), in the plane of
+    its polar coordinates."""
+    from scipy.spatial import cKDTree
+
+    angle, phi, _ = _cap()
+    return _neighbour_lists(cKDTree(np.stack([angle * np.cos(phi), angle * np.sin(phi)], axis=-1)))
 
 
 def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: np.ndarray, poles: np.ndarray,
