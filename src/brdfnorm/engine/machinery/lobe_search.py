@@ -252,8 +252,12 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
         strict[own, best[own]] = False
         some = strict.any(axis=1)
         if some.any():
-            found.append(_candidates(case[some], omega[some, :on.shape[1]], on[some], strict[some], symmetric,
-                                     spacing[some]))
+            # A main peak off the lattice counts as a sample joined to those within one spacing of it.
+            top = omega[some, best[some]]
+            near = _angles(omega[some, :on.shape[1]], top) < spacing[some, None]
+            ceiling = np.where(near, g[some, best[some]][:, None], on[some])
+            found.append(_candidates(case[some], omega[some, :on.shape[1]], on[some], ceiling, strict[some],
+                                     symmetric, spacing[some]))
 
     poles, widths, supports = estimate_lobe(integrand, cases, samples, max_nodes_per_call, candidates, seen)
     case, direction, level, width, spacing = (np.concatenate(part) for part in zip(*found, strict=True)) if found \
@@ -262,12 +266,13 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
                                                spacing, max_nodes_per_call)
 
 
-def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, strict: np.ndarray, symmetric: np.ndarray,
-                spacing: np.ndarray) -> tuple[np.ndarray, ...]:
+def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.ndarray, strict: np.ndarray,
+                symmetric: np.ndarray, spacing: np.ndarray) -> tuple[np.ndarray, ...]:
     """Of the strict local maxima ``strict`` (k, m) of samples ``g`` at ``omega`` (k, m, 3), the largest
     :data:`MAX_CANDIDATES` per row, those whose half-level component (on the neighbour lists ``symmetric``) reaches
-    no higher sample: their case, direction, value, width (twice the RMS angle of that component; 0 where it is
-    that sample alone) and their samples' ``spacing``."""
+    no higher sample (nor a sample whose ``ceiling``, the highest value it touches, is higher): their case,
+    direction, value, width (twice the RMS angle of that component; 0 where it is that sample alone) and their
+    samples' ``spacing``."""
     row, index = np.nonzero(strict)
     order = np.lexsort((-g[row, index], row))
     row, index = row[order], index[order]
@@ -282,7 +287,7 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, strict: np.n
         if (grown == reach).all():
             break
         reach = grown
-    alone = ~np.any(reach & (g[row] > level[:, None]), axis=1)
+    alone = ~np.any(reach & (ceiling[row] > level[:, None]), axis=1)
     row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
     direction = omega[row, index]
     angle = _angles(omega[row], direction)
