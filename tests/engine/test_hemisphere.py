@@ -13,7 +13,8 @@ from helpers.references import ggx_albedo_reference, nquad_albedo, phong_like_re
 
 import brdfnorm as bn
 from brdfnorm.engine.machinery.result import REASONS
-from brdfnorm.engine.routes.hemisphere import fibonacci_hemisphere, integrate_hemisphere, lobe_frame
+from brdfnorm.engine.machinery.lobe_search import fibonacci_hemisphere
+from brdfnorm.engine.routes.hemisphere import integrate_hemisphere, lobe_frame
 from brdfnorm.models import closed_forms
 
 NAIVE_GGX = FIXTURES / "ggx_naive.brdf"

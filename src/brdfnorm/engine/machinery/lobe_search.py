@@ -61,7 +61,8 @@ CANDIDATE_RADIUS = 1.5
 MAX_CANDIDATES = 16
 #: Peaks per case (the main one included) integrated about their own poles.
 MAX_PEAKS = 8
-#: Peaks closer than this many widths (the larger) are one.
+#: Peaks closer than this many widths (the smaller: a narrow lobe separated from a broad one a few of the broad one's
+#: widths away is a peak of its own) are one.
 MERGE_WIDTHS = 3.0
 #: A peak beyond :data:`MAX_PEAKS` is charged this multiple of its contribution estimate g·2π·w².
 CHARGE = 4.0
@@ -136,26 +137,52 @@ def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
                       np.einsum("kmi,ki->km", omega, centre))
 
 
-def _locate(omega: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The largest sample's direction (k, 3) and the width about it (k,) from samples ``g`` (k, m) at ``omega``."""
-    best = omega[np.arange(g.shape[0]), np.argmax(g, axis=1)]
+def _locate(omega: np.ndarray, g: np.ndarray, symmetric: np.ndarray,
+            spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """The largest sample's direction (k, 3) and the width about it (k,) from samples ``g`` (k, m) at ``omega``, the
+    first ``symmetric.shape[0]`` of them joined by the neighbour lists ``symmetric``, the others (likely directions)
+    to those within ``spacing`` of them."""
+    rows = np.arange(g.shape[0])
+    top = np.argmax(g, axis=1)
+    best = omega[rows, top]
     angle = _angles(omega, best)
     total = g.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         rms = np.sqrt((g * angle**2).sum(axis=1) / total)
-    # The RMS angle of the samples above half the peak measures the core: heavy tails (GGX at grazing views) make
-    # the RMS angle of all samples far wider than the core that rounding noise lives in. (0 where only the peak
-    # sample is above half: the core is unresolved, and zoomed into.)
-    core = g >= 0.5 * g.max(axis=1, keepdims=True)
+    # The RMS angle of the samples above half the peak that are joined to it measures the core: heavy tails (GGX at
+    # grazing views) make the RMS angle of all samples far wider than the core that rounding noise lives in, and a
+    # second lobe above half the peak elsewhere is not this one's core. (0 where only the peak sample is above
+    # half: the core is unresolved, and zoomed into.)
+    n = symmetric.shape[0]
+    above = g >= 0.5 * g.max(axis=1, keepdims=True)
+    start = np.zeros_like(above[:, :n])
+    on = top < n
+    start[rows[on], top[on]] = True
+    start[~on] = angle[~on, :n] < spacing
+    core = np.zeros_like(above)
+    core[:, :n] = _component(above[:, :n], start & above[:, :n], symmetric)
+    core[rows, top] = True
     core_rms = np.sqrt(np.where(core, angle**2, 0.0).sum(axis=1) / np.maximum(core.sum(axis=1), 1))
     return best, np.where(total > 0, np.minimum(rms, 2.0 * core_rms), 1.0)
 
 
+def _component(mask: np.ndarray, start: np.ndarray, symmetric: np.ndarray) -> np.ndarray:
+    """Per row, the samples of ``mask`` (k, m) joined to those of ``start`` (k, m) through samples of ``mask`` on the
+    neighbour lists ``symmetric`` (m, d)."""
+    reach = start.copy()
+    while True:
+        grown = reach | (mask & reach[:, symmetric].any(axis=-1))
+        if np.array_equal(grown, reach):
+            return reach
+        reach = grown
+
+
 def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarray], count: int,
-            subset: np.ndarray, max_nodes_per_call: int,
+            subset: np.ndarray, max_nodes_per_call: int, graph: tuple[np.ndarray, float],
             seen: Seen | None = None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_locate` on ``count`` directions per case of ``subset`` (``directions_of(cases)`` (k, count, 3)), in
-    bounded chunks; ``seen(cases, omega, g)`` is shown each chunk's samples."""
+    bounded chunks, with the neighbour lists and spacing ``graph`` of those directions; ``seen(cases, omega, g)`` is
+    shown each chunk's samples."""
     per_call = max(1, max_nodes_per_call // count)
     peaks, widths = [], []
     for start in range(0, subset.size, per_call):
@@ -164,7 +191,7 @@ def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarr
         g = _magnitudes(integrand, omega, case)
         if seen is not None:
             seen(case, omega, g)
-        best, width = _locate(omega, g)
+        best, width = _locate(omega, g, *graph)
         peaks.append(best)
         widths.append(width)
     return np.concatenate(peaks), np.concatenate(widths)
@@ -192,7 +219,7 @@ def _zoom(integrand: Integrand, peak: np.ndarray, width: np.ndarray, unresolved:
         around_peak = _cap_lattice(peak, unresolved, radius, cap_angle, cap_phi)
         shown = None if seen is None else lambda i, omega, g: seen(i, omega, g, cap_spacing * radius[i])
         peak[unresolved], width[unresolved] = _sample(integrand, around_peak, cap_angle.size, unresolved,
-                                                      max_nodes_per_call, shown)
+                                                      max_nodes_per_call, (_cap_neighbours()[1], 0.0), shown)
         if spent is not None:
             spent[unresolved] += cap_angle.size
         resolved = width[unresolved] >= 2.0 * cap_spacing * radius[unresolved]
@@ -228,17 +255,21 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_
         return np.concatenate([np.broadcast_to(grid, (case.size,) + grid.shape), extra[case]], axis=1)
 
     shown = None if seen is None else lambda case, omega, g: seen(case, omega, g, np.full(case.size, spacing))
-    peak, width = _sample(integrand, lattice, samples + extra.shape[1], np.arange(cases), max_nodes_per_call, shown)
+    peak, width = _sample(integrand, lattice, samples + extra.shape[1], np.arange(cases), max_nodes_per_call,
+                          (lattice_neighbours(samples)[1], spacing), shown)
     _zoom(integrand, peak, width, np.flatnonzero(width < 2.0 * spacing), np.full(cases, 3.0 * spacing),
           max_nodes_per_call, seen=seen)
     return peak, np.clip(width, 1e-12, 1.0), np.full(cases, np.pi)
 
 
 def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
-                 candidates: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
+                 candidates: np.ndarray | None = None,
+                 negligible: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
     """:func:`estimate_lobe`'s main peak per case (poles, widths, supports) and the separated :class:`Peaks`
     besides it (the module's docstring says how they are found): the candidates come from the lattice's samples and
-    from those of every cap the main peak's zoom samples."""
+    from those of every cap the main peak's zoom samples. A peak whose contribution estimate is below
+    ``negligible`` times the main peak's is charged, not kept (a bump in the far tails of the lobes: its own
+    sub-case would integrate a crescent of their tails about a pole it does not centre)."""
     found = []
 
     def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
@@ -262,8 +293,9 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
     poles, widths, supports = estimate_lobe(integrand, cases, samples, max_nodes_per_call, candidates, seen)
     case, direction, level, width, spacing = (np.concatenate(part) for part in zip(*found, strict=True)) if found \
         else (np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0))
-    return poles, widths, supports, _confirmed(integrand, cases, poles, widths, case, direction, level, width,
-                                               spacing, max_nodes_per_call)
+    peaks = _confirmed(integrand, cases, poles, widths, case, direction, level, width, spacing, max_nodes_per_call,
+                       negligible)
+    return poles, widths, supports, peaks
 
 
 def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.ndarray, strict: np.ndarray,
@@ -279,14 +311,9 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.
     keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES
     row, index = row[keep], index[keep]
     level = g[row, index]
-    above = g[row] >= SEPARATION * level[:, None]
-    reach = np.zeros_like(above)
-    reach[np.arange(row.size), index] = True
-    while True:
-        grown = reach | (above & reach[:, symmetric].any(axis=-1))
-        if (grown == reach).all():
-            break
-        reach = grown
+    start = np.zeros(g[row].shape, dtype=bool)
+    start[np.arange(row.size), index] = True
+    reach = _component(g[row] >= SEPARATION * level[:, None], start, symmetric)
     alone = ~np.any(reach & (ceiling[row] > level[:, None]), axis=1)
     row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
     direction = omega[row, index]
@@ -297,7 +324,7 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.
 
 def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.ndarray, case: np.ndarray,
                direction: np.ndarray, level: np.ndarray, width: np.ndarray, spacing: np.ndarray,
-               max_nodes_per_call: int) -> Peaks:
+               max_nodes_per_call: int, negligible: float) -> Peaks:
     """The candidates that the arc to their case's main peak separates from it, zoomed into and merged."""
     evaluations = np.zeros(cases, dtype=np.int64)
     # The arc to the main peak: a ridge thinner than the samples joins them there.
@@ -319,7 +346,13 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     width = np.clip(width, 1e-12, 1.0)
     value = _magnitudes(at_case, direction[:, None, :], np.arange(case.size))[:, 0] if case.size else np.zeros(0)
     np.add.at(evaluations, case, 1)
-    return _merged(case, direction, width, value, poles, widths, np.zeros(cases), evaluations)
+    main = _magnitudes(integrand, poles[case][:, None, :], case)[:, 0] if case.size else np.zeros(0)
+    np.add.at(evaluations, case, 1)
+    small = value * width**2 < negligible * main * widths[case]**2
+    charge = np.zeros(cases)
+    np.add.at(charge, case[small], CHARGE * 2.0 * np.pi * (value * width**2)[small])
+    keep = ~small
+    return _merged(case[keep], direction[keep], width[keep], value[keep], poles, widths, charge, evaluations)
 
 
 @cache
@@ -334,8 +367,8 @@ def _cap_neighbours() -> tuple[np.ndarray, np.ndarray]:
 
 def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: np.ndarray, poles: np.ndarray,
             widths: np.ndarray, charge: np.ndarray, evaluations: np.ndarray) -> Peaks:
-    """Candidates merged into a kept peak within :data:`MERGE_WIDTHS` widths (the main one first, then by value), at
-    most :data:`MAX_PEAKS` per case by contribution; the others' contributions charged."""
+    """Candidates merged into a kept peak within :data:`MERGE_WIDTHS` widths (the smaller; the main peak first, then
+    by value), at most :data:`MAX_PEAKS` per case by contribution; the others' contributions charged."""
     kept = np.zeros(case.size, dtype=bool)
     contribution = value * 2.0 * np.pi * width**2
     for c in np.unique(case):
@@ -343,7 +376,7 @@ def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: n
         mine = mine[np.argsort(-value[mine], kind="stable")]
         centres, sizes = [poles[c]], [widths[c]]
         for i in mine:
-            apart = [np.arctan2(np.linalg.norm(np.cross(direction[i], p)), direction[i] @ p) > MERGE_WIDTHS * max(
+            apart = [np.arctan2(np.linalg.norm(np.cross(direction[i], p)), direction[i] @ p) > MERGE_WIDTHS * min(
                 width[i], w) for p, w in zip(centres, sizes, strict=True)]
             if all(apart):
                 kept[i] = True

@@ -98,7 +98,9 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
         return _cubature(problem, scale, lower, poles, widths, supports, **options)
     normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
     candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
-    poles, widths, supports, peaks = search_lobes(_integrand(problem, scale, lower), K, candidates=candidates)
+    # (a bump whose contribution is below rtol/64 of the main peak's is charged, not integrated about its own pole)
+    poles, widths, supports, peaks = search_lobes(_integrand(problem, scale, lower), K, candidates=candidates,
+                                                  negligible=rtol / 64)
     count = peaks.count(K)
     if np.all(count == 1):  # (the whole batch as it is, compiled kernels and all)
         result = _cubature(problem, scale, lower, poles, widths, supports, **options)
