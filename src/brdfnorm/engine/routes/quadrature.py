@@ -119,11 +119,12 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
     single = np.flatnonzero(count == 1)
     parts = [(single, part(single, poles[single], widths[single], supports[single]))] if single.size else []
     for m in np.unique(count[count > 1]):
-        # each peak's sub-case with its share of the case's budget and absolute tolerance
+        # each peak's sub-case with its share of the case's budget and absolute tolerance, both tolerances divided by
+        # the margin fold charges
         cases = np.flatnonzero(count == m)
         sub = partition.expand(poles, widths, supports, peaks, cases)
-        result = part(cases[sub.owner], sub.poles, sub.widths, sub.supports, sub, atol=options["atol"] / m,
-                      max_evaluations=max_evaluations // m)
+        result = part(cases[sub.owner], sub.poles, sub.widths, sub.supports, sub, rtol=rtol / partition.MARGIN,
+                      atol=options["atol"] / (m * partition.MARGIN), max_evaluations=max_evaluations // m)
         parts.append((cases, partition.fold(result, sub, cases.size)))
     return _joined(parts, K, peaks, rtol, options["atol"])
 
