@@ -104,7 +104,7 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
     count = peaks.count(K)
     if np.all(count == 1):  # (the whole batch as it is, compiled kernels and all)
         result = _cubature(problem, scale, lower, poles, widths, supports, **options)
-        return _joined([(np.arange(K), result)], K, peaks, rtol, options["atol"])
+        return _joined([(np.arange(K), result)], K, peaks, scale, rtol, atol)
 
     def part(cases: np.ndarray, *args, **changes) -> RouteResult:
         """The cubature of ``problem`` restricted to ``cases`` (its non-finite values reported at their own case)."""
@@ -126,13 +126,14 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
         result = part(cases[sub.owner], sub.poles, sub.widths, sub.supports, sub, rtol=rtol / partition.MARGIN,
                       atol=options["atol"] / (m * partition.MARGIN), max_evaluations=max_evaluations // m)
         parts.append((cases, partition.fold(result, sub, cases.size)))
-    return _joined(parts, K, peaks, rtol, options["atol"])
+    return _joined(parts, K, peaks, scale, rtol, atol)
 
 
-def _joined(parts: list, K: int, peaks: Peaks, rtol: float, atol: float) -> RouteResult:
+def _joined(parts: list, K: int, peaks: Peaks, scale: np.ndarray | None, rtol: float, atol: float) -> RouteResult:
     """The parts' results (cases, result) as one of the K cases, with the search's evaluations and the charge of the
-    separated peaks no sub-case integrated (a case it takes past its tolerance is not converged: "budget", the cap
-    on peaks per case)."""
+    separated peaks no sub-case integrated (times ``scale``, the search's integrand having been divided by it). A
+    case with a charge or several peaks that is past its tolerance is not converged: "budget", the cap on peaks per
+    case (the others keep their route's verdict)."""
     channels = parts[0][1].value.shape[1:]
     value, error = np.zeros((K,) + channels), np.zeros((K,) + channels)
     evaluations, converged = peaks.evaluations.copy(), np.zeros(K, dtype=bool)
@@ -142,8 +143,9 @@ def _joined(parts: list, K: int, peaks: Peaks, rtol: float, atol: float) -> Rout
         evaluations[cases] += result.evaluations
         converged[cases], reason[cases] = result.converged, result.reasons()
         nonfinite[cases] = result.nonfinite_fraction
-    error += peaks.charge[:, None]
-    over = converged & np.any(error > np.maximum(atol, rtol * np.abs(value)), axis=1)
+    error += (peaks.charge * (1.0 if scale is None else scale))[:, None]
+    checked = (peaks.charge > 0) | (peaks.count(K) > 1)
+    over = checked & converged & np.any(error > np.maximum(atol, rtol * np.abs(value)), axis=1)
     converged &= ~over
     reason[over] = "budget"
     return RouteResult(value, error, evaluations, converged, reason.astype(str), {"nonfinite_fraction": nonfinite})
