@@ -128,3 +128,40 @@ def test_a_peak_beyond_the_cap_is_charged_and_the_estimate_still_bounds_the_erro
     assert abs(result.value[0, 0] - 1.4498e-4) < 5e-8  # the main lobe alone
     assert _ratio(result, exact, allowance)[0] <= 1.0
     assert not result.converged[0] and result.reason[0] == "budget"
+
+
+NAN_ZONE = """analytic
+
+::begin parameters
+float n 1 100000 100
+float m 1 1000000 2000
+float weight 0 100 1
+float azimuth -4 4 0.5
+float zone -2 2 2
+::end parameters
+
+::begin shader
+vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)
+{
+    vec3 H = normalize(L + V);
+    float main = pow(max(dot(N, H), 0.0), n);
+    vec3 R = reflect(-V, N);
+    float c = cos(azimuth);
+    float s = sin(azimuth);
+    vec3 D = (dot(R, X) * c - dot(R, Y) * s) * X + (dot(R, X) * s + dot(R, Y) * c) * Y + dot(R, N) * N;
+    float bad = sqrt(zone - dot(L, X));
+    return vec3(main + weight * pow(max(dot(L, D), 0.0), m)) * (1.0 + bad - bad);
+}
+::end shader
+"""
+
+
+@BACKENDS
+def test_a_value_that_is_not_finite_is_reported_at_its_own_case(backend, tmp_path):
+    """In a batch split into single- and multi-peak parts, a NaN of the second case names that case's V."""
+    path = tmp_path / "nan_zone.brdf"
+    path.write_text(NAN_ZONE, encoding="utf-8")
+    model = bn.load(str(path)).with_params(n=[300.0, 11634.0], m=[2000.0, 23967.0], weight=[0.0, 0.65],
+                                           azimuth=[1.0, -0.63], zone=[2.0, 0.95])
+    with pytest.raises(bn.errors.EvaluationError, match=r"V=\(0\.965925826, 0, 0\.258819045\)"):
+        _albedo(model, np.radians([30.0, 75.0]), backend, rtol=1e-8)
