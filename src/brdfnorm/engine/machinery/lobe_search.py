@@ -60,6 +60,9 @@ SAMPLES = 1024
 NEIGHBOURS = 8
 #: Points of the great-circle arc from a candidate to the main peak where g is evaluated.
 ARC_POINTS = 16
+#: The parallel arcs tested beside the arc to the main peak, as shares of its length (the arc itself is tested
+#: first; a curved ridge, Ashikhmin-Shirley's n_u = 1.6, n_v = 5 112 at θ_o = 49°, leaves it).
+OFFSETS = np.array([-4, -3, -2, -1, 1, 2, 3, 4]) / 32.0
 #: A candidate is separated where g falls below this share of its value between it and any higher sample.
 SEPARATION = 0.5
 #: Starting radius of a candidate's zoom, in lattice spacings.
@@ -357,6 +360,23 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     on_arc = _magnitudes(integrand, arc, case) if case.size else np.zeros((0, ARC_POINTS))
     np.add.at(evaluations, case, ARC_POINTS)
     apart = on_arc.min(axis=1, initial=np.inf) < SEPARATION * level
+    case, direction, level, width, spacing = (case[apart], direction[apart], level[apart], width[apart],
+                                              spacing[apart])
+    # A curved ridge leaves the arc: the parallel arcs beside it, up to an eighth of its length away, where the arc
+    # dipped (at each of its points the largest of them must dip too).
+    across = np.cross(direction, poles[case])
+    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-300)
+    length = np.arctan2(np.linalg.norm(np.cross(direction, poles[case]), axis=-1),
+                        np.einsum("ki,ki->k", direction, poles[case]))
+    arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
+    arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
+    beside = (arc[:, None] + (OFFSETS[None, :, None, None] * length[:, None, None, None]) * across[:, None, None, :])
+    beside = (beside / np.linalg.norm(beside, axis=-1, keepdims=True)).reshape(case.size, OFFSETS.size * ARC_POINTS,
+                                                                                 3)
+    on_side = _magnitudes(integrand, beside, case).reshape(case.size, OFFSETS.size, ARC_POINTS) if case.size \
+        else np.zeros((0, OFFSETS.size, ARC_POINTS))
+    np.add.at(evaluations, case, OFFSETS.size * ARC_POINTS)
+    apart = on_side.max(axis=1).min(axis=1, initial=np.inf) < SEPARATION * level
     case, direction, width, spacing = case[apart], direction[apart].copy(), width[apart], spacing[apart]
 
     def at_case(omega: np.ndarray, peak: np.ndarray) -> np.ndarray:
