@@ -10,22 +10,23 @@ model), :func:`search_lobes` samples one equal-area Fibonacci lattice (1024 dire
 - the **main peak** (:func:`estimate_lobe`): the largest sample, its width the |g|-weighted RMS angle (or twice that
   of the samples above half the peak), zoomed into on ever smaller polar caps while the lobe is narrower than the
   lattice — what the lobe-aligned coordinates of :mod:`brdfnorm.engine.routes.hemisphere` are built about;
-- the **separated peaks** (:class:`Peaks`): strict local maxima of the same samples, and of the samples of every
-  cap the main peak's zoom takes (above each of their :data:`NEIGHBOURS` nearest neighbours, the neighbour tables
-  of the fixed lattice and of the unit cap computed once), that are separated from every higher sample — the
-  samples above half the candidate's value that are joined to it reach none higher (its half-level component; a
-  sample on a slope or a ridge of a higher peak, or on a noisy plateau, reaches one; a main peak at a likely
-  direction off the lattice counts as joined to the samples within one spacing of it), and g on
-  :data:`ARC_POINTS` points of the great-circle arc to the main peak falls below half the candidate's value (a
-  ridge thinner than the samples along the arc does not). Each separated candidate is zoomed into as the main peak
-  is (starting on a cap of :data:`CANDIDATE_RADIUS` spacings of its samples, so that the zoom cannot climb onto
-  another peak; its core only the samples joined to it) unless its half-level component already spans several
-  samples; candidates that end within :data:`MERGE_WIDTHS` widths (the smaller) of a kept peak are merged into it,
-  and at most :data:`MAX_PEAKS` peaks per case are kept, ranked by the contribution estimate c ≈ g·2π·w². A
-  separated peak beyond that cap, or whose c is below ``negligible`` times the main peak's, is not integrated about
-  its own pole: :data:`CHARGE` · c joins the case's error estimate (``charge``), never dropped. A case with
-  separated peaks has its main peak measured again, its core only the samples joined to it (another lobe above
-  half its value elsewhere on the first cap is not its core).
+- the **separated peaks** (:class:`Peaks`): strict local maxima of the same samples, and of the samples of every cap
+  the main peak's zoom takes (above each of their :data:`NEIGHBOURS` nearest neighbours, the neighbour tables of the
+  fixed lattice and of the unit cap computed once), that are separated from every higher sample — the samples above
+  half the candidate's value that are joined to it reach none higher (its half-level component; a sample on a slope
+  or a ridge of a higher peak, or on a noisy plateau, reaches one; a main peak at a likely direction off the lattice
+  counts as joined to the samples within one spacing of it), and g on :data:`ARC_POINTS` points of the great-circle
+  arc to the main peak falls below half the candidate's value (a ridge thinner than the samples along the arc does
+  not), and so does the largest of g on the parallel arcs beside it at each of those points (:data:`OFFSETS`: a
+  curved ridge leaves the arc). Each separated candidate is zoomed into as the main peak is (starting on a cap of
+  :data:`CANDIDATE_RADIUS` spacings of its samples, so that the zoom cannot climb onto another peak; its core only
+  the samples joined to it) unless its half-level component already spans several samples; candidates that end
+  within :data:`MERGE_WIDTHS` widths (the smaller) of a kept peak are merged into it, and at most :data:`MAX_PEAKS`
+  peaks per case are kept, ranked by the contribution estimate c ≈ g·2π·w². A separated peak beyond that cap, or
+  whose c is below ``negligible`` times the main peak's, is not integrated about its own pole: :data:`CHARGE` · c
+  joins the case's error estimate (``charge``), never dropped. A case with separated peaks has its main peak
+  measured again, its core only the samples joined to it (another lobe above half its value elsewhere on the first
+  cap is not its core).
 
 Every evaluation the separated-peak search spends (arcs, zooms) is counted per case (``evaluations``); the lattice
 and the main peak's first zoom are not (they were not before, and single-peak cases keep their counts but for the
