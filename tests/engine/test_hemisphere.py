@@ -12,8 +12,9 @@ from helpers.paths import EXAMPLES, FIXTURES
 from helpers.references import ggx_albedo_reference, nquad_albedo, phong_like_reference
 
 import brdfnorm as bn
+from brdfnorm.engine.machinery.lobe_search import fibonacci_hemisphere
 from brdfnorm.engine.machinery.result import REASONS
-from brdfnorm.engine.routes.hemisphere import fibonacci_hemisphere, integrate_hemisphere, lobe_frame
+from brdfnorm.engine.routes.hemisphere import integrate_hemisphere, lobe_frame
 from brdfnorm.models import closed_forms
 
 NAIVE_GGX = FIXTURES / "ggx_naive.brdf"

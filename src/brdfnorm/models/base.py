@@ -192,7 +192,7 @@ class Model(ABC):
         """Peak of the integrand over the free direction, given the fixed one (a hint only).
 
         None (the default) lets the integrator find it by sampling
-        (:func:`brdfnorm.engine.routes.hemisphere.estimate_lobe`).
+        (:func:`brdfnorm.engine.machinery.lobe_search.search_lobes`).
         """
         return None
 

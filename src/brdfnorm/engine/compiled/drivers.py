@@ -116,6 +116,14 @@ class NativeIntegrand:
                                      self.over_light, out)
         return out
 
+    def take(self, index: np.ndarray) -> NativeIntegrand:
+        """The integrand of the cases ``index`` (repeats allowed): case i of the copy is case ``index[i]`` of this
+        one (the generic route's split of a batch into its single- and multi-peak cases)."""
+        copy = object.__new__(NativeIntegrand)
+        copy.__dict__.update(self.__dict__, fixed=np.ascontiguousarray(self.fixed[index]),
+                             U=np.ascontiguousarray(self.U[index]))
+        return copy
+
 
 #: Seconds this process spent compiling (or loading from the disk cache) kernels: work budgets in seconds
 #: (:mod:`brdfnorm.check`) leave it out, so that a first run, which compiles, searches as far as a later one.

@@ -20,5 +20,7 @@
   convergence is shown to be geometric, and (every grid) the coarser difference kept after a sudden agreement;
 - :mod:`.slope_coordinates` — the radial coordinates (pole, tail, cap) the half-vector routes run in over each
   microfacet slope distribution;
-- :mod:`.directions` — random hemisphere directions and rotations about the normal.
+- :mod:`.directions` — random hemisphere directions and rotations about the normal;
+- :mod:`.lobe_search` — the generic route's search for a lobe's main peak and every separated peak besides it;
+  :mod:`.partition` — a case with several peaks integrated as one sub-case per peak.
 """

@@ -54,11 +54,11 @@ import numpy as np
 
 from ...models.microfacet import GGXDistribution
 from ..compiled import drivers as native
+from ..machinery.lobe_search import fibonacci_hemisphere
 from ..machinery.result import RouteResult
 from ..machinery.rounding import noise_bound
 from . import halfvector_global as global_rule
 from .halfvector import SlopeGeometry, SlopeNodes, integrate_slopes, slope_map
-from .hemisphere import fibonacci_hemisphere
 
 #: Fixed directions closer to the horizon than this are left to the lobe-aligned routes (whose grazing honesty
 #: was established down to μ = 1e-7 on random sweeps; this route's sweeps cover μ ≥ 1e-3).

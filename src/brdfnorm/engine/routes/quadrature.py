@@ -19,16 +19,12 @@ import numpy as np
 
 from ...errors import EvaluationError
 from ...models.base import Lobe, mirror
+from ..machinery import partition
 from ..machinery.directions import random_hemisphere, rotation_about_normal
+from ..machinery.lobe_search import Peaks, fibonacci_hemisphere, search_lobes
 from ..machinery.result import RouteResult
 from . import halfvector_generic
-from .hemisphere import (
-    NonFiniteIntegrand,
-    NonFinitePolicy,
-    estimate_lobe,
-    fibonacci_hemisphere,
-    integrate_hemisphere,
-)
+from .hemisphere import NonFiniteIntegrand, NonFinitePolicy, integrate_hemisphere
 
 #: An integrand whose sampled values exceed this is integrated divided by a power of two (the sums of values near
 #: float64's limit, such as a BRDF of 2e307, overflow although the albedo itself is finite).
@@ -86,46 +82,130 @@ def _quadrature_hemisphere(problem, lower: bool, options: dict) -> RouteResult:
 def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: float, atol: float,
                nonfinite: NonFinitePolicy, max_evaluations: int) -> RouteResult:
     """The lobe hint (or search) and the adaptive cubature, of the integrand divided by ``scale`` per case; with
-    ``lower``, of the lower hemisphere mirrored into the upper one."""
+    ``lower``, of the lower hemisphere mirrored into the upper one. A case where the search finds separated peaks
+    is integrated as one sub-case per peak (brdfnorm.engine.machinery.partition), the others as before."""
     K = problem.fixed.shape[0]
-    side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
-    if scale is None:
-        # the compiled integrand itself where there is one: the routes then run their fused kernels on it
-        integrand, scale = (problem.native if problem.native is not None and not lower else side), np.ones(K)
-    else:
-        def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
-            return side(omega, case) / scale[case, None]
+    options = dict(rtol=rtol, atol=atol / (1.0 if scale is None else scale.max()), nonfinite=nonfinite,
+                   max_evaluations=max_evaluations)
     if lower:
         refracted = problem.model.transmission_lobe(problem.fixed, problem.case_params(np.arange(K)))
         lobe = Lobe(refracted.direction * FLIP, refracted.width, refracted.support)
     else:
         lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
-    if lobe is None:
-        normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
-        candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
-        poles, widths, supports = estimate_lobe(integrand, K, candidates=candidates)
-    else:
+    if lobe is not None:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-    # The half-vector route first, on the upper hemisphere (brdfnorm.engine.routes.halfvector_generic says which lobes
-    # it takes);
-    # isotropy decides that and the global rule's azimuth estimate.
-    isotropic = _isotropic_cases(problem, rtol)
+        return _cubature(problem, scale, lower, poles, widths, supports, **options)
+    normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
+    candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
+    # (a bump whose contribution is below rtol/64 of the main peak's is charged, not integrated about its own pole)
+    poles, widths, supports, peaks = search_lobes(_integrand(problem, scale, lower), K, candidates=candidates,
+                                                  negligible=rtol / 64)
+    count = peaks.count(K)
+    if np.all(count == 1):  # (the whole batch as it is, compiled kernels and all)
+        result = _cubature(problem, scale, lower, poles, widths, supports, **options)
+        return _joined([(np.arange(K), result)], K, peaks, scale, rtol, atol)
 
-    def rescaled(factor: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """The integrand (by numpy) with each case's fixed direction scaled by ``factor`` (K,), for the bias of the
+    def part(cases: np.ndarray, *args, **changes) -> RouteResult:
+        """The cubature of ``problem`` restricted to ``cases`` (its non-finite values reported at their own case)."""
+        try:
+            return _cubature(_take(problem, cases), None if scale is None else scale[cases], lower, *args,
+                             **{**options, **changes})
+        except NonFiniteIntegrand as bad:
+            case = int(cases[bad.case])
+            value = _integrand(problem, scale, lower)(bad.direction[None], np.array([case]))[0]
+            raise NonFiniteIntegrand(case, bad.direction, value) from None
+
+    single = np.flatnonzero(count == 1)
+    parts = [(single, part(single, poles[single], widths[single], supports[single]))] if single.size else []
+    for m in np.unique(count[count > 1]):
+        # each peak's sub-case with its share of the case's budget and absolute tolerance, both tolerances divided by
+        # the margin fold charges
+        cases = np.flatnonzero(count == m)
+        sub = partition.expand(poles, widths, supports, peaks, cases)
+        result = part(cases[sub.owner], sub.poles, sub.widths, sub.supports, sub, rtol=rtol / partition.MARGIN,
+                      atol=options["atol"] / (m * partition.MARGIN), max_evaluations=max_evaluations // m)
+        parts.append((cases, partition.fold(result, sub, cases.size)))
+    return _joined(parts, K, peaks, scale, rtol, atol)
+
+
+def _joined(parts: list, K: int, peaks: Peaks, scale: np.ndarray | None, rtol: float, atol: float) -> RouteResult:
+    """The parts' results (cases, result) as one of the K cases, with the search's evaluations and the charge of the
+    separated peaks no sub-case integrated (times ``scale``, the search's integrand having been divided by it). A
+    case with a charge or several peaks that is past its tolerance is not converged: "budget", the cap on peaks per
+    case (the others keep their route's verdict)."""
+    channels = parts[0][1].value.shape[1:]
+    value, error = np.zeros((K,) + channels), np.zeros((K,) + channels)
+    evaluations, converged = peaks.evaluations.copy(), np.zeros(K, dtype=bool)
+    reason, nonfinite = np.full(K, "", dtype=object), np.zeros(K)
+    for cases, result in parts:
+        value[cases], error[cases] = result.value, result.error
+        evaluations[cases] += result.evaluations
+        converged[cases], reason[cases] = result.converged, result.reasons()
+        nonfinite[cases] = result.nonfinite_fraction
+    error += (peaks.charge * (1.0 if scale is None else scale))[:, None]
+    checked = (peaks.charge > 0) | (peaks.count(K) > 1)
+    over = checked & converged & np.any(error > np.maximum(atol, rtol * np.abs(value)), axis=1)
+    converged &= ~over
+    reason[over] = "budget"
+    return RouteResult(value, error, evaluations, converged, reason.astype(str), {"nonfinite_fraction": nonfinite})
+
+
+def _integrand(problem, scale: np.ndarray | None, lower: bool):
+    """The integrand of ``problem``'s cases divided by ``scale`` (None: 1, and the compiled integrand itself where
+    there is one: the routes then run their fused kernels on it); with ``lower``, mirrored (ω_z → −ω_z)."""
+    side = (lambda omega, case: problem.integrand(omega * FLIP, case)) if lower else problem.integrand
+    if scale is None:
+        return problem.native if problem.native is not None and not lower else side
+
+    def integrand(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+        return side(omega, case) / scale[case, None]
+
+    return integrand
+
+
+def _take(problem, cases: np.ndarray):
+    """``problem`` restricted to ``cases`` (repeats allowed): its case i is case ``cases[i]``."""
+    params = {name: np.asarray(value)[cases] if name in problem.per_case else value
+              for name, value in problem.params.items()}
+    native = None if problem.native is None else problem.native.take(cases)
+    return replace(problem, fixed=problem.fixed[cases], params=params, native=native)
+
+
+def _cubature(problem, scale: np.ndarray | None, lower: bool, poles: np.ndarray, widths: np.ndarray,
+              supports: np.ndarray, sub: partition.SubCases | None = None, *, rtol: float, atol: float,
+              nonfinite: NonFinitePolicy, max_evaluations: int) -> RouteResult:
+    """The adaptive cubature of :mod:`.hemisphere` about ``poles``, of ``problem``'s integrand (divided by
+    ``scale``, mirrored with ``lower``) — or, with ``sub``, of its sub-cases' g·ψ (no half-vector route: it assumes
+    a lobe centred on the mirror direction; every sub-case anisotropic: ψ breaks any symmetry about its pole)."""
+    K = problem.fixed.shape[0]
+    integrand = _integrand(problem, scale, lower)
+    factor = np.ones(K) if scale is None else scale
+
+    def rescaled(change: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """The integrand (by numpy) with each case's fixed direction scaled by ``change`` (K,), for the bias of the
         lobe's cosine (brdfnorm.engine.machinery.rounding.cosine_bias)."""
-        moved = replace(problem, fixed=problem.fixed * factor[:, None], native=None)
-        return lambda omega, case: moved.integrand(omega * FLIP if lower else omega, case) / scale[case, None]
+        moved = replace(problem, fixed=problem.fixed * change[:, None], native=None)
+        def plain(omega: np.ndarray, case: np.ndarray) -> np.ndarray:
+            return moved.integrand(omega * FLIP if lower else omega, case) / factor[case, None]
 
-    first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
-    result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol / scale.max(),
-                                  nonfinite=nonfinite, max_evaluations=max_evaluations, first_route=first,
-                                  anisotropic=~isotropic, epsilon=getattr(problem.model, "epsilon", None),
-                                  fixed=problem.fixed, rescaled=rescaled)
+        return plain if sub is None else sub.wrap(plain)
+
+    if sub is None:
+        # The half-vector route first, on the upper hemisphere (brdfnorm.engine.routes.halfvector_generic says which
+        # lobes it takes); isotropy decides that and the global rule's azimuth estimate.
+        isotropic = _isotropic_cases(problem, rtol)
+        first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
+        anisotropic, tested = ~isotropic, 3 * ISOTROPY_PAIRS
+    else:
+        integrand, first, anisotropic, tested = sub.wrap(integrand), None, np.ones(K, dtype=bool), 0
+    result = integrate_hemisphere(integrand, poles, widths, supports, rtol=rtol, atol=atol, nonfinite=nonfinite,
+                                  max_evaluations=max_evaluations, first_route=first, anisotropic=anisotropic,
+                                  epsilon=getattr(problem.model, "epsilon", None), fixed=problem.fixed,
+                                  rescaled=rescaled)
     # Each case is charged the isotropy test as if it had run alone: counts do not depend on how cases are batched.
-    return result.with_(value=result.value * scale[:, None], error=result.error * scale[:, None],
-                        evaluations=result.evaluations + 3 * ISOTROPY_PAIRS)
+    return result.with_(value=result.value * factor[:, None], error=result.error * factor[:, None],
+                        evaluations=result.evaluations + tested)
 
 
 #: Random direction pairs per parameter set for the isotropy test.
