@@ -38,7 +38,7 @@ from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import grid_sums
+from .rules import grid_sums_all
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
@@ -111,6 +111,9 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
     flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
     vz, ax, ay = geometry[0], geometry[4], geometry[5]
+    # (the case's slope map as numbers, not arrays: an array passed to _row would be reference-counted per row)
+    here = (vz[q], geometry[1][q], geometry[2][q], geometry[3][q], ax[q], ay[q], geometry[6][q], geometry[7][q],
+            geometry[8][q], geometry[9][q])
     C = grid.shape[2] - 1 if largest else grid.shape[2]
     parameters = case(q, extra)
     count = 0
@@ -120,7 +123,7 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
             continue
         # (bool(): shader_global's beckmann is the literal False, which would be another signature of _row)
         factor, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio = _row(
-            index, M, kind, q, lam, width, scale, linear, log_horizon, bool(beckmann), geometry)
+            index, M, kind, lam, width, scale, linear, log_horizon, bool(beckmann), here)
         for j in range(radial.size):
             s, weight_t, one_sp, n2, Lz = slope_node(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h,
                                                      s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
@@ -142,16 +145,16 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
 
 
 @njit(**_OPTIONS)
-def _row(index, M, kind, q, lam, width, scale, linear, log_horizon, beckmann, geometry):  # pragma: no cover
-    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of case ``q``: the azimuth
-    map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s values but s_middle, and
-    :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per node): compiled once and
-    shared by :func:`fused_global` and :func:`shader_global`, not inlined into each."""
-    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+def _row(index, M, kind, lam, width, scale, linear, log_horizon, beckmann, here):  # pragma: no cover - compiled
+    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of a case whose slope map
+    (:data:`.slopes.SLOPE_MAP`) is ``here``: the azimuth map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s
+    values but s_middle, and :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per
+    node): compiled once and shared by :func:`fused_global` and :func:`shader_global`, not inlined into each; its
+    arguments are numbers (arrays would be reference-counted at every call)."""
+    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = here
     phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
     dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
-        phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
-        multiplicity[q], vz[q], beckmann)
+        phi, linear, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, vz, beckmann)
     start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
     return dphi * scale, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio
 
@@ -198,21 +201,26 @@ def _doublings(ratio, last):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
+def _sums(grid, M, level_u, sums, raw):  # pragma: no cover - compiled
     """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid (M, 2^level_u − 1, C), as
-    compiled.rules.grid_sums."""
+    compiled.rules.grid_sums (``raw`` (6, C): its sums before the azimuth step). Returns whether every magnitude is
+    finite (then so is every value of the grid: the magnitude sums their |·| with positive weights)."""
     C = grid.shape[2]
     w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
     n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
     step = 2 * np.pi / M
+    grid_sums_all(grid, w, w_half, w_quarter, n_half, n_quarter, raw)
+    finite = True
     for c in range(C):
-        q, q_b, q_bb, q_u, q_uu, magnitude = grid_sums(grid, c, w, w_half, w_quarter, n_half, n_quarter)
+        q, q_b, q_bb, q_u, q_uu, magnitude = raw[0, c], raw[1, c], raw[2, c], raw[3, c], raw[4, c], raw[5, c]
+        finite &= math.isfinite(magnitude)
         q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
         q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
         sums[0, c] = q
         sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
         sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
         sums[3, c] = magnitude
+    return finite
 
 
 @njit(**_OPTIONS)
@@ -287,22 +295,25 @@ def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol
     done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
     outputs then written."""
     C = numbers.shape[2]
-    sums = np.empty((4, C))
+    sums, raw = np.empty((4, C)), np.empty((6, C))
     failed = False
     for kind in range(_PIECES):
         if not switches[kind, _ALIVE]:
             continue
         grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
-        finite = True
-        for x in grid.flat:
-            if not math.isfinite(x):
-                finite = False
-                break
+        # (a finite magnitude: every value finite, no pass of its own over the grid; else the values looked at)
+        finite = _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums, raw)
+        if not finite:
+            finite = True
+            for x in grid.flat:
+                if not math.isfinite(x):
+                    finite = False
+                    break
         switches[kind, _FINITE] = finite
         if not finite:
             grid.fill(0.0)
             failed = True
-        _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums)
+            _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums, raw)
         for c in range(C):
             for row in range(4):
                 numbers[kind, 3 + row, c] = sums[row, c]
@@ -494,7 +505,7 @@ def shared_kernels() -> None:
     real, whole, truth = types.float64, types.int64, types.boolean
     grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
     plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
-            (_row, (whole, whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(vector, 10))),
+            (_row, (whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(real, 10))),
             (_mirror, (grid, indices, whole, whole, whole)),
             (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
                        types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
