@@ -38,7 +38,7 @@ from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import grid_sums_all
+from .rules import row_sums, rows_total
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
@@ -102,19 +102,27 @@ def _canonical(i, M):  # pragma: no cover - compiled
 
 
 @njit(error_model="numpy", inline="always")
-def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon, beckmann,
-          geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
+def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon,
+          beckmann, geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
     """The weighted values at the azimuth indices ``rows`` of ``M`` (t = 2π·index/M) and the radial nodes
     ``radial`` of piece ``kind`` of case ``q``, written to grid[index, col_step·j]; a mirrored case's indices
     outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). The weight at a node is that of
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
-    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
+    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Each row filled has its sums
+    (:func:`.rules.row_sums`) written to totals[index] while it is in cache, so that a round sums the grid's rows
+    that changed only, not the whole grid. Returns the nodes evaluated."""
     vz, ax, ay = geometry[0], geometry[4], geometry[5]
     # (the case's slope map as numbers, not arrays: an array passed to _row would be reference-counted per row)
     here = (vz[q], geometry[1][q], geometry[2][q], geometry[3][q], ax[q], ay[q], geometry[6][q], geometry[7][q],
             geometry[8][q], geometry[9][q])
     C = grid.shape[2] - 1 if largest else grid.shape[2]
+    N1 = grid.shape[1]
+    level_u = 1
+    while 2 ** level_u - 1 < N1:
+        level_u += 1
+    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
+    n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
     parameters = case(q, extra)
     count = 0
     for a in range(rows.size):
@@ -138,9 +146,10 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
                 grid[index, col_step * j, c] = x * factor
             if largest:
                 grid[index, col_step * j, C] = most * factor
+        row_sums(grid, index, w, w_half, w_quarter, n_half, n_quarter, totals, index)
         count += radial.size
     if mirrored:
-        _mirror(grid, rows, M, col_step, radial.size)
+        _mirror(grid, totals, rows, M, col_step, radial.size)
     return count
 
 
@@ -160,8 +169,9 @@ def _row(index, M, kind, lam, width, scale, linear, log_horizon, beckmann, here)
 
 
 @njit(**_OPTIONS)
-def _mirror(grid, rows, M, col_step, N):  # pragma: no cover - compiled
-    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values (:func:`_fill`)."""
+def _mirror(grid, totals, rows, M, col_step, N):  # pragma: no cover - compiled
+    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values and row sums
+    (:func:`_fill`)."""
     for a in range(rows.size):
         index = rows[a]
         source = _canonical(index, M)
@@ -169,6 +179,9 @@ def _mirror(grid, rows, M, col_step, N):  # pragma: no cover - compiled
             for j in range(N):
                 for c in range(grid.shape[2]):
                     grid[index, col_step * j, c] = grid[source, col_step * j, c]
+            for r in range(4):
+                for c in range(grid.shape[2]):
+                    totals[index, r, c] = totals[source, r, c]
 
 
 @njit(**_OPTIONS, inline="always")
@@ -201,18 +214,18 @@ def _doublings(ratio, last):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _sums(grid, M, level_u, sums, raw):  # pragma: no cover - compiled
-    """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid (M, 2^level_u − 1, C), as
-    compiled.rules.grid_sums (``raw`` (6, C): its sums before the azimuth step). Returns whether every magnitude is
-    finite (then so is every value of the grid: the magnitude sums their |·| with positive weights)."""
-    C = grid.shape[2]
-    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
-    n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
+def _sums(totals, M, sums, raw):  # pragma: no cover - compiled
+    """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M azimuths from its row sums
+    ``totals`` (:func:`_fill`), as compiled.rules.rows_total (``raw`` (6, 1, C): its sums before the azimuth step).
+    Returns whether every magnitude is finite (then so is every value of the grid: the magnitude sums their |·| with
+    positive weights)."""
+    C = totals.shape[2]
     step = 2 * np.pi / M
-    grid_sums_all(grid, w, w_half, w_quarter, n_half, n_quarter, raw)
+    rows_total(totals, M, raw, 0)
     finite = True
     for c in range(C):
-        q, q_b, q_bb, q_u, q_uu, magnitude = raw[0, c], raw[1, c], raw[2, c], raw[3, c], raw[4, c], raw[5, c]
+        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
+                                              raw[5, 0, c])
         finite &= math.isfinite(magnitude)
         q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
         q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
@@ -224,18 +237,15 @@ def _sums(grid, M, level_u, sums, raw):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
+def _sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
     """The β estimate ``e_b`` of channel ``c`` of a piece's grid at 16 azimuths, raised to d₁ + d₂ where the last
     fall is more than ACCELERATION times steeper than the square of the one before, as
     :func:`brdfnorm.engine.machinery.grid_estimate.sudden` (d_k the differences of the rules on every 1st, 2nd, 4th
-    and 8th azimuth)."""
-    M, N1 = grid.shape[0], grid.shape[1]
-    w = _WEIGHTS[level_u]
+    and 8th azimuth; each azimuth's radial sum its row sum, ``totals``, :func:`_fill`)."""
+    M = totals.shape[0]
     q = np.zeros(4)
     for i in range(M):
-        s = 0.0
-        for j in range(N1):
-            s += grid[i, j, c] * w[j]
+        s = totals[i, 0, c]
         for k in range(4):
             if i % (2**k) == 0:
                 q[k] += s * (2 * np.pi * 2**k / M)
@@ -249,7 +259,8 @@ def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
 def _begin(C):  # pragma: no cover - compiled
     """A case's state at its start: levels (pieces, 2: β, u), the ratios last extrapolated from (pieces, 2),
     switches (pieces, 5: alive, done, finite, more along β, more along u), numbers (pieces, 7, C: the latest value,
-    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid."""
+    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid and
+    its row sums (M, 4, C: :func:`.rules.row_sums`)."""
     levels = np.empty((_PIECES, 2), dtype=np.int64)
     lasts = np.empty((_PIECES, 2))
     switches = np.zeros((_PIECES, 5), dtype=np.bool_)
@@ -259,25 +270,30 @@ def _begin(C):  # pragma: no cover - compiled
         switches[kind, _ALIVE] = switches[kind, _FINITE] = True
     M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
     return (levels, lasts, switches, np.zeros((_PIECES, 7, C)), np.empty((M0, N0, C)), np.empty((M0, N0, C)),
-            np.empty((M0, N0, C)))
+            np.empty((M0, N0, C)), np.empty((M0, 4, C)), np.empty((M0, 4, C)), np.empty((M0, 4, C)))
 
 
 @njit(**_OPTIONS)
-def _grown(grid, step, kind, levels):  # pragma: no cover - compiled
-    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, rows, M, col_step, radial) — the first grid
-    (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place, whose level it raises."""
+def _grown(grid, totals, step, kind, levels):  # pragma: no cover - compiled
+    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, row sums, rows, M, col_step, radial) — the
+    first grid (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place (and along t
+    the old rows' sums, which the new rows leave as they were), whose level it raises."""
     C = grid.shape[2]
     M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
     if step == 0:
-        return grid, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
+        return grid, totals, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
     if step == 1:
         target = np.empty((2 * M, N1, C))
+        rows = np.empty((2 * M, 4, C))
         for i in range(M):
             for j in range(N1):
                 for c in range(C):
                     target[2 * i, j, c] = grid[i, j, c]
+            for r in range(4):
+                for c in range(C):
+                    rows[2 * i, r, c] = totals[i, r, c]
         levels[kind, 0] += 1
-        return target, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
+        return target, rows, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
     target = np.empty((M, 2 * N1 + 1, C))
     for i in range(M):
         for j in range(N1):
@@ -285,24 +301,25 @@ def _grown(grid, step, kind, levels):  # pragma: no cover - compiled
                 target[i, 2 * j + 1, c] = grid[i, j, c]
     lu = levels[kind, 1] + 1
     levels[kind, 1] = lu
-    return target, np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
+    return target, np.empty((M, 4, C)), np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
 
 
 @njit(**_OPTIONS)
-def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
-            graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
+def _settle(grid0, grid1, grid2, totals0, totals1, totals2, k, levels, lasts, switches, numbers, rtol, atol, width,
+            max_nodes, graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
     """After a round of grids: each live piece's sums and estimates, the tolerance, and per piece whether it is
     done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
     outputs then written."""
     C = numbers.shape[2]
-    sums, raw = np.empty((4, C)), np.empty((6, C))
+    sums, raw = np.empty((4, C)), np.empty((6, 1, C))
     failed = False
     for kind in range(_PIECES):
         if not switches[kind, _ALIVE]:
             continue
         grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
+        totals = totals0 if kind == 0 else (totals1 if kind == 1 else totals2)
         # (a finite magnitude: every value finite, no pass of its own over the grid; else the values looked at)
-        finite = _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums, raw)
+        finite = _sums(totals, 2 ** levels[kind, 0], sums, raw)
         if not finite:
             finite = True
             for x in grid.flat:
@@ -312,14 +329,15 @@ def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol
         switches[kind, _FINITE] = finite
         if not finite:
             grid.fill(0.0)
+            totals.fill(0.0)  # (the row sums of zeros)
             failed = True
-            _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums, raw)
+            _sums(totals, 2 ** levels[kind, 0], sums, raw)
         for c in range(C):
             for row in range(4):
                 numbers[kind, 3 + row, c] = sums[row, c]
             numbers[kind, 0, c] = sums[0, c]
             if levels[kind, 0] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
-                numbers[kind, 4, c] = _sudden(grid, levels[kind, 1], c, sums[1, c], sums[3, c])
+                numbers[kind, 4, c] = _sudden(totals, c, sums[1, c], sums[3, c])
     tolerance = np.empty(C)
     for c in range(C):
         total = 0.0
@@ -410,7 +428,7 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
     C = out_value.shape[1]
     for n in range(cases.size):
         k = cases[n]
-        levels, lasts, switches, numbers, grid0, grid1, grid2 = _begin(C)
+        levels, lasts, switches, numbers, grid0, grid1, grid2, totals0, totals1, totals2 = _begin(C)
         first = True
         while True:
             # the grids: the first ones, then each piece's doublings along t (1) and u (2), one _fill call site
@@ -418,23 +436,24 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                 if not switches[kind, _ALIVE]:
                     continue
                 grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
+                totals = totals0 if kind == 0 else (totals1 if kind == 1 else totals2)
                 for step in range(3):
                     if (step == 0) != first or (step > 0 and not switches[kind, _MORE_B + step - 1]):
                         continue
-                    target, rows, M, col_step, radial = _grown(grid, step, kind, levels)
-                    evaluations[k] += _fill(target, rows, M, col_step, radial, k, kind, symmetric[k], lam[k],
-                                            width[k], scale[k], linear, log_horizon, beckmann, geometry, case,
-                                            value, extra, largest, flags)
-                    grid = target
+                    target, target_totals, rows, M, col_step, radial = _grown(grid, totals, step, kind, levels)
+                    evaluations[k] += _fill(target, target_totals, rows, M, col_step, radial, k, kind, symmetric[k],
+                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, geometry,
+                                            case, value, extra, largest, flags)
+                    grid, totals = target, target_totals
                 if kind == 0:
-                    grid0 = grid
+                    grid0, totals0 = grid, totals
                 elif kind == 1:
-                    grid1 = grid
+                    grid1, totals1 = grid, totals
                 else:
-                    grid2 = grid
+                    grid2, totals2 = grid, totals
             first = False
-            if _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
-                       graded_predicts, out_value, out_error, settled):
+            if _settle(grid0, grid1, grid2, totals0, totals1, totals2, k, levels, lasts, switches, numbers, rtol,
+                       atol, width, max_nodes, graded_predicts, out_value, out_error, settled):
                 break
 
 
@@ -504,10 +523,10 @@ def shared_kernels() -> None:
 
     real, whole, truth = types.float64, types.int64, types.boolean
     grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
-    plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
+    plan = ((_begin, (whole,)), (_grown, (grid, grid, whole, whole, types.Array(whole, 2, "C"))),
             (_row, (whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(real, 10))),
-            (_mirror, (grid, indices, whole, whole, whole)),
-            (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
+            (_mirror, (grid, grid, indices, whole, whole, whole)),
+            (_settle, (grid, grid, grid, grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
                        types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
                        types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
     mark = cache_mark(_settle, "global_rule_shared", plan[-1][1])

@@ -10,119 +10,106 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
-def grid_sums(G, c, w, w_half, w_quarter, n_half, n_quarter):  # pragma: no cover - compiled
-    """(Q, Q(½ β), Q(¼ β), Q(½ u), Q(¼ u), ∫|F|) of channel ``c`` of one case's grid G (M azimuths, N1 radial
-    nodes, C), before the azimuth step 2π/M, with the first ``n_half`` and ``n_quarter`` weights of the coarser radial
-    rules (the fused driver's weight tables are padded rows): the one loop of the global rule's sums."""
-    M, N1 = G.shape[0], G.shape[1]
-    q = q_b = q_bb = q_u = q_uu = magnitude = 0.0
-    for i in range(M):
-        s = 0.0
-        s_abs = 0.0
-        for j in range(N1):
-            x = G[i, j, c]
-            s += x * w[j]
-            s_abs += abs(x) * w[j]
-        s_u = 0.0
-        for j in range(n_half):
-            s_u += G[i, 2 * j + 1, c] * w_half[j]
-        s_uu = 0.0
-        for j in range(n_quarter):
-            s_uu += G[i, 4 * j + 3, c] * w_quarter[j]
-        q += s
-        if i % 2 == 0:
-            q_b += s
-        if i % 4 == 0:
-            q_bb += s
-        q_u += s_u
-        q_uu += s_uu
-        magnitude += s_abs
-    return q, q_b, q_bb, q_u, q_uu, magnitude
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def grid_sums_all(G, w, w_half, w_quarter, n_half, n_quarter, out):  # pragma: no cover - compiled
-    """:func:`grid_sums` of every channel of G at once into ``out`` (6, C), bit for bit: each channel's sums in the
-    same order, but up to four channels side by side in one pass over the grid. Why: each sum is a chain of
-    dependent additions (no reassociation allowed), so one channel at a time waits on the adder's latency; four
-    chains side by side keep it busy (the fused global rule's sums of a three-channel DFG grid, ~2× faster)."""
-    M, N1, C = G.shape[0], G.shape[1], G.shape[2]
-    if C > 4:
-        for c in range(C):
-            out[0, c], out[1, c], out[2, c], out[3, c], out[4, c], out[5, c] = grid_sums(
-                G, c, w, w_half, w_quarter, n_half, n_quarter)
-        return
-    for r in range(6):
-        for c in range(C):
-            out[r, c] = 0.0
-    s = np.empty((3, 4))  # per row: the rule, the half and the quarter radial rules, per channel
-    for i in range(M):
-        s0 = s1 = s2 = s3 = a0 = a1 = a2 = a3 = 0.0
-        for j in range(N1):
-            wj = w[j]
-            x = G[i, j, 0]
-            s0 += x * wj
-            a0 += abs(x) * wj
-            if C > 1:
-                x = G[i, j, 1]
-                s1 += x * wj
-                a1 += abs(x) * wj
-            if C > 2:
-                x = G[i, j, 2]
-                s2 += x * wj
-                a2 += abs(x) * wj
-            if C > 3:
-                x = G[i, j, 3]
-                s3 += x * wj
-                a3 += abs(x) * wj
-        s[0, 0], s[0, 1], s[0, 2], s[0, 3] = s0, s1, s2, s3
-        s0 = s1 = s2 = s3 = 0.0
-        for j in range(n_half):
-            wj = w_half[j]
-            s0 += G[i, 2 * j + 1, 0] * wj
-            if C > 1:
-                s1 += G[i, 2 * j + 1, 1] * wj
-            if C > 2:
-                s2 += G[i, 2 * j + 1, 2] * wj
-            if C > 3:
-                s3 += G[i, 2 * j + 1, 3] * wj
-        s[1, 0], s[1, 1], s[1, 2], s[1, 3] = s0, s1, s2, s3
-        s0 = s1 = s2 = s3 = 0.0
-        for j in range(n_quarter):
-            wj = w_quarter[j]
-            s0 += G[i, 4 * j + 3, 0] * wj
-            if C > 1:
-                s1 += G[i, 4 * j + 3, 1] * wj
-            if C > 2:
-                s2 += G[i, 4 * j + 3, 2] * wj
-            if C > 3:
-                s3 += G[i, 4 * j + 3, 3] * wj
-        s[2, 0], s[2, 1], s[2, 2], s[2, 3] = s0, s1, s2, s3
-        for c in range(C):
-            row = s[0, c]
-            out[0, c] += row
-            if i % 2 == 0:
-                out[1, c] += row
-            if i % 4 == 0:
-                out[2, c] += row
-            out[3, c] += s[1, c]
-            out[4, c] += s[2, c]
-        out[5, 0] += a0
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def row_sums(G, i, w, w_half, w_quarter, n_half, n_quarter, out, k):  # pragma: no cover - compiled
+    """Row ``i`` of one case's grid G (M azimuths, N1 radial nodes, C ≤ 4 channels): out[k, 0, c] = Σ_j G[i, j, c]
+    w[j], out[k, 1, c] = Σ_j |G[i, j, c]| w[j], out[k, 2, c] and out[k, 3, c] the coarser radial rules on every
+    other and every fourth node, with the first ``n_half`` and ``n_quarter`` weights of theirs (the fused driver's
+    weight tables are padded rows). Each sum in index order, the channels side by side: each is a chain of dependent
+    additions (no reassociation allowed), one channel at a time waits on the adder's latency, four chains side by
+    side keep it busy."""
+    C = G.shape[2]
+    N1 = G.shape[1]
+    s0 = s1 = s2 = s3 = a0 = a1 = a2 = a3 = 0.0
+    for j in range(N1):
+        wj = w[j]
+        x = G[i, j, 0]
+        s0 += x * wj
+        a0 += abs(x) * wj
         if C > 1:
-            out[5, 1] += a1
+            x = G[i, j, 1]
+            s1 += x * wj
+            a1 += abs(x) * wj
         if C > 2:
-            out[5, 2] += a2
+            x = G[i, j, 2]
+            s2 += x * wj
+            a2 += abs(x) * wj
         if C > 3:
-            out[5, 3] += a3
+            x = G[i, j, 3]
+            s3 += x * wj
+            a3 += abs(x) * wj
+    u0 = u1 = u2 = u3 = 0.0
+    for j in range(n_half):
+        wj = w_half[j]
+        u0 += G[i, 2 * j + 1, 0] * wj
+        if C > 1:
+            u1 += G[i, 2 * j + 1, 1] * wj
+        if C > 2:
+            u2 += G[i, 2 * j + 1, 2] * wj
+        if C > 3:
+            u3 += G[i, 2 * j + 1, 3] * wj
+    v0 = v1 = v2 = v3 = 0.0
+    for j in range(n_quarter):
+        wj = w_quarter[j]
+        v0 += G[i, 4 * j + 3, 0] * wj
+        if C > 1:
+            v1 += G[i, 4 * j + 3, 1] * wj
+        if C > 2:
+            v2 += G[i, 4 * j + 3, 2] * wj
+        if C > 3:
+            v3 += G[i, 4 * j + 3, 3] * wj
+    out[k, 0, 0], out[k, 1, 0], out[k, 2, 0], out[k, 3, 0] = s0, a0, u0, v0
+    if C > 1:
+        out[k, 0, 1], out[k, 1, 1], out[k, 2, 1], out[k, 3, 1] = s1, a1, u1, v1
+    if C > 2:
+        out[k, 0, 2], out[k, 1, 2], out[k, 2, 2], out[k, 3, 2] = s2, a2, u2, v2
+    if C > 3:
+        out[k, 0, 3], out[k, 1, 3], out[k, 2, 3], out[k, 3, 3] = s3, a3, u3, v3
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def rows_total(rows, M, out, r):  # pragma: no cover - compiled
+    """(Q, Q(½ β), Q(¼ β), Q(½ u), Q(¼ u), ∫|F|) per channel into out[:, r, :] from the :func:`row_sums` ``rows``
+    (M, 4, C) of a grid, before the azimuth step 2π/M: the rows added in order, every row, every other and every
+    fourth for the periodic trapezoid rules on M, M/2 and M/4 azimuths."""
+    for c in range(rows.shape[2]):
+        q = q_b = q_bb = q_u = q_uu = magnitude = 0.0
+        for i in range(M):
+            s = rows[i, 0, c]
+            q += s
+            if i % 2 == 0:
+                q_b += s
+            if i % 4 == 0:
+                q_bb += s
+            q_u += rows[i, 2, c]
+            q_uu += rows[i, 3, c]
+            magnitude += rows[i, 1, c]
+        out[0, r, c], out[1, r, c], out[2, r, c], out[3, r, c], out[4, r, c], out[5, r, c] = (
+            q, q_b, q_bb, q_u, q_uu, magnitude)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _block_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
+    rows = np.empty((F.shape[1], 4, F.shape[3]))
+    for r in range(F.shape[0]):
+        G = F[r]
+        for i in range(G.shape[0]):
+            row_sums(G, i, w, w_half, w_quarter, w_half.size, w_quarter.size, rows, i)
+        rows_total(rows, G.shape[0], out, r)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
-    for r in range(F.shape[0]):
-        for c in range(F.shape[3]):
-            out[0, r, c], out[1, r, c], out[2, r, c], out[3, r, c], out[4, r, c], out[5, r, c] = grid_sums(
-                F[r], c, w, w_half, w_quarter, w_half.size, w_quarter.size)
+    C = F.shape[3]
+    if C <= 4:
+        _block_sums(F, w, w_half, w_quarter, out)
+        return
+    part = np.empty((6, F.shape[0], 1))  # (more channels than row_sums takes side by side: one at a time)
+    for c in range(C):
+        _block_sums(np.ascontiguousarray(F[:, :, :, c:c + 1]), w, w_half, w_quarter, part)
+        for k in range(6):
+            for r in range(F.shape[0]):
+                out[k, r, c] = part[k, r, 0]
 
 
 def tensor_sums(F: np.ndarray, w: np.ndarray, w_half: np.ndarray, w_quarter: np.ndarray) -> np.ndarray:
