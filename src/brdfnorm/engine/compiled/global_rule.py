@@ -149,7 +149,7 @@ def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width
         row_sums(grid, index, w, w_half, w_quarter, n_half, n_quarter, totals, index)
         count += radial.size
     if mirrored:
-        _mirror(grid, totals, rows, M, col_step, radial.size)
+        _mirror(grid, totals, rows, M)
     return count
 
 
@@ -169,16 +169,14 @@ def _row(index, M, kind, lam, width, scale, linear, log_horizon, beckmann, here)
 
 
 @njit(**_OPTIONS)
-def _mirror(grid, totals, rows, M, col_step, N):  # pragma: no cover - compiled
-    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values and row sums
-    (:func:`_fill`)."""
+def _mirror(grid, totals, rows, M):  # pragma: no cover - compiled
+    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's row sums (:func:`_fill`).
+    Not their values: nothing reads a mirrored row's values after its sums (:func:`_grown` and :func:`_settle` skip
+    them)."""
     for a in range(rows.size):
         index = rows[a]
         source = _canonical(index, M)
         if source != index:
-            for j in range(N):
-                for c in range(grid.shape[2]):
-                    grid[index, col_step * j, c] = grid[source, col_step * j, c]
             for r in range(4):
                 for c in range(grid.shape[2]):
                     totals[index, r, c] = totals[source, r, c]
@@ -274,10 +272,11 @@ def _begin(C):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _grown(grid, totals, step, kind, levels):  # pragma: no cover - compiled
+def _grown(grid, totals, step, kind, levels, mirrored):  # pragma: no cover - compiled
     """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, row sums, rows, M, col_step, radial) — the
     first grid (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place (and along t
-    the old rows' sums, which the new rows leave as they were), whose level it raises."""
+    the old rows' sums, which the new rows leave as they were), whose level it raises; a ``mirrored`` case's rows
+    outside t ∈ [−π/2, π/2] only their sums (:func:`_mirror`)."""
     C = grid.shape[2]
     M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
     if step == 0:
@@ -286,9 +285,10 @@ def _grown(grid, totals, step, kind, levels):  # pragma: no cover - compiled
         target = np.empty((2 * M, N1, C))
         rows = np.empty((2 * M, 4, C))
         for i in range(M):
-            for j in range(N1):
-                for c in range(C):
-                    target[2 * i, j, c] = grid[i, j, c]
+            if not mirrored or _canonical(i, M) == i:
+                for j in range(N1):
+                    for c in range(C):
+                        target[2 * i, j, c] = grid[i, j, c]
             for r in range(4):
                 for c in range(C):
                     rows[2 * i, r, c] = totals[i, r, c]
@@ -296,17 +296,18 @@ def _grown(grid, totals, step, kind, levels):  # pragma: no cover - compiled
         return target, rows, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
     target = np.empty((M, 2 * N1 + 1, C))
     for i in range(M):
-        for j in range(N1):
-            for c in range(C):
-                target[i, 2 * j + 1, c] = grid[i, j, c]
+        if not mirrored or _canonical(i, M) == i:
+            for j in range(N1):
+                for c in range(C):
+                    target[i, 2 * j + 1, c] = grid[i, j, c]
     lu = levels[kind, 1] + 1
     levels[kind, 1] = lu
     return target, np.empty((M, 4, C)), np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
 
 
 @njit(**_OPTIONS)
-def _settle(grid0, grid1, grid2, totals0, totals1, totals2, k, levels, lasts, switches, numbers, rtol, atol, width,
-            max_nodes, graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
+def _settle(grid0, grid1, grid2, totals0, totals1, totals2, mirrored, k, levels, lasts, switches, numbers, rtol,
+            atol, width, max_nodes, graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
     """After a round of grids: each live piece's sums and estimates, the tolerance, and per piece whether it is
     done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
     outputs then written."""
@@ -322,10 +323,12 @@ def _settle(grid0, grid1, grid2, totals0, totals1, totals2, k, levels, lasts, sw
         finite = _sums(totals, 2 ** levels[kind, 0], sums, raw)
         if not finite:
             finite = True
-            for x in grid.flat:
-                if not math.isfinite(x):
-                    finite = False
-                    break
+            M = grid.shape[0]
+            for i in range(M):
+                if mirrored and _canonical(i, M) != i:
+                    continue
+                for x in grid[i].flat:
+                    finite &= math.isfinite(x)
         switches[kind, _FINITE] = finite
         if not finite:
             grid.fill(0.0)
@@ -440,7 +443,8 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                 for step in range(3):
                     if (step == 0) != first or (step > 0 and not switches[kind, _MORE_B + step - 1]):
                         continue
-                    target, target_totals, rows, M, col_step, radial = _grown(grid, totals, step, kind, levels)
+                    target, target_totals, rows, M, col_step, radial = _grown(grid, totals, step, kind, levels,
+                                                                              symmetric[k])
                     evaluations[k] += _fill(target, target_totals, rows, M, col_step, radial, k, kind, symmetric[k],
                                             lam[k], width[k], scale[k], linear, log_horizon, beckmann, geometry,
                                             case, value, extra, largest, flags)
@@ -452,8 +456,8 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                 else:
                     grid2, totals2 = grid, totals
             first = False
-            if _settle(grid0, grid1, grid2, totals0, totals1, totals2, k, levels, lasts, switches, numbers, rtol,
-                       atol, width, max_nodes, graded_predicts, out_value, out_error, settled):
+            if _settle(grid0, grid1, grid2, totals0, totals1, totals2, symmetric[k], k, levels, lasts, switches,
+                       numbers, rtol, atol, width, max_nodes, graded_predicts, out_value, out_error, settled):
                 break
 
 
@@ -523,12 +527,13 @@ def shared_kernels() -> None:
 
     real, whole, truth = types.float64, types.int64, types.boolean
     grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
-    plan = ((_begin, (whole,)), (_grown, (grid, grid, whole, whole, types.Array(whole, 2, "C"))),
+    matrix = types.Array(real, 2, "C")
+    plan = ((_begin, (whole,)), (_grown, (grid, grid, whole, whole, types.Array(whole, 2, "C"), truth)),
             (_row, (whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(real, 10))),
-            (_mirror, (grid, grid, indices, whole, whole, whole)),
-            (_settle, (grid, grid, grid, grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
-                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
-                       types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
+            (_mirror, (grid, grid, indices, whole)),
+            (_settle, (grid, grid, grid, grid, grid, grid, truth, whole, types.Array(whole, 2, "C"), matrix,
+                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole, matrix, matrix,
+                       types.Array(truth, 1, "C"))))
     mark = cache_mark(_settle, "global_rule_shared", plan[-1][1])
     if mark is not None:
         await_other(mark)
