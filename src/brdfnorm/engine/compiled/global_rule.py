@@ -34,18 +34,16 @@ import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
-from ..machinery.grid_estimate import ACCELERATION, RESOLVED
-from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
+from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import row_sums, rows_total
+from .rules import piece_sums, row_sums, sudden
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
 _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).
-_EPS = np.finfo(np.float64).eps
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
 #: The radial pieces of a case (pole, tail, horizon layer), and the columns of a case's switches (:func:`_begin`).
 _PIECES = 3
@@ -183,11 +181,6 @@ def _mirror(grid, totals, rows, M):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS, inline="always")
-def _margin(deviation, coarser):  # pragma: no cover - compiled
-    return deviation + min(coarser, SAFETY * deviation)
-
-
-@njit(**_OPTIONS, inline="always")
 def _normalized(error, share):  # pragma: no cover - compiled
     if share > 0:
         return error / share
@@ -209,48 +202,6 @@ def _doublings(ratio, last):  # pragma: no cover - compiled
     if needed != needed:
         return 0
     return int(min(max(needed, 0.0), 99.0))
-
-
-@njit(**_OPTIONS)
-def _sums(totals, M, sums, raw):  # pragma: no cover - compiled
-    """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M azimuths from its row sums
-    ``totals`` (:func:`_fill`), as compiled.rules.rows_total (``raw`` (6, 1, C): its sums before the azimuth step).
-    Returns whether every magnitude is finite (then so is every value of the grid: the magnitude sums their |·| with
-    positive weights)."""
-    C = totals.shape[2]
-    step = 2 * np.pi / M
-    rows_total(totals, M, raw, 0)
-    finite = True
-    for c in range(C):
-        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
-                                              raw[5, 0, c])
-        finite &= math.isfinite(magnitude)
-        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
-        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
-        sums[0, c] = q
-        sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
-        sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
-        sums[3, c] = magnitude
-    return finite
-
-
-@njit(**_OPTIONS)
-def _sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
-    """The β estimate ``e_b`` of channel ``c`` of a piece's grid at 16 azimuths, raised to d₁ + d₂ where the last
-    fall is more than ACCELERATION times steeper than the square of the one before, as
-    :func:`brdfnorm.engine.machinery.grid_estimate.sudden` (d_k the differences of the rules on every 1st, 2nd, 4th
-    and 8th azimuth; each azimuth's radial sum its row sum, ``totals``, :func:`_fill`)."""
-    M = totals.shape[0]
-    q = np.zeros(4)
-    for i in range(M):
-        s = totals[i, 0, c]
-        for k in range(4):
-            if i % (2**k) == 0:
-                q[k] += s * (2 * np.pi * 2**k / M)
-    d1, d2, d3 = abs(q[0] - q[1]), abs(q[1] - q[2]), abs(q[2] - q[3])
-    if d2 * d2 * d2 > ACCELERATION * d1 * d3 * d3 and max(d1, d2) > RESOLVED * _EPS * magnitude:
-        return max(e_b, d1 + d2)
-    return e_b
 
 
 @njit(**_OPTIONS)
@@ -320,7 +271,7 @@ def _settle(grid0, grid1, grid2, totals0, totals1, totals2, mirrored, k, levels,
         grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
         totals = totals0 if kind == 0 else (totals1 if kind == 1 else totals2)
         # (a finite magnitude: every value finite, no pass of its own over the grid; else the values looked at)
-        finite = _sums(totals, 2 ** levels[kind, 0], sums, raw)
+        finite = piece_sums(totals, 2 ** levels[kind, 0], sums, raw)
         if not finite:
             finite = True
             M = grid.shape[0]
@@ -334,13 +285,13 @@ def _settle(grid0, grid1, grid2, totals0, totals1, totals2, mirrored, k, levels,
             grid.fill(0.0)
             totals.fill(0.0)  # (the row sums of zeros)
             failed = True
-            _sums(totals, 2 ** levels[kind, 0], sums, raw)
+            piece_sums(totals, 2 ** levels[kind, 0], sums, raw)
         for c in range(C):
             for row in range(4):
                 numbers[kind, 3 + row, c] = sums[row, c]
             numbers[kind, 0, c] = sums[0, c]
             if levels[kind, 0] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
-                numbers[kind, 4, c] = _sudden(totals, c, sums[1, c], sums[3, c])
+                numbers[kind, 4, c] = sudden(totals, c, sums[1, c], sums[3, c])
     tolerance = np.empty(C)
     for c in range(C):
         total = 0.0

@@ -1,13 +1,25 @@
-"""The global tensor rule's sums (:func:`brdfnorm.engine.machinery.tensor_rule.sums`) as one compiled pass over
-the grid: the rule Q and its embedded coarser rules (every other and every fourth azimuth; every other and every
-fourth radial node, Fejér's nested weights) and the |F| integral, per case and channel. Under the compiled backend
-these sums took more time than the compiled integrand on the same grid (numpy's transposed matmuls over strided
-arrays: 1.4 of 8.3 s of a 16 × 16 DFG table)."""
+"""The global tensor rule's sums (:func:`brdfnorm.engine.machinery.tensor_rule.sums`) compiled: the rule Q and its
+embedded coarser rules (every other and every fourth azimuth; every other and every fourth radial node, Fejér's
+nested weights) and the |F| integral, per case and channel. Under the compiled backend these sums took more time
+than the compiled integrand on the same grid (numpy's transposed matmuls over strided arrays: 1.4 of 8.3 s of a
+16 × 16 DFG table).
+
+Per azimuth first (:func:`row_sums`, the channels side by side), then over the azimuths (:func:`rows_total`): the
+fused global rule (:mod:`.global_rule`) sums each row as it fills it and keeps the row sums, so a doubling along the
+azimuth sums only its new rows; its estimates from them (:func:`piece_sums`, :func:`sudden`). Every sum is added in
+the same order as the numpy driver's loops, bit for bit (docs/performance.md, seventh round, ``nodecost``)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
+
+from ..machinery.grid_estimate import ACCELERATION, RESOLVED
+from ..machinery.tensor_rule import SAFETY
+
+_EPS = np.finfo(np.float64).eps
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -86,6 +98,53 @@ def rows_total(rows, M, out, r):  # pragma: no cover - compiled
             magnitude += rows[i, 1, c]
         out[0, r, c], out[1, r, c], out[2, r, c], out[3, r, c], out[4, r, c], out[5, r, c] = (
             q, q_b, q_bb, q_u, q_uu, magnitude)
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def margin(deviation, coarser):  # pragma: no cover - compiled
+    return deviation + min(coarser, SAFETY * deviation)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def piece_sums(totals, M, sums, raw):  # pragma: no cover - compiled
+    """The fused global rule's q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M
+    azimuths from its row sums ``totals`` (:func:`.global_rule._fill`), as :func:`rows_total` (``raw`` (6, 1, C):
+    its sums before the azimuth step). Returns whether every magnitude is finite (then so is every value of the grid:
+    the magnitude sums their |·| with positive weights)."""
+    C = totals.shape[2]
+    step = 2 * np.pi / M
+    rows_total(totals, M, raw, 0)
+    finite = True
+    for c in range(C):
+        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
+                                              raw[5, 0, c])
+        finite &= math.isfinite(magnitude)
+        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
+        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
+        sums[0, c] = q
+        sums[1, c] = margin(abs(q - q_b), abs(q_b - q_bb))
+        sums[2, c] = margin(abs(q - q_u), abs(q_u - q_uu))
+        sums[3, c] = magnitude
+    return finite
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
+    """The β estimate ``e_b`` of channel ``c`` of a piece's grid at 16 azimuths, raised to d₁ + d₂ where the last
+    fall is more than ACCELERATION times steeper than the square of the one before, as
+    :func:`brdfnorm.engine.machinery.grid_estimate.sudden` (d_k the differences of the rules on every 1st, 2nd, 4th
+    and 8th azimuth; each azimuth's radial sum its row sum, ``totals``, :func:`.global_rule._fill`)."""
+    M = totals.shape[0]
+    q = np.zeros(4)
+    for i in range(M):
+        s = totals[i, 0, c]
+        for k in range(4):
+            if i % (2**k) == 0:
+                q[k] += s * (2 * np.pi * 2**k / M)
+    d1, d2, d3 = abs(q[0] - q[1]), abs(q[1] - q[2]), abs(q[2] - q[3])
+    if d2 * d2 * d2 > ACCELERATION * d1 * d3 * d3 and max(d1, d2) > RESOLVED * _EPS * magnitude:
+        return max(e_b, d1 + d2)
+    return e_b
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
