@@ -80,7 +80,7 @@ def test_the_azimuth_row_is_the_slope_maps_own_functions(kind, width, linear):
 
     geometry = tuple(np.array([0.0, value]) for value in (0.6, 0.9, 0.1, 0.2, 0.3, 0.35, 0.05, 0.4, 2.0, 1.0))
     assert len(geometry) == len(SLOPE_MAP)
-    row = global_rule._row(3, 16, kind, 1, 0.7, width, 2.0, linear, True, False, geometry)
+    row = global_rule._row(3, 16, kind, 0.7, width, 2.0, linear, True, False, tuple(g[1] for g in geometry))
     phi, dphi = global_rule._azimuth(3 * (2 * np.pi / 16), 0.7, width)
     vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = (g[1] for g in geometry)
     dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(

@@ -1,13 +1,14 @@
 """brdfnorm.engine.compiled.rules: the global rule's sums per azimuth (row_sums, the channels side by side) and over
-the azimuths (rows_total, piece_sums) equal, bit for bit, the plain sums in the numpy driver's order; a grid with a
-value that is not finite has a magnitude that is not; and slopes.borrowed's view reads its array's values."""
+the azimuths (rows_total, global_rule.piece_sums) equal, bit for bit, the plain sums in the numpy driver's order; a
+grid with a value that is not finite has a magnitude that is not; and slopes.borrowed's view reads its array's
+values."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from brdfnorm.engine.compiled import rules
+from brdfnorm.engine.compiled import global_rule, rules
 from brdfnorm.engine.machinery.tensor_rule import fejer
 
 
@@ -62,7 +63,7 @@ def test_piece_sums_read_a_value_that_is_not_finite_off_the_magnitude(rng):
         if bad is not None:
             G[5, 3, 1] = bad
         _rows(G, w, w_half, w_quarter, totals)
-        assert rules.piece_sums(totals, 8, sums, raw) == (bad is None)
+        assert global_rule.piece_sums(totals, 8, sums, raw) == (bad is None)
         assert np.isfinite(sums[3, 0])  # (the other channel's magnitude stays finite)
 
 

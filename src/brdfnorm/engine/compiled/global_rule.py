@@ -34,10 +34,10 @@ import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
-from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, START_LEVELS
+from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import piece_sums, row_sums, sudden
+from .rules import row_sums, rows_total, sudden
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
@@ -178,6 +178,34 @@ def _mirror(grid, totals, rows, M):  # pragma: no cover - compiled
             for r in range(4):
                 for c in range(grid.shape[2]):
                     totals[index, r, c] = totals[source, r, c]
+
+
+@njit(**_OPTIONS, inline="always")
+def margin(deviation, coarser):  # pragma: no cover - compiled
+    return deviation + min(coarser, SAFETY * deviation)
+
+
+@njit(**_OPTIONS)
+def piece_sums(totals, M, sums, raw):  # pragma: no cover - compiled
+    """The fused global rule's q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M
+    azimuths from its row sums ``totals`` (:func:`_fill`), as :func:`.rules.rows_total` (``raw`` (6, 1, C):
+    its sums before the azimuth step). Returns whether every magnitude is finite (then so is every value of the grid:
+    the magnitude sums their |·| with positive weights)."""
+    C = totals.shape[2]
+    step = 2 * np.pi / M
+    rows_total(totals, M, raw, 0)
+    finite = True
+    for c in range(C):
+        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
+                                              raw[5, 0, c])
+        finite &= math.isfinite(magnitude)
+        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
+        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
+        sums[0, c] = q
+        sums[1, c] = margin(abs(q - q_b), abs(q_b - q_bb))
+        sums[2, c] = margin(abs(q - q_u), abs(q_u - q_uu))
+        sums[3, c] = magnitude
+    return finite
 
 
 @njit(**_OPTIONS, inline="always")

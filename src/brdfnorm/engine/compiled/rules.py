@@ -6,18 +6,15 @@ than the compiled integrand on the same grid (numpy's transposed matmuls over st
 
 Per azimuth first (:func:`row_sums`, the channels side by side), then over the azimuths (:func:`rows_total`): the
 fused global rule (:mod:`.global_rule`) sums each row as it fills it and keeps the row sums, so a doubling along the
-azimuth sums only its new rows; its estimates from them (:func:`piece_sums`, :func:`sudden`). Every sum is added in
+azimuth sums only its new rows; its sudden-agreement test from them (:func:`sudden`). Every sum is added in
 the same order as the numpy driver's loops, bit for bit (docs/performance.md, seventh round, ``nodecost``)."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from numba import njit
 
 from ..machinery.grid_estimate import ACCELERATION, RESOLVED
-from ..machinery.tensor_rule import SAFETY
 
 _EPS = np.finfo(np.float64).eps
 
@@ -98,34 +95,6 @@ def rows_total(rows, M, out, r):  # pragma: no cover - compiled
             magnitude += rows[i, 1, c]
         out[0, r, c], out[1, r, c], out[2, r, c], out[3, r, c], out[4, r, c], out[5, r, c] = (
             q, q_b, q_bb, q_u, q_uu, magnitude)
-
-
-@njit(cache=True, error_model="numpy", nogil=True, inline="always")
-def margin(deviation, coarser):  # pragma: no cover - compiled
-    return deviation + min(coarser, SAFETY * deviation)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def piece_sums(totals, M, sums, raw):  # pragma: no cover - compiled
-    """The fused global rule's q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M
-    azimuths from its row sums ``totals`` (:func:`.global_rule._fill`), as :func:`rows_total` (``raw`` (6, 1, C):
-    its sums before the azimuth step). Returns whether every magnitude is finite (then so is every value of the grid:
-    the magnitude sums their |·| with positive weights)."""
-    C = totals.shape[2]
-    step = 2 * np.pi / M
-    rows_total(totals, M, raw, 0)
-    finite = True
-    for c in range(C):
-        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
-                                              raw[5, 0, c])
-        finite &= math.isfinite(magnitude)
-        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
-        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
-        sums[0, c] = q
-        sums[1, c] = margin(abs(q - q_b), abs(q_b - q_bb))
-        sums[2, c] = margin(abs(q - q_u), abs(q_u - q_uu))
-        sums[3, c] = magnitude
-    return finite
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
