@@ -104,23 +104,17 @@ def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width
           beckmann, geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
     """The weighted values at the azimuth indices ``rows`` of ``M`` (t = 2π·index/M) and the radial nodes
     ``radial`` of piece ``kind`` of case ``q``, written to grid[index, col_step·j]; a mirrored case's indices
-    outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). The weight at a node is that of
+    outside t ∈ [−π/2, π/2] take their mirror's sums (which ``rows`` holds). The weight at a node is that of
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
-    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Each row filled has its sums
-    (:func:`.rules.row_sums`) written to totals[index] while it is in cache, so that a round sums the grid's rows
-    that changed only, not the whole grid. Returns the nodes evaluated."""
+    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). The rows filled have their sums
+    written to ``totals`` (:func:`_summed`), so that a round sums the grid's rows that changed only, not the whole
+    grid. Returns the nodes evaluated."""
     vz, ax, ay = geometry[0], geometry[4], geometry[5]
     # (the case's slope map as numbers, not arrays: an array passed to _row would be reference-counted per row)
     here = (vz[q], geometry[1][q], geometry[2][q], geometry[3][q], ax[q], ay[q], geometry[6][q], geometry[7][q],
             geometry[8][q], geometry[9][q])
     C = grid.shape[2] - 1 if largest else grid.shape[2]
-    N1 = grid.shape[1]
-    level_u = 1
-    while 2 ** level_u - 1 < N1:
-        level_u += 1
-    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
-    n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
     parameters = case(q, extra)
     count = 0
     for a in range(rows.size):
@@ -144,10 +138,8 @@ def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width
                 grid[index, col_step * j, c] = x * factor
             if largest:
                 grid[index, col_step * j, C] = most * factor
-        row_sums(grid, index, w, w_half, w_quarter, n_half, n_quarter, totals, index)
         count += radial.size
-    if mirrored:
-        _mirror(grid, totals, rows, M)
+    _summed(grid, totals, rows, M, mirrored)
     return count
 
 
@@ -167,17 +159,27 @@ def _row(index, M, kind, lam, width, scale, linear, log_horizon, beckmann, here)
 
 
 @njit(**_OPTIONS)
-def _mirror(grid, totals, rows, M):  # pragma: no cover - compiled
-    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's row sums (:func:`_fill`).
-    Not their values: nothing reads a mirrored row's values after its sums (:func:`_grown` and :func:`_settle` skip
-    them)."""
+def _summed(grid, totals, rows, M, mirrored):  # pragma: no cover - compiled
+    """The sums (:func:`.rules.row_sums`) of the rows ``rows`` of ``M`` just filled by :func:`_fill` into
+    totals[index]; a mirrored case's indices outside t ∈ [−π/2, π/2] their mirror's. Not their values: nothing reads
+    a mirrored row's values after its sums (:func:`_grown` and :func:`_settle` skip them). One call per fill, a
+    kernel compiled once and shared by both callers (inlined into each, the sums cost ~2 s of CPU to compile)."""
+    level_u = 1
+    while 2 ** level_u - 1 < grid.shape[1]:
+        level_u += 1
+    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
     for a in range(rows.size):
         index = rows[a]
-        source = _canonical(index, M)
-        if source != index:
-            for r in range(4):
-                for c in range(grid.shape[2]):
-                    totals[index, r, c] = totals[source, r, c]
+        if not mirrored or _canonical(index, M) == index:
+            row_sums(grid, index, w, w_half, w_quarter, 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1, totals, index)
+    if mirrored:
+        for a in range(rows.size):
+            index = rows[a]
+            source = _canonical(index, M)
+            if source != index:
+                for r in range(4):
+                    for c in range(grid.shape[2]):
+                        totals[index, r, c] = totals[source, r, c]
 
 
 @njit(**_OPTIONS, inline="always")
@@ -255,7 +257,7 @@ def _grown(grid, totals, step, kind, levels, mirrored):  # pragma: no cover - co
     """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, row sums, rows, M, col_step, radial) — the
     first grid (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place (and along t
     the old rows' sums, which the new rows leave as they were), whose level it raises; a ``mirrored`` case's rows
-    outside t ∈ [−π/2, π/2] only their sums (:func:`_mirror`)."""
+    outside t ∈ [−π/2, π/2] only their sums (:func:`_summed`)."""
     C = grid.shape[2]
     M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
     if step == 0:
@@ -494,7 +496,7 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
 
 
 def shared_kernels() -> None:
-    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_mirror` and :func:`_settle`, which
+    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_summed` and :func:`_settle`, which
     :func:`fused_global` and :func:`shader_global` both call, for the types those callers give them (~3.5 s of CPU,
     once per machine), under
     one mark beside Numba's cache: on a fresh machine :mod:`brdfnorm.parallel.warm`'s child (compiling
@@ -509,7 +511,7 @@ def shared_kernels() -> None:
     matrix = types.Array(real, 2, "C")
     plan = ((_begin, (whole,)), (_grown, (grid, grid, whole, whole, types.Array(whole, 2, "C"), truth)),
             (_row, (whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(real, 10))),
-            (_mirror, (grid, grid, indices, whole)),
+            (_summed, (grid, grid, indices, whole, truth)),
             (_settle, (grid, grid, grid, grid, grid, grid, truth, whole, types.Array(whole, 2, "C"), matrix,
                        types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole, matrix, matrix,
                        types.Array(truth, 1, "C"))))

@@ -21,59 +21,65 @@ _EPS = np.finfo(np.float64).eps
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
 def row_sums(G, i, w, w_half, w_quarter, n_half, n_quarter, out, k):  # pragma: no cover - compiled
-    """Row ``i`` of one case's grid G (M azimuths, N1 radial nodes, C ≤ 4 channels): out[k, 0, c] = Σ_j G[i, j, c]
+    """Row ``i`` of one case's grid G (M azimuths, N1 radial nodes, C channels): out[k, 0, c] = Σ_j G[i, j, c]
     w[j], out[k, 1, c] = Σ_j |G[i, j, c]| w[j], out[k, 2, c] and out[k, 3, c] the coarser radial rules on every
     other and every fourth node, with the first ``n_half`` and ``n_quarter`` weights of theirs (the fused driver's
     weight tables are padded rows). Each sum in index order, the channels side by side: each is a chain of dependent
     additions (no reassociation allowed), one channel at a time waits on the adder's latency, four chains side by
     side keep it busy."""
-    C = G.shape[2]
+    for c0 in range(0, G.shape[2], 4):
+        _four_sums(G, i, w, w_half, w_quarter, n_half, n_quarter, out, k, c0, min(G.shape[2] - c0, 4))
+
+
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def _four_sums(G, i, w, w_half, w_quarter, n_half, n_quarter, out, k, c0, C):  # pragma: no cover - compiled
+    """:func:`row_sums` of the channels c0 … c0 + C − 1 (C ≤ 4)."""
     N1 = G.shape[1]
     s0 = s1 = s2 = s3 = a0 = a1 = a2 = a3 = 0.0
     for j in range(N1):
         wj = w[j]
-        x = G[i, j, 0]
+        x = G[i, j, c0 + 0]
         s0 += x * wj
         a0 += abs(x) * wj
         if C > 1:
-            x = G[i, j, 1]
+            x = G[i, j, c0 + 1]
             s1 += x * wj
             a1 += abs(x) * wj
         if C > 2:
-            x = G[i, j, 2]
+            x = G[i, j, c0 + 2]
             s2 += x * wj
             a2 += abs(x) * wj
         if C > 3:
-            x = G[i, j, 3]
+            x = G[i, j, c0 + 3]
             s3 += x * wj
             a3 += abs(x) * wj
     u0 = u1 = u2 = u3 = 0.0
     for j in range(n_half):
         wj = w_half[j]
-        u0 += G[i, 2 * j + 1, 0] * wj
+        u0 += G[i, 2 * j + 1, c0 + 0] * wj
         if C > 1:
-            u1 += G[i, 2 * j + 1, 1] * wj
+            u1 += G[i, 2 * j + 1, c0 + 1] * wj
         if C > 2:
-            u2 += G[i, 2 * j + 1, 2] * wj
+            u2 += G[i, 2 * j + 1, c0 + 2] * wj
         if C > 3:
-            u3 += G[i, 2 * j + 1, 3] * wj
+            u3 += G[i, 2 * j + 1, c0 + 3] * wj
     v0 = v1 = v2 = v3 = 0.0
     for j in range(n_quarter):
         wj = w_quarter[j]
-        v0 += G[i, 4 * j + 3, 0] * wj
+        v0 += G[i, 4 * j + 3, c0 + 0] * wj
         if C > 1:
-            v1 += G[i, 4 * j + 3, 1] * wj
+            v1 += G[i, 4 * j + 3, c0 + 1] * wj
         if C > 2:
-            v2 += G[i, 4 * j + 3, 2] * wj
+            v2 += G[i, 4 * j + 3, c0 + 2] * wj
         if C > 3:
-            v3 += G[i, 4 * j + 3, 3] * wj
-    out[k, 0, 0], out[k, 1, 0], out[k, 2, 0], out[k, 3, 0] = s0, a0, u0, v0
+            v3 += G[i, 4 * j + 3, c0 + 3] * wj
+    out[k, 0, c0 + 0], out[k, 1, c0 + 0], out[k, 2, c0 + 0], out[k, 3, c0 + 0] = s0, a0, u0, v0
     if C > 1:
-        out[k, 0, 1], out[k, 1, 1], out[k, 2, 1], out[k, 3, 1] = s1, a1, u1, v1
+        out[k, 0, c0 + 1], out[k, 1, c0 + 1], out[k, 2, c0 + 1], out[k, 3, c0 + 1] = s1, a1, u1, v1
     if C > 2:
-        out[k, 0, 2], out[k, 1, 2], out[k, 2, 2], out[k, 3, 2] = s2, a2, u2, v2
+        out[k, 0, c0 + 2], out[k, 1, c0 + 2], out[k, 2, c0 + 2], out[k, 3, c0 + 2] = s2, a2, u2, v2
     if C > 3:
-        out[k, 0, 3], out[k, 1, 3], out[k, 2, 3], out[k, 3, 3] = s3, a3, u3, v3
+        out[k, 0, c0 + 3], out[k, 1, c0 + 3], out[k, 2, c0 + 3], out[k, 3, c0 + 3] = s3, a3, u3, v3
 
 
 @njit(cache=True, error_model="numpy", nogil=True, inline="always")
@@ -117,27 +123,13 @@ def sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _block_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
+def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
     rows = np.empty((F.shape[1], 4, F.shape[3]))
     for r in range(F.shape[0]):
         G = F[r]
         for i in range(G.shape[0]):
             row_sums(G, i, w, w_half, w_quarter, w_half.size, w_quarter.size, rows, i)
         rows_total(rows, G.shape[0], out, r)
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
-    C = F.shape[3]
-    if C <= 4:
-        _block_sums(F, w, w_half, w_quarter, out)
-        return
-    part = np.empty((6, F.shape[0], 1))  # (more channels than row_sums takes side by side: one at a time)
-    for c in range(C):
-        _block_sums(np.ascontiguousarray(F[:, :, :, c:c + 1]), w, w_half, w_quarter, part)
-        for k in range(6):
-            for r in range(F.shape[0]):
-                out[k, r, c] = part[k, r, 0]
 
 
 def tensor_sums(F: np.ndarray, w: np.ndarray, w_half: np.ndarray, w_quarter: np.ndarray) -> np.ndarray:
