@@ -37,7 +37,7 @@ from numba.core.errors import NumbaError
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import row_sums, rows_total, sudden
+from .rules import rows_sums, rows_total, sudden
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
@@ -167,11 +167,11 @@ def _summed(grid, totals, rows, M, mirrored):  # pragma: no cover - compiled
     level_u = 1
     while 2 ** level_u - 1 < grid.shape[1]:
         level_u += 1
-    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
-    for a in range(rows.size):
-        index = rows[a]
-        if not mirrored or _canonical(index, M) == index:
-            row_sums(grid, index, w, w_half, w_quarter, 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1, totals, index)
+    filled = rows
+    if mirrored:
+        filled = np.array([index for index in rows if _canonical(index, M) == index], dtype=np.int64)
+    rows_sums(grid, filled, _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2], 2 ** (level_u - 1) - 1,
+              2 ** (level_u - 2) - 1, totals)
     if mirrored:
         for a in range(rows.size):
             index = rows[a]

@@ -123,18 +123,32 @@ def sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def rows_sums(G, indices, w, w_half, w_quarter, n_half, n_quarter, out):  # pragma: no cover - compiled
+    """:func:`row_sums` of each row ``indices`` of G into out[index]: the one kernel that inlines it, compiled once
+    for the fused global rule (:func:`.global_rule._summed`) and :func:`tensor_sums`."""
+    for a in range(indices.size):
+        row_sums(G, indices[a], w, w_half, w_quarter, n_half, n_quarter, out, indices[a])
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
     rows = np.empty((F.shape[1], 4, F.shape[3]))
+    every = np.arange(F.shape[1])
     for r in range(F.shape[0]):
-        G = F[r]
-        for i in range(G.shape[0]):
-            row_sums(G, i, w, w_half, w_quarter, w_half.size, w_quarter.size, rows, i)
-        rows_total(rows, G.shape[0], out, r)
+        rows_sums(F[r], every, w, w_half, w_quarter, w_half.size, w_quarter.size, rows)
+        rows_total(rows, F.shape[1], out, r)
 
 
 def tensor_sums(F: np.ndarray, w: np.ndarray, w_half: np.ndarray, w_quarter: np.ndarray) -> np.ndarray:
     """(Q, Q(½ β), Q(¼ β), Q(½ u), Q(¼ u), ∫|F|) per case and channel, before the azimuth step 2π/M: (6, n, C)."""
     out = np.empty((6, F.shape[0], F.shape[3]))
-    _tensor_sums(np.ascontiguousarray(F, dtype=float), np.ascontiguousarray(w), np.ascontiguousarray(w_half),
-                 np.ascontiguousarray(w_quarter), out)
+    _tensor_sums(np.ascontiguousarray(F, dtype=float), *(_read_only(x) for x in (w, w_half, w_quarter)), out)
     return out
+
+
+def _read_only(weights: np.ndarray) -> np.ndarray:
+    """A read-only contiguous float64 copy: the type of the fused global rule's weights (rows of a module constant,
+    which Numba freezes read-only), so that :func:`rows_sums` is compiled once for both."""
+    weights = np.array(weights, dtype=float)
+    weights.flags.writeable = False
+    return weights
