@@ -183,7 +183,7 @@ def _summed(grid, totals, rows, M, mirrored):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS, inline="always")
-def margin(deviation, coarser):  # pragma: no cover - compiled
+def _margin(deviation, coarser):  # pragma: no cover - compiled
     return deviation + min(coarser, SAFETY * deviation)
 
 
@@ -204,8 +204,8 @@ def piece_sums(totals, M, sums, raw):  # pragma: no cover - compiled
         q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
         q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
         sums[0, c] = q
-        sums[1, c] = margin(abs(q - q_b), abs(q_b - q_bb))
-        sums[2, c] = margin(abs(q - q_u), abs(q_u - q_uu))
+        sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
+        sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
         sums[3, c] = magnitude
     return finite
 
