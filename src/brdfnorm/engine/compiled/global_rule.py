@@ -37,7 +37,7 @@ from numba.core.errors import NumbaError
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import rows_sums, rows_total, sudden
+from .rules import canonical, rows_sums, rows_total, sudden
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
@@ -90,15 +90,6 @@ def _azimuth(t, lam, width):  # pragma: no cover - compiled
                                                                                     + lam * lam * sin_y * sin_y)
 
 
-@njit(**_OPTIONS, inline="always")
-def _canonical(i, M):  # pragma: no cover - compiled
-    """The azimuth index whose node a mirrored case evaluates for index ``i`` of ``M`` (t ↔ π − t)."""
-    i = i % M
-    if i <= M // 4 or i >= 3 * M // 4:
-        return i
-    return (M // 2 - i) % M
-
-
 @njit(error_model="numpy", inline="always")
 def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon,
           beckmann, geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
@@ -119,7 +110,7 @@ def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width
     count = 0
     for a in range(rows.size):
         index = rows[a]
-        if mirrored and _canonical(index, M) != index:
+        if mirrored and canonical(index, M) != index:
             continue
         # (bool(): shader_global's beckmann is the literal False, which would be another signature of _row)
         factor, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio = _row(
@@ -167,15 +158,13 @@ def _summed(grid, totals, rows, M, mirrored):  # pragma: no cover - compiled
     level_u = 1
     while 2 ** level_u - 1 < grid.shape[1]:
         level_u += 1
-    filled = rows
-    if mirrored:
-        filled = np.array([index for index in rows if _canonical(index, M) == index], dtype=np.int64)
-    rows_sums(grid, filled, _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2], 2 ** (level_u - 1) - 1,
+    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
+    rows_sums(grid, rows, M if mirrored else np.int64(0), w, w_half, w_quarter, 2 ** (level_u - 1) - 1,
               2 ** (level_u - 2) - 1, totals)
     if mirrored:
         for a in range(rows.size):
             index = rows[a]
-            source = _canonical(index, M)
+            source = canonical(index, M)
             if source != index:
                 for r in range(4):
                     for c in range(grid.shape[2]):
@@ -266,7 +255,7 @@ def _grown(grid, totals, step, kind, levels, mirrored):  # pragma: no cover - co
         target = np.empty((2 * M, N1, C))
         rows = np.empty((2 * M, 4, C))
         for i in range(M):
-            if not mirrored or _canonical(i, M) == i:
+            if not mirrored or canonical(i, M) == i:
                 for j in range(N1):
                     for c in range(C):
                         target[2 * i, j, c] = grid[i, j, c]
@@ -277,7 +266,7 @@ def _grown(grid, totals, step, kind, levels, mirrored):  # pragma: no cover - co
         return target, rows, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
     target = np.empty((M, 2 * N1 + 1, C))
     for i in range(M):
-        if not mirrored or _canonical(i, M) == i:
+        if not mirrored or canonical(i, M) == i:
             for j in range(N1):
                 for c in range(C):
                     target[i, 2 * j + 1, c] = grid[i, j, c]
@@ -306,7 +295,7 @@ def _settle(grid0, grid1, grid2, totals0, totals1, totals2, mirrored, k, levels,
             finite = True
             M = grid.shape[0]
             for i in range(M):
-                if mirrored and _canonical(i, M) != i:
+                if mirrored and canonical(i, M) != i:
                     continue
                 for x in grid[i].flat:
                     finite &= math.isfinite(x)

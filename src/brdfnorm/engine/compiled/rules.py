@@ -122,12 +122,24 @@ def sudden(totals, c, e_b, magnitude):  # pragma: no cover - compiled
     return e_b
 
 
+@njit(cache=True, error_model="numpy", nogil=True, inline="always")
+def canonical(i, M):  # pragma: no cover - compiled
+    """The azimuth index whose node a mirrored case evaluates for index ``i`` of ``M`` (t ↔ π − t)."""
+    i = i % M
+    if i <= M // 4 or i >= 3 * M // 4:
+        return i
+    return (M // 2 - i) % M
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
-def rows_sums(G, indices, w, w_half, w_quarter, n_half, n_quarter, out):  # pragma: no cover - compiled
-    """:func:`row_sums` of each row ``indices`` of G into out[index]: the one kernel that inlines it, compiled once
-    for the fused global rule (:func:`.global_rule._summed`) and :func:`tensor_sums`."""
+def rows_sums(G, indices, mirrored, w, w_half, w_quarter, n_half, n_quarter, out):  # pragma: no cover - compiled
+    """:func:`row_sums` of each row ``indices`` of G into out[index], but those of a grid of ``mirrored`` azimuths
+    (0: none) that a mirrored case does not evaluate (:func:`canonical`): the one kernel that inlines the row sums,
+    compiled once for the fused global rule (:func:`.global_rule._summed`) and :func:`tensor_sums`."""
     for a in range(indices.size):
-        row_sums(G, indices[a], w, w_half, w_quarter, n_half, n_quarter, out, indices[a])
+        i = indices[a]
+        if mirrored == 0 or canonical(i, mirrored) == i:
+            row_sums(G, i, w, w_half, w_quarter, n_half, n_quarter, out, i)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -135,7 +147,7 @@ def _tensor_sums(F, w, w_half, w_quarter, out):  # pragma: no cover - compiled
     rows = np.empty((F.shape[1], 4, F.shape[3]))
     every = np.arange(F.shape[1])
     for r in range(F.shape[0]):
-        rows_sums(F[r], every, w, w_half, w_quarter, w_half.size, w_quarter.size, rows)
+        rows_sums(F[r], every, np.int64(0), w, w_half, w_quarter, w_half.size, w_quarter.size, rows)
         rows_total(rows, F.shape[1], out, r)
 
 
