@@ -1,4 +1,4 @@
-"""The kernels both fused global rules call (brdfnorm.engine.compiled.global_rule: _begin, _grown, _row, _mirror,
+"""The kernels both fused global rules call (brdfnorm.engine.compiled.global_rule: _begin, _grown, _row, _summed,
 _settle), compiled once per machine and shared by fused_global and shader_global: global_rule.shared_kernels
 compiles them under one mark that a second process waits on, for the very signatures the two callers give them (a
 fresh process with an empty Numba cache ends with one overload of each), and marks.in_cache tells a cached
@@ -18,7 +18,7 @@ from numba import types
 
 from brdfnorm.engine.compiled import global_rule, marks
 
-SHARED = ("_begin", "_grown", "_row", "_mirror", "_settle")
+SHARED = ("_begin", "_grown", "_row", "_summed", "_settle")
 
 
 class _Kernel:
@@ -42,7 +42,7 @@ def test_the_shared_kernels_compile_under_one_mark_another_process_waits_on(monk
     global_rule.shared_kernels()
     assert len(waited) == 1 and waited[0].parent == tmp_path
     # each compiled once, _settle last (its overloads say "done" to the next caller), all under this process's mark
-    assert log == [(name, str(os.getpid())) for name in ("_begin", "_grown", "_row", "_mirror", "_settle")]
+    assert log == [(name, str(os.getpid())) for name in ("_begin", "_grown", "_row", "_summed", "_settle")]
     assert not waited[0].exists()
     global_rule.shared_kernels()  # compiled in this process: neither waits nor compiles
     assert len(waited) == 1 and len(log) == len(SHARED)
