@@ -1,4 +1,4 @@
-"""The kernels both fused global rules call (brdfnorm.engine.compiled.global_rule: _begin, _grown, _row, _mirror,
+"""The kernels both fused global rules call (brdfnorm.engine.compiled.global_rule: _begin, _grown, _row, _summed,
 _settle), compiled once per machine and shared by fused_global and shader_global: global_rule.shared_kernels
 compiles them under one mark that a second process waits on, for the very signatures the two callers give them (a
 fresh process with an empty Numba cache ends with one overload of each), and marks.in_cache tells a cached
@@ -18,7 +18,7 @@ from numba import types
 
 from brdfnorm.engine.compiled import global_rule, marks
 
-SHARED = ("_begin", "_grown", "_row", "_mirror", "_settle")
+SHARED = ("_begin", "_grown", "_row", "_summed", "_settle")
 
 
 class _Kernel:
@@ -42,7 +42,7 @@ def test_the_shared_kernels_compile_under_one_mark_another_process_waits_on(monk
     global_rule.shared_kernels()
     assert len(waited) == 1 and waited[0].parent == tmp_path
     # each compiled once, _settle last (its overloads say "done" to the next caller), all under this process's mark
-    assert log == [(name, str(os.getpid())) for name in ("_begin", "_grown", "_row", "_mirror", "_settle")]
+    assert log == [(name, str(os.getpid())) for name in ("_begin", "_grown", "_row", "_summed", "_settle")]
     assert not waited[0].exists()
     global_rule.shared_kernels()  # compiled in this process: neither waits nor compiles
     assert len(waited) == 1 and len(log) == len(SHARED)
@@ -80,7 +80,7 @@ def test_the_azimuth_row_is_the_slope_maps_own_functions(kind, width, linear):
 
     geometry = tuple(np.array([0.0, value]) for value in (0.6, 0.9, 0.1, 0.2, 0.3, 0.35, 0.05, 0.4, 2.0, 1.0))
     assert len(geometry) == len(SLOPE_MAP)
-    row = global_rule._row(3, 16, kind, 1, 0.7, width, 2.0, linear, True, False, geometry)
+    row = global_rule._row(3, 16, kind, 0.7, width, 2.0, linear, True, False, tuple(g[1] for g in geometry))
     phi, dphi = global_rule._azimuth(3 * (2 * np.pi / 16), 0.7, width)
     vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = (g[1] for g in geometry)
     dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(

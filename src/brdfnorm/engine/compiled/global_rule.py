@@ -34,18 +34,16 @@ import numpy as np
 from numba import njit
 from numba.core.errors import NumbaError
 
-from ..machinery.grid_estimate import ACCELERATION, RESOLVED
 from ..machinery.tensor_rule import FLOOR, MAX_LEVEL_B, SAFETY, START_LEVELS
 from .backend import tell_once
 from .marks import await_other, cache_mark, compile_marked, first_class_argtypes, holding, in_cache
-from .rules import grid_sums
+from .rules import canonical, rows_sums, rows_total, sudden
 from .slopes import azimuth_node, microfacet_case, microfacet_node, piece_extent, shader_case, shader_node, slope_node
 
 _OPTIONS = dict(cache=True, error_model="numpy", nogil=True)
 #: Radial levels tabulated (a piece's grid of 2^3 azimuths and 2^12 − 1 radial nodes is already 32 760 nodes).
 _LEVELS = 14
 #: Nodes per piece at most that the tables allow (the route's cap is 32 768).
-_EPS = np.finfo(np.float64).eps
 MAX_NODES = 2 ** START_LEVELS[0] * (2 ** (_LEVELS - 1) - 1)
 #: The radial pieces of a case (pole, tail, horizon layer), and the columns of a case's switches (:func:`_begin`).
 _PIECES = 3
@@ -92,35 +90,31 @@ def _azimuth(t, lam, width):  # pragma: no cover - compiled
                                                                                     + lam * lam * sin_y * sin_y)
 
 
-@njit(**_OPTIONS, inline="always")
-def _canonical(i, M):  # pragma: no cover - compiled
-    """The azimuth index whose node a mirrored case evaluates for index ``i`` of ``M`` (t ↔ π − t)."""
-    i = i % M
-    if i <= M // 4 or i >= 3 * M // 4:
-        return i
-    return (M // 2 - i) % M
-
-
 @njit(error_model="numpy", inline="always")
-def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon, beckmann,
-          geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
+def _fill(grid, totals, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale, linear, log_horizon,
+          beckmann, geometry, case, value, extra, largest, flags):  # pragma: no cover - compiled
     """The weighted values at the azimuth indices ``rows`` of ``M`` (t = 2π·index/M) and the radial nodes
     ``radial`` of piece ``kind`` of case ``q``, written to grid[index, col_step·j]; a mirrored case's indices
-    outside t ∈ [−π/2, π/2] copy their mirror's (which ``rows`` holds). The weight at a node is that of
+    outside t ∈ [−π/2, π/2] take their mirror's sums (which ``rows`` holds). The weight at a node is that of
     :func:`.slopes.slope_loop`: ``case(q, extra)`` -> the case's parameters, ``value(...)`` -> (g, a, b, keep,
     flag), g[c]·a·b (0 where not ``keep``), the last channel the largest |·| where ``largest``, ``flag`` marking
-    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). Returns the nodes evaluated."""
+    flags[q]; ``geometry``: the slope map's per-case arrays (slopes.SLOPE_MAP). The rows filled have their sums
+    written to ``totals`` (:func:`_summed`), so that a round sums the grid's rows that changed only, not the whole
+    grid. Returns the nodes evaluated."""
     vz, ax, ay = geometry[0], geometry[4], geometry[5]
+    # (the case's slope map as numbers, not arrays: an array passed to _row would be reference-counted per row)
+    here = (vz[q], geometry[1][q], geometry[2][q], geometry[3][q], ax[q], ay[q], geometry[6][q], geometry[7][q],
+            geometry[8][q], geometry[9][q])
     C = grid.shape[2] - 1 if largest else grid.shape[2]
     parameters = case(q, extra)
     count = 0
     for a in range(rows.size):
         index = rows[a]
-        if mirrored and _canonical(index, M) != index:
+        if mirrored and canonical(index, M) != index:
             continue
         # (bool(): shader_global's beckmann is the literal False, which would be another signature of _row)
         factor, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio = _row(
-            index, M, kind, q, lam, width, scale, linear, log_horizon, bool(beckmann), geometry)
+            index, M, kind, lam, width, scale, linear, log_horizon, bool(beckmann), here)
         for j in range(radial.size):
             s, weight_t, one_sp, n2, Lz = slope_node(kind, (kind + radial[j]) - kind, start, length, log_ratio, s_h,
                                                      s_split, s_end, log_horizon, beckmann, d2, p, q_minus_p, vz[q])
@@ -136,41 +130,73 @@ def _fill(grid, rows, M, col_step, radial, q, kind, mirrored, lam, width, scale,
             if largest:
                 grid[index, col_step * j, C] = most * factor
         count += radial.size
-    if mirrored:
-        _mirror(grid, rows, M, col_step, radial.size)
+    _summed(grid, totals, rows, M, mirrored)
     return count
 
 
 @njit(**_OPTIONS)
-def _row(index, M, kind, q, lam, width, scale, linear, log_horizon, beckmann, geometry):  # pragma: no cover
-    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of case ``q``: the azimuth
-    map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s values but s_middle, and
-    :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per node): compiled once and
-    shared by :func:`fused_global` and :func:`shader_global`, not inlined into each."""
-    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = geometry
+def _row(index, M, kind, lam, width, scale, linear, log_horizon, beckmann, here):  # pragma: no cover - compiled
+    """What :func:`_fill` needs of azimuth ``index`` of ``M`` for radial piece ``kind`` of a case whose slope map
+    (:data:`.slopes.SLOPE_MAP`) is ``here``: the azimuth map's Jacobian times ``scale``, :func:`.slopes.azimuth_node`'s
+    values but s_middle, and :func:`.slopes.piece_extent`'s. A kernel of its own, called once per azimuth (not per
+    node): compiled once and shared by :func:`fused_global` and :func:`shader_global`, not inlined into each; its
+    arguments are numbers (arrays would be reference-counted at every call)."""
+    vz, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity = here
     phi, dphi = _azimuth(index * (2 * np.pi / M), lam, width)
     dx, dy, d2, p, q_minus_p, s_h, s_split, s_middle, s_end, azimuth = azimuth_node(
-        phi, linear, cos_offset[q], sin_offset[q], amplitude[q], ax[q], ay[q], layer[q], delta[q], kappa[q],
-        multiplicity[q], vz[q], beckmann)
+        phi, linear, cos_offset, sin_offset, amplitude, ax, ay, layer, delta, kappa, multiplicity, vz, beckmann)
     start, length, log_ratio = piece_extent(kind, s_middle, s_split, s_end, log_horizon, beckmann)
     return dphi * scale, dx, dy, d2, p, q_minus_p, s_h, s_split, s_end, azimuth, start, length, log_ratio
 
 
 @njit(**_OPTIONS)
-def _mirror(grid, rows, M, col_step, N):  # pragma: no cover - compiled
-    """A mirrored case's indices of ``rows`` outside t ∈ [−π/2, π/2]: their mirror's values (:func:`_fill`)."""
-    for a in range(rows.size):
-        index = rows[a]
-        source = _canonical(index, M)
-        if source != index:
-            for j in range(N):
-                for c in range(grid.shape[2]):
-                    grid[index, col_step * j, c] = grid[source, col_step * j, c]
+def _summed(grid, totals, rows, M, mirrored):  # pragma: no cover - compiled
+    """The sums (:func:`.rules.row_sums`) of the rows ``rows`` of ``M`` just filled by :func:`_fill` into
+    totals[index]; a mirrored case's indices outside t ∈ [−π/2, π/2] their mirror's. Not their values: nothing reads
+    a mirrored row's values after its sums (:func:`_grown` and :func:`_settle` skip them). One call per fill, a
+    kernel compiled once and shared by both callers (inlined into each, the sums cost ~2 s of CPU to compile)."""
+    level_u = 1
+    while 2 ** level_u - 1 < grid.shape[1]:
+        level_u += 1
+    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
+    rows_sums(grid, rows, M if mirrored else np.int64(0), w, w_half, w_quarter, 2 ** (level_u - 1) - 1,
+              2 ** (level_u - 2) - 1, totals)
+    if mirrored:
+        for a in range(rows.size):
+            index = rows[a]
+            source = canonical(index, M)
+            if source != index:
+                for r in range(4):
+                    for c in range(grid.shape[2]):
+                        totals[index, r, c] = totals[source, r, c]
 
 
 @njit(**_OPTIONS, inline="always")
 def _margin(deviation, coarser):  # pragma: no cover - compiled
     return deviation + min(coarser, SAFETY * deviation)
+
+
+@njit(**_OPTIONS)
+def piece_sums(totals, M, sums, raw):  # pragma: no cover - compiled
+    """The fused global rule's q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid of M
+    azimuths from its row sums ``totals`` (:func:`_fill`), as :func:`.rules.rows_total` (``raw`` (6, 1, C):
+    its sums before the azimuth step). Returns whether every magnitude is finite (then so is every value of the grid:
+    the magnitude sums their |·| with positive weights)."""
+    C = totals.shape[2]
+    step = 2 * np.pi / M
+    rows_total(totals, M, raw, 0)
+    finite = True
+    for c in range(C):
+        q, q_b, q_bb, q_u, q_uu, magnitude = (raw[0, 0, c], raw[1, 0, c], raw[2, 0, c], raw[3, 0, c], raw[4, 0, c],
+                                              raw[5, 0, c])
+        finite &= math.isfinite(magnitude)
+        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
+        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
+        sums[0, c] = q
+        sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
+        sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
+        sums[3, c] = magnitude
+    return finite
 
 
 @njit(**_OPTIONS, inline="always")
@@ -198,50 +224,11 @@ def _doublings(ratio, last):  # pragma: no cover - compiled
 
 
 @njit(**_OPTIONS)
-def _sums(grid, M, level_u, sums):  # pragma: no cover - compiled
-    """q, e_b, e_u, magnitude per channel (rows of ``sums``) of a piece's grid (M, 2^level_u − 1, C), as
-    compiled.rules.grid_sums."""
-    C = grid.shape[2]
-    w, w_half, w_quarter = _WEIGHTS[level_u], _WEIGHTS[level_u - 1], _WEIGHTS[level_u - 2]
-    n_half, n_quarter = 2 ** (level_u - 1) - 1, 2 ** (level_u - 2) - 1
-    step = 2 * np.pi / M
-    for c in range(C):
-        q, q_b, q_bb, q_u, q_uu, magnitude = grid_sums(grid, c, w, w_half, w_quarter, n_half, n_quarter)
-        q, q_u, q_uu, magnitude = q * step, q_u * step, q_uu * step, magnitude * step
-        q_b, q_bb = q_b * (2 * step), q_bb * (4 * step)
-        sums[0, c] = q
-        sums[1, c] = _margin(abs(q - q_b), abs(q_b - q_bb))
-        sums[2, c] = _margin(abs(q - q_u), abs(q_u - q_uu))
-        sums[3, c] = magnitude
-
-
-@njit(**_OPTIONS)
-def _sudden(grid, level_u, c, e_b, magnitude):  # pragma: no cover - compiled
-    """The β estimate ``e_b`` of channel ``c`` of a piece's grid at 16 azimuths, raised to d₁ + d₂ where the last
-    fall is more than ACCELERATION times steeper than the square of the one before, as
-    :func:`brdfnorm.engine.machinery.grid_estimate.sudden` (d_k the differences of the rules on every 1st, 2nd, 4th
-    and 8th azimuth)."""
-    M, N1 = grid.shape[0], grid.shape[1]
-    w = _WEIGHTS[level_u]
-    q = np.zeros(4)
-    for i in range(M):
-        s = 0.0
-        for j in range(N1):
-            s += grid[i, j, c] * w[j]
-        for k in range(4):
-            if i % (2**k) == 0:
-                q[k] += s * (2 * np.pi * 2**k / M)
-    d1, d2, d3 = abs(q[0] - q[1]), abs(q[1] - q[2]), abs(q[2] - q[3])
-    if d2 * d2 * d2 > ACCELERATION * d1 * d3 * d3 and max(d1, d2) > RESOLVED * _EPS * magnitude:
-        return max(e_b, d1 + d2)
-    return e_b
-
-
-@njit(**_OPTIONS)
 def _begin(C):  # pragma: no cover - compiled
     """A case's state at its start: levels (pieces, 2: β, u), the ratios last extrapolated from (pieces, 2),
     switches (pieces, 5: alive, done, finite, more along β, more along u), numbers (pieces, 7, C: the latest value,
-    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid."""
+    the value and error of a done piece, then the sums q, e_b, e_u, magnitude), and each piece's first grid and
+    its row sums (M, 4, C: :func:`.rules.row_sums`)."""
     levels = np.empty((_PIECES, 2), dtype=np.int64)
     lasts = np.empty((_PIECES, 2))
     switches = np.zeros((_PIECES, 5), dtype=np.bool_)
@@ -251,64 +238,79 @@ def _begin(C):  # pragma: no cover - compiled
         switches[kind, _ALIVE] = switches[kind, _FINITE] = True
     M0, N0 = 2 ** START_LEVELS[0], 2 ** START_LEVELS[1] - 1
     return (levels, lasts, switches, np.zeros((_PIECES, 7, C)), np.empty((M0, N0, C)), np.empty((M0, N0, C)),
-            np.empty((M0, N0, C)))
+            np.empty((M0, N0, C)), np.empty((M0, 4, C)), np.empty((M0, 4, C)), np.empty((M0, 4, C)))
 
 
 @njit(**_OPTIONS)
-def _grown(grid, step, kind, levels):  # pragma: no cover - compiled
-    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, rows, M, col_step, radial) — the first grid
-    (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place, whose level it raises."""
+def _grown(grid, totals, step, kind, levels, mirrored):  # pragma: no cover - compiled
+    """What :func:`_fill` fills at ``step`` of piece ``kind``: (grid, row sums, rows, M, col_step, radial) — the
+    first grid (step 0), or a new grid doubled along t (1) or u (2) with the old nodes copied in place (and along t
+    the old rows' sums, which the new rows leave as they were), whose level it raises; a ``mirrored`` case's rows
+    outside t ∈ [−π/2, π/2] only their sums (:func:`_summed`)."""
     C = grid.shape[2]
     M, N1 = 2 ** levels[kind, 0], 2 ** levels[kind, 1] - 1
     if step == 0:
-        return grid, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
+        return grid, totals, np.arange(M), M, 1, _NODES[levels[kind, 1]][:N1]
     if step == 1:
         target = np.empty((2 * M, N1, C))
+        rows = np.empty((2 * M, 4, C))
         for i in range(M):
-            for j in range(N1):
+            if not mirrored or canonical(i, M) == i:
+                for j in range(N1):
+                    for c in range(C):
+                        target[2 * i, j, c] = grid[i, j, c]
+            for r in range(4):
                 for c in range(C):
-                    target[2 * i, j, c] = grid[i, j, c]
+                    rows[2 * i, r, c] = totals[i, r, c]
         levels[kind, 0] += 1
-        return target, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
+        return target, rows, 2 * np.arange(M) + 1, 2 * M, 1, _NODES[levels[kind, 1]][:N1]
     target = np.empty((M, 2 * N1 + 1, C))
     for i in range(M):
-        for j in range(N1):
-            for c in range(C):
-                target[i, 2 * j + 1, c] = grid[i, j, c]
+        if not mirrored or canonical(i, M) == i:
+            for j in range(N1):
+                for c in range(C):
+                    target[i, 2 * j + 1, c] = grid[i, j, c]
     lu = levels[kind, 1] + 1
     levels[kind, 1] = lu
-    return target, np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
+    return target, np.empty((M, 4, C)), np.arange(M), M, 2, _NODES[lu][0:2 ** lu - 1:2]
 
 
 @njit(**_OPTIONS)
-def _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
-            graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
+def _settle(grid0, grid1, grid2, totals0, totals1, totals2, mirrored, k, levels, lasts, switches, numbers, rtol,
+            atol, width, max_nodes, graded_predicts, out_value, out_error, settled):  # pragma: no cover - compiled
     """After a round of grids: each live piece's sums and estimates, the tolerance, and per piece whether it is
     done, goes on (along which directions) or sends the case to the panels. Returns whether case ``k`` is over, its
     outputs then written."""
     C = numbers.shape[2]
-    sums = np.empty((4, C))
+    sums, raw = np.empty((4, C)), np.empty((6, 1, C))
     failed = False
     for kind in range(_PIECES):
         if not switches[kind, _ALIVE]:
             continue
         grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
-        finite = True
-        for x in grid.flat:
-            if not math.isfinite(x):
-                finite = False
-                break
+        totals = totals0 if kind == 0 else (totals1 if kind == 1 else totals2)
+        # (a finite magnitude: every value finite, no pass of its own over the grid; else the values looked at)
+        finite = piece_sums(totals, 2 ** levels[kind, 0], sums, raw)
+        if not finite:
+            finite = True
+            M = grid.shape[0]
+            for i in range(M):
+                if mirrored and canonical(i, M) != i:
+                    continue
+                for x in grid[i].flat:
+                    finite &= math.isfinite(x)
         switches[kind, _FINITE] = finite
         if not finite:
             grid.fill(0.0)
+            totals.fill(0.0)  # (the row sums of zeros)
             failed = True
-        _sums(grid, 2 ** levels[kind, 0], levels[kind, 1], sums)
+            piece_sums(totals, 2 ** levels[kind, 0], sums, raw)
         for c in range(C):
             for row in range(4):
                 numbers[kind, 3 + row, c] = sums[row, c]
             numbers[kind, 0, c] = sums[0, c]
             if levels[kind, 0] == START_LEVELS[0] + 1:  # a sudden agreement at 16 azimuths (grid_estimate)
-                numbers[kind, 4, c] = _sudden(grid, levels[kind, 1], c, sums[1, c], sums[3, c])
+                numbers[kind, 4, c] = sudden(totals, c, sums[1, c], sums[3, c])
     tolerance = np.empty(C)
     for c in range(C):
         total = 0.0
@@ -399,7 +401,7 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
     C = out_value.shape[1]
     for n in range(cases.size):
         k = cases[n]
-        levels, lasts, switches, numbers, grid0, grid1, grid2 = _begin(C)
+        levels, lasts, switches, numbers, grid0, grid1, grid2, totals0, totals1, totals2 = _begin(C)
         first = True
         while True:
             # the grids: the first ones, then each piece's doublings along t (1) and u (2), one _fill call site
@@ -407,23 +409,25 @@ def fused_loop(cases, lam, width, symmetric, scale, rtol, atol, max_nodes, grade
                 if not switches[kind, _ALIVE]:
                     continue
                 grid = grid0 if kind == 0 else (grid1 if kind == 1 else grid2)
+                totals = totals0 if kind == 0 else (totals1 if kind == 1 else totals2)
                 for step in range(3):
                     if (step == 0) != first or (step > 0 and not switches[kind, _MORE_B + step - 1]):
                         continue
-                    target, rows, M, col_step, radial = _grown(grid, step, kind, levels)
-                    evaluations[k] += _fill(target, rows, M, col_step, radial, k, kind, symmetric[k], lam[k],
-                                            width[k], scale[k], linear, log_horizon, beckmann, geometry, case,
-                                            value, extra, largest, flags)
-                    grid = target
+                    target, target_totals, rows, M, col_step, radial = _grown(grid, totals, step, kind, levels,
+                                                                              symmetric[k])
+                    evaluations[k] += _fill(target, target_totals, rows, M, col_step, radial, k, kind, symmetric[k],
+                                            lam[k], width[k], scale[k], linear, log_horizon, beckmann, geometry,
+                                            case, value, extra, largest, flags)
+                    grid, totals = target, target_totals
                 if kind == 0:
-                    grid0 = grid
+                    grid0, totals0 = grid, totals
                 elif kind == 1:
-                    grid1 = grid
+                    grid1, totals1 = grid, totals
                 else:
-                    grid2 = grid
+                    grid2, totals2 = grid, totals
             first = False
-            if _settle(grid0, grid1, grid2, k, levels, lasts, switches, numbers, rtol, atol, width, max_nodes,
-                       graded_predicts, out_value, out_error, settled):
+            if _settle(grid0, grid1, grid2, totals0, totals1, totals2, symmetric[k], k, levels, lasts, switches,
+                       numbers, rtol, atol, width, max_nodes, graded_predicts, out_value, out_error, settled):
                 break
 
 
@@ -481,7 +485,7 @@ def shader_kernel(arguments: list, shader: int, outputs: int):
 
 
 def shared_kernels() -> None:
-    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_mirror` and :func:`_settle`, which
+    """Compile (or load) :func:`_begin`, :func:`_grown`, :func:`_row`, :func:`_summed` and :func:`_settle`, which
     :func:`fused_global` and :func:`shader_global` both call, for the types those callers give them (~3.5 s of CPU,
     once per machine), under
     one mark beside Numba's cache: on a fresh machine :mod:`brdfnorm.parallel.warm`'s child (compiling
@@ -493,12 +497,13 @@ def shared_kernels() -> None:
 
     real, whole, truth = types.float64, types.int64, types.boolean
     grid, vector, indices = types.Array(real, 3, "C"), types.Array(real, 1, "C"), types.Array(whole, 1, "C")
-    plan = ((_begin, (whole,)), (_grown, (grid, whole, whole, types.Array(whole, 2, "C"))),
-            (_row, (whole, whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(vector, 10))),
-            (_mirror, (grid, indices, whole, whole, whole)),
-            (_settle, (grid, grid, grid, whole, types.Array(whole, 2, "C"), types.Array(real, 2, "C"),
-                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole,
-                       types.Array(real, 2, "C"), types.Array(real, 2, "C"), types.Array(truth, 1, "C"))))
+    matrix = types.Array(real, 2, "C")
+    plan = ((_begin, (whole,)), (_grown, (grid, grid, whole, whole, types.Array(whole, 2, "C"), truth)),
+            (_row, (whole, whole, whole, real, real, real, truth, truth, truth, types.UniTuple(real, 10))),
+            (_summed, (grid, grid, indices, whole, truth)),
+            (_settle, (grid, grid, grid, grid, grid, grid, truth, whole, types.Array(whole, 2, "C"), matrix,
+                       types.Array(truth, 2, "C"), grid, vector, vector, vector, whole, whole, matrix, matrix,
+                       types.Array(truth, 1, "C"))))
     mark = cache_mark(_settle, "global_rule_shared", plan[-1][1])
     if mark is not None:
         await_other(mark)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.extending import intrinsic
 
 from ...models.fresnel import KERNEL_CODES
 from ...models.native import beckmann_lambda, fresnel_factor, ggx_lambda
@@ -41,6 +42,22 @@ def rectangle_grids(case: np.ndarray, phi: np.ndarray, v: np.ndarray) -> tuple[n
     R = case.size
     return (np.ascontiguousarray(np.broadcast_to(phi, (R, phi.shape[1], 1)), dtype=float).reshape(R, -1),
             np.ascontiguousarray(np.broadcast_to(v, (R, 1, v.shape[-1])), dtype=float).reshape(R, -1))
+
+
+@intrinsic
+def borrowed(typingctx, array):
+    """A view of ``array`` that holds no reference (no meminfo, as :func:`numba.carray`'s views): Numba's reference
+    counts on it are a null test, not an atomic add and subtract. Only for views used while ``array`` itself is
+    held, as the kernels' arguments are for the whole call: the per-node calls of a shader, whose parameters are an
+    array."""
+    def codegen(context, builder, signature, args):
+        source = context.make_array(signature.args[0])(context, builder, value=args[0])
+        view = context.make_array(signature.return_type)(context, builder)
+        context.populate_array(view, data=source.data, shape=source.shape, strides=source.strides,
+                               itemsize=source.itemsize, meminfo=None, parent=None)
+        return view._getvalue()
+
+    return array(array), codegen
 
 
 @njit(**_OPTIONS, inline="always")
@@ -233,8 +250,12 @@ def slope_loop(case, value, k, phi, v, piece, linear, log_horizon, beckmann, vz,
 
 @njit(**_OPTIONS, inline="always")
 def microfacet_case(q, extra):  # pragma: no cover - compiled
+    """Case ``q``'s parameters of :func:`microfacet_value`, its Fresnel row as numbers: an array (``fresnel[q]``)
+    in them would be reference-counted at every node (an atomic add and subtract, ~10 % of the fused loop)."""
     beckmann, vx, lambda_v, separable, fresnel_kind, fresnel = extra
-    return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, fresnel[q]
+    u = fresnel[q]
+    return beckmann, vx[q], lambda_v[q], separable, fresnel_kind, (
+        u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7], u[8], u[9], u[10], u[11], u[12], u[13], u[14], u[15])
 
 
 @njit(**_OPTIONS, inline="always")
@@ -293,10 +314,13 @@ def microfacet_rectangle(g, linear: bool, log_horizon: bool, geometry: dict):
 @njit(**_OPTIONS, inline="always")
 def shader_case(q, extra):  # pragma: no cover - compiled
     """Per case: the reflection's fixed direction F, the shader's fixed direction and parameters U, ``over_light``
-    (:func:`reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader)."""
+    (:func:`reflected_value`'s ``case``) and the shader (extra: F, rows, fixed, U, over_light, shader). The
+    parameters are a :func:`borrowed` view of U's row: the shader takes an array, and an owned view would be
+    reference-counted at every node (an atomic add and subtract around each shader call)."""
     F, rows, fixed, U, over_light, shader = extra
     row = rows[q]
-    return F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], U[row], over_light, shader
+    return (F[q, 0], F[q, 1], F[q, 2], fixed[row, 0], fixed[row, 1], fixed[row, 2], borrowed(U[row]), over_light,
+            shader)
 
 
 @njit(**_OPTIONS, inline="always")

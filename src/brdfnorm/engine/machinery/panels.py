@@ -188,6 +188,18 @@ def _confirm_quarters(pool: Panels, check: np.ndarray, *, integrand: RectangleIn
     pool.change[check] = np.where(surprise[:, None], kinks.SURPRISE * difference, difference)
 
 
+def _within_budget(split: np.ndarray, badness: np.ndarray, case: np.ndarray, allowed: np.ndarray) -> np.ndarray:
+    """``split`` (R,) less, per case, all but its ``allowed[case]`` worst panels (by ``badness``): the splits its
+    budget can still pay for, their halves evaluated and confirmed (a case that cannot pay for one has stopped)."""
+    chosen = np.flatnonzero(split)
+    order = chosen[np.lexsort((-badness[chosen], case[chosen]))]
+    cases = case[order]
+    rank = np.arange(order.size) - np.searchsorted(cases, cases, side="left")
+    within = np.zeros_like(split)
+    within[order[rank < allowed[cases]]] = True
+    return within
+
+
 def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, *, rtol: float | np.ndarray,
                         atol: float | np.ndarray, max_evaluations: int,
                         chunk: int = PANELS_PER_CHUNK) -> RouteResult:
@@ -206,6 +218,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
     pool: Panels | None = None
     fresh = initial
     per_panel, per_check = NODES.size**2, 4 * QUARTER_NODES.size**2
+    per_split = 2 * (per_panel + per_check)  # a split's two halves, evaluated and confirmed before their case stops
     confirm = partial(_confirm_quarters, integrand=integrand, chunk=chunk)
     parent_error = None  # |K − G| of the panels whose halves ``fresh`` holds
     while True:
@@ -222,7 +235,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         tolerance = np.maximum(atol, rtol * np.abs(total))
         meets = np.all(per_case(K, pool.case, pool.error()) <= tolerance, axis=1) & active
         unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
-        stopping = out_of_budget(active & ~meets, evaluations, unchecked, per_check, 2 * per_panel, max_evaluations)
+        stopping = out_of_budget(active & ~meets, evaluations, unchecked, per_check, per_split, max_evaluations)
         # Confirmation: the unchecked panels of the cases that meet the tolerance or stop, on new nodes.
         confirm_before_stop(pool, meets, stopping, confirm, evaluations, per_check)
         total_error = per_case(K, pool.case, pool.error())
@@ -231,7 +244,7 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         # whose confirmation took it back over the tolerance goes on while the budget allows (its panels are all
         # confirmed now, so it stops honestly whenever it does).
         unchecked = np.bincount(pool.case[~pool.checked], minlength=K)
-        budget = active & ~done & (stopping | out_of_budget(active, evaluations, unchecked, per_check, 2 * per_panel,
+        budget = active & ~done & (stopping | out_of_budget(active, evaluations, unchecked, per_check, per_split,
                                                             max_evaluations))
         finished = done | budget
         value[finished], error[finished] = total[finished], total_error[finished]
@@ -246,6 +259,8 @@ def adaptive_rectangles(integrand: RectangleIntegrand, initial: Panels, K: int, 
         worst = np.zeros(K)
         np.maximum.at(worst, pool.case, badness)
         split = (badness > 1.0 / count[pool.case]) | (badness >= worst[pool.case])
+        split = _within_budget(split, badness, pool.case, (max_evaluations - evaluations - unchecked * per_check)
+                               // per_split)
         parents = pool.take(split)
         pool = pool.take(~split)
         parent_error = parents.err_a + parents.err_b
