@@ -87,7 +87,7 @@ from ..machinery.kinks import algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
 from ..machinery.panels import Panels, kronrod_estimate
 from ..machinery.result import RouteResult
-from ..machinery.rounding import BIAS_EVALUATIONS, PROBE_EVALUATIONS, cosine_bias, noise_bound, rounding_noise
+from ..machinery.rounding import BIAS_EVALUATIONS, cosine_bias, noise_bound, surveyed_noise
 from ..machinery.tensor_rule import START_NODES, map_grid, neck_u, normalized
 
 NonFinitePolicy = Literal["raise", "zero"]
@@ -200,8 +200,8 @@ def integrate_hemisphere(
     converged = np.zeros(K, dtype=bool)
     reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
-    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call, epsilon)
-    evaluations += PROBE_EVALUATIONS
+    noise_amplitude, probed = surveyed_noise(integrand, frame, widths, supports, rtol, max_nodes_per_call, epsilon)
+    evaluations += probed
     # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
     # below its tolerance; the adaptive panels below take the cases it does not settle.
     # (Not at all where a quarter of the budget would not cover its first grid.)
