@@ -200,7 +200,8 @@ def integrate_hemisphere(
     converged = np.zeros(K, dtype=bool)
     reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
-    noise_amplitude, probed = surveyed_noise(integrand, frame, widths, supports, rtol, max_nodes_per_call, epsilon)
+    noise_amplitude, probed = surveyed_noise(integrand, frame, widths, supports, rtol, max_nodes_per_call, epsilon,
+                                             anisotropic)
     evaluations += probed
     # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
     # below its tolerance; the adaptive panels below take the cases it does not settle.
