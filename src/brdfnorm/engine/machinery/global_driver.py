@@ -52,7 +52,9 @@ from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, dou
 HALF_AZIMUTH_FROM = 4
 #: ... where at most this many more doublings of u are predicted to settle the unit
 #: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`).
-HALF_AZIMUTH_NEEDED = 1
+HALF_AZIMUTH_NEEDED = 2
+#: The check measures u on 2^-HALF_AZIMUTH_DEPTH of the refined grid's azimuths (1: the M of 2M).
+HALF_AZIMUTH_DEPTH = 2
 
 
 @dataclass
@@ -86,7 +88,7 @@ class Group:
     def checked(self) -> bool:
         """Whether the half-azimuth check measures u on half the grid's azimuths (then it takes part in the
         estimate; after a further doubling of β alone it is kept for its nodes only)."""
-        return self.check is not None and self.check_b == self.level_b - 1
+        return self.check is not None and self.check_b == self.level_b - HALF_AZIMUTH_DEPTH
 
 
 def integrate_global(grid: GlobalGrid, K: int, cases: np.ndarray, *, rtol, atol, max_nodes: int) -> RouteResult:
@@ -238,7 +240,8 @@ def _halves(grid: GlobalGrid, group: Group, more_b, more_u, short, needed_u) -> 
     coarser rule's, and its value move along u alone, which the stall check reads as a stall)."""
     if group.checked:
         return more_b & ~more_u
-    if grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM and group.level_u > START_LEVELS[1]:
+    if (grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM + HALF_AZIMUTH_DEPTH - 1
+            and group.level_u > START_LEVELS[1]):
         return more_b & more_u & ~short & (needed_u <= HALF_AZIMUTH_NEEDED) & np.isfinite(group.last_u)
     return None
 
@@ -336,13 +339,15 @@ def _refine_half(grid: GlobalGrid, group: Group, pick, evaluations) -> Group:
     case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
     F = group.grid if every else group.grid[pick]
     old = None if group.check is None else (group.check if every else group.check[pick])
-    new = _new_radial(grid, case, piece, group.level_b, group.level_u, old, group.check_b, evaluations)
-    check = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
-    check[:, :, 1::2], check[:, :, 0::2] = F, new
+    check_b = group.level_b + 1 - HALF_AZIMUTH_DEPTH  # (the check's azimuths: every 2^(depth-1)-th of the M)
+    new = _new_radial(grid, case, piece, check_b, group.level_u, old, group.check_b, evaluations)
+    sub = F[:, ::2 ** (group.level_b - check_b)]
+    check = np.empty(sub.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+    check[:, :, 1::2], check[:, :, 0::2] = sub, new
     halved = Group(case, piece, group.level_b, group.level_u, F, group.last_b[pick], group.last_u[pick],
                    None if group.earlier is None else group.earlier[pick])
     refined = _refine(grid, halved, np.ones(case.size, dtype=bool), True, False, evaluations)
-    refined.check, refined.check_b = check, group.level_b
+    refined.check, refined.check_b = check, check_b
     return refined
 
 
