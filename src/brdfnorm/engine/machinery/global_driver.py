@@ -24,7 +24,9 @@ each step below). This module runs it, level by level, for many cases at once:
    (:func:`_refine_half`, the *half-azimuth check*): the unit's estimate at (2M, N) is then its β estimate plus
    the error of the N-node radial rule measured on M azimuths, |Q(M, 2N) − Q(M, N)| with its margin, and Q(2M, N)
    the value (Blinn-Phong n = 100, θ_o = 0…89°, rtol 1e-9: 7 013 → 5 921 evaluations per albedo; the randomized
-   sweeps are in docs/performance.md, sixth session).
+   sweeps are in docs/performance.md, sixth session). Since the seventh session u is measured on a quarter of the
+   refined grid's azimuths, M/2 of 2M (:data:`HALF_AZIMUTH_DEPTH`), where at most two more doublings of u are
+   predicted (:data:`HALF_AZIMUTH_NEEDED`): 5 536 → 4 967 with the rounding-noise survey.
 
 What differs between coordinate systems is a grid,
 :class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
@@ -45,16 +47,19 @@ from . import grid_estimate
 from .result import RouteResult
 from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
 
-#: The half-azimuth check of u (:func:`_refine_half`) from grids of at least 2^HALF_AZIMUTH_FROM azimuths (where
-#: the grid allows it, :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured
-#: on the 8 start azimuths alone, whose embedded rules the driver does not trust either (module docstring, step 2;
-#: 3, 4 and 5 cost the same on Blinn-Phong n = 100 at rtol 1e-9) ...
+#: The half-azimuth check of u (:func:`_refine_half`) measures u on 2^-HALF_AZIMUTH_DEPTH of the refined grid's
+#: azimuths: 1, the M of 2M (the sixth session); 2, a quarter (M/2 of 2M; Blinn-Phong n = 100, rtol 1e-9:
+#: 5 536.2 → 5 001.5 evaluations per albedo, every estimate above its true error on the sweeps of
+#: docs/performance.md, seventh session) ...
+HALF_AZIMUTH_DEPTH = 2
+#: ... on grids whose check has at least 2^HALF_AZIMUTH_FROM azimuths (where the grid allows it,
+#: :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured on the 8 start
+#: azimuths alone, whose embedded rules the driver does not trust either (module docstring, step 2; 3, 4 and 5
+#: cost the same on Blinn-Phong n = 100 at rtol 1e-9 with the check on half the azimuths) ...
 HALF_AZIMUTH_FROM = 4
 #: ... where at most this many more doublings of u are predicted to settle the unit
-#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`).
+#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`; 1 → 2: 5 001.5 → 4 967.3, the view at 77°).
 HALF_AZIMUTH_NEEDED = 2
-#: The check measures u on 2^-HALF_AZIMUTH_DEPTH of the refined grid's azimuths (1: the M of 2M).
-HALF_AZIMUTH_DEPTH = 2
 
 
 @dataclass
@@ -328,8 +333,9 @@ def _new_radial(grid: GlobalGrid, case, piece, level_b: int, level_u: int, check
 
 def _refine_half(grid: GlobalGrid, group: Group, pick, evaluations) -> Group:
     """The half-azimuth check of u (issue 39, item 5): for the picked units of ``group`` at (M, N), where the
-    driver would double both directions, β is doubled to (2M, N) and u measured on the M azimuths already there,
-    (M, 2N) — M·N new nodes instead of 2M·N. The unit's estimate at (2M, N) is then its plain β estimate plus the
+    driver would double both directions, β is doubled to (2M, N) and u measured on M/2^(depth − 1) of the
+    azimuths already there (:data:`HALF_AZIMUTH_DEPTH`; every other one of the M at depth 2), (M/2, 2N) — M·N/2
+    new nodes instead of 2M·N. The text below says M for the azimuths of the check. The unit's estimate at (2M, N) is then its plain β estimate plus the
     u estimate of the N-node rule itself, |Q(M, 2N) − Q(M, N)| with its margin (the driver's loop): both bound
     errors of the reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the M azimuths
     measure as the 2M would unless a feature along β that only the finer azimuths resolve changes how the

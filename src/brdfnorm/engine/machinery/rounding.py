@@ -8,6 +8,11 @@ one. :func:`rounding_noise` measures the noise before integrating, :func:`noise_
 of the error estimate (:mod:`brdfnorm.engine.routes.hemisphere` stops a case whose noise exceeds its tolerance, with the
 reason "rounding-limited").
 
+The probe costs 576 evaluations per case; :func:`surveyed_noise` evaluates a third of them first (its fine step on
+the rays nearest the peak) and the rest only where the noise could matter against the tolerance, or the lobe is
+anisotropic — elsewhere four times the survey's amplitude stands for the probe's, which has measured at most 2.1
+times it (docs/performance.md, seventh session).
+
 A model that evaluates in lower precision declares its unit roundoff as ``epsilon`` (Mitsuba's float32 variants:
 2⁻²⁴, :mod:`brdfnorm.models.mitsuba`). Its noise is then also at least :data:`EVALUATION_ULPS` units of it — a
 float32 evaluation's error is partly a bias (the rounded inputs, a fixed direction rounded for the whole integral)
