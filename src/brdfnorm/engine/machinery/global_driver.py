@@ -333,14 +333,14 @@ def _new_radial(grid: GlobalGrid, case, piece, level_b: int, level_u: int, check
 
 def _refine_half(grid: GlobalGrid, group: Group, pick, evaluations) -> Group:
     """The half-azimuth check of u (issue 39, item 5): for the picked units of ``group`` at (M, N), where the
-    driver would double both directions, β is doubled to (2M, N) and u measured on M/2^(depth − 1) of the
-    azimuths already there (:data:`HALF_AZIMUTH_DEPTH`; every other one of the M at depth 2), (M/2, 2N) — M·N/2
-    new nodes instead of 2M·N. The text below says M for the azimuths of the check. The unit's estimate at (2M, N) is then its plain β estimate plus the
-    u estimate of the N-node rule itself, |Q(M, 2N) − Q(M, N)| with its margin (the driver's loop): both bound
-    errors of the reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the M azimuths
-    measure as the 2M would unless a feature along β that only the finer azimuths resolve changes how the
-    radial rule converges (the mixed term of the combination technique, Griebel, Schneider & Zenger 1992; the
-    randomized sweeps of tests/engine/test_half_azimuth_check.py look for one)."""
+    driver would double both directions, β is doubled to (2M, N) and u measured on m = M/2^(depth − 1) of the
+    azimuths already there (:data:`HALF_AZIMUTH_DEPTH`: every other one of the M at depth 2), (m, 2N) — m·N new
+    nodes instead of 2M·N. The unit's estimate at (2M, N) is then its plain β estimate plus the u estimate of the
+    N-node rule itself, |Q(m, 2N) − Q(m, N)| with its margin (the driver's loop): both bound errors of the
+    reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the m azimuths measure as the
+    2M would unless a feature along β that only the finer azimuths resolve changes how the radial rule converges
+    (the mixed term of the combination technique, Griebel, Schneider & Zenger 1992; the randomized sweeps of
+    tests/engine/test_half_azimuth_check.py look for one)."""
     every = pick.all()
     case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
     F = group.grid if every else group.grid[pick]

@@ -161,10 +161,11 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     its tolerance (the estimate's rounding floor, 50 ε, is most of it for lobes wider than ~0.1 rad). Elsewhere
     — for every case when ``rtol`` is 0, and for the ``anisotropic`` ones (K,) (a lobe narrow across one axis,
     where the rays at 1 width see up to 9.5 times what the survey does: Ashikhmin-Shirley) — the rest of the
-    probe's nodes are evaluated and the amplitude is the probe's, exactly. The fine step alone sees at least what the probe's smaller of two steps does on the same
-    ray; the rays at 1 width, left out, are where a lobe's noise is smallest relative to its peak (measured:
-    the probe's amplitude is at most 2.1 times the survey's over Blinn-Phong, Phong, modified Phong n = 1…1e8,
-    the Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders at random views, docs/performance.md).
+    probe's nodes are evaluated and the amplitude is the probe's, exactly. The fine step alone sees at least what
+    the probe's smaller of two steps does on the same ray; the rays at 1 width, left out, are where a lobe's noise
+    is smallest relative to its peak (measured: the probe's amplitude is at most 2.1 times the survey's over
+    Blinn-Phong, Phong, modified Phong n = 1…1e8, the Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders
+    at random views, docs/performance.md).
     """
     omega = _probe_rays(frame, widths, supports)
     K = omega.shape[0]
