@@ -51,7 +51,8 @@ At float64's limit the integrand itself is noise: a lobe written with a cosine n
 1 − (N·H)²) sees that cosine only to within ε, which at n = 1e16 or GGX α = 1e-8 is a staircase as wide as
 the lobe. Before the first round :func:`rounding_noise` measures each case's noise by fourth differences
 along rays from the peak (in full where it can matter, :func:`surveyed_noise`), and :func:`noise_bound` adds it
-(times the |g|-integral) to the estimate. A case whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
+(times the |g|-integral) to the estimate. A case whose noise exceeds its tolerance stops once its quadrature
+error is below the noise ("rounding-limited");
 one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
 ``converged`` is False and ``reason`` says why. The bias no difference sees — of a lobe's cosine from the rounded
 norms of the fixed direction and of the lobe frame (:func:`cosine_bias`) — is a floor on that noise, charged once
