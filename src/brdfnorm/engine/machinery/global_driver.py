@@ -153,8 +153,15 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
                     # doubled with β (a level that doubled β alone would otherwise look like a stall)
                     check = group.check if finite.all() else np.where(finite[:, None, None, None], group.check, 0.0)
                     q_check, _, e_check, _ = grid.sums(check, group.level_u + 1)
-                    e_u = np.minimum(e_u, e_check)
-                    trend = q + (q_check - grid.sums(check[:, :, 1::2], group.level_u)[0])
+                    change = q_check - grid.sums(check[:, :, 1::2], group.level_u)[0]
+                    # The check's own β error: the same change measured on every other of its azimuths. Where
+                    # the radial rule's error varies along β faster than the check's azimuths follow, the two
+                    # differ (Blinn-Phong n = 1 307.5 at 74.85°, rtol 1e-6, u checked on 16 azimuths: changes
+                    # 3.6e-16 and 2.6e-14 on 8, the grid 1.3e-14 off against an estimate of 5.9e-15).
+                    coarser = (grid.sums(check[:, ::2], group.level_u + 1)[0]
+                               - grid.sums(check[:, ::2, 1::2], group.level_u)[0])
+                    e_u = np.minimum(e_u, e_check + np.abs(change - coarser))
+                    trend = q + change
                 weights = [fejer(group.level_u - k)[1] for k in range(4)]
                 # (the deviations at 16 azimuths, where grid_estimate.sudden needs them, computed once)
                 group.deviations = grid_estimate.deviations(F, weights) if F.shape[1] == 16 else None
