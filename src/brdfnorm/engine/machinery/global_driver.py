@@ -59,7 +59,7 @@ HALF_AZIMUTH_DEPTH = 2
 HALF_AZIMUTH_FROM = 4
 #: ... where at most this many more doublings of u are predicted to settle the unit
 #: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`; 1 → 2: 5 001.5 → 4 967.3, the view at 77°).
-HALF_AZIMUTH_NEEDED = 2
+HALF_AZIMUTH_NEEDED = 1
 
 
 @dataclass

@@ -52,7 +52,8 @@ _PLATEAU_WIDTH = 1e-5
 #: multiplied by where it stands for the probe's (which has measured at most 2.05 times it).
 _SURVEY_RADII = np.array([0, 1])
 _SURVEY_STEPS = np.array([1])
-SURVEY_EVALUATIONS = _PROBE_AZIMUTHS.size * _SURVEY_RADII.size * _SURVEY_STEPS.size * _PROBE_POINTS
+_SURVEY_POINTS = 24
+SURVEY_EVALUATIONS = _PROBE_AZIMUTHS.size * _SURVEY_RADII.size * _SURVEY_STEPS.size * _SURVEY_POINTS
 SURVEY_MARGIN = 4.0
 #: The survey stands for the probe where its noise bound is below rtol over this.
 SURVEY_QUIET = 64.0
@@ -170,7 +171,7 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     omega = _probe_rays(frame, widths, supports)
     K = omega.shape[0]
     evaluations = np.full(K, SURVEY_EVALUATIONS, dtype=np.int64)
-    survey = omega[:, :, _SURVEY_RADII][:, :, :, _SURVEY_STEPS]
+    survey = omega[:, :, _SURVEY_RADII][:, :, :, _SURVEY_STEPS][:, :, :, :, :_SURVEY_POINTS]
     g_survey = _sample(integrand, survey, np.arange(K), max_nodes_per_call)
     amplitude = _floored(SURVEY_MARGIN * _relative_noise(g_survey), widths, epsilon)
     stands = np.all(noise_bound(amplitude, 1.0) < rtol / SURVEY_QUIET, axis=-1)
@@ -179,11 +180,12 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     full = np.flatnonzero(~stands)
     if full.size:
         # The rest of the probe's nodes for those cases (the survey's are reused).
-        rest = np.ones(omega.shape[1:4], dtype=bool)
-        rest[np.ix_(np.arange(_PROBE_AZIMUTHS.size), _SURVEY_RADII, _SURVEY_STEPS)] = False
+        surveyed = np.zeros(omega.shape[1:5], dtype=bool)  # (azimuths, radii, steps, points)
+        surveyed[np.ix_(np.arange(_PROBE_AZIMUTHS.size), _SURVEY_RADII, _SURVEY_STEPS,
+                        np.arange(_SURVEY_POINTS))] = True
         g = np.full(omega[full].shape[:-1] + (g_survey.shape[-1],), np.nan)
-        g[:, :, _SURVEY_RADII[:, None], _SURVEY_STEPS] = g_survey[full]
-        g[:, rest] = _sample(integrand, omega[full][:, rest], full, max_nodes_per_call)
+        g[:, surveyed] = g_survey[full].reshape(full.size, -1, g_survey.shape[-1])
+        g[:, ~surveyed] = _sample(integrand, omega[full][:, ~surveyed], full, max_nodes_per_call)
         amplitude[full] = _floored(_relative_noise(g), widths[full], epsilon)
         evaluations[full] = PROBE_EVALUATIONS
     return amplitude, evaluations
