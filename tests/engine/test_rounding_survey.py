@@ -51,8 +51,8 @@ def test_where_the_survey_stands_its_amplitude_is_above_the_probes():
     counting, count = _counted(integrand)
     amplitude, evaluations = rounding.surveyed_noise(counting, frame, widths, supports, 1e-9, epsilon=epsilon)
     probe = rounding.rounding_noise(integrand, frame, widths, supports, epsilon=epsilon)
-    assert evaluations.tolist() == [rounding.SURVEY_EVALUATIONS] * 4 == [192] * 4
-    assert sum(count) == 4 * 192
+    assert evaluations.tolist() == [rounding.SURVEY_EVALUATIONS] * 4 == [96] * 4
+    assert sum(count) == 4 * 96
     assert np.all(amplitude >= probe) and np.all(amplitude <= rounding.SURVEY_MARGIN * probe * 4)
 
 

@@ -52,7 +52,7 @@ _PLATEAU_WIDTH = 1e-5
 #: multiplied by where it stands for the probe's (which has measured at most 2.05 times it).
 _SURVEY_RADII = np.array([0, 1])
 _SURVEY_STEPS = np.array([1])
-_SURVEY_POINTS = 24
+_SURVEY_POINTS = 12
 SURVEY_EVALUATIONS = _PROBE_AZIMUTHS.size * _SURVEY_RADII.size * _SURVEY_STEPS.size * _SURVEY_POINTS
 SURVEY_MARGIN = 4.0
 #: The survey stands for the probe where its noise bound is below rtol over this.
