@@ -25,8 +25,8 @@ each step below). This module runs it, level by level, for many cases at once:
    the error of the N-node radial rule measured on M azimuths, |Q(M, 2N) − Q(M, N)| with its margin, and Q(2M, N)
    the value (Blinn-Phong n = 100, θ_o = 0…89°, rtol 1e-9: 7 013 → 5 921 evaluations per albedo; the randomized
    sweeps are in docs/performance.md, sixth session). Since the seventh session u is measured on a quarter of the
-   refined grid's azimuths, M/2 of 2M (:data:`HALF_AZIMUTH_DEPTH`), where at most two more doublings of u are
-   predicted (:data:`HALF_AZIMUTH_NEEDED`): 5 536 → 4 967 with the rounding-noise survey.
+   refined grid's azimuths, M/2 of 2M (:data:`HALF_AZIMUTH_DEPTH`), its estimate raised by its own β error (the
+   change measured on every other of those azimuths): 5 440 → 4 906 with the rounding-noise survey.
 
 What differs between coordinate systems is a grid,
 :class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
@@ -48,9 +48,9 @@ from .result import RouteResult
 from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
 
 #: The half-azimuth check of u (:func:`_refine_half`) measures u on 2^-HALF_AZIMUTH_DEPTH of the refined grid's
-#: azimuths: 1, the M of 2M (the sixth session); 2, a quarter (M/2 of 2M; Blinn-Phong n = 100, rtol 1e-9:
-#: 5 536.2 → 5 001.5 evaluations per albedo, every estimate above its true error on the sweeps of
-#: docs/performance.md, seventh session) ...
+#: azimuths: 1, the M of 2M (the sixth session); 2, a quarter (M/2 of 2M; Blinn-Phong n = 100, rtol 1e-9, with
+#: the rounding-noise survey: 5 440.2 → 4 905.5 evaluations per albedo, every estimate above its true error on
+#: the sweeps of docs/performance.md, seventh session) ...
 HALF_AZIMUTH_DEPTH = 2
 #: ... on grids whose check has at least 2^HALF_AZIMUTH_FROM azimuths (where the grid allows it,
 #: :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured on the 8 start
@@ -58,7 +58,8 @@ HALF_AZIMUTH_DEPTH = 2
 #: cost the same on Blinn-Phong n = 100 at rtol 1e-9 with the check on half the azimuths) ...
 HALF_AZIMUTH_FROM = 4
 #: ... where at most this many more doublings of u are predicted to settle the unit
-#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`; 1 → 2: 5 001.5 → 4 967.3, the view at 77°).
+#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`; 2 saves 34 per albedo at rtol 1e-9, the view at
+#: 77°, but costs 16 % at rtol 1e-11: 74–87° then double u twice).
 HALF_AZIMUTH_NEEDED = 1
 
 

@@ -8,10 +8,10 @@ one. :func:`rounding_noise` measures the noise before integrating, :func:`noise_
 of the error estimate (:mod:`brdfnorm.engine.routes.hemisphere` stops a case whose noise exceeds its tolerance, with the
 reason "rounding-limited").
 
-The probe costs 576 evaluations per case; :func:`surveyed_noise` evaluates a third of them first (its fine step on
-the rays nearest the peak) and the rest only where the noise could matter against the tolerance, or the lobe is
-anisotropic — elsewhere four times the survey's amplitude stands for the probe's, which has measured at most 2.1
-times it (docs/performance.md, seventh session).
+The probe costs 576 evaluations per case; :func:`surveyed_noise` evaluates 96 of them first (the first 12 points of
+its fine step on the rays nearest the peak) and the rest only where the noise could matter against the tolerance,
+or the lobe is anisotropic — elsewhere four times the survey's amplitude stands for the probe's, which has measured
+at most 2.1 times it (docs/performance.md, seventh session).
 
 A model that evaluates in lower precision declares its unit roundoff as ``epsilon`` (Mitsuba's float32 variants:
 2⁻²⁴, :mod:`brdfnorm.models.mitsuba`). Its noise is then also at least :data:`EVALUATION_ULPS` units of it — a
@@ -48,8 +48,8 @@ PROBE_EVALUATIONS = _PROBE_RADII.size * _PROBE_AZIMUTHS.size * _PROBE_STEPS.size
 _FOURTH_DIFFERENCE_GAIN = np.sqrt(70.0)
 #: Lobes narrower than this (rad) may be plateaus of float64 rounding at their core.
 _PLATEAU_WIDTH = 1e-5
-#: The survey (:func:`surveyed_noise`): the fine step on the rays at 1e-2 and 0.3 widths, and what its amplitude is
-#: multiplied by where it stands for the probe's (which has measured at most 2.05 times it).
+#: The survey (:func:`surveyed_noise`): the first points of the fine step on the rays at 1e-2 and 0.3 widths, and
+#: what its amplitude is multiplied by where it stands for the probe's (which has measured at most 2.1 times it).
 _SURVEY_RADII = np.array([0, 1])
 _SURVEY_STEPS = np.array([1])
 _SURVEY_POINTS = 12
@@ -155,18 +155,20 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     """:func:`rounding_noise` where it can matter, a cheaper survey of it elsewhere: (amplitude (K, C),
     evaluations (K,)).
 
-    The survey is the probe's fine step on its rays at 1e-2 and 0.3 widths (:data:`SURVEY_EVALUATIONS` per case),
-    a subset of the probe's nodes; its amplitude times :data:`SURVEY_MARGIN` stands for the probe's where even
+    The survey is the first 12 of the 24 points of the probe's fine step on its rays at 1e-2 and 0.3 widths
+    (:data:`SURVEY_EVALUATIONS` = 96 per case), a subset of the probe's nodes; its amplitude times
+    :data:`SURVEY_MARGIN` stands for the probe's where even
     that keeps the noise bound (:func:`noise_bound` of the |g|-integral) below rtol/:data:`SURVEY_QUIET` — far from
     where the noise decides anything (a case is "quiet" below rtol/16) and then a term of the estimate well under
     its tolerance (the estimate's rounding floor, 50 ε, is most of it for lobes wider than ~0.1 rad). Elsewhere
     — for every case when ``rtol`` is 0, and for the ``anisotropic`` ones (K,) (a lobe narrow across one axis,
     where the rays at 1 width see up to 9.5 times what the survey does: Ashikhmin-Shirley) — the rest of the
-    probe's nodes are evaluated and the amplitude is the probe's, exactly. The fine step alone sees at least what
-    the probe's smaller of two steps does on the same ray; the rays at 1 width, left out, are where a lobe's noise
-    is smallest relative to its peak (measured: the probe's amplitude is at most 2.1 times the survey's over
-    Blinn-Phong, Phong, modified Phong n = 1…1e8, the Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders
-    at random views, docs/performance.md).
+    probe's nodes are evaluated and the amplitude is the probe's, exactly. The fine step alone, on all 24 points,
+    sees at least what the probe's smaller of two steps does on the same ray; the rays at 1 width, left out, are
+    where a lobe's noise is smallest relative to its peak; 12 points give 8 fourth differences per ray, 64 in all,
+    a noisier RMS, which the margin covers (measured: the
+    probe's amplitude is at most 2.1 times the survey's over Blinn-Phong, Phong, modified Phong n = 1…1e8, the
+    Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders at random views, docs/performance.md).
     """
     omega = _probe_rays(frame, widths, supports)
     K = omega.shape[0]
