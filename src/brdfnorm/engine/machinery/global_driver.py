@@ -92,8 +92,8 @@ class Group:
 
     @property
     def checked(self) -> bool:
-        """Whether the half-azimuth check measures u on half the grid's azimuths (then it takes part in the
-        estimate; after a further doubling of β alone it is kept for its nodes only)."""
+        """Whether the half-azimuth check measures u on 2^-:data:`HALF_AZIMUTH_DEPTH` of the grid's azimuths (then
+        it takes part in the estimate; after a further doubling of β alone it is kept for its nodes only)."""
         return self.check is not None and self.check_b == self.level_b - HALF_AZIMUTH_DEPTH
 
 
