@@ -8,7 +8,7 @@ extrapolation), each over its share of the tolerance, the direction(s) doubled n
 measured on the azimuths already there, the half-azimuth check of ``global_driver._refine_half``), and — where a
 reference is given — the grid's true error. The grid is nested and refined as a whole (no local refinement along β
 or u), so a view's evaluations are its final grid, the nodes of its half-azimuth check (``check``) and the per-call
-probes (lobe search, isotropy test, rounding-noise probe, heavy-tail test), the same for every view. Views that
+probes (lobe search, isotropy test, the rounding-noise survey or probe, heavy-tail test). Views that
 another route or grid settles (the half-vector rectangle, tried first for broad lobes, or the adaptive panels after
 the global rule) are not profiled: their ``levels`` are empty, or end where the lobe-aligned rule gave them up.
 

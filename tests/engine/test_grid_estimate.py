@@ -158,13 +158,13 @@ def test_the_known_plateau_is_covered(rtol):
 def test_fewer_evaluations_for_blinn_phong():
     # The point of the extrapolation (issue 39, item 5): Blinn-Phong n = 100 at rtol 1e-9 settles a grid earlier
     # at views up to 49° (numpy backend; the compiled one evaluates the same nodes). Without it: 4 808 at 10°,
-    # 8 872 at 30° and 45°.
+    # 8 872 at 30° and 45°. (480 fewer each since the rounding-noise survey, machinery/rounding.surveyed_noise.)
     model = bn.load("blinn-phong", n=100.0)
     theta = np.radians([10.0, 30.0, 45.0])
     result = _quiet(model, theta, rtol=1e-9)
     exact = bn.albedo(model, theta, method="series", rtol=1e-13)
     assert np.all(_covered(result, exact.value[:, 0], exact.error[:, 0]) <= 1.0)
-    assert result.evaluations.tolist() == [2_760, 4_776, 4_776]
+    assert result.evaluations.tolist() == [2_280, 4_296, 4_296]
 
 
 

@@ -24,7 +24,9 @@ each step below). This module runs it, level by level, for many cases at once:
    (:func:`_refine_half`, the *half-azimuth check*): the unit's estimate at (2M, N) is then its β estimate plus
    the error of the N-node radial rule measured on M azimuths, |Q(M, 2N) − Q(M, N)| with its margin, and Q(2M, N)
    the value (Blinn-Phong n = 100, θ_o = 0…89°, rtol 1e-9: 7 013 → 5 921 evaluations per albedo; the randomized
-   sweeps are in docs/performance.md, sixth session).
+   sweeps are in docs/performance.md, sixth session). Since the seventh session u is measured on a quarter of the
+   refined grid's azimuths, M/2 of 2M (:data:`HALF_AZIMUTH_DEPTH`), its estimate raised by its own β error (the
+   change measured on every other of those azimuths): 5 440 → 4 906 with the rounding-noise survey.
 
 What differs between coordinate systems is a grid,
 :class:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid` (the style of mpmath's quadrature classes: a class with
@@ -45,13 +47,19 @@ from . import grid_estimate
 from .result import RouteResult
 from .tensor_rule import BATCH_NODES, MAX_LEVEL_B, START_LEVELS, GlobalGrid, doublings, fejer, normalized
 
-#: The half-azimuth check of u (:func:`_refine_half`) from grids of at least 2^HALF_AZIMUTH_FROM azimuths (where
-#: the grid allows it, :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured
-#: on the 8 start azimuths alone, whose embedded rules the driver does not trust either (module docstring, step 2;
-#: 3, 4 and 5 cost the same on Blinn-Phong n = 100 at rtol 1e-9) ...
+#: The half-azimuth check of u (:func:`_refine_half`) measures u on 2^-HALF_AZIMUTH_DEPTH of the refined grid's
+#: azimuths: 1, the M of 2M (the sixth session); 2, a quarter (M/2 of 2M; Blinn-Phong n = 100, rtol 1e-9, with
+#: the rounding-noise survey: 5 440.2 → 4 905.5 evaluations per albedo, every estimate above its true error on
+#: the sweeps of docs/performance.md, seventh session) ...
+HALF_AZIMUTH_DEPTH = 2
+#: ... on grids whose check has at least 2^HALF_AZIMUTH_FROM azimuths (where the grid allows it,
+#: :attr:`~brdfnorm.engine.machinery.tensor_rule.GlobalGrid.half_azimuth`): u is never measured on the 8 start
+#: azimuths alone, whose embedded rules the driver does not trust either (module docstring, step 2; 3, 4 and 5
+#: cost the same on Blinn-Phong n = 100 at rtol 1e-9 with the check on half the azimuths) ...
 HALF_AZIMUTH_FROM = 4
 #: ... where at most this many more doublings of u are predicted to settle the unit
-#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`).
+#: (:func:`~brdfnorm.engine.machinery.tensor_rule.doublings`; 2 saves 34 per albedo at rtol 1e-9, the view at
+#: 77°, but costs 16 % at rtol 1e-11: 74–87° then double u twice).
 HALF_AZIMUTH_NEEDED = 1
 
 
@@ -84,9 +92,9 @@ class Group:
 
     @property
     def checked(self) -> bool:
-        """Whether the half-azimuth check measures u on half the grid's azimuths (then it takes part in the
-        estimate; after a further doubling of β alone it is kept for its nodes only)."""
-        return self.check is not None and self.check_b == self.level_b - 1
+        """Whether the half-azimuth check measures u on 2^-:data:`HALF_AZIMUTH_DEPTH` of the grid's azimuths (then
+        it takes part in the estimate; after a further doubling of β alone it is kept for its nodes only)."""
+        return self.check is not None and self.check_b == self.level_b - HALF_AZIMUTH_DEPTH
 
 
 def integrate_global(grid: GlobalGrid, K: int, cases: np.ndarray, *, rtol, atol, max_nodes: int) -> RouteResult:
@@ -146,8 +154,15 @@ def _integrate_batch(grid: GlobalGrid, K, cases, rtol, atol, max_nodes, evaluati
                     # doubled with β (a level that doubled β alone would otherwise look like a stall)
                     check = group.check if finite.all() else np.where(finite[:, None, None, None], group.check, 0.0)
                     q_check, _, e_check, _ = grid.sums(check, group.level_u + 1)
-                    e_u = np.minimum(e_u, e_check)
-                    trend = q + (q_check - grid.sums(check[:, :, 1::2], group.level_u)[0])
+                    change = q_check - grid.sums(check[:, :, 1::2], group.level_u)[0]
+                    # The check's own β error: the same change measured on every other of its azimuths. Where
+                    # the radial rule's error varies along β faster than the check's azimuths follow, the two
+                    # differ (Blinn-Phong n = 1 307.5 at 74.85°, rtol 1e-6, u checked on 16 azimuths: changes
+                    # 3.6e-16 and 2.6e-14 on 8, the grid 1.3e-14 off against an estimate of 5.9e-15).
+                    coarser = (grid.sums(check[:, ::2], group.level_u + 1)[0]
+                               - grid.sums(check[:, ::2, 1::2], group.level_u)[0])
+                    e_u = np.minimum(e_u, e_check + np.abs(change - coarser))
+                    trend = q + change
                 weights = [fejer(group.level_u - k)[1] for k in range(4)]
                 # (the deviations at 16 azimuths, where grid_estimate.sudden needs them, computed once)
                 group.deviations = grid_estimate.deviations(F, weights) if F.shape[1] == 16 else None
@@ -238,7 +253,8 @@ def _halves(grid: GlobalGrid, group: Group, more_b, more_u, short, needed_u) -> 
     coarser rule's, and its value move along u alone, which the stall check reads as a stall)."""
     if group.checked:
         return more_b & ~more_u
-    if grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM and group.level_u > START_LEVELS[1]:
+    if (grid.half_azimuth and group.level_b >= HALF_AZIMUTH_FROM + HALF_AZIMUTH_DEPTH - 1
+            and group.level_u > START_LEVELS[1]):
         return more_b & more_u & ~short & (needed_u <= HALF_AZIMUTH_NEEDED) & np.isfinite(group.last_u)
     return None
 
@@ -325,24 +341,27 @@ def _new_radial(grid: GlobalGrid, case, piece, level_b: int, level_u: int, check
 
 def _refine_half(grid: GlobalGrid, group: Group, pick, evaluations) -> Group:
     """The half-azimuth check of u (issue 39, item 5): for the picked units of ``group`` at (M, N), where the
-    driver would double both directions, β is doubled to (2M, N) and u measured on the M azimuths already there,
-    (M, 2N) — M·N new nodes instead of 2M·N. The unit's estimate at (2M, N) is then its plain β estimate plus the
-    u estimate of the N-node rule itself, |Q(M, 2N) − Q(M, N)| with its margin (the driver's loop): both bound
-    errors of the reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the M azimuths
-    measure as the 2M would unless a feature along β that only the finer azimuths resolve changes how the
-    radial rule converges (the mixed term of the combination technique, Griebel, Schneider & Zenger 1992; the
-    randomized sweeps of tests/engine/test_half_azimuth_check.py look for one)."""
+    driver would double both directions, β is doubled to (2M, N) and u measured on m = M/2^(depth − 1) of the
+    azimuths already there (:data:`HALF_AZIMUTH_DEPTH`: every other one of the M at depth 2), (m, 2N) — m·N new
+    nodes instead of 2M·N. The unit's estimate at (2M, N) is then its plain β estimate plus the u estimate of the
+    N-node rule itself, |Q(m, 2N) − Q(m, N)| with its margin (the driver's loop): both bound errors of the
+    reported Q(2M, N) — the error of its β rule, and that of its radial rule, which the m azimuths measure as the
+    2M would unless a feature along β that only the finer azimuths resolve changes how the radial rule converges
+    (the mixed term of the combination technique, Griebel, Schneider & Zenger 1992; the randomized sweeps of
+    tests/engine/test_half_azimuth_check.py look for one)."""
     every = pick.all()
     case, piece = (group.case, group.piece) if every else (group.case[pick], group.piece[pick])
     F = group.grid if every else group.grid[pick]
     old = None if group.check is None else (group.check if every else group.check[pick])
-    new = _new_radial(grid, case, piece, group.level_b, group.level_u, old, group.check_b, evaluations)
-    check = np.empty(F.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
-    check[:, :, 1::2], check[:, :, 0::2] = F, new
+    check_b = group.level_b + 1 - HALF_AZIMUTH_DEPTH  # (the check's azimuths: every 2^(depth-1)-th of the M)
+    new = _new_radial(grid, case, piece, check_b, group.level_u, old, group.check_b, evaluations)
+    sub = F[:, ::2 ** (group.level_b - check_b)]
+    check = np.empty(sub.shape[:2] + (2 * F.shape[2] + 1, F.shape[3]))
+    check[:, :, 1::2], check[:, :, 0::2] = sub, new
     halved = Group(case, piece, group.level_b, group.level_u, F, group.last_b[pick], group.last_u[pick],
                    None if group.earlier is None else group.earlier[pick])
     refined = _refine(grid, halved, np.ones(case.size, dtype=bool), True, False, evaluations)
-    refined.check, refined.check_b = check, group.level_b
+    refined.check, refined.check_b = check, check_b
     return refined
 
 

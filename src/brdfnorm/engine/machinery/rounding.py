@@ -8,6 +8,11 @@ one. :func:`rounding_noise` measures the noise before integrating, :func:`noise_
 of the error estimate (:mod:`brdfnorm.engine.routes.hemisphere` stops a case whose noise exceeds its tolerance, with the
 reason "rounding-limited").
 
+The probe costs 576 evaluations per case; :func:`surveyed_noise` evaluates 96 of them first (the first 12 points of
+its fine step on the rays nearest the peak) and the rest only where the noise could matter against the tolerance,
+or the lobe is anisotropic — elsewhere four times the survey's amplitude stands for the probe's, which has measured
+at most 2.1 times it (docs/performance.md, seventh session).
+
 A model that evaluates in lower precision declares its unit roundoff as ``epsilon`` (Mitsuba's float32 variants:
 2⁻²⁴, :mod:`brdfnorm.models.mitsuba`). Its noise is then also at least :data:`EVALUATION_ULPS` units of it — a
 float32 evaluation's error is partly a bias (the rounded inputs, a fixed direction rounded for the whole integral)
@@ -43,10 +48,78 @@ PROBE_EVALUATIONS = _PROBE_RADII.size * _PROBE_AZIMUTHS.size * _PROBE_STEPS.size
 _FOURTH_DIFFERENCE_GAIN = np.sqrt(70.0)
 #: Lobes narrower than this (rad) may be plateaus of float64 rounding at their core.
 _PLATEAU_WIDTH = 1e-5
+#: The survey (:func:`surveyed_noise`): the first points of the fine step on the rays at 1e-2 and 0.3 widths, and
+#: what its amplitude is multiplied by where it stands for the probe's (which has measured at most 2.1 times it).
+_SURVEY_RADII = np.array([0, 1])
+_SURVEY_STEPS = np.array([1])
+_SURVEY_POINTS = 12
+SURVEY_EVALUATIONS = _PROBE_AZIMUTHS.size * _SURVEY_RADII.size * _SURVEY_STEPS.size * _SURVEY_POINTS
+SURVEY_MARGIN = 4.0
+#: The survey stands for the probe where its noise bound is below rtol over this.
+SURVEY_QUIET = 64.0
 #: Evaluations of :func:`cosine_bias` per probed case: 12 nodes, each at ω, ω(1 + h) and with F(1 + h).
 BIAS_EVALUATIONS = 3 * _PROBE_RADII.size * _PROBE_AZIMUTHS.size
 #: Veltkamp's splitting constant for float64, 2^27 + 1.
 _SPLIT = 134217729.0
+
+
+def _probe_rays(frame, widths: np.ndarray, supports: np.ndarray) -> np.ndarray:
+    """The probe's directions (K, azimuths, radii, steps, points, 3) (:func:`rounding_noise`)."""
+    P, T, B = frame
+    pz = P[:, 2:3]
+    s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
+    cos_b, sin_b = np.cos(_PROBE_AZIMUTHS), np.sin(_PROBE_AZIMUTHS)
+    alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[:, None])  # (K, azimuths)
+    # Each ray stays within half the horizon's distance, unclipped (a clipped ray would have a kink).
+    scale = np.minimum(widths[:, None], alpha_max)  # (K, az)
+    step = scale[:, :, None] * _PROBE_STEPS  # (K, az, steps)
+    reach = _PROBE_POINTS * step.max(axis=2, keepdims=True)
+    start = np.minimum(widths[:, None, None] * _PROBE_RADII, 0.5 * alpha_max[:, :, None] - reach)  # (K, az, radii)
+    alpha = (start[:, :, :, None, None]
+             + step[:, :, None, :, None] * np.arange(_PROBE_POINTS))  # (K, az, radii, steps, points)
+    radial = cos_b[None, :, None] * T[:, None, :] + sin_b[None, :, None] * B[:, None, :]  # (K, az, 3)
+    return (np.cos(alpha)[..., None] * P[:, None, None, None, None, :]
+            + np.sin(alpha)[..., None] * radial[:, :, None, None, None, :])
+
+
+def _sample(integrand, omega: np.ndarray, cases: np.ndarray, max_nodes_per_call: int) -> np.ndarray:
+    """The integrand on the directions ``omega`` (k, ..., 3) of the cases ``cases`` (k,): (k, ..., C)."""
+    shape = omega.shape[:-1]
+    per_case = int(np.prod(shape[1:]))
+    per_call = max(1, max_nodes_per_call // per_case)
+    values = []
+    with np.errstate(all="ignore"):
+        for first in range(0, cases.size, per_call):
+            part = slice(first, first + per_call)
+            case = np.repeat(cases[part], per_case)
+            values.append(np.asarray(integrand(omega[part].reshape(-1, 3), case), dtype=float)
+                          .reshape(omega[part].shape[:-1] + (-1,)))
+    return np.concatenate(values) if values else np.zeros(shape + (1,))
+
+
+def _relative_noise(g: np.ndarray) -> np.ndarray:
+    """The RMS over the rays of each ray's smaller RMS fourth difference over its steps, over √70 and relative to
+    the largest sample, (k, C), of samples ``g`` (k, azimuths, radii, steps, points, C)."""
+    # A ray with a non-finite sample is left out: the integrator raises there or zeroes it (``nonfinite``).
+    usable = np.isfinite(g).all(axis=(3, 4))  # (K, az, radii, C)
+    g = np.where(np.isfinite(g), g, 0.0)
+    # A smooth lobe's fourth differences shrink 16⁴-fold from the coarse step to the fine one, noise's do not:
+    # the smaller of the two is the noise (or a smooth part far below it, on a ray where the lobe is steep).
+    rms = np.sqrt(np.mean(np.diff(g, n=4, axis=4) ** 2, axis=4)).min(axis=3) / _FOURTH_DIFFERENCE_GAIN
+    peak = np.where(usable, np.abs(g).max(axis=(3, 4)), 0.0).max(axis=(1, 2))  # (K, C): relative to the peak,
+    with np.errstate(invalid="ignore", divide="ignore"):  # so a ray along a fast-decaying sliver does not count
+        mean_square = (np.where(usable, rms**2, 0.0).sum(axis=(1, 2)) / np.maximum(usable.sum(axis=(1, 2)), 1))
+        return np.where(peak > 0, np.sqrt(mean_square) / peak, 0.0)
+
+
+def _floored(relative: np.ndarray, widths: np.ndarray, epsilon: float | None) -> np.ndarray:
+    """``relative`` (K, C) with the plateau charge and a lower-precision model's floor (:func:`rounding_noise`)."""
+    if epsilon is None or epsilon <= _EPS:
+        plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
+        return np.minimum(1.0, np.maximum(relative, plateau))
+    plateau_width = _PLATEAU_WIDTH * np.sqrt(epsilon / _EPS)
+    plateau = epsilon / widths[:, None] ** 2 * (plateau_width / widths[:, None]) ** 2
+    return np.minimum(1.0, np.maximum(np.maximum(relative, plateau), EVALUATION_ULPS * epsilon))
 
 
 def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], frame, widths: np.ndarray,
@@ -70,47 +143,54 @@ def rounding_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     plateau charge then uses it, over a width scaled by √(epsilon/ε) (where a cosine near 1 has as few values
     across the lobe as float64's has across 1e-5 rad), and the noise is at least :data:`EVALUATION_ULPS` × epsilon.
     """
-    P, T, B = frame
-    K = P.shape[0]
-    pz = P[:, 2:3]
-    s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
-    cos_b, sin_b = np.cos(_PROBE_AZIMUTHS), np.sin(_PROBE_AZIMUTHS)
-    alpha_max = np.minimum(np.arctan2(pz, -s * cos_b), supports[:, None])  # (K, azimuths)
-    # Each ray stays within half the horizon's distance, unclipped (a clipped ray would have a kink).
-    scale = np.minimum(widths[:, None], alpha_max)  # (K, az)
-    step = scale[:, :, None] * _PROBE_STEPS  # (K, az, steps)
-    reach = _PROBE_POINTS * step.max(axis=2, keepdims=True)
-    start = np.minimum(widths[:, None, None] * _PROBE_RADII, 0.5 * alpha_max[:, :, None] - reach)  # (K, az, radii)
-    alpha = (start[:, :, :, None, None]
-             + step[:, :, None, :, None] * np.arange(_PROBE_POINTS))  # (K, az, radii, steps, points)
-    radial = cos_b[None, :, None] * T[:, None, :] + sin_b[None, :, None] * B[:, None, :]  # (K, az, 3)
-    omega = (np.cos(alpha)[..., None] * P[:, None, None, None, None, :]
-             + np.sin(alpha)[..., None] * radial[:, :, None, None, None, :])
-    case = np.broadcast_to(np.arange(K)[:, None, None, None, None], alpha.shape)
-    per_call = max(1, max_nodes_per_call // case[0].size)
-    values = []
-    with np.errstate(all="ignore"):
-        for first in range(0, K, per_call):
-            part = slice(first, first + per_call)
-            values.append(np.asarray(integrand(omega[part].reshape(-1, 3), case[part].ravel()), dtype=float)
-                          .reshape(alpha[part].shape + (-1,)))
-    g = np.concatenate(values)  # (K, az, radii, steps, points, C)
-    # A ray with a non-finite sample is left out: the integrator raises there or zeroes it (``nonfinite``).
-    usable = np.isfinite(g).all(axis=(3, 4))  # (K, az, radii, C)
-    g = np.where(np.isfinite(g), g, 0.0)
-    # A smooth lobe's fourth differences shrink 16⁴-fold from the coarse step to the fine one, noise's do not:
-    # the smaller of the two is the noise (or a smooth part far below it, on a ray where the lobe is steep).
-    rms = np.sqrt(np.mean(np.diff(g, n=4, axis=4) ** 2, axis=4)).min(axis=3) / _FOURTH_DIFFERENCE_GAIN
-    peak = np.where(usable, np.abs(g).max(axis=(3, 4)), 0.0).max(axis=(1, 2))  # (K, C): relative to the peak,
-    with np.errstate(invalid="ignore", divide="ignore"):  # so a ray along a fast-decaying sliver does not count
-        mean_square = (np.where(usable, rms**2, 0.0).sum(axis=(1, 2)) / np.maximum(usable.sum(axis=(1, 2)), 1))
-        relative = np.where(peak > 0, np.sqrt(mean_square) / peak, 0.0)
-    if epsilon is None or epsilon <= _EPS:
-        plateau = _EPS / widths[:, None] ** 2 * (_PLATEAU_WIDTH / widths[:, None]) ** 2
-        return np.minimum(1.0, np.maximum(relative, plateau))
-    plateau_width = _PLATEAU_WIDTH * np.sqrt(epsilon / _EPS)
-    plateau = epsilon / widths[:, None] ** 2 * (plateau_width / widths[:, None]) ** 2
-    return np.minimum(1.0, np.maximum(np.maximum(relative, plateau), EVALUATION_ULPS * epsilon))
+    omega = _probe_rays(frame, widths, supports)
+    g = _sample(integrand, omega, np.arange(omega.shape[0]), max_nodes_per_call)
+    return _floored(_relative_noise(g), widths, epsilon)
+
+
+def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], frame, widths: np.ndarray,
+                   supports: np.ndarray, rtol: float, max_nodes_per_call: int = 1_500_000,
+                   epsilon: float | None = None,
+                   anisotropic: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rounding_noise` where it can matter, a cheaper survey of it elsewhere: (amplitude (K, C),
+    evaluations (K,)).
+
+    The survey is the first 12 of the 24 points of the probe's fine step on its rays at 1e-2 and 0.3 widths
+    (:data:`SURVEY_EVALUATIONS` = 96 per case), a subset of the probe's nodes; its amplitude times
+    :data:`SURVEY_MARGIN` stands for the probe's where even
+    that keeps the noise bound (:func:`noise_bound` of the |g|-integral) below rtol/:data:`SURVEY_QUIET` — far from
+    where the noise decides anything (a case is "quiet" below rtol/16) and then a term of the estimate well under
+    its tolerance (the estimate's rounding floor, 50 ε, is most of it for lobes wider than ~0.1 rad). Elsewhere
+    — for every case when ``rtol`` is 0, and for the ``anisotropic`` ones (K,) (a lobe narrow across one axis,
+    where the rays at 1 width see up to 9.5 times what the survey does: Ashikhmin-Shirley) — the rest of the
+    probe's nodes are evaluated and the amplitude is the probe's, exactly. The fine step alone, on all 24 points,
+    sees at least what the probe's smaller of two steps does on the same ray; the rays at 1 width, left out, are
+    where a lobe's noise is smallest relative to its peak; 12 points give 8 fourth differences per ray, 64 in all,
+    a noisier RMS, which the margin covers (measured: the
+    probe's amplitude is at most 2.1 times the survey's over Blinn-Phong, Phong, modified Phong n = 1…1e8, the
+    Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders at random views, docs/performance.md).
+    """
+    omega = _probe_rays(frame, widths, supports)
+    K = omega.shape[0]
+    evaluations = np.full(K, SURVEY_EVALUATIONS, dtype=np.int64)
+    survey = omega[:, :, _SURVEY_RADII][:, :, :, _SURVEY_STEPS][:, :, :, :, :_SURVEY_POINTS]
+    g_survey = _sample(integrand, survey, np.arange(K), max_nodes_per_call)
+    amplitude = _floored(SURVEY_MARGIN * _relative_noise(g_survey), widths, epsilon)
+    stands = np.all(noise_bound(amplitude, 1.0) < rtol / SURVEY_QUIET, axis=-1)
+    if anisotropic is not None:
+        stands &= ~np.asarray(anisotropic, dtype=bool)
+    full = np.flatnonzero(~stands)
+    if full.size:
+        # The rest of the probe's nodes for those cases (the survey's are reused).
+        surveyed = np.zeros(omega.shape[1:5], dtype=bool)  # (azimuths, radii, steps, points)
+        surveyed[np.ix_(np.arange(_PROBE_AZIMUTHS.size), _SURVEY_RADII, _SURVEY_STEPS,
+                        np.arange(_SURVEY_POINTS))] = True
+        g = np.full(omega[full].shape[:-1] + (g_survey.shape[-1],), np.nan)
+        g[:, surveyed] = g_survey[full].reshape(full.size, -1, g_survey.shape[-1])
+        g[:, ~surveyed] = _sample(integrand, omega[full][:, ~surveyed], full, max_nodes_per_call)
+        amplitude[full] = _floored(_relative_noise(g), widths[full], epsilon)
+        evaluations[full] = PROBE_EVALUATIONS
+    return amplitude, evaluations
 
 
 def norm_error(vectors: np.ndarray) -> np.ndarray:

@@ -50,8 +50,9 @@ estimate still says how far off the value may be).
 At float64's limit the integrand itself is noise: a lobe written with a cosine near 1 (cos^n, (N·H)^n,
 1 − (N·H)²) sees that cosine only to within ε, which at n = 1e16 or GGX α = 1e-8 is a staircase as wide as
 the lobe. Before the first round :func:`rounding_noise` measures each case's noise by fourth differences
-along rays from the peak, and :func:`noise_bound` adds it (times the |g|-integral) to the estimate. A case
-whose noise exceeds its tolerance stops once its quadrature error is below the noise ("rounding-limited");
+along rays from the peak (in full where it can matter, :func:`surveyed_noise`), and :func:`noise_bound` adds it
+(times the |g|-integral) to the estimate. A case whose noise exceeds its tolerance stops once its quadrature
+error is below the noise ("rounding-limited");
 one whose estimate no longer halves when its evaluations double stops too ("stalled"); either way
 ``converged`` is False and ``reason`` says why. The bias no difference sees — of a lobe's cosine from the rounded
 norms of the fixed direction and of the lobe frame (:func:`cosine_bias`) — is a floor on that noise, charged once
@@ -87,7 +88,7 @@ from ..machinery.kinks import algebraic_floor, refinement_change
 from ..machinery.kronrod import GAUSS, KRONROD, NODES
 from ..machinery.panels import Panels, kronrod_estimate
 from ..machinery.result import RouteResult
-from ..machinery.rounding import BIAS_EVALUATIONS, PROBE_EVALUATIONS, cosine_bias, noise_bound, rounding_noise
+from ..machinery.rounding import BIAS_EVALUATIONS, cosine_bias, noise_bound, surveyed_noise
 from ..machinery.tensor_rule import START_NODES, map_grid, neck_u, normalized
 
 NonFinitePolicy = Literal["raise", "zero"]
@@ -200,8 +201,9 @@ def integrate_hemisphere(
     converged = np.zeros(K, dtype=bool)
     reason = np.full(K, "", dtype=object)
     nodes_per_panel = NODES.size**2
-    noise_amplitude = rounding_noise(integrand, frame, widths, supports, max_nodes_per_call, epsilon)
-    evaluations += PROBE_EVALUATIONS
+    noise_amplitude, probed = surveyed_noise(integrand, frame, widths, supports, rtol, max_nodes_per_call, epsilon,
+                                             anisotropic)
+    evaluations += probed
     # The global tensor rule first (brdfnorm.engine.machinery.tensor_rule), for every case whose rounding noise is far
     # below its tolerance; the adaptive panels below take the cases it does not settle.
     # (Not at all where a quarter of the budget would not cover its first grid.)
