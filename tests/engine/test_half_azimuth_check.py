@@ -15,12 +15,13 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers.global_grid import SmoothGrid, assert_settled_with_check
 from helpers.paths import EXAMPLES, FIXTURES
 from helpers.references import phong_like_reference
 
 import brdfnorm as bn
 from brdfnorm.engine.machinery import global_driver, grid_estimate
-from brdfnorm.engine.machinery.tensor_rule import GlobalGrid, LobeAlignedGrid, fejer, sums
+from brdfnorm.engine.machinery.tensor_rule import LobeAlignedGrid, fejer
 
 BACKENDS = pytest.mark.parametrize("backend", ["numpy", "compiled"])
 
@@ -36,30 +37,6 @@ def _ratio(result, exact, allowance=0.0) -> np.ndarray:
     return np.maximum(np.abs(value - exact) - allowance, 0.0) / error
 
 
-class _Smooth(GlobalGrid):
-    """A periodic analytic integrand in t times a smooth one in u, with every evaluated node recorded; its
-    estimate is the plain one (no extrapolation), and it may use the half-azimuth check."""
-
-    half_azimuth = True
-    rho, shift = 0.7, 0.02
-
-    def __init__(self):
-        self.nodes: list[tuple[float, float]] = []
-
-    def evaluate(self, case, piece, index, M, u):
-        t = index * (2 * np.pi / M)
-        for x in t:
-            self.nodes.extend((round(float(x), 9), round(float(y), 11)) for y in u)
-        f = (1.0 / (1.0 - 2 * self.rho * np.cos(t) + self.rho**2))[:, None] / (u + self.shift)[None, :]
-        return np.broadcast_to(f[None, :, :, None], (case.size,) + f.shape + (1,)).copy()
-
-    def estimate(self, group, F, q, e_b, e_u, magnitude):
-        floor = 50 * np.finfo(float).eps * magnitude
-        return e_b, e_u, floor, 0.0 * floor, e_b + e_u + floor
-
-    def exact(self) -> float:
-        return 2 * np.pi / (1 - self.rho**2) * np.log((1 + self.shift) / self.shift)
-
 
 def test_the_check_evaluates_each_node_once_and_reports_its_grid(monkeypatch):
     halves = []
@@ -73,20 +50,12 @@ def test_the_check_evaluates_each_node_once_and_reports_its_grid(monkeypatch):
     monkeypatch.setattr(global_driver, "_halves", observed)
     monkeypatch.setattr(global_driver, "HALF_AZIMUTH_DEPTH", 1)  # (the quarter: test_quarter_azimuth_check.py)
     monkeypatch.setattr(global_driver, "HALF_AZIMUTH_NEEDED", 1)
-    grid = _Smooth()
+    grid = SmoothGrid()
     # (its path: 32 × 63 → β doubled, u checked on the 32 azimuths → β again, the check taken along to 64 of the
     # 128 → settled on 128 × 63, u checked on 64 azimuths × 127 radial nodes)
     result = global_driver.integrate_global(grid, 1, np.arange(1), rtol=1e-6, atol=0.0, max_nodes=65_536)
     assert result.converged[0] and sum(halves) == 2
-    assert len(grid.nodes) == len(set(grid.nodes)) == result.evaluations[0]  # no node twice
-    # The value is the tensor rule's on the grid it settled, within its estimate.
-    assert abs(result.value[0, 0] - grid.exact()) <= result.error[0, 0]
-    M, level_u = 128, 6
-    assert set(grid.nodes) == {(round(2 * np.pi * i / M, 9), round(float(u), 11))
-                               for i in range(M) for u in fejer(level_u)[0]} | {
-        (round(2 * np.pi * i / M, 9), round(float(u), 11)) for i in range(0, M, 2) for u in fejer(level_u + 1)[0]}
-    F = grid.evaluate(np.zeros(1, dtype=int), np.zeros(1, dtype=int), np.arange(M), M, fejer(level_u)[0])
-    assert result.value[0, 0] == pytest.approx(float(sums(F, level_u)[0][0, 0]), rel=1e-14)
+    assert_settled_with_check(grid, result, M=128, level_u=6, check_step=2)
 
 
 @pytest.mark.parametrize("theta_deg", [55.0, 75.0])

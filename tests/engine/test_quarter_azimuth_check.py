@@ -9,34 +9,10 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers.global_grid import SmoothGrid, assert_settled_with_check
 
 import brdfnorm as bn
 from brdfnorm.engine.machinery import global_driver
-from brdfnorm.engine.machinery.tensor_rule import GlobalGrid, fejer, sums
-
-
-class _Smooth(GlobalGrid):
-    """A periodic analytic integrand in t times a smooth one in u, every evaluated node recorded; plain estimates."""
-
-    half_azimuth = True
-    rho, shift = 0.7, 0.02
-
-    def __init__(self):
-        self.nodes: list[tuple[float, float]] = []
-
-    def evaluate(self, case, piece, index, M, u):
-        t = index * (2 * np.pi / M)
-        for x in t:
-            self.nodes.extend((round(float(x), 9), round(float(y), 11)) for y in u)
-        f = (1.0 / (1.0 - 2 * self.rho * np.cos(t) + self.rho**2))[:, None] / (u + self.shift)[None, :]
-        return np.broadcast_to(f[None, :, :, None], (case.size,) + f.shape + (1,)).copy()
-
-    def estimate(self, group, F, q, e_b, e_u, magnitude):
-        floor = 50 * np.finfo(float).eps * magnitude
-        return e_b, e_u, floor, 0.0 * floor, e_b + e_u + floor
-
-    def exact(self) -> float:
-        return 2 * np.pi / (1 - self.rho**2) * np.log((1 + self.shift) / self.shift)
 
 
 def _albedo(model, theta, backend="numpy", **kwargs):
@@ -59,19 +35,12 @@ def test_the_quarter_check_evaluates_each_node_once(monkeypatch):
         return half
 
     monkeypatch.setattr(global_driver, "_halves", observed)
-    grid = _Smooth()
+    grid = SmoothGrid()
     # (its path: 32 × 63 → β doubled, u checked on 16 of the 64 azimuths → β again, the check taken along to 32 of
     # the 128 → settled on 128 × 63, u checked on 32 azimuths × 127 radial nodes)
     result = global_driver.integrate_global(grid, 1, np.arange(1), rtol=1e-6, atol=0.0, max_nodes=65_536)
     assert result.converged[0] and sum(halves) == 2
-    assert len(grid.nodes) == len(set(grid.nodes)) == result.evaluations[0]  # no node twice
-    assert abs(result.value[0, 0] - grid.exact()) <= result.error[0, 0]
-    M, level_u = 128, 6
-    assert set(grid.nodes) == {(round(2 * np.pi * i / M, 9), round(float(u), 11))
-                               for i in range(M) for u in fejer(level_u)[0]} | {
-        (round(2 * np.pi * i / M, 9), round(float(u), 11)) for i in range(0, M, 4) for u in fejer(level_u + 1)[0]}
-    F = grid.evaluate(np.zeros(1, dtype=int), np.zeros(1, dtype=int), np.arange(M), M, fejer(level_u)[0])
-    assert result.value[0, 0] == pytest.approx(float(sums(F, level_u)[0][0, 0]), rel=1e-14)
+    assert_settled_with_check(grid, result, M=128, level_u=6, check_step=4)
 
 
 def test_fewer_evaluations_for_blinn_phong(monkeypatch):

@@ -18,3 +18,11 @@ def bp_table() -> lut.Lut:
     layout and reader tests (computed once per process)."""
     return lut.compute(bn.load("blinn-phong"), {"mu": BLINN_PHONG_MU, "n": BLINN_PHONG_N}, rtol=1e-9,
                        channels=["dfg"])
+
+
+@pytest.fixture(scope="module")
+def ggx_shader():
+    """examples/ggx.brdf at f0 = 1 (the E_avg tests' shader)."""
+    from helpers.paths import EXAMPLES
+
+    return bn.load(str(EXAMPLES / "ggx.brdf"), f0=1.0)

@@ -7,11 +7,9 @@ its own microfacet route, not the shader's), averaged at rtol 1e-12."""
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
-from helpers.paths import EXAMPLES
+from helpers.quiet import quietly
 
 import brdfnorm as bn
 from brdfnorm.lut import table
@@ -20,21 +18,12 @@ ROUGHNESS = np.array([0.1, 0.5, 1.0])
 RTOL = 1e-9
 
 
-def _quiet(function, *args, **kwargs):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return function(*args, **kwargs)
-
-
-@pytest.fixture(scope="module")
-def shader():
-    return bn.load(str(EXAMPLES / "ggx.brdf"), f0=1.0)
 
 
 @pytest.fixture(scope="module")
 def reference():
     """E_avg of the built-in separable GGX (α = roughness²) by the adaptive G7/K15 rule at rtol 1e-12."""
-    value, error, converged, _ = _quiet(table._average_adaptive, bn.load("ggx", shadowing="separable"),
+    value, error, converged, _ = quietly(table._average_adaptive, bn.load("ggx", shadowing="separable"),
                                         {"alpha": ROUGHNESS**2}, rtol=1e-12)
     assert converged.all() and np.all(error <= 1.1e-12 * value)
     return value, error
@@ -61,12 +50,12 @@ def _check(value, error, converged, reference):
     assert np.all(np.abs(value - reference_value) <= error + reference_error), np.abs(value - reference_value) / error
 
 
-def test_nodes_asked_by_their_share(shader, reference, monkeypatch):
+def test_nodes_asked_by_their_share(ggx_shader, reference, monkeypatch):
     """Every node is asked at least NODE_SHARE·rtol (the old rule asked rtol/4 of the heaviest nodes and of the one
     at μ = 1, whose share of the 16-interval rule is 1/8); the grazing nodes, of shares below 1e-4, at
     NODE_RTOL_MAX; and the values stay within their estimates of the reference."""
     calls = _recording(monkeypatch)
-    value, error, converged, integrals = _quiet(table.average_over_mu, shader, {"roughness": ROUGHNESS}, rtol=RTOL)
+    value, error, converged, integrals = quietly(table.average_over_mu, ggx_shader, {"roughness": ROUGHNESS}, rtol=RTOL)
     _check(value, error, converged, reference)
     asked = {}
     for mu, rtol, _ in calls:
@@ -81,7 +70,7 @@ def test_nodes_asked_by_their_share(shader, reference, monkeypatch):
     assert integrals <= ROUGHNESS.size * (table.CC_MAX + 1)
 
 
-def test_loose_nodes_are_asked_again_not_a_finer_rule(shader, reference, monkeypatch):
+def test_loose_nodes_are_asked_again_not_a_finer_rule(ggx_shader, reference, monkeypatch):
     """With every node asked NODE_RTOL_MAX (NODE_SHARE raised far above its value) the rule settles at 32
     intervals but the nodes' estimates do not: the heaviest nodes are asked again, tighter, and every combination
     converges within its estimate of the reference without the adaptive route — without ``_tighten`` the
@@ -94,7 +83,7 @@ def test_loose_nodes_are_asked_again_not_a_finer_rule(shader, reference, monkeyp
 
     monkeypatch.setattr(table, "_average_adaptive", refused)
     calls = _recording(monkeypatch)
-    value, error, converged, integrals = _quiet(table.average_over_mu, shader, {"roughness": ROUGHNESS}, rtol=RTOL)
+    value, error, converged, integrals = quietly(table.average_over_mu, ggx_shader, {"roughness": ROUGHNESS}, rtol=RTOL)
     _check(value, error, converged, reference)
     first = {round(float(m), 12) for m in calls[0][0]} | {round(float(m), 12) for m in calls[1][0]}
     again = [rtol for mu, rtol, _ in calls if rtol < table.NODE_RTOL_MAX and any(round(float(m), 12) in first
@@ -136,8 +125,8 @@ def test_other_lobes_within_their_estimates(name, parameter, values):
     """Lobes on other routes, with the shares at rtol 1e-9, against the adaptive G7/K15 rule at rtol 1e-12 (its
     nodes asked rtol/4 each): converged, within rtol, within their estimates."""
     model, params = bn.load(name), {parameter: np.array(values)}
-    value, error, converged, _ = _quiet(table.average_over_mu, model, params, rtol=RTOL)
-    reference, reference_error, reference_converged, _ = _quiet(table._average_adaptive, model, params, rtol=1e-12)
+    value, error, converged, _ = quietly(table.average_over_mu, model, params, rtol=RTOL)
+    reference, reference_error, reference_converged, _ = quietly(table._average_adaptive, model, params, rtol=1e-12)
     assert reference_converged.all()
     assert converged.all() and np.all(error <= RTOL * np.abs(value))
     assert np.all(np.abs(value - reference) <= error + reference_error), np.abs(value - reference) / error

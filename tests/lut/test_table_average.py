@@ -6,11 +6,9 @@ albedos."""
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
-from helpers.paths import EXAMPLES
+from helpers.quiet import quietly
 
 import brdfnorm as bn
 from brdfnorm.lut import table
@@ -19,21 +17,12 @@ from brdfnorm.lut.table import average_over_mu, clenshaw_curtis, rule_error
 ROUGHNESS = np.array([0.05, 0.3, 1.0])
 
 
-def _quiet(function, *args, **kwargs):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return function(*args, **kwargs)
-
-
-@pytest.fixture(scope="module")
-def shader():
-    return bn.load(str(EXAMPLES / "ggx.brdf"), f0=1.0)
 
 
 @pytest.fixture(scope="module")
 def reference_e_avg():
     """E_avg of the built-in separable GGX (α = roughness²) by the adaptive G7/K15 rule at rtol 1e-12."""
-    value, error, converged, _ = _quiet(table._average_adaptive, bn.load("ggx", shadowing="separable"),
+    value, error, converged, _ = quietly(table._average_adaptive, bn.load("ggx", shadowing="separable"),
                                         {"alpha": ROUGHNESS**2}, rtol=1e-12, method="azimuthal")
     assert converged.all() and np.all(error <= 1.1e-12 * value)
     return value, error
@@ -54,12 +43,12 @@ def _counting(monkeypatch) -> list[int]:
 
 
 @pytest.mark.slow
-def test_shader_e_avg_within_its_estimate_and_converged(shader, reference_e_avg, monkeypatch):
+def test_shader_e_avg_within_its_estimate_and_converged(ggx_shader, reference_e_avg, monkeypatch):
     """At rtol 1e-10 every roughness converges, the narrowest (0.05: α = 0.0025, the shader's float64 noise ~6e-11
     of the albedo, above the nodes' rtol/4) too, and each value is within its estimate of the reference — in a
     bounded number of evaluations (42 million for the 32 roughnesses of the benchmark before the noise floor)."""
     counts = _counting(monkeypatch)
-    value, error, converged, integrals = _quiet(average_over_mu, shader, {"roughness": ROUGHNESS}, rtol=1e-10)
+    value, error, converged, integrals = quietly(average_over_mu, ggx_shader, {"roughness": ROUGHNESS}, rtol=1e-10)
     reference, reference_error = reference_e_avg
     assert converged.all(), error / value
     assert np.all(error <= 1e-10 * value)
@@ -68,7 +57,7 @@ def test_shader_e_avg_within_its_estimate_and_converged(shader, reference_e_avg,
     assert sum(counts) < 3_500_000, sum(counts)
 
 
-def test_rounding_limited_node_stops_early_with_an_honest_estimate(shader):
+def test_rounding_limited_node_stops_early_with_an_honest_estimate(ggx_shader):
     """A node of roughness 0.05 asked for rtol/4 = 2.5e-11 is rounding-limited: the route refines until its noise
     test stops it. With its combination's noise floor (what E_avg learns from its node at μ = 1) the same node is
     asked no finer than the noise and costs a fraction, with an estimate as small (the noise bound) that still
@@ -88,7 +77,7 @@ def test_rounding_limited_node_stops_early_with_an_honest_estimate(shader):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(table, "compute_cells", counted)
         for label, floor in (("plain", None), ("floored", np.full(2, 6e-11))):
-            results[label] = _quiet(table._node_albedos, shader, mu, weight, params, 1e-10, "auto", floor)
+            results[label] = quietly(table._node_albedos, ggx_shader, mu, weight, params, 1e-10, "auto", floor)
     plain, floored = results["plain"], results["floored"]
     assert plain[3].all() and plain[2].all()  # rounding-limited: final, and flagged as noisy
     assert floored[2].all()
@@ -143,7 +132,7 @@ def test_rule_error_covers_e_avg_of_lobes(name, params):
     """The rule's estimate at 32 and 64 intervals, E_avg's integrand 4x³E(x²) with albedos to rtol 1e-13, against
     the 128-interval rule (its own error: its difference from 64 and the albedo errors through the weights)."""
     x, w = clenshaw_curtis(128)
-    result = _quiet(bn.albedo, bn.load(name, **params), np.arccos(np.maximum(x[1:] ** 2, 1e-7)), rtol=1e-13)
+    result = quietly(bn.albedo, bn.load(name, **params), np.arccos(np.maximum(x[1:] ** 2, 1e-7)), rtol=1e-13)
     E, E_error = (np.concatenate([[0.0], a[:, 0]]) for a in (result.value, result.error))
 
     def rule(n: int, values: np.ndarray) -> float:
