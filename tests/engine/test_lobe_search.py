@@ -128,9 +128,8 @@ def test_candidates_converging_to_one_peak_are_merged(monkeypatch):
     found = lobe_search._candidates
 
     def twice(*args):
-        case, direction, level, width, spacing = found(*args)
-        return (np.concatenate([case, case]), np.concatenate([direction, direction]),
-                np.concatenate([level, level]), np.concatenate([width, width]), np.concatenate([spacing, spacing]))
+        *tested, untested, charge = found(*args)
+        return (*(np.concatenate([part, part]) for part in tested), untested, charge)
 
     monkeypatch.setattr(lobe_search, "_candidates", twice)
     merged = _search(integrand)[3]

@@ -68,7 +68,8 @@ OFFSETS = np.array([-4, -3, -2, -1, 1, 2, 3, 4]) / 32.0
 SEPARATION = 0.5
 #: Starting radius of a candidate's zoom, in lattice spacings.
 CANDIDATE_RADIUS = 1.5
-#: Candidates per case tested (the largest first): a noisy plateau has many strict local maxima, none separated.
+#: Candidates per case and sample set given arcs (the largest first, of those the free half-level test leaves: a noisy
+#: plateau has many strict local maxima, none separated); the others are charged (see _candidates).
 MAX_CANDIDATES = 16
 #: Peaks per case (the main one included) integrated about their own poles.
 MAX_PEAKS = 8
@@ -308,10 +309,13 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
                                      symmetric, spacing[some]))
 
     poles, widths, supports = estimate_lobe(integrand, cases, samples, max_nodes_per_call, candidates, seen)
-    case, direction, level, width, spacing = (np.concatenate(part) for part in zip(*found, strict=True)) if found \
-        else (np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0))
+    case, direction, level, width, spacing, untested, untested_charge = (
+        (np.concatenate(part) for part in zip(*found, strict=True)) if found
+        else (np.zeros(0, dtype=np.intp), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0),
+              np.zeros(0, dtype=np.intp), np.zeros(0)))
     peaks = _confirmed(integrand, cases, poles, widths, case, direction, level, width, spacing, max_nodes_per_call,
                        negligible)
+    np.add.at(peaks.charge, untested, untested_charge)  # candidates beyond MAX_CANDIDATES: charged, not dropped
     # A case with separated peaks has its main peak measured again, its core only the samples joined to it (another
     # lobe above half the peak within the first cap made Blinn-Phong's width 0.205 for 0.0064: the rules about it
     # then missed its core).
@@ -327,16 +331,16 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
 
 def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.ndarray, strict: np.ndarray,
                 symmetric: np.ndarray, spacing: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Of the strict local maxima ``strict`` (k, m) of samples ``g`` at ``omega`` (k, m, 3), the largest
-    :data:`MAX_CANDIDATES` per row, those whose half-level component (on the neighbour lists ``symmetric``) reaches
-    no higher sample (nor a sample whose ``ceiling``, the highest value it touches, is higher): their case,
-    direction, value, width (twice the RMS angle of that component; 0 where it is that sample alone) and their
-    samples' ``spacing``."""
+    """Of the strict local maxima ``strict`` (k, m) of samples ``g`` at ``omega`` (k, m, 3), those whose half-level
+    component (on the neighbour lists ``symmetric``) reaches no higher sample (nor a sample whose ``ceiling``, the
+    highest value it touches, is higher), the largest :data:`MAX_CANDIDATES` per row: their case, direction, value,
+    width (twice the RMS angle of that component; 0 where it is that sample alone) and their samples' ``spacing``;
+    and the case and :data:`CHARGE` · g·2π·max(width, spacing)² of each one beyond them. (The component test comes
+    first and costs no evaluation: a noisy plateau's many strict maxima, each reaching a higher sample, must not
+    crowd out a lone sample of a narrow lobe elsewhere.)"""
     row, index = np.nonzero(strict)
     order = np.lexsort((-g[row, index], row))
     row, index = row[order], index[order]
-    keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES
-    row, index = row[keep], index[keep]
     level = g[row, index]
     start = np.zeros(g[row].shape, dtype=bool)
     start[np.arange(row.size), index] = True
@@ -346,7 +350,10 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.
     direction = omega[row, index]
     angle = _angles(omega[row], direction)
     width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
-    return case[row], direction, level, width, spacing[row]
+    keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES  # (rows in order, values descending)
+    over = CHARGE * 2.0 * np.pi * level * np.maximum(width, spacing[row]) ** 2
+    return (case[row][keep], direction[keep], level[keep], width[keep], spacing[row][keep], case[row][~keep],
+            over[~keep])
 
 
 def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.ndarray, case: np.ndarray,
