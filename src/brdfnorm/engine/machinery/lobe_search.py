@@ -18,7 +18,9 @@ model), :func:`search_lobes` samples one equal-area Fibonacci lattice (1024 dire
   counts as joined to the samples within one spacing of it), and g on :data:`ARC_POINTS` points of the great-circle
   arc to the main peak falls below half the candidate's value (a ridge thinner than the samples along the arc does
   not), and so does the largest of g on the parallel arcs beside it at each of those points (:data:`OFFSETS`: a
-  curved ridge leaves the arc). Each separated candidate is zoomed into as the main peak is (starting on a cap of
+  curved ridge leaves the arc), and so does g on the paths about N between the two polar angles
+  (:data:`RING_OFFSETS`: a ring about N leaves every great-circle arc). Each separated candidate is zoomed into
+  as the main peak is (starting on a cap of
   :data:`CANDIDATE_RADIUS` spacings of its samples, so that the zoom cannot climb onto another peak; its core only
   the samples joined to it) unless its half-level component already spans several samples; candidates that end
   within :data:`MERGE_WIDTHS` widths (the smaller) of a kept peak are merged into it, and at most :data:`MAX_PEAKS`
@@ -64,13 +66,16 @@ ARC_POINTS = 16
 #: The parallel arcs tested beside the arc to the main peak, as shares of its length (the arc itself is tested
 #: first; a curved ridge, Ashikhmin-Shirley's n_u = 1.6, n_v = 5 112 at θ_o = 49°, leaves it).
 OFFSETS = np.array([-4, -3, -2, -1, 1, 2, 3, 4]) / 32.0
+#: The paths about N tested beside the one at the candidate's and the main peak's polar angles, in polar angle (rad):
+#: fine enough for a ring 0.003 rad thick, wide enough for one that the view tilts by 0.02 rad.
+RING_OFFSETS = np.array([0.0, -0.001, 0.001, -0.002, 0.002, -0.004, 0.004, -0.008, 0.008, -0.016, 0.016, -0.024, 0.024])
 #: A candidate is separated where g falls below this share of its value between it and any higher sample.
 SEPARATION = 0.5
 #: Starting radius of a candidate's zoom, in lattice spacings.
 CANDIDATE_RADIUS = 1.5
 #: Candidates per case and sample set given arcs (the largest first, of those the free half-level test leaves: a noisy
 #: plateau has many strict local maxima, none separated); the others are charged (see _candidates).
-MAX_CANDIDATES = 16
+MAX_CANDIDATES = 64
 #: Peaks per case (the main one included) integrated about their own poles.
 MAX_PEAKS = 8
 #: Peaks closer than this many widths (the smaller: a narrow lobe separated from a broad one a few of the broad one's
@@ -281,19 +286,24 @@ def estimate_lobe(integrand: Integrand, cases: int, samples: int = SAMPLES, max_
 
 
 def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_nodes_per_call: int = 1_500_000,
-                 candidates: np.ndarray | None = None,
-                 negligible: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
+                 candidates: np.ndarray | None = None, negligible: float = 0.0,
+                 axial: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, Peaks]:
     """:func:`estimate_lobe`'s main peak per case (poles, widths, supports) and the separated :class:`Peaks`
     besides it (the module's docstring says how they are found): the candidates come from the lattice's samples and
     from those of every cap the main peak's zoom samples. A peak whose contribution estimate is below
     ``negligible`` times the main peak's is charged, not kept (a bump in the far tails of the lobes: its own
-    sub-case would integrate a crescent of their tails about a pole it does not centre)."""
+    sub-case would integrate a crescent of their tails about a pole it does not centre). ``axial`` (K,): the cases
+    whose integrand is rotation-invariant about N, which have no separated peaks (none is searched for): every
+    maximum off N is a ring, and its samples — strict maxima of their neighbours, the arcs between them dipping
+    below the ring — would be taken for peaks (the sheen lobe at normal incidence, a ring 0.003 rad above the
+    horizon: six peaks and a charge of half the albedo)."""
     found = []
+    searched = np.ones(cases, dtype=bool) if axial is None else ~np.asarray(axial, dtype=bool)
 
     def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
         nearest, symmetric = _cap_neighbours() if g.shape[1] == CAP_POINTS + 1 else lattice_neighbours(samples)
         on = g[:, :nearest.shape[0]]  # (the lattice's samples, not the likely directions after them)
-        strict = (on > on[:, nearest].max(axis=-1)) & (on > 0)
+        strict = (on > on[:, nearest].max(axis=-1)) & (on > 0) & searched[case][:, None]
         # Not the main peak's own sample (where the main peak is a likely direction off the lattice, the lattice's
         # largest sample is a candidate: the arc test says whether it lies on the main peak's slope).
         best = np.argmax(g, axis=1)
@@ -385,6 +395,23 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
         else np.zeros((0, OFFSETS.size, ARC_POINTS))
     np.add.at(evaluations, case, OFFSETS.size * ARC_POINTS)
     apart = on_side.max(axis=1).min(axis=1, initial=np.inf) < SEPARATION * level
+    case, direction, level, width, spacing = (case[apart], direction[apart], level[apart], width[apart],
+                                              spacing[apart])
+    # A ring about N leaves every great-circle arc: the path at the candidate's and the main peak's polar angles
+    # (interpolated) between their azimuths, and paths beside it in polar angle (RING_OFFSETS), where the arcs dipped
+    # (the sheen lobe near normal incidence: a ring 0.003 rad thick above the horizon, tilted by the view).
+    polar = np.arccos(np.clip(direction[:, 2], -1.0, 1.0)), np.arccos(np.clip(poles[case][:, 2], -1.0, 1.0))
+    azimuth = np.arctan2(direction[:, 1], direction[:, 0])
+    turn = np.angle(np.exp(1j * (np.arctan2(poles[case][:, 1], poles[case][:, 0]) - azimuth)))
+    theta = np.clip((polar[0][:, None] + t * (polar[1] - polar[0])[:, None])[:, None, :]
+                    + RING_OFFSETS[None, :, None], 0.0, np.pi / 2)
+    phi = (azimuth[:, None] + t * turn[:, None])[:, None, :]
+    ring = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)),
+                    axis=-1).reshape(case.size, RING_OFFSETS.size * ARC_POINTS, 3)
+    on_ring = _magnitudes(integrand, ring, case).reshape(case.size, RING_OFFSETS.size, ARC_POINTS) if case.size \
+        else np.zeros((0, RING_OFFSETS.size, ARC_POINTS))
+    np.add.at(evaluations, case, RING_OFFSETS.size * ARC_POINTS)
+    apart = on_ring.max(axis=1).min(axis=1, initial=np.inf) < SEPARATION * level
     case, direction, width, spacing = case[apart], direction[apart].copy(), width[apart], spacing[apart]
 
     def at_case(omega: np.ndarray, peak: np.ndarray) -> np.ndarray:

@@ -92,25 +92,29 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
         lobe = Lobe(refracted.direction * FLIP, refracted.width, refracted.support)
     else:
         lobe = problem.model.lobe(problem.fixed, problem.case_params(np.arange(K)), problem.over)
+    # Isotropy decides the half-vector route, the global rule's azimuth estimate, and which cases have no separated
+    # peaks: an isotropic lobe at a fixed direction along N is rotation-invariant about N (its maxima off N are rings).
+    isotropic = _isotropic_cases(problem, rtol)
     if lobe is not None:
         poles = np.broadcast_to(lobe.direction, (K, 3))
         widths, supports = np.broadcast_to(lobe.width, (K,)), np.broadcast_to(lobe.support, (K,))
-        return _cubature(problem, scale, lower, poles, widths, supports, **options)
+        return _cubature(problem, scale, lower, isotropic, poles, widths, supports, **options)
     normal = np.broadcast_to([0.0, 0.0, 1.0], problem.fixed.shape)
     candidates = np.stack([mirror(problem.fixed), problem.fixed, normal], axis=1)
+    axial = isotropic & (np.hypot(problem.fixed[:, 0], problem.fixed[:, 1]) <= AXIAL)
     # (a bump whose contribution is below rtol/64 of the main peak's is charged, not integrated about its own pole)
     poles, widths, supports, peaks = search_lobes(_integrand(problem, scale, lower), K, candidates=candidates,
-                                                  negligible=rtol / 64)
+                                                  negligible=rtol / 64, axial=axial)
     count = peaks.count(K)
     if np.all(count == 1):  # (the whole batch as it is, compiled kernels and all)
-        result = _cubature(problem, scale, lower, poles, widths, supports, **options)
+        result = _cubature(problem, scale, lower, isotropic, poles, widths, supports, **options)
         return _joined([(np.arange(K), result)], K, peaks, scale, rtol, atol)
 
     def part(cases: np.ndarray, *args, **changes) -> RouteResult:
         """The cubature of ``problem`` restricted to ``cases`` (its non-finite values reported at their own case)."""
         try:
-            return _cubature(_take(problem, cases), None if scale is None else scale[cases], lower, *args,
-                             **{**options, **changes})
+            return _cubature(_take(problem, cases), None if scale is None else scale[cases], lower, isotropic[cases],
+                             *args, **{**options, **changes})
         except NonFiniteIntegrand as bad:
             case = int(cases[bad.case])
             value = _integrand(problem, scale, lower)(bad.direction[None], np.array([case]))[0]
@@ -125,7 +129,8 @@ def _integrate(problem, scale: np.ndarray | None, lower: bool = False, *, rtol: 
         sub = partition.expand(poles, widths, supports, peaks, cases)
         result = part(cases[sub.owner], sub.poles, sub.widths, sub.supports, sub, rtol=rtol / partition.MARGIN,
                       atol=options["atol"] / (m * partition.MARGIN), max_evaluations=max_evaluations // m)
-        parts.append((cases, partition.fold(result, sub, cases.size)))
+        folded = partition.fold(result, sub, cases.size)  # (the isotropy test ran on every case: charged here too)
+        parts.append((cases, folded.with_(evaluations=folded.evaluations + 3 * ISOTROPY_PAIRS)))
     return _joined(parts, K, peaks, scale, rtol, atol)
 
 
@@ -172,12 +177,13 @@ def _take(problem, cases: np.ndarray):
     return replace(problem, fixed=problem.fixed[cases], params=params, native=native)
 
 
-def _cubature(problem, scale: np.ndarray | None, lower: bool, poles: np.ndarray, widths: np.ndarray,
-              supports: np.ndarray, sub: partition.SubCases | None = None, *, rtol: float, atol: float,
-              nonfinite: NonFinitePolicy, max_evaluations: int) -> RouteResult:
+def _cubature(problem, scale: np.ndarray | None, lower: bool, isotropic: np.ndarray, poles: np.ndarray,
+              widths: np.ndarray, supports: np.ndarray, sub: partition.SubCases | None = None, *, rtol: float,
+              atol: float, nonfinite: NonFinitePolicy, max_evaluations: int) -> RouteResult:
     """The adaptive cubature of :mod:`.hemisphere` about ``poles``, of ``problem``'s integrand (divided by
-    ``scale``, mirrored with ``lower``) — or, with ``sub``, of its sub-cases' g·ψ (no half-vector route: it assumes
-    a lobe centred on the mirror direction; every sub-case anisotropic: ψ breaks any symmetry about its pole)."""
+    ``scale``, mirrored with ``lower``; ``isotropic`` (K,) its cases rotation-invariant, :func:`_isotropic_cases`)
+    — or, with ``sub``, of its sub-cases' g·ψ (no half-vector route: it assumes a lobe centred on the mirror
+    direction; every sub-case anisotropic: ψ breaks any symmetry about its pole)."""
     K = problem.fixed.shape[0]
     integrand = _integrand(problem, scale, lower)
     factor = np.ones(K) if scale is None else scale
@@ -194,7 +200,6 @@ def _cubature(problem, scale: np.ndarray | None, lower: bool, poles: np.ndarray,
     if sub is None:
         # The half-vector route first, on the upper hemisphere (brdfnorm.engine.routes.halfvector_generic says which
         # lobes it takes); isotropy decides that and the global rule's azimuth estimate.
-        isotropic = _isotropic_cases(problem, rtol)
         first = None if lower else partial(halfvector_generic.route, problem.fixed, isotropic)
         anisotropic, tested = ~isotropic, 3 * ISOTROPY_PAIRS
     else:
@@ -208,6 +213,8 @@ def _cubature(problem, scale: np.ndarray | None, lower: bool, poles: np.ndarray,
                         evaluations=result.evaluations + tested)
 
 
+#: A fixed direction within this of N (in sin θ) counts as along N for an isotropic lobe: rotation-invariant about N.
+AXIAL = 1e-12
 #: Random direction pairs per parameter set for the isotropy test.
 ISOTROPY_PAIRS = 48
 
