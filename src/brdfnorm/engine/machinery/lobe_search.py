@@ -51,6 +51,7 @@ from functools import cache
 import numpy as np
 
 from ..routes.hemisphere import lobe_frame
+from .directions import angle_between
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -148,10 +149,8 @@ def _magnitudes(integrand: Integrand, omega: np.ndarray, case: np.ndarray) -> np
 
 
 def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """Angles (k, m) between ``omega`` (k, m, 3) and ``centre`` (k, 3): atan2(|ω × P|, ω·P), since arccos would not
-    resolve angles below √ε."""
-    return np.arctan2(np.linalg.norm(np.cross(omega, centre[:, None, :]), axis=-1),
-                      np.einsum("kmi,ki->km", omega, centre))
+    """Angles (k, m) between ``omega`` (k, m, 3) and ``centre`` (k, 3)."""
+    return angle_between(omega, centre[:, None, :])
 
 
 def _locate(omega: np.ndarray, g: np.ndarray,
@@ -384,10 +383,8 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     # dipped (at each of its points the largest of them must dip too).
     across = np.cross(direction, poles[case])
     across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-300)
-    length = np.arctan2(np.linalg.norm(np.cross(direction, poles[case]), axis=-1),
-                        np.einsum("ki,ki->k", direction, poles[case]))
-    arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
-    arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
+    length = angle_between(direction, poles[case])
+    arc = arc[apart]
     beside = (arc[:, None] + (OFFSETS[None, :, None, None] * length[:, None, None, None]) * across[:, None, None, :])
     beside = (beside / np.linalg.norm(beside, axis=-1, keepdims=True)).reshape(case.size, OFFSETS.size * ARC_POINTS,
                                                                                  3)
@@ -454,7 +451,7 @@ def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: n
         mine = mine[np.argsort(-value[mine], kind="stable")]
         centres, sizes = [poles[c]], [widths[c]]
         for i in mine:
-            apart = [np.arctan2(np.linalg.norm(np.cross(direction[i], p)), direction[i] @ p) > MERGE_WIDTHS * min(
+            apart = [angle_between(direction[i], p) > MERGE_WIDTHS * min(
                 width[i], w) for p, w in zip(centres, sizes, strict=True)]
             if all(apart):
                 kept[i] = True

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
+from .directions import angle_between
 from .lobe_search import Peaks
 from .result import RouteResult
 
@@ -86,8 +87,7 @@ class SubCases:
 
 def _step(omega: np.ndarray, centre: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """χ of caps of ``radius`` (M,) about ``centre`` (M, 3) at ``omega`` (M, 3) (0 where the radius is 0)."""
-    # atan2(|ω × P|, ω·P): arccos would not resolve the small angles of a narrow core
-    angle = np.arctan2(np.linalg.norm(np.cross(omega, centre), axis=-1), np.einsum("mi,mi->m", omega, centre))
+    angle = angle_between(omega, centre)
     with np.errstate(divide="ignore", invalid="ignore"):
         scaled = (angle - MIDDLE * radius) / (SPREAD * radius)
     return np.where((radius > 0) & (angle < radius), 0.5 * special.erfc(np.nan_to_num(scaled, nan=np.inf)), 0.0)
@@ -114,8 +114,7 @@ def expand(poles: np.ndarray, widths: np.ndarray, supports: np.ndarray, peaks: P
     present = np.concatenate([np.ones((cases.size, 1), dtype=bool), np.zeros((cases.size, m), dtype=bool)], axis=1)
     present[owner_extra, 1 + rank] = True
     mine = every[owner_extra, 1 + rank]
-    apart = np.arctan2(np.linalg.norm(np.cross(mine[:, None], every[owner_extra]), axis=-1),
-                       np.einsum("ei,eji->ej", mine, every[owner_extra]))
+    apart = angle_between(mine[:, None], every[owner_extra])
     apart = np.where(present[owner_extra], apart, np.inf)
     apart[np.arange(extra.size), 1 + rank] = np.inf
     apart[:, 0] *= 2.0 * REACH
