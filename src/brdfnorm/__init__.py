@@ -12,19 +12,46 @@ Frame: N = +z, X = +x, Y = +y; angles in radians in the API, degrees on the comm
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from . import materials  # material files (load)
-from .engine.methods import AlbedoResult, albedo
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError, ParameterError
-from .models import REGISTRY, Model
-from .normalization import NormalizationResult, normalize
 from .validate import short_repr
 from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
+if TYPE_CHECKING:  # (imported on first use below: PEP 562's module __getattr__)
+    from .engine.methods import AlbedoResult, albedo
+    from .models import REGISTRY, Model
+    from .normalization import NormalizationResult, normalize
+
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
            "load_text", "normalize"]
+
+#: The public names imported on first use, by the module that defines them: ``import brdfnorm`` (and the command
+#: line's start) then costs what a command uses, not the engine, the models, scipy.special and the materials.
+_LAZY = {
+    "AlbedoResult": "engine.methods", "albedo": "engine.methods", "REGISTRY": "models", "Model": "models",
+    "NormalizationResult": "normalization", "normalize": "normalization",
+}
+
+
+def __getattr__(name: str) -> object:
+    """A public name of :data:`_LAZY`, or a subpackage (``brdfnorm.materials``, ``brdfnorm.lut``, ...), imported
+    when first asked for (PEP 562)."""
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        return importlib.import_module(f"{__name__}.{name}")  # (the import binds it as an attribute, too)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
 
 
 def load(name_or_path: str | Path, **params: object) -> Model:
@@ -38,6 +65,8 @@ def load(name_or_path: str | Path, **params: object) -> Model:
     key = os.fspath(name_or_path)
     if not isinstance(key, str):
         raise ArgumentTypeError("expected a text path, got bytes", where="model")
+    from .models import REGISTRY
+
     if key in REGISTRY:
         return REGISTRY[key](**params)
     from .models import mitsuba
@@ -45,8 +74,10 @@ def load(name_or_path: str | Path, **params: object) -> Model:
     if mitsuba.is_mitsuba(key):  # Mitsuba itself is imported only when such a model is asked for
         return mitsuba.load(key, **params)
     path = Path(key)
-    if materials.files.is_material_file(key):  # a material file: TOML or JSON naming a material model
-        return materials.files.load_material(key, REGISTRY, **params)
+    from .materials import files as material_files
+
+    if material_files.is_material_file(key):  # a material file: TOML or JSON naming a material model
+        return material_files.load_material(key, REGISTRY, **params)
     if path.exists():
         if not path.is_file():  # a directory, FIFO (reading it would block), device or socket
             kind = "a directory" if path.is_dir() else "not a regular file (a FIFO, device or socket)"

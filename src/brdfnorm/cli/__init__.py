@@ -1,27 +1,118 @@
-"""The ``brdfnorm`` command line (typer): one module per command group, registered below."""
+"""The ``brdfnorm`` command line (typer): one module per command group, registered on :data:`app` when imported.
+
+A run imports only the module of the command it names (:data:`COMMANDS`): ``brdfnorm lut ...`` does not import
+the fit, audit, check and report commands and what they use. The root's help, an unknown command (its "did you
+mean" needs every name) and shell completion import them all, as does ``brdfnorm.cli.app`` (PEP 562), which
+holds every command.
+"""
 
 from __future__ import annotations
 
+import atexit
 import difflib
+import gc
+import importlib
 import os
 import re
 import sys
+import threading
+from collections.abc import Callable
+from typing import NoReturn
 
 import typer
 
-from .application import app
+from . import application
 from .help import tidy
 
-# isort: split
-# Command modules register themselves on `app` (defined in .application, which imports none of them) when imported.
-from . import audit, check, core, explore, fit, info, lut, materials, report, verify  # noqa: F401
+#: Each command's name -> the module of this package that defines it (tests/cli/test_lazy_commands.py keeps the
+#: two in step); in the order the modules were imported before (the order typer lists commands not in help.ORDER).
+COMMANDS = {
+    "audit": "audit", "check": "check", "models": "core", "albedo": "core", "normalize": "core",
+    "explore": "explore", "fit": "fit", "info": "info", "lut": "lut", "furnace": "materials",
+    "reference": "materials", "report": "report", "verify": "verify",
+}
+
+
+def register(names: list[str] | None = None) -> typer.Typer:
+    """The application with the commands ``names`` registered (their modules imported; None: every command)."""
+    for module in dict.fromkeys(COMMANDS[n] for n in (COMMANDS if names is None else names)):
+        importlib.import_module(f"{__name__}.{module}")
+    return application.app
+
+
+def __getattr__(name: str) -> object:
+    if name == "app":  # the whole application (tests, documentation tools): every command registered
+        return register()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def chosen(argv: list[str]) -> list[str] | None:
+    """The command ``argv`` runs, as a list of one name, or None where every command must be registered: no
+    command (the root's help), one not known (the "did you mean" of the error), shell completion."""
+    if any(key.startswith("_BRDFNORM_COMPLETE") or key == "_TYPER_COMPLETE_ARGS" for key in os.environ):
+        return None
+    for arg in argv:
+        if arg == "--":
+            return None
+        if not arg.startswith("-"):  # the root takes no option with a value: the first word is the command
+            return [arg] if arg in COMMANDS else None
+    return None
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point: usage errors become one line (``error: ...``) with exit code 2, as project errors do."""
-    command = tidy(typer.main.get_command(app))
+    """Entry point: usage errors become one line (``error: ...``) with exit code 2, as project errors do.
+
+    Called as the process's command line (``argv`` None: the ``brdfnorm`` script, ``python -m brdfnorm``), the
+    process also starts and ends faster (:func:`_started`, :func:`_leave`); called with ``argv`` (tests, other
+    programs), it only raises SystemExit as click does."""
+    if argv is not None:
+        _run(list(argv), started=lambda: None)
+        return
+    gc.disable()  # (re-enabled by _started once the command's modules are imported)
     try:
-        code = command.main(args=argv if argv is not None else sys.argv[1:], prog_name="brdfnorm",
+        _run(sys.argv[1:], started=_started)
+    except SystemExit as done:
+        _leave(done.code)
+    finally:
+        gc.enable()
+    _leave(0)
+
+
+def _started() -> None:
+    """The command's modules imported: the collector back on, with what the imports made frozen (never scanned
+    again: modules, functions and classes live as long as the process). Without the collector during the imports,
+    and with them frozen, the start of ``lut examples/ggx.brdf`` takes ~0.08 CPU s less (docs/performance.md)."""
+    gc.freeze()
+    gc.enable()
+
+
+def _leave(code: object) -> NoReturn:
+    """End the command-line process with ``code`` (as ``sys.exit`` reads it) without the interpreter's teardown:
+    its streams flushed and its ``atexit`` functions run first, as at a normal exit. The teardown — every module's
+    dictionary cleared and Numba's and LLVM's objects destroyed one by one — took ~0.2 s after a table
+    (docs/performance.md). Where another thread that is no daemon still runs, or a child process of
+    :mod:`multiprocessing`, the interpreter's own exit (which waits for them) is taken."""
+    others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive() and not t.daemon]
+    processes = sys.modules.get("multiprocessing")
+    if others or (processes is not None and processes.active_children()):
+        raise SystemExit(code)
+    status = 0 if code is None else code if isinstance(code, int) else 1
+    if not isinstance(code, int | None):
+        print(code, file=sys.stderr)  # (sys.exit's rule for other objects: printed, status 1)
+    atexit._run_exitfuncs()  # noqa: SLF001 — what a normal exit runs (logging's flush, handlers of libraries)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a reader that went away, or a closed stream: nothing more to write
+            pass
+    os._exit(status)
+
+
+def _run(args: list[str], started: Callable[[], None]) -> None:
+    command = tidy(typer.main.get_command(register(chosen(args))))
+    started()
+    try:
+        code = command.main(args=args, prog_name="brdfnorm",
                             standalone_mode=False)
         sys.stdout.flush()
     except typer.Exit as done:

@@ -11,7 +11,27 @@ package registers nothing.
 
 from __future__ import annotations
 
-from . import files
-from .model import OpenPBR
+import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from . import files
+    from .model import OpenPBR
 
 __all__ = ["OpenPBR", "files"]
+
+
+def __getattr__(name: str) -> object:
+    """``OpenPBR`` and ``files`` imported on first use (PEP 562): a ``.brdf`` file's load reads
+    :func:`.files.is_material_file` without importing the material model, its lobes and the engine."""
+    if name == "OpenPBR":
+        from .model import OpenPBR
+
+        return OpenPBR
+    if name == "files":
+        return importlib.import_module(f"{__name__}.files")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
