@@ -268,6 +268,17 @@ def _reciprocal_microfacet(applies):
 #: mirror limit, where the hemisphere coordinates fail); rough dielectrics (BSDFs), reflection and refraction over
 #: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
 #: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
+_MATERIAL_APPLIES = Reference("brdfnorm.materials.route:applies").call()
+
+
+def _material_applies(model: Model, over: Over) -> bool:
+    """Whether the method "material" applies: asked of a model whose class derives from one of
+    :mod:`brdfnorm.materials` only, so that "auto" for any other model does not import the materials (a ``.brdf``
+    table's start: docs/performance.md, eighth round)."""
+    return any(c.__module__.startswith("brdfnorm.materials.") for c in type(model).__mro__) and \
+        _MATERIAL_APPLIES(model, over)
+
+
 METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, quadrature.albedo_method,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),
@@ -284,7 +295,7 @@ METHODS: Registry[Method] = Registry("method", "method", {
     "certified": Method("certified", certified.applies, certified.albedo_method,
                         "guaranteed enclosure by Arb ball arithmetic (1-D reductions)", options=("digits",)),
     # brdfnorm.materials lies above the engine: its method is declared by where it lives, imported on first use
-    "material": Method("material", Reference("brdfnorm.materials.route:applies").call(),
+    "material": Method("material", _material_applies,
                        Reference("brdfnorm.materials.route:albedo_method").call(),
                        "a material term by term: its lobes' exact albedos through the layering factors"),
 })
