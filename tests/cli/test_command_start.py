@@ -44,6 +44,21 @@ def test_the_root_help_imports_every_command():
     assert all(imported[m] for m in OTHERS if m.startswith("brdfnorm.cli."))
 
 
+def test_a_table_not_on_a_terminal_does_not_import_rich():
+    # rich (~0.1 s) draws the progress bar on a terminal and prints tables; `lut` to a file needs neither
+    code = ("import atexit, sys\natexit.register(lambda: print('rich' in sys.modules))\n"
+            "from brdfnorm.cli import main\nsys.argv[0] = 'brdfnorm'\nmain()\n")
+    args = ["lut", str(EXAMPLES / "ggx.brdf"), "--axis", "mu=0.5", "--axis", "roughness=0.5", "-p", "f0=1",
+            "--rtol", "1e-6", "--no-average", "-o", "-", "--format", "csv"]
+    plain = _process(code, *args)
+    assert plain.returncode == 0 and plain.stdout.splitlines()[-1] == "False", plain.stderr
+    # the probe sees it where rich is told stderr is a terminal (its FORCE_COLOR): the bar is drawn
+    env = {**os.environ, "FORCE_COLOR": "1", "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    forced = subprocess.run([sys.executable, "-c", code, *args], env=env, capture_output=True, text=True,
+                            timeout=300)
+    assert forced.returncode == 0 and forced.stdout.splitlines()[-1] == "True" and "\x1b[" in forced.stderr
+
+
 def test_commands_names_every_command_by_its_module():
     from brdfnorm.cli import COMMANDS, app
 

@@ -21,8 +21,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .. import validate
 from ..errors import ArgumentError, BrdfnormError
@@ -32,6 +30,8 @@ from ..output import STDOUT, write_file
 from ..output.formats import render
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from ..parallel.executors import Scheduler
 
 #: Help panels of the options every computing command shares (typer's rich_help_panel), so that a long --help
@@ -204,17 +204,36 @@ CLI_NAMES = {"theta": "--theta", "phi": "--phi", "rtol": "--rtol", "method": "--
              "certified": "--certified"}
 
 
-class _Console(Console):
-    def on_broken_pipe(self) -> None:
-        """rich exits 1 when stdout's reader goes away; a closed pipe is the reader's choice, not an error,
-        so it goes the way of every other write (:func:`guarded`: exit 0)."""
-        raise BrokenPipeError
+@functools.cache
+def _console_class() -> type[Console]:
+    """rich's Console with a closed pipe treated as every other write is (rich imported here, where a command prints
+    through it: ~0.1 s that ``lut`` and other commands printing plain lines do not pay)."""
+    from rich.console import Console
+
+    class _Console(Console):
+        def on_broken_pipe(self) -> None:
+            """rich exits 1 when stdout's reader goes away; a closed pipe is the reader's choice, not an error,
+            so it goes the way of every other write (:func:`guarded`: exit 0)."""
+            raise BrokenPipeError
+
+    return _Console
 
 
 def console(*, stderr: bool = False) -> Console:
     """A rich console on stdout (or stderr) that never truncates numbers (wide when not a terminal)."""
     stream = sys.stderr if stderr else sys.stdout
-    return _Console(stderr=stderr) if stream.isatty() else _Console(stderr=stderr, width=160)
+    kind = _console_class()
+    return kind(stderr=stderr) if stream.isatty() else kind(stderr=stderr, width=160)
+
+
+def _maybe_terminal() -> bool:
+    """False where rich's ``Console(stderr=True).is_terminal`` is False for sure, told without importing rich: stderr
+    is no terminal and neither ``TTY_COMPATIBLE=1`` nor ``FORCE_COLOR`` says otherwise (rich's own rule)."""
+    try:
+        terminal = sys.stderr.isatty()
+    except (AttributeError, ValueError):  # replaced by an object without it, or closed
+        terminal = False
+    return terminal or os.environ.get("TTY_COMPATIBLE") == "1" or "FORCE_COLOR" in os.environ
 
 
 def fail(message: str, code: int = 2) -> typer.Exit:
@@ -392,8 +411,14 @@ def result_format(json_output: bool, csv_output: bool) -> str:
 def progress_bar(description: str, *, enabled: bool = True) -> Iterator[Callable[[int, int], None] | None]:
     """An ``on_progress(done, total)`` callback drawing a rich bar on stderr — None (no chunking, no bar)
     unless ``enabled`` and stderr is a terminal."""
+    if not (enabled and _maybe_terminal()):
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
     stderr = Console(stderr=True)
-    if not (enabled and stderr.is_terminal):
+    if not stderr.is_terminal:
         yield None
         return
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

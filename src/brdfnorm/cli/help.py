@@ -18,13 +18,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from rich import box
-from rich.console import Group
-from rich.markup import escape
-from rich.padding import Padding
-from rich.panel import Panel
-from rich.table import Table
-from rich.text import Text
 from typer.core import TyperArgument, TyperGroup, TyperOption
 
 #: The commands in the order a user meets them: discover, compute, tabulate and fit, audit, explore, study.
@@ -48,6 +41,12 @@ def options_panel(*, name: str, params, ctx, markup_mode, console) -> None:
     """Typer's options panel in two columns (the module docstring says why); same signature as the function it
     replaces, ``typer.rich_utils._print_options_panel``."""
     import typer.rich_utils as rich_utils
+    from rich import box
+    from rich.console import Group
+    from rich.padding import Padding
+    from rich.panel import Panel
+    from rich.table import Table
+    from rich.text import Text
 
     if not params:
         return
@@ -129,6 +128,17 @@ def _plain_usage(argument: TyperArgument):
         name = name if argument.required else f"[{name}]"
         return name + ("..." if argument.nargs != 1 else "")
     return usage
+
+
+def escape(text: str) -> str:
+    """``text`` with rich's markup escaped (``rich.markup.escape``): rich imported only for a text that has any to
+    escape — a ``[`` or a final backslash (what that function's pattern needs) — and so not at every command's start
+    (rich costs ~0.1 s; the help printer imports it when it prints)."""
+    if "[" not in text and not text.endswith("\\"):
+        return text
+    from rich.markup import escape as rich_escape
+
+    return rich_escape(text)
 
 
 def tidy(command):
