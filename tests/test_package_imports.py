@@ -84,3 +84,32 @@ def test_load_still_finds_each_kind_of_model(tmp_path):
             f"assert brdfnorm.load({str(SRC.parent / 'examples' / 'ggx.brdf')!r}).name == 'ggx'\n")
     env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True)
+
+
+def _modules(code: str, names: tuple[str, ...]) -> dict[str, bool]:
+    env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    probe = f"import sys, json\n{code}\nprint(json.dumps({{m: m in sys.modules for m in {list(names)!r}}}))"
+    done = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+POOL = ("brdfnorm.parallel.executors", "brdfnorm.parallel.job", "brdfnorm.parallel.checkpoint", "multiprocessing")
+
+
+def test_a_table_on_threads_does_not_import_the_process_pool():
+    # brdfnorm.parallel's names are imported at first use: lut.table (threads, the glass tables' pool in a function)
+    assert _modules("import brdfnorm.lut.table, brdfnorm.parallel.threads", POOL) == dict.fromkeys(POOL, False)
+    assert _modules("from brdfnorm.parallel import albedo_cells", POOL) == dict.fromkeys(POOL, True)
+
+
+def test_the_parallel_package_exports_the_same_names():
+    from brdfnorm import parallel
+    from brdfnorm.parallel import cells, cores, executors, job
+
+    assert set(parallel.__all__) <= set(dir(parallel))
+    for name in parallel.__all__:
+        owner = next(m for m in (cells, cores, executors, job) if hasattr(m, name))
+        assert getattr(parallel, name) is getattr(owner, name)
+    assert executors.local_cores is cores.local_cores  # (still importable from where it was)
+    with pytest.raises(AttributeError, match="no_such_name"):
+        parallel.no_such_name  # noqa: B018

@@ -14,7 +14,7 @@ import brdfnorm as bn
 from brdfnorm.engine.compiled import backend
 from brdfnorm.glsl import native as glsl_native
 from brdfnorm.lut import table
-from brdfnorm.parallel import executors
+from brdfnorm.parallel import cores
 from brdfnorm.parallel.threads import cell_tasks, local_threads, run_tasks
 
 pytest.importorskip("numba")
@@ -72,7 +72,7 @@ def test_run_tasks_keeps_order_and_context_and_raises():
 
 
 def test_thread_count_follows_backend_workers_and_scheduler(monkeypatch):
-    monkeypatch.setattr(executors, "local_cores", lambda: 2)
+    monkeypatch.setattr(cores, "local_cores", lambda: 2)
     with backend.scope("compiled"):
         assert local_threads(None) == 2
         assert local_threads(3) == local_threads(np.int64(3)) == 3
@@ -87,7 +87,7 @@ def test_brdf_table_on_two_threads_equals_one_thread_cold_and_warm(monkeypatch, 
     E, E_avg and their estimates bit for bit, on one thread and on two; the first threaded table with the shader's
     compiled kernel not yet made in this process (both threads ask for it at once: the one that waits must get the
     kernel, not the numpy integrand — the values would then differ in their last bits)."""
-    monkeypatch.setattr(executors, "local_cores", lambda: 2)
+    monkeypatch.setattr(cores, "local_cores", lambda: 2)
     model = bn.load(str(GGX_BRDF)).with_params(f0=1.0)
     axes = {"mu": np.linspace(0.0, 1.0, 6), "roughness": np.array([0.05, 0.3, 0.7, 1.0])}
     settings = dict(clamp={"mu": 1e-4}, rtol=1e-9, backend="compiled")
@@ -124,7 +124,7 @@ def test_builtin_dfg_table_on_two_threads_equals_one_thread(monkeypatch, spy):
 def _assert_two_threads_equal_one(monkeypatch, spy, name: str, axes: dict, **settings) -> None:
     """The compiled backend's table of built-in ``name`` on two threads (checked to have used them) equals, array for
     array, the one on one thread."""
-    monkeypatch.setattr(executors, "local_cores", lambda: 2)
+    monkeypatch.setattr(cores, "local_cores", lambda: 2)
     two = table.compute(bn.load(name), axes, workers=None, backend="compiled", **settings)
     assert max(spy["threads"]) == 2
     one = table.compute(bn.load(name), axes, workers=1, backend="compiled", **settings)
@@ -133,7 +133,7 @@ def _assert_two_threads_equal_one(monkeypatch, spy, name: str, axes: dict, **set
 
 
 def test_numpy_backend_keeps_one_thread(monkeypatch, spy):
-    monkeypatch.setattr(executors, "local_cores", lambda: 2)
+    monkeypatch.setattr(cores, "local_cores", lambda: 2)
     lut = table.compute(bn.load("blinn-phong"), {"mu": [0.5, 1.0], "n": [10.0, 100.0]}, rtol=1e-8, workers=None,
                         backend="numpy")
     assert lut["E"].shape == (2, 2)

@@ -21,7 +21,6 @@ import numpy as np
 from ..engine.routes.dielectric_average import average_albedo
 from ..models.base import Model
 from ..models.dielectric import MicrofacetDielectric
-from ..parallel.executors import Workers
 
 #: Albedo methods under which the 3-D route stands in for the μ-average of albedos.
 ROUTE_METHODS = ("auto", "dielectric")
@@ -41,6 +40,8 @@ def average(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, gene
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
     alpha, eta = (flat.get(name, np.full(M, float(model.params[name]))) for name in ("alpha", "eta"))
+    from ..parallel.executors import Workers  # (the process pool, imported where a glass table uses it)
+
     spread = spread or {}
     with Workers(spread.get("workers", 1), spread.get("scheduler")) as pool:
         pool.start()

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..models import Model
+from .cores import local_cores
 from .job import CellsJob, ChunkPlan, ModelSource, canonical_json
 
 #: Dask re-runs a chunk task that raised this many more times (an unexpected failure on one worker).
@@ -158,15 +159,6 @@ def compute_chunk(model: Model, header: Mapping, index: int, theta: np.ndarray, 
         return ChunkResult(index, found.albedo.reshape(n, -1), found.error.reshape(n, -1),
                            np.full(n, -1, dtype=np.int64), found.converged.reshape(n), np.zeros(n),
                            found.theta.reshape(n), found.phi.reshape(n), found.method, time.perf_counter() - start)
-
-
-def local_cores() -> int:
-    """Cores this process may run on (the default number of local workers)."""
-    import os
-
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
 
 
 class Workers:

@@ -77,7 +77,7 @@ def local_threads(workers: int | None = None, scheduler: object = None) -> int:
     the compiled backend computes (as :func:`brdfnorm.engine.compiled.backend.resolve` says now) and no Dask
     ``scheduler`` is given; else 1."""
     from ..engine.compiled.backend import resolve
-    from .executors import local_cores
+    from .cores import local_cores
 
     if scheduler is not None or resolve() != "compiled":
         return 1

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 from ..errors import ArgumentError
 from ..models.base import Model
-from .executors import local_cores
+from .cores import local_cores
 from .job import ModelSource
 
 #: The view angle (radians) and tolerance of the child's one albedo per job: any albedo compiles every kernel.
