@@ -107,6 +107,15 @@ def test_a_running_thread_is_waited_for():
     assert done.returncode == 0 and "built-in models" in done.stdout and "thread done" in done.stdout
 
 
+def test_a_profiled_run_writes_its_profile(tmp_path):
+    # cProfile writes its file after main() returns: under a profiler the process ends the interpreter's way
+    env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    profile = tmp_path / "run.prof"
+    done = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(profile), "-m", "brdfnorm", "models"], env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and "ggx" in done.stdout and profile.stat().st_size > 0
+
+
 def test_main_with_arguments_leaves_the_process_and_the_collector_alone():
     import gc
 

@@ -91,10 +91,12 @@ def _leave(code: object) -> NoReturn:
     its streams flushed and its ``atexit`` functions run first, as at a normal exit. The teardown — every module's
     dictionary cleared and Numba's and LLVM's objects destroyed one by one — took ~0.2 s after a table
     (docs/performance.md). Where another thread that is no daemon still runs, or a child process of
-    :mod:`multiprocessing`, the interpreter's own exit (which waits for them) is taken."""
+    :mod:`multiprocessing`, or where a profiler or tracer watches the process (``python -m cProfile -o FILE -m
+    brdfnorm ...`` writes its file after ``main()`` returns; coverage), the interpreter's own exit is taken."""
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive() and not t.daemon]
     processes = sys.modules.get("multiprocessing")
-    if others or (processes is not None and processes.active_children()):
+    watched = sys.getprofile() is not None or sys.gettrace() is not None
+    if others or watched or (processes is not None and processes.active_children()):
         raise SystemExit(code)
     status = 0 if code is None else code if isinstance(code, int) else 1
     if not isinstance(code, int | None):
