@@ -24,7 +24,7 @@ import typer
 from . import application
 from .help import tidy
 
-#: Each command's name -> the module of this package that defines it (tests/cli/test_lazy_commands.py keeps the
+#: Each command's name -> the module of this package that defines it (tests/cli/test_command_start.py keeps the
 #: two in step); in the order the modules were imported before (the order typer lists commands not in help.ORDER).
 COMMANDS = {
     "audit": "audit", "check": "check", "models": "core", "albedo": "core", "normalize": "core",
@@ -111,11 +111,12 @@ def _leave(code: object) -> NoReturn:
 
 
 def _run(args: list[str], started: Callable[[], None]) -> None:
+    """The command line ``args`` run (the application with the commands it needs; ``started`` called once their
+    modules are imported), its errors mapped to the exit statuses and lines of :func:`main`."""
     command = tidy(typer.main.get_command(register(chosen(args))))
     started()
     try:
-        code = command.main(args=args, prog_name="brdfnorm",
-                            standalone_mode=False)
+        code = command.main(args=args, prog_name="brdfnorm", standalone_mode=False)
         sys.stdout.flush()
     except typer.Exit as done:
         if done.exit_code == 0:
