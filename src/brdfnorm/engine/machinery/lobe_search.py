@@ -126,16 +126,18 @@ def lattice_neighbours(count: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _neighbour_lists(tree) -> tuple[np.ndarray, np.ndarray]:
-    """The nearest and the symmetric neighbour lists of the points of a ``cKDTree``."""
+    """The nearest and the symmetric neighbour lists of the points of a ``cKDTree``: each pair (i, j) and (j, i)
+    encoded as i·count + j, made unique and sorted by numpy (each row's neighbours in ascending order)."""
     count = tree.data.shape[0]
     nearest = tree.query(tree.data, NEIGHBOURS + 1)[1][:, 1:]
-    pairs = {(int(i), int(j)) for i, row in enumerate(nearest) for j in row}
-    pairs |= {(j, i) for i, j in pairs}
-    lists = [[] for _ in range(count)]
-    for i, j in sorted(pairs):
-        lists[i].append(j)
-    width = max(len(row) for row in lists)
-    symmetric = np.array([row + [i] * (width - len(row)) for i, row in enumerate(lists)], dtype=np.intp)
+    i = np.repeat(np.arange(count, dtype=np.intp), NEIGHBOURS)
+    j = nearest.ravel().astype(np.intp)
+    pairs = np.unique(np.concatenate([i * count + j, j * count + i]))
+    first, second = np.divmod(pairs, count)
+    length = np.bincount(first, minlength=count)
+    width = int(length.max())
+    symmetric = np.repeat(np.arange(count, dtype=np.intp)[:, None], width, axis=1)  # padded with i itself
+    symmetric[first, np.arange(pairs.size) - np.repeat(np.cumsum(length) - length, length)] = second
     nearest.flags.writeable = symmetric.flags.writeable = False
     return nearest, symmetric
 
@@ -187,13 +189,33 @@ def _locate(omega: np.ndarray, g: np.ndarray,
 
 def _component(mask: np.ndarray, start: np.ndarray, symmetric: np.ndarray) -> np.ndarray:
     """Per row, the samples of ``mask`` (k, m) joined to those of ``start`` (k, m) through samples of ``mask`` on the
-    neighbour lists ``symmetric`` (m, d)."""
-    reach = start.copy()
-    while True:
-        grown = reach | (mask & reach[:, symmetric].any(axis=-1))
-        if np.array_equal(grown, reach):
-            return reach
-        reach = grown
+    neighbour lists ``symmetric`` (m, d): the connected components (one pass of
+    :func:`scipy.sparse.csgraph.connected_components`) of the graph on the samples of ``mask | start`` of all rows,
+    an edge between two of a row's samples that the lists join, that hold a sample of ``start``. (A flood from
+    ``start`` through ``mask`` reaches exactly these, the lists being symmetric: a start sample outside ``mask``
+    passes the flood on as any reached one does.)"""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    k, m = mask.shape
+    node = (mask | start).ravel()
+    where = np.flatnonzero(node)
+    if where.size == 0:
+        return np.zeros_like(start)
+    index = np.full(node.size, -1, dtype=np.intp)
+    index[where] = np.arange(where.size)
+    row, sample = np.divmod(where, m)
+    other = index[(row * m)[:, None] + symmetric[sample]]  # (nodes, d): each neighbour's node, -1 where none
+    source = np.repeat(np.arange(where.size), symmetric.shape[1]).reshape(other.shape)
+    edge = other >= 0
+    graph = csr_matrix((np.ones(int(edge.sum()), dtype=np.int8), (source[edge], other[edge])),
+                       shape=(where.size, where.size))
+    labels = connected_components(graph, directed=False)[1]
+    reached = np.zeros(labels.max() + 1, dtype=bool)
+    reached[labels[start.ravel()[where]]] = True
+    reach = np.zeros(node.size, dtype=bool)
+    reach[where] = reached[labels]
+    return reach.reshape(k, m)
 
 
 def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarray], count: int,
