@@ -51,7 +51,7 @@ from functools import cache
 import numpy as np
 
 from ..routes.hemisphere import lobe_frame
-from .directions import angle_between
+from .directions import angle_between, norm
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -147,7 +147,18 @@ def _magnitudes(integrand: Integrand, omega: np.ndarray, case: np.ndarray) -> np
     index = np.broadcast_to(case[:, None], omega.shape[:2])
     with np.errstate(all="ignore"):
         g = np.abs(np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float))
-    return np.where(np.isfinite(g), g, 0.0).max(axis=-1).reshape(omega.shape[:2])
+    g[~np.isfinite(g)] = 0.0
+    return _largest(g.T).reshape(omega.shape[:2])
+
+
+def _largest(columns) -> np.ndarray:
+    """The elementwise maximum of the c ≥ 1 arrays ``columns`` (an array's first axis, or a list), no NaN among them:
+    the values of a ``.max`` over their axis, as c − 1 maxima of whole arrays (a reduction over a short last axis
+    runs its loop per element: 0.12 of the search's 0.48 CPU s in the 32 × 32 ``ggx.brdf`` table)."""
+    largest = columns[0]
+    for column in columns[1:]:
+        largest = np.maximum(largest, column)
+    return largest
 
 
 def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
@@ -324,7 +335,7 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
     def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
         nearest, symmetric = _cap_neighbours() if g.shape[1] == CAP_POINTS + 1 else lattice_neighbours(samples)
         on = g[:, :nearest.shape[0]]  # (the lattice's samples, not the likely directions after them)
-        strict = (on > on[:, nearest].max(axis=-1)) & (on > 0) & searched[case][:, None]
+        strict = (on > _largest([on[:, column] for column in nearest.T])) & (on > 0) & searched[case][:, None]
         # Not the main peak's own sample (where the main peak is a likely direction off the lattice, the lattice's
         # largest sample is a candidate: the arc test says whether it lies on the main peak's slope).
         best = np.argmax(g, axis=1)
@@ -395,7 +406,7 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     # The arc to the main peak: a ridge thinner than the samples joins them there.
     t = np.arange(1, ARC_POINTS + 1) / (ARC_POINTS + 1)
     arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
-    arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
+    arc /= np.maximum(norm(arc), 1e-300)[..., None]
     on_arc = _magnitudes(integrand, arc, case) if case.size else np.zeros((0, ARC_POINTS))
     np.add.at(evaluations, case, ARC_POINTS)
     apart = on_arc.min(axis=1, initial=np.inf) < SEPARATION * level
@@ -404,11 +415,11 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     # A curved ridge leaves the arc: the parallel arcs beside it, up to an eighth of its length away, where the arc
     # dipped (at each of its points the largest of them must dip too).
     across = np.cross(direction, poles[case])
-    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-300)
+    across /= np.maximum(norm(across), 1e-300)[..., None]
     length = angle_between(direction, poles[case])
     arc = arc[apart]
     beside = (arc[:, None] + (OFFSETS[None, :, None, None] * length[:, None, None, None]) * across[:, None, None, :])
-    beside = (beside / np.linalg.norm(beside, axis=-1, keepdims=True)).reshape(case.size, OFFSETS.size * ARC_POINTS,
+    beside = (beside / norm(beside)[..., None]).reshape(case.size, OFFSETS.size * ARC_POINTS,
                                                                                  3)
     on_side = _magnitudes(integrand, beside, case).reshape(case.size, OFFSETS.size, ARC_POINTS) if case.size \
         else np.zeros((0, OFFSETS.size, ARC_POINTS))
@@ -500,6 +511,6 @@ def _cap_lattice(peak: np.ndarray, cases: np.ndarray, radius: np.ndarray, cap_an
         radial = np.cos(cap_phi)[None, :, None] * T[i][:, None] + np.sin(cap_phi)[None, :, None] * B[i][:, None]
         omega = np.cos(angle)[..., None] * P[i][:, None] + np.sin(angle)[..., None] * radial
         omega[..., 2] = np.maximum(omega[..., 2], 1e-9)
-        return omega / np.linalg.norm(omega, axis=-1, keepdims=True)
+        return omega / norm(omega)[..., None]
 
     return directions
