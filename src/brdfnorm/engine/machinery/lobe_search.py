@@ -217,11 +217,12 @@ def _component(mask: np.ndarray, start: np.ndarray, symmetric: np.ndarray) -> np
     index[where] = np.arange(where.size)
     row, sample = np.divmod(where, m)
     other = index[(row * m)[:, None] + symmetric[sample]]  # (nodes, d): each neighbour's node, -1 where none
-    source = np.repeat(np.arange(where.size), symmetric.shape[1]).reshape(other.shape)
     edge = other >= 0
-    graph = csr_matrix((np.ones(int(edge.sum()), dtype=np.int8), (source[edge], other[edge])),
-                       shape=(where.size, where.size))
-    labels = connected_components(graph, directed=False)[1]
+    # The rows of the graph's CSR arrays are the nodes in order, so they come straight from ``other``; the graph is
+    # symmetric, so its strong components are its components (and scipy builds no transpose for them).
+    indptr = np.concatenate([[0], np.cumsum(edge.sum(axis=1))])
+    graph = csr_matrix((np.ones(int(indptr[-1])), other[edge], indptr), shape=(where.size, where.size))
+    labels = connected_components(graph, directed=True, connection="strong")[1]
     reached = np.zeros(labels.max() + 1, dtype=bool)
     reached[labels[start.ravel()[where]]] = True
     reach = np.zeros(node.size, dtype=bool)
