@@ -166,6 +166,18 @@ def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
     return angle_between(omega, centre[:, None, :])
 
 
+def _within(omega: np.ndarray, centre: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """``_angles(omega, centre) < radius[:, None]`` for unit directions ``omega`` (k, m, 3), ``centre`` (k, 3):
+    the angles computed only where the dot product ω·c ≥ |c|(cos r − 10⁻⁹) (every angle below r, with a margin
+    far above rounding; the others are farther than r)."""
+    dot = np.einsum("kmi,ki->km", omega, centre)
+    floor = norm(centre) * (np.cos(np.minimum(radius, np.pi)) - 1e-9)
+    at, sample = np.nonzero(dot >= floor[:, None])
+    near = np.zeros(dot.shape, dtype=bool)
+    near[at, sample] = angle_between(omega[at, sample], centre[at]) < radius[at]
+    return near
+
+
 def _locate(omega: np.ndarray, g: np.ndarray,
             graph: tuple[np.ndarray, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The largest sample's direction (k, 3) and the width about it (k,) from samples ``g`` (k, m) at ``omega``.
@@ -346,7 +358,7 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
         if some.any():
             # A main peak off the lattice counts as a sample joined to those within one spacing of it.
             top = omega[some, best[some]]
-            near = _angles(omega[some, :on.shape[1]], top) < spacing[some, None]
+            near = _within(omega[some, :on.shape[1]], top, spacing[some])
             ceiling = np.where(near, g[some, best[some]][:, None], on[some])
             found.append(_candidates(case[some], omega[some, :on.shape[1]], on[some], ceiling, strict[some],
                                      symmetric, spacing[some]))
@@ -391,8 +403,10 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.
     alone = ~np.any(reach & (ceiling[row] > level[:, None]), axis=1)
     row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
     direction = omega[row, index]
-    angle = _angles(omega[row], direction)
-    width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
+    squared = np.zeros(reach.shape)  # (the angles of the component's samples alone: the others' terms are 0)
+    at, sample = np.nonzero(reach)
+    squared[at, sample] = angle_between(omega[row[at], sample], direction[at]) ** 2
+    width = 2.0 * np.sqrt(squared.sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
     keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES  # (rows in order, values descending)
     over = CHARGE * 2.0 * np.pi * level * np.maximum(width, spacing[row]) ** 2
     return (case[row][keep], direction[keep], level[keep], width[keep], spacing[row][keep], case[row][~keep],
