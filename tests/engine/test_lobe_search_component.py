@@ -81,3 +81,20 @@ def test_component_of_nothing():
     empty = np.zeros((3, symmetric.shape[0]), dtype=bool)
     assert not lobe_search._component(empty, empty, symmetric).any()
     assert lobe_search._component(empty[:0], empty[:0], symmetric).shape == (0, symmetric.shape[0])
+
+
+def test_within_equals_the_angles_compared():
+    """lobe_search._within (angles only where the dot product allows them below the radius) equals the angles of
+    every sample compared with it, for radii from below the lattice's spacing to past the hemisphere."""
+    rng = np.random.default_rng(13)
+    omega = np.broadcast_to(lobe_search.fibonacci_hemisphere(lobe_search.SAMPLES), (6, lobe_search.SAMPLES, 3))
+    centre = rng.normal(size=(6, 3))
+    centre[:, 2] = np.abs(centre[:, 2])
+    centre /= np.linalg.norm(centre, axis=-1, keepdims=True)
+    centre[0] = omega[0, 17]  # a centre on the lattice: its own sample at angle 0
+    for radius in (1e-9, 0.01, 0.078, 0.5, 2.0, 4.0):
+        radii = np.full(6, radius)
+        expected = lobe_search._angles(omega, centre) < radii[:, None]
+        got = lobe_search._within(omega, centre, radii)
+        assert np.array_equal(got, expected)
+        assert radius < 0.5 or got.any()

@@ -519,11 +519,12 @@ def _cap_lattice(peak: np.ndarray, cases: np.ndarray, radius: np.ndarray, cap_an
     P, T, B = lobe_frame(peak[cases])
     position = np.empty(radius.size, dtype=np.intp)
     position[cases] = np.arange(cases.size)
+    cos_phi, sin_phi = np.cos(cap_phi)[None, :, None], np.sin(cap_phi)[None, :, None]
 
     def directions(case: np.ndarray) -> np.ndarray:
         i = position[case]
         angle = cap_angle[None, :] * radius[case][:, None]
-        radial = np.cos(cap_phi)[None, :, None] * T[i][:, None] + np.sin(cap_phi)[None, :, None] * B[i][:, None]
+        radial = cos_phi * T[i][:, None] + sin_phi * B[i][:, None]
         omega = np.cos(angle)[..., None] * P[i][:, None] + np.sin(angle)[..., None] * radial
         omega[..., 2] = np.maximum(omega[..., 2], 1e-9)
         return omega / norm(omega)[..., None]
