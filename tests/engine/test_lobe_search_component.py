@@ -98,3 +98,23 @@ def test_within_equals_the_angles_compared():
         got = lobe_search._within(omega, centre, radii)
         assert np.array_equal(got, expected)
         assert radius < 0.5 or got.any()
+
+
+def test_above_neighbours_is_the_maximum_compared():
+    """lobe_search._above_neighbours (each neighbour compared with the survivors of the ones before) equals the
+    comparison with the neighbours' maximum, on smooth lobes, noise, plateaus (ties are not strict) and zeros."""
+    nearest = lobe_search.lattice_neighbours(lobe_search.SAMPLES)[0]
+    omega = lobe_search.fibonacci_hemisphere(lobe_search.SAMPLES)
+    rng = np.random.default_rng(29)
+    centre = rng.normal(size=(40, 3))
+    centre /= np.linalg.norm(centre, axis=-1, keepdims=True)
+    g = np.exp(20.0 * centre @ omega.T)
+    g[:10] = rng.random((10, omega.shape[0]))
+    g[10:15] = np.round(g[10:15], 1)  # plateaus: equal neighbours
+    g[15] = 0.0
+    got = lobe_search._above_neighbours(g, nearest)
+    assert np.array_equal(got, g > g[:, nearest].max(axis=-1))
+    assert got[:10].sum() > 10 and not got[15].any()
+    cap = lobe_search._cap_neighbours()[0]
+    h = rng.random((5, cap.shape[0]))
+    assert np.array_equal(lobe_search._above_neighbours(h, cap), h > h[:, cap].max(axis=-1))

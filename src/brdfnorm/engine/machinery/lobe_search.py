@@ -151,6 +151,23 @@ def _magnitudes(integrand: Integrand, omega: np.ndarray, case: np.ndarray) -> np
     return _largest(g.T).reshape(omega.shape[:2])
 
 
+def _above_neighbours(g: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+    """Per row of samples ``g`` (k, m), no NaN among them, which are above all their neighbours ``nearest`` (m, n):
+    ``g > g[:, nearest].max(axis=-1)``, each neighbour compared only with the samples above the ones before it
+    (a sample above its first neighbour is one in two; strict maxima are few)."""
+    k, m = g.shape
+    flat = g.ravel()
+    where = np.flatnonzero(g > g[:, nearest[:, 0]])
+    value, sample = flat[where], where % m
+    start = where - sample
+    for column in nearest.T[1:]:
+        above = value > flat[start + column[sample]]
+        where, value, sample, start = where[above], value[above], sample[above], start[above]
+    strict = np.zeros(g.size, dtype=bool)
+    strict[where] = True
+    return strict.reshape(k, m)
+
+
 def _largest(columns) -> np.ndarray:
     """The elementwise maximum of the c ≥ 1 arrays ``columns`` (an array's first axis, or a list), no NaN among them:
     the values of a ``.max`` over their axis, as c − 1 maxima of whole arrays (a reduction over a short last axis
@@ -348,7 +365,7 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
     def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
         nearest, symmetric = _cap_neighbours() if g.shape[1] == CAP_POINTS + 1 else lattice_neighbours(samples)
         on = g[:, :nearest.shape[0]]  # (the lattice's samples, not the likely directions after them)
-        strict = (on > _largest([on[:, column] for column in nearest.T])) & (on > 0) & searched[case][:, None]
+        strict = _above_neighbours(on, nearest) & (on > 0) & searched[case][:, None]
         # Not the main peak's own sample (where the main peak is a likely direction off the lattice, the lattice's
         # largest sample is a candidate: the arc test says whether it lies on the main peak's slope).
         best = np.argmax(g, axis=1)
