@@ -120,16 +120,25 @@ def lattice_neighbours(count: int) -> tuple[np.ndarray, np.ndarray]:
     """The :data:`NEIGHBOURS` nearest neighbours of each direction of :func:`fibonacci_hemisphere` (count, k), and
     the symmetric neighbour lists (count, d) (i is j's neighbour or j is i's; padded with i itself), computed once
     per lattice."""
-    from scipy.spatial import cKDTree  # (only cases without a hint search; keeps the engine's import light)
-
-    return _neighbour_lists(cKDTree(fibonacci_hemisphere(count)))
+    return _neighbour_lists(fibonacci_hemisphere(count))
 
 
-def _neighbour_lists(tree) -> tuple[np.ndarray, np.ndarray]:
-    """The nearest and the symmetric neighbour lists of the points of a ``cKDTree``: each pair (i, j) and (j, i)
+def _nearest(points: np.ndarray) -> np.ndarray:
+    """The :data:`NEIGHBOURS` nearest other points of each of ``points`` (count, dimensions), nearest first: by
+    squared distances summed over the differences, all pairs (a lattice of 1 024 points: ~10 ms, no scipy.spatial
+    to import, which cost 30–70 ms a process; the same neighbours as its ``cKDTree`` gives, tests/engine)."""
+    distance = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=-1)
+    np.fill_diagonal(distance, -1.0)  # (each point first, dropped below)
+    closest = np.argpartition(distance, NEIGHBOURS, axis=1)[:, :NEIGHBOURS + 1]
+    order = np.lexsort((closest, np.take_along_axis(distance, closest, axis=1)), axis=1)
+    return np.take_along_axis(closest, order, axis=1)[:, 1:]
+
+
+def _neighbour_lists(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest (:func:`_nearest`) and the symmetric neighbour lists of ``points``: each pair (i, j) and (j, i)
     encoded as i·count + j, made unique and sorted by numpy (each row's neighbours in ascending order)."""
-    count = tree.data.shape[0]
-    nearest = tree.query(tree.data, NEIGHBOURS + 1)[1][:, 1:]
+    count = points.shape[0]
+    nearest = _nearest(points)
     i = np.repeat(np.arange(count, dtype=np.intp), NEIGHBOURS)
     j = nearest.ravel().astype(np.intp)
     pairs = np.unique(np.concatenate([i * count + j, j * count + i]))
@@ -499,10 +508,8 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
 def _cap_neighbours() -> tuple[np.ndarray, np.ndarray]:
     """:func:`lattice_neighbours` of the zoom's cap (its centre and :data:`CAP_POINTS` points), in the plane of
     its polar coordinates."""
-    from scipy.spatial import cKDTree
-
     angle, phi, _ = _cap()
-    return _neighbour_lists(cKDTree(np.stack([angle * np.cos(phi), angle * np.sin(phi)], axis=-1)))
+    return _neighbour_lists(np.stack([angle * np.cos(phi), angle * np.sin(phi)], axis=-1))
 
 
 def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: np.ndarray, poles: np.ndarray,
