@@ -127,7 +127,9 @@ def _nearest(points: np.ndarray) -> np.ndarray:
     """The :data:`NEIGHBOURS` nearest other points of each of ``points`` (count, dimensions), nearest first: by
     squared distances summed over the differences, all pairs (a lattice of 1 024 points: ~10 ms, no scipy.spatial
     to import, which cost 30–70 ms a process; the same neighbours as its ``cKDTree`` gives, tests/engine)."""
-    distance = ((points[:, None, :] - points[None, :, :]) ** 2).sum(axis=-1)
+    distance = np.zeros((points.shape[0], points.shape[0]))
+    for x in points.T:  # (one coordinate at a time: a (count, count) array, not (count, count, dimensions))
+        distance += (x[:, None] - x[None, :]) ** 2
     np.fill_diagonal(distance, -1.0)  # (each point first, dropped below)
     closest = np.argpartition(distance, NEIGHBOURS, axis=1)[:, :NEIGHBOURS + 1]
     order = np.lexsort((closest, np.take_along_axis(distance, closest, axis=1)), axis=1)
