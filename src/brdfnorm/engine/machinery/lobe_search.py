@@ -51,7 +51,7 @@ from functools import cache
 import numpy as np
 
 from ..routes.hemisphere import lobe_frame
-from .directions import angle_between
+from .directions import angle_between, norm
 
 #: Integrand signature: (ω (M, 3), case index (M,)) -> (M, C).
 Integrand = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -120,22 +120,35 @@ def lattice_neighbours(count: int) -> tuple[np.ndarray, np.ndarray]:
     """The :data:`NEIGHBOURS` nearest neighbours of each direction of :func:`fibonacci_hemisphere` (count, k), and
     the symmetric neighbour lists (count, d) (i is j's neighbour or j is i's; padded with i itself), computed once
     per lattice."""
-    from scipy.spatial import cKDTree  # (only cases without a hint search; keeps the engine's import light)
-
-    return _neighbour_lists(cKDTree(fibonacci_hemisphere(count)))
+    return _neighbour_lists(fibonacci_hemisphere(count))
 
 
-def _neighbour_lists(tree) -> tuple[np.ndarray, np.ndarray]:
-    """The nearest and the symmetric neighbour lists of the points of a ``cKDTree``."""
-    count = tree.data.shape[0]
-    nearest = tree.query(tree.data, NEIGHBOURS + 1)[1][:, 1:]
-    pairs = {(int(i), int(j)) for i, row in enumerate(nearest) for j in row}
-    pairs |= {(j, i) for i, j in pairs}
-    lists = [[] for _ in range(count)]
-    for i, j in sorted(pairs):
-        lists[i].append(j)
-    width = max(len(row) for row in lists)
-    symmetric = np.array([row + [i] * (width - len(row)) for i, row in enumerate(lists)], dtype=np.intp)
+def _nearest(points: np.ndarray) -> np.ndarray:
+    """The :data:`NEIGHBOURS` nearest other points of each of ``points`` (count, dimensions), nearest first: by
+    squared distances summed over the differences, all pairs (a lattice of 1 024 points: ~10 ms, no scipy.spatial
+    to import, which cost 30–70 ms a process; the same neighbours as its ``cKDTree`` gives, tests/engine)."""
+    distance = np.zeros((points.shape[0], points.shape[0]))
+    for x in points.T:  # (one coordinate at a time: a (count, count) array, not (count, count, dimensions))
+        distance += (x[:, None] - x[None, :]) ** 2
+    np.fill_diagonal(distance, -1.0)  # (each point first, dropped below)
+    closest = np.argpartition(distance, NEIGHBOURS, axis=1)[:, :NEIGHBOURS + 1]
+    order = np.lexsort((closest, np.take_along_axis(distance, closest, axis=1)), axis=1)
+    return np.take_along_axis(closest, order, axis=1)[:, 1:]
+
+
+def _neighbour_lists(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest (:func:`_nearest`) and the symmetric neighbour lists of ``points``: each pair (i, j) and (j, i)
+    encoded as i·count + j, made unique and sorted by numpy (each row's neighbours in ascending order)."""
+    count = points.shape[0]
+    nearest = _nearest(points)
+    i = np.repeat(np.arange(count, dtype=np.intp), NEIGHBOURS)
+    j = nearest.ravel().astype(np.intp)
+    pairs = np.unique(np.concatenate([i * count + j, j * count + i]))
+    first, second = np.divmod(pairs, count)
+    length = np.bincount(first, minlength=count)
+    width = int(length.max())
+    symmetric = np.repeat(np.arange(count, dtype=np.intp)[:, None], width, axis=1)  # padded with i itself
+    symmetric[first, np.arange(pairs.size) - np.repeat(np.cumsum(length) - length, length)] = second
     nearest.flags.writeable = symmetric.flags.writeable = False
     return nearest, symmetric
 
@@ -145,12 +158,52 @@ def _magnitudes(integrand: Integrand, omega: np.ndarray, case: np.ndarray) -> np
     index = np.broadcast_to(case[:, None], omega.shape[:2])
     with np.errstate(all="ignore"):
         g = np.abs(np.asarray(integrand(omega.reshape(-1, 3), index.ravel()), dtype=float))
-    return np.where(np.isfinite(g), g, 0.0).max(axis=-1).reshape(omega.shape[:2])
+    g[~np.isfinite(g)] = 0.0
+    return _largest(g.T).reshape(omega.shape[:2])
+
+
+def _above_neighbours(g: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+    """Per row of samples ``g`` (k, m), no NaN among them, which are above all their neighbours ``nearest`` (m, n):
+    ``g > g[:, nearest].max(axis=-1)``, each neighbour compared only with the samples above the ones before it
+    (a sample above its first neighbour is one in two; strict maxima are few)."""
+    k, m = g.shape
+    flat = g.ravel()
+    where = np.flatnonzero(g > g[:, nearest[:, 0]])
+    value, sample = flat[where], where % m
+    start = where - sample
+    for column in nearest.T[1:]:
+        above = value > flat[start + column[sample]]
+        where, value, sample, start = where[above], value[above], sample[above], start[above]
+    strict = np.zeros(g.size, dtype=bool)
+    strict[where] = True
+    return strict.reshape(k, m)
+
+
+def _largest(columns) -> np.ndarray:
+    """The elementwise maximum of the c ≥ 1 arrays ``columns`` (an array's first axis, or a list), no NaN among them:
+    the values of a ``.max`` over their axis, as c − 1 maxima of whole arrays (a reduction over a short last axis
+    runs its loop per element: a quarter of the search's CPU in the 32 × 32 ``ggx.brdf`` table, before)."""
+    largest = columns[0]
+    for column in columns[1:]:
+        largest = np.maximum(largest, column)
+    return largest
 
 
 def _angles(omega: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """Angles (k, m) between ``omega`` (k, m, 3) and ``centre`` (k, 3)."""
     return angle_between(omega, centre[:, None, :])
+
+
+def _within(omega: np.ndarray, centre: np.ndarray, radius: np.ndarray) -> np.ndarray:
+    """``_angles(omega, centre) < radius[:, None]`` for unit directions ``omega`` (k, m, 3), ``centre`` (k, 3):
+    the angles computed only where the dot product ω·c ≥ |c|(cos r − 10⁻⁹) (every angle below r, with a margin
+    far above rounding; the others are farther than r)."""
+    dot = np.einsum("kmi,ki->km", omega, centre)
+    floor = norm(centre) * (np.cos(np.minimum(radius, np.pi)) - 1e-9)
+    at, sample = np.nonzero(dot >= floor[:, None])
+    near = np.zeros(dot.shape, dtype=bool)
+    near[at, sample] = angle_between(omega[at, sample], centre[at]) < radius[at]
+    return near
 
 
 def _locate(omega: np.ndarray, g: np.ndarray,
@@ -187,13 +240,34 @@ def _locate(omega: np.ndarray, g: np.ndarray,
 
 def _component(mask: np.ndarray, start: np.ndarray, symmetric: np.ndarray) -> np.ndarray:
     """Per row, the samples of ``mask`` (k, m) joined to those of ``start`` (k, m) through samples of ``mask`` on the
-    neighbour lists ``symmetric`` (m, d)."""
-    reach = start.copy()
-    while True:
-        grown = reach | (mask & reach[:, symmetric].any(axis=-1))
-        if np.array_equal(grown, reach):
-            return reach
-        reach = grown
+    neighbour lists ``symmetric`` (m, d): the connected components (one pass of
+    :func:`scipy.sparse.csgraph.connected_components`) of the graph on the samples of ``mask | start`` of all rows,
+    an edge between two of a row's samples that the lists join, that hold a sample of ``start``. (A flood from
+    ``start`` through ``mask`` reaches exactly these, the lists being symmetric: a start sample outside ``mask``
+    passes the flood on as any reached one does.)"""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    k, m = mask.shape
+    node = (mask | start).ravel()
+    where = np.flatnonzero(node)
+    if where.size == 0:
+        return np.zeros_like(start)
+    index = np.full(node.size, -1, dtype=np.intp)
+    index[where] = np.arange(where.size)
+    row, sample = np.divmod(where, m)
+    other = index[(row * m)[:, None] + symmetric[sample]]  # (nodes, d): each neighbour's node, -1 where none
+    edge = other >= 0
+    # The rows of the graph's CSR arrays are the nodes in order, so they come straight from ``other``; the graph is
+    # symmetric, so its strong components are its components (and scipy builds no transpose for them).
+    indptr = np.concatenate([[0], np.cumsum(edge.sum(axis=1))])
+    graph = csr_matrix((np.ones(int(indptr[-1])), other[edge], indptr), shape=(where.size, where.size))
+    labels = connected_components(graph, directed=True, connection="strong")[1]
+    reached = np.zeros(labels.max() + 1, dtype=bool)
+    reached[labels[start.ravel()[where]]] = True
+    reach = np.zeros(node.size, dtype=bool)
+    reach[where] = reached[labels]
+    return reach.reshape(k, m)
 
 
 def _sample(integrand: Integrand, directions_of: Callable[[np.ndarray], np.ndarray], count: int,
@@ -302,7 +376,7 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
     def seen(case: np.ndarray, omega: np.ndarray, g: np.ndarray, spacing: np.ndarray) -> None:
         nearest, symmetric = _cap_neighbours() if g.shape[1] == CAP_POINTS + 1 else lattice_neighbours(samples)
         on = g[:, :nearest.shape[0]]  # (the lattice's samples, not the likely directions after them)
-        strict = (on > on[:, nearest].max(axis=-1)) & (on > 0) & searched[case][:, None]
+        strict = _above_neighbours(on, nearest) & (on > 0) & searched[case][:, None]
         # Not the main peak's own sample (where the main peak is a likely direction off the lattice, the lattice's
         # largest sample is a candidate: the arc test says whether it lies on the main peak's slope).
         best = np.argmax(g, axis=1)
@@ -312,7 +386,7 @@ def search_lobes(integrand: Integrand, cases: int, samples: int = SAMPLES, max_n
         if some.any():
             # A main peak off the lattice counts as a sample joined to those within one spacing of it.
             top = omega[some, best[some]]
-            near = _angles(omega[some, :on.shape[1]], top) < spacing[some, None]
+            near = _within(omega[some, :on.shape[1]], top, spacing[some])
             ceiling = np.where(near, g[some, best[some]][:, None], on[some])
             found.append(_candidates(case[some], omega[some, :on.shape[1]], on[some], ceiling, strict[some],
                                      symmetric, spacing[some]))
@@ -357,8 +431,10 @@ def _candidates(case: np.ndarray, omega: np.ndarray, g: np.ndarray, ceiling: np.
     alone = ~np.any(reach & (ceiling[row] > level[:, None]), axis=1)
     row, index, level, reach = row[alone], index[alone], level[alone], reach[alone]
     direction = omega[row, index]
-    angle = _angles(omega[row], direction)
-    width = 2.0 * np.sqrt(np.where(reach, angle**2, 0.0).sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
+    squared = np.zeros(reach.shape)  # (the angles of the component's samples alone: the others' terms are 0)
+    at, sample = np.nonzero(reach)
+    squared[at, sample] = angle_between(omega[row[at], sample], direction[at]) ** 2
+    width = 2.0 * np.sqrt(squared.sum(axis=1) / np.maximum(reach.sum(axis=1), 1))
     keep = np.arange(row.size) - np.searchsorted(row, row) < MAX_CANDIDATES  # (rows in order, values descending)
     over = CHARGE * 2.0 * np.pi * level * np.maximum(width, spacing[row]) ** 2
     return (case[row][keep], direction[keep], level[keep], width[keep], spacing[row][keep], case[row][~keep],
@@ -373,7 +449,7 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     # The arc to the main peak: a ridge thinner than the samples joins them there.
     t = np.arange(1, ARC_POINTS + 1) / (ARC_POINTS + 1)
     arc = direction[:, None, :] * (1.0 - t)[:, None] + poles[case][:, None, :] * t[:, None]
-    arc /= np.maximum(np.linalg.norm(arc, axis=-1, keepdims=True), 1e-300)
+    arc /= np.maximum(norm(arc), 1e-300)[..., None]
     on_arc = _magnitudes(integrand, arc, case) if case.size else np.zeros((0, ARC_POINTS))
     np.add.at(evaluations, case, ARC_POINTS)
     apart = on_arc.min(axis=1, initial=np.inf) < SEPARATION * level
@@ -382,12 +458,11 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
     # A curved ridge leaves the arc: the parallel arcs beside it, up to an eighth of its length away, where the arc
     # dipped (at each of its points the largest of them must dip too).
     across = np.cross(direction, poles[case])
-    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-300)
+    across /= np.maximum(norm(across), 1e-300)[..., None]
     length = angle_between(direction, poles[case])
     arc = arc[apart]
     beside = (arc[:, None] + (OFFSETS[None, :, None, None] * length[:, None, None, None]) * across[:, None, None, :])
-    beside = (beside / np.linalg.norm(beside, axis=-1, keepdims=True)).reshape(case.size, OFFSETS.size * ARC_POINTS,
-                                                                                 3)
+    beside = (beside / norm(beside)[..., None]).reshape(case.size, OFFSETS.size * ARC_POINTS, 3)
     on_side = _magnitudes(integrand, beside, case).reshape(case.size, OFFSETS.size, ARC_POINTS) if case.size \
         else np.zeros((0, OFFSETS.size, ARC_POINTS))
     np.add.at(evaluations, case, OFFSETS.size * ARC_POINTS)
@@ -434,10 +509,8 @@ def _confirmed(integrand: Integrand, cases: int, poles: np.ndarray, widths: np.n
 def _cap_neighbours() -> tuple[np.ndarray, np.ndarray]:
     """:func:`lattice_neighbours` of the zoom's cap (its centre and :data:`CAP_POINTS` points), in the plane of
     its polar coordinates."""
-    from scipy.spatial import cKDTree
-
     angle, phi, _ = _cap()
-    return _neighbour_lists(cKDTree(np.stack([angle * np.cos(phi), angle * np.sin(phi)], axis=-1)))
+    return _neighbour_lists(np.stack([angle * np.cos(phi), angle * np.sin(phi)], axis=-1))
 
 
 def _merged(case: np.ndarray, direction: np.ndarray, width: np.ndarray, value: np.ndarray, poles: np.ndarray,
@@ -471,13 +544,14 @@ def _cap_lattice(peak: np.ndarray, cases: np.ndarray, radius: np.ndarray, cap_an
     P, T, B = lobe_frame(peak[cases])
     position = np.empty(radius.size, dtype=np.intp)
     position[cases] = np.arange(cases.size)
+    cos_phi, sin_phi = np.cos(cap_phi)[None, :, None], np.sin(cap_phi)[None, :, None]
 
     def directions(case: np.ndarray) -> np.ndarray:
         i = position[case]
         angle = cap_angle[None, :] * radius[case][:, None]
-        radial = np.cos(cap_phi)[None, :, None] * T[i][:, None] + np.sin(cap_phi)[None, :, None] * B[i][:, None]
+        radial = cos_phi * T[i][:, None] + sin_phi * B[i][:, None]
         omega = np.cos(angle)[..., None] * P[i][:, None] + np.sin(angle)[..., None] * radial
         omega[..., 2] = np.maximum(omega[..., 2], 1e-9)
-        return omega / np.linalg.norm(omega, axis=-1, keepdims=True)
+        return omega / norm(omega)[..., None]
 
     return directions

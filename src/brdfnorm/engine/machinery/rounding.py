@@ -65,6 +65,22 @@ _SPLIT = 134217729.0
 
 def _probe_rays(frame, widths: np.ndarray, supports: np.ndarray) -> np.ndarray:
     """The probe's directions (K, azimuths, radii, steps, points, 3) (:func:`rounding_noise`)."""
+    return _rays(frame[0], *_probe_angles(frame, widths, supports))
+
+
+def _rays(P: np.ndarray, alpha: np.ndarray, radial: np.ndarray) -> np.ndarray:
+    """The directions at angles ``alpha`` (K, azimuths, ...) from the poles ``P`` (K, 3) towards ``radial``
+    (K, azimuths, 3): (K, azimuths, ..., 3), each from its own angle alone (so any subset of a probe's angles gives
+    the same bits as the whole probe's)."""
+    extra = (None,) * (alpha.ndim - 2)
+    pole = P[(slice(None), None) + extra]
+    towards = radial[(slice(None), slice(None)) + extra]
+    return np.cos(alpha)[..., None] * pole + np.sin(alpha)[..., None] * towards
+
+
+def _probe_angles(frame, widths: np.ndarray, supports: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The probe's angles from the pole (K, azimuths, radii, steps, points) and its radial directions
+    (K, azimuths, 3) (:func:`_probe_rays`)."""
     P, T, B = frame
     pz = P[:, 2:3]
     s = np.sqrt(np.maximum(1.0 - pz * pz, 0.0))
@@ -78,8 +94,7 @@ def _probe_rays(frame, widths: np.ndarray, supports: np.ndarray) -> np.ndarray:
     alpha = (start[:, :, :, None, None]
              + step[:, :, None, :, None] * np.arange(_PROBE_POINTS))  # (K, az, radii, steps, points)
     radial = cos_b[None, :, None] * T[:, None, :] + sin_b[None, :, None] * B[:, None, :]  # (K, az, 3)
-    return (np.cos(alpha)[..., None] * P[:, None, None, None, None, :]
-            + np.sin(alpha)[..., None] * radial[:, :, None, None, None, :])
+    return alpha, radial
 
 
 def _sample(integrand, omega: np.ndarray, cases: np.ndarray, max_nodes_per_call: int) -> np.ndarray:
@@ -170,10 +185,11 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     probe's amplitude is at most 2.1 times the survey's over Blinn-Phong, Phong, modified Phong n = 1…1e8, the
     Beckmann, GGX, naive GGX, Oren-Nayar and two-lobe shaders at random views, docs/performance.md).
     """
-    omega = _probe_rays(frame, widths, supports)
-    K = omega.shape[0]
+    # (the survey's directions alone, then the probe's of the cases that need it: most cases need only the survey)
+    alpha, radial = _probe_angles(frame, widths, supports)
+    K = alpha.shape[0]
     evaluations = np.full(K, SURVEY_EVALUATIONS, dtype=np.int64)
-    survey = omega[:, :, _SURVEY_RADII][:, :, :, _SURVEY_STEPS][:, :, :, :, :_SURVEY_POINTS]
+    survey = _rays(frame[0], alpha[:, :, _SURVEY_RADII][:, :, :, _SURVEY_STEPS][:, :, :, :, :_SURVEY_POINTS], radial)
     g_survey = _sample(integrand, survey, np.arange(K), max_nodes_per_call)
     amplitude = _floored(SURVEY_MARGIN * _relative_noise(g_survey), widths, epsilon)
     stands = np.all(noise_bound(amplitude, 1.0) < rtol / SURVEY_QUIET, axis=-1)
@@ -182,12 +198,13 @@ def surveyed_noise(integrand: Callable[[np.ndarray, np.ndarray], np.ndarray], fr
     full = np.flatnonzero(~stands)
     if full.size:
         # The rest of the probe's nodes for those cases (the survey's are reused).
+        omega = _rays(frame[0][full], alpha[full], radial[full])
         surveyed = np.zeros(omega.shape[1:5], dtype=bool)  # (azimuths, radii, steps, points)
         surveyed[np.ix_(np.arange(_PROBE_AZIMUTHS.size), _SURVEY_RADII, _SURVEY_STEPS,
                         np.arange(_SURVEY_POINTS))] = True
-        g = np.full(omega[full].shape[:-1] + (g_survey.shape[-1],), np.nan)
+        g = np.full(omega.shape[:-1] + (g_survey.shape[-1],), np.nan)
         g[:, surveyed] = g_survey[full].reshape(full.size, -1, g_survey.shape[-1])
-        g[:, ~surveyed] = _sample(integrand, omega[full][:, ~surveyed], full, max_nodes_per_call)
+        g[:, ~surveyed] = _sample(integrand, omega[:, ~surveyed], full, max_nodes_per_call)
         amplitude[full] = _floored(_relative_noise(g), widths[full], epsilon)
         evaluations[full] = PROBE_EVALUATIONS
     return amplitude, evaluations

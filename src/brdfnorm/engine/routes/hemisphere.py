@@ -82,6 +82,7 @@ from ..machinery.confirmation import (
     confirm_before_stop,
     stopping,
 )
+from ..machinery.directions import cross, norm
 from ..machinery.grazing_panels import starting_panels
 from ..machinery.hemisphere_global import integrate_global
 from ..machinery.kinks import algebraic_floor, refinement_change
@@ -117,14 +118,14 @@ def lobe_frame(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     P = np.array(poles, dtype=float, copy=True)
     # The pole must lie strictly above the horizon for α_h(β) to be positive everywhere.
     P[:, 2] = np.maximum(P[:, 2], 1e-9)
-    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    P /= norm(P)[:, None]  # (directions' norm and cross product: numpy's bits, without their generic overhead)
     up = np.zeros_like(P)
     up[:, 2] = 1.0
     T = up - P[:, 2:3] * P
-    norm = np.linalg.norm(T, axis=1, keepdims=True)
-    at_pole = norm[:, 0] < 1e-12
-    T = np.where(at_pole[:, None], np.array([1.0, 0.0, 0.0]), T / np.where(at_pole[:, None], 1.0, norm))
-    B = np.cross(P, T)
+    length = norm(T)[:, None]
+    at_pole = length[:, 0] < 1e-12
+    T = np.where(at_pole[:, None], np.array([1.0, 0.0, 0.0]), T / np.where(at_pole[:, None], 1.0, length))
+    B = np.stack(cross(P, T), axis=-1)
     return P, T, B
 
 
