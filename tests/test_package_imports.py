@@ -15,9 +15,10 @@ import pytest
 from helpers.paths import SRC
 
 #: What ``import brdfnorm`` must not import: each costs the start of a command that does not use it (the engine,
-#: the models and scipy.special ~0.2 s, the materials ~0.1 s, Numba ~0.3 s; docs/performance.md, eighth round).
+#: the models and scipy.special ~0.2 s, the materials ~0.1 s, Numba ~0.3 s; numpy before the command line has
+#: set its BLAS threads: docs/performance.md, eighth round).
 HEAVY = ("brdfnorm.engine", "brdfnorm.models", "brdfnorm.materials", "brdfnorm.materials.model",
-         "brdfnorm.inputs.npz", "brdfnorm.normalization", "scipy", "scipy.special", "numba")
+         "brdfnorm.inputs.npz", "brdfnorm.normalization", "numpy", "scipy", "scipy.special", "numba")
 
 
 def _run(code: str) -> dict:

@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError, ParameterError
-from .validate import short_repr
 from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
 if TYPE_CHECKING:  # (imported on first use below: PEP 562's module __getattr__)
@@ -87,6 +86,8 @@ def load(name_or_path: str | Path, **params: object) -> Model:
         return load_brdf(path, **params)
     if path.suffix == ".brdf" or "/" in key or "\\" in key:
         raise ModelNotFoundError("no such file", where=key)
+    from .validate import short_repr
+
     raise ModelNotFoundError(f"unknown model {short_repr(key)}: not a built-in ({', '.join(REGISTRY)}) and no "
                              "such file", where="model")
 

@@ -116,6 +116,22 @@ def test_a_profiled_run_writes_its_profile(tmp_path):
     assert done.returncode == 0 and "ggx" in done.stdout and profile.stat().st_size > 0
 
 
+def test_one_blas_thread_unless_the_user_sets_them():
+    # the process's BLAS threads spin on the cores its table threads compute on: one, where the user sets none
+    from brdfnorm.cli import BLAS_THREADS
+
+    code = ("import atexit, os, sys\n"
+            "atexit.register(lambda: print(os.environ.get('OPENBLAS_NUM_THREADS'), os.environ.get('MKL_NUM_THREADS'),"
+            " 'numpy' in sys.modules))\nfrom brdfnorm.cli import main\nsys.argv[0] = 'brdfnorm'\nmain()\n")
+    base = {k: v for k, v in os.environ.items() if k not in BLAS_THREADS}
+    base["PYTHONPATH"] = str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")
+    for given, expected in (({}, "1 1 True"), ({"OMP_NUM_THREADS": "2"}, "None None True"),
+                            ({"OPENBLAS_NUM_THREADS": "3"}, "3 None True")):
+        done = subprocess.run([sys.executable, "-c", code, "albedo", "ggx", "--theta", "30"], env={**base, **given},
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0 and done.stdout.splitlines()[-1] == expected, (given, done.stdout, done.stderr)
+
+
 def test_main_with_arguments_leaves_the_process_and_the_collector_alone():
     import gc
 
