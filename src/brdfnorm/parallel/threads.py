@@ -31,8 +31,15 @@ safe: per thread, it could leave a filter behind).
 How many threads: :func:`scope` (a context variable, as the backend's
 :func:`brdfnorm.engine.compiled.backend.scope`), set where a table or an audit starts and read where a batch is cut
 into tasks; no stage passes it on. Two stages that do not depend on each other (a table's E and E_avg) run at once
-with :func:`beside`: each batch waits at its end for its slowest task, and the other stage's tasks fill that gap;
-the warning filter the batches need is set once around both (:func:`albedo_warnings_ignored`).
+with :func:`beside`; the warning filter the batches need is set once around both (:func:`albedo_warnings_ignored`).
+
+Which task runs when two stages share the cores (:class:`Slots`): at most ``threads`` tasks at once. The stage
+beside is the critical path (a table's E_avg: a chain of dependent albedo calls, ~1.2 CPU s of the 32 × 32
+``examples/ggx.brdf`` table's ~2.4): it holds one slot from its start to its end, its Python between calls
+included, and takes every other slot that frees before the caller's tasks do (its tasks on its own thread and on
+helpers that wait for a slot); the caller's tasks (E) run in the slots left. Before, three threads (E_avg's and
+E's two) shared two cores, and E_avg, starved, ended ~0.3 s after E (docs/performance.md, "Eighth round: the
+E_avg chain"). Which thread runs a task changes nothing in its result.
 
 Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
 short array operations) and for a Dask cluster (its workers compute the cells).
@@ -62,6 +69,9 @@ _THREADS: contextvars.ContextVar[int] = contextvars.ContextVar("brdfnorm_threads
 _QUIET: contextvars.ContextVar[bool] = contextvars.ContextVar("brdfnorm_quiet", default=False)
 #: Set in a stage that runs beside another (:func:`beside`): its next batch of cells does not start once it is set.
 _STOP: contextvars.ContextVar[threading.Event | None] = contextvars.ContextVar("brdfnorm_stop", default=None)
+#: Set while two stages share the cores (:func:`beside`): the slots, and whether this context's stage holds one (the
+#: stage beside, the critical path) or takes one per task (the caller's).
+_SLOTS: contextvars.ContextVar[tuple[Slots, bool] | None] = contextvars.ContextVar("brdfnorm_slots", default=None)
 
 
 class Stopped(Exception):
@@ -134,23 +144,66 @@ def albedo_warnings_ignored() -> Iterator[None]:
             _QUIET.reset(token)
 
 
+class Slots:
+    """At most ``count`` tasks at once (module docstring): :meth:`acquire` a slot, ``urgent`` before every waiting
+    task that is not; ``wanted`` (called under the lock) says whether a waiter still wants one."""
+
+    def __init__(self, count: int) -> None:
+        self.lock = threading.Condition()
+        self._free = max(1, int(count))
+        self._urgent = 0
+
+    def acquire(self, urgent: bool = False, wanted: Callable[[], bool] = lambda: True) -> bool:
+        """Wait for a slot and take it (True), or give up once ``wanted()`` is false (False)."""
+        with self.lock:
+            self._urgent += urgent
+            try:
+                while wanted() and (self._free == 0 or (self._urgent and not urgent)):
+                    self.lock.wait()
+                if not wanted():
+                    return False
+                self._free -= 1
+                return True
+            finally:
+                self._urgent -= urgent
+                self.lock.notify_all()  # (an urgent waiter that leaves may let the others in)
+
+    def release(self) -> None:
+        with self.lock:
+            self._free += 1
+            self.lock.notify_all()
+
+
 @contextlib.contextmanager
 def beside(function: Callable[..., Result], *args, **kwargs) -> Iterator[Callable[[], Result]]:
     """``function(*args, **kwargs)`` on a thread of its own while the block runs (in a copy of the caller's context:
     the scopes, the warning filter's flag); yields a callable that waits for it and returns its result or raises
-    its exception. Where the block fails, the other stage stops before its next batch of cells (:class:`Stopped`)
-    and is waited for (a compiled kernel cannot be stopped midway)."""
+    its exception. The two share :func:`current` threads' worth of :class:`Slots`, ``function`` first (the
+    critical path: module docstring). Where the block fails, the other stage stops before its next batch of cells
+    (:class:`Stopped`) and is waited for (a compiled kernel cannot be stopped midway)."""
     stop = threading.Event()
+    slots = Slots(current())
     context = contextvars.copy_context()
     context.run(_STOP.set, stop)
+    context.run(_SLOTS.set, (slots, True))
+
+    def holding() -> Result:
+        try:
+            return function(*args, **kwargs)
+        finally:
+            slots.release()
+
+    slots.acquire(urgent=True)  # (here, before the caller's first task can take it)
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="brdfnorm-stage")
-    future = pool.submit(context.run, function, *args, **kwargs)
+    future = pool.submit(context.run, holding)
+    token = _SLOTS.set((slots, False))
     try:
         yield future.result
     except BaseException:
         stop.set()
         raise
     finally:
+        _SLOTS.reset(token)
         pool.shutdown(wait=True)
 
 
@@ -179,6 +232,19 @@ def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarr
                 raise Stopped("stopped: the stage beside this one failed")
             return original(task)
 
+    shared = _SLOTS.get()
+    if shared is not None and shared[1]:
+        return _run_holding(function, tasks, threads, shared[0])
+    if shared is not None:  # the caller's stage beside a critical one: one slot per task
+        slots, ungated = shared[0], function
+
+        def function(task: np.ndarray) -> Result:
+            slots.acquire()
+            try:
+                return ungated(task)
+            finally:
+                slots.release()
+
     if threads <= 1 or len(tasks) <= 1:
         return [function(task) for task in tasks]
     pool = ThreadPoolExecutor(max_workers=min(threads, len(tasks)), thread_name_prefix="brdfnorm-cells")
@@ -187,3 +253,62 @@ def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarr
         return [future.result() for future in futures]
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_holding(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarray], threads: int,
+                 slots: Slots) -> list[Result]:
+    """:func:`run_tasks` for the stage that holds a slot (:func:`beside`): its thread takes the tasks in order, and
+    up to ``threads`` − 1 helpers take them too once each gets a slot (before any task of the other stage does);
+    the helpers give up their wait when no task is left. The first failing task's exception (in the tasks'
+    order) is raised once every started task has finished."""
+    results: list = [None] * len(tasks)
+    failures: dict[int, BaseException] = {}
+    taken = [0]
+
+    def left() -> bool:
+        return taken[0] < len(tasks)
+
+    def claim() -> int | None:
+        with slots.lock:
+            if not left():
+                return None
+            taken[0] += 1
+            if not left():
+                slots.lock.notify_all()  # (helpers still waiting for a slot give up)
+            return taken[0] - 1
+
+    def work() -> None:
+        while (index := claim()) is not None:
+            try:
+                results[index] = function(tasks[index])
+            except BaseException as failure:  # (KeyboardInterrupt included: raised below, in the caller)
+                failures[index] = failure
+                with slots.lock:
+                    taken[0] = len(tasks)
+                    slots.lock.notify_all()
+
+    def helper() -> None:
+        with slots.lock:
+            wanted = left()
+        if wanted and slots.acquire(urgent=True, wanted=left):
+            try:
+                work()
+            finally:
+                slots.release()
+
+    helpers = min(threads, len(tasks)) - 1
+    pool = ThreadPoolExecutor(max_workers=helpers, thread_name_prefix="brdfnorm-cells") if helpers > 0 else None
+    try:
+        waiting = [pool.submit(contextvars.copy_context().run, helper) for _ in range(helpers)] if pool else []
+        work()
+    finally:
+        with slots.lock:  # (where the caller's own work was interrupted, no helper starts another task)
+            taken[0] = len(tasks)
+            slots.lock.notify_all()
+        if pool is not None:
+            pool.shutdown(wait=True)
+    for future in waiting:
+        future.result()
+    if failures:
+        raise failures[min(failures)]
+    return results
