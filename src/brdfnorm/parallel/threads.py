@@ -39,7 +39,10 @@ beside is the critical path (a table's E_avg: a chain of dependent albedo calls,
 included, and takes every other slot that frees before the caller's tasks do (its tasks on its own thread and on
 helpers that wait for a slot); the caller's tasks (E) run in the slots left. Before, three threads (E_avg's and
 E's two) shared two cores, and E_avg, starved, ended ~0.3 s after E (docs/performance.md, "Eighth round: the
-E_avg chain"). Which thread runs a task changes nothing in its result.
+E_avg chain"). A task keeps its slot to its end (a compiled kernel cannot be stopped), so while E's costliest task (256
+grazing cells, ~0.7 s) runs, E_avg's batches run on its own slot alone: in effect E_avg has one core and E the
+other, and E_avg takes both wherever E's tasks leave a slot free. Which thread runs a task changes nothing in its
+result.
 
 Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
 short array operations) and for a Dask cluster (its workers compute the cells).
