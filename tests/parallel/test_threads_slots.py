@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+from brdfnorm.parallel import threads
 from brdfnorm.parallel.threads import Slots, beside, cell_tasks, run_tasks, scope
 
 
@@ -96,3 +97,22 @@ def test_a_failing_task_beside_is_raised_by_the_stage_after_its_other_tasks():
     with scope(2), beside(stage) as averaged, pytest.raises(ValueError, match="task 1"):
         averaged()
     assert 0 in done
+
+
+def test_a_batch_nested_in_a_callers_task_runs_in_the_slot_the_task_holds():
+    """(Were the nested batch's tasks to wait for slots of their own, the stage beside holding one and the task the
+    other, they would wait forever: the tasks see no slots to take.)"""
+    seen = []
+
+    def task(t: np.ndarray) -> np.ndarray:
+        seen.append(threads._SLOTS.get())
+        return t
+
+    def stage() -> list[np.ndarray]:
+        return run_tasks(lambda t: t, [np.array([0])], 2)
+
+    with scope(2), beside(stage) as averaged:
+        assert threads._SLOTS.get() is not None  # (the caller's own context: its tasks take slots)
+        run_tasks(task, [np.array([k]) for k in range(4)], 2)
+        averaged()
+    assert seen == [None] * 4

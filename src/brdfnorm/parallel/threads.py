@@ -243,9 +243,11 @@ def run_tasks(function: Callable[[np.ndarray], Result], tasks: Sequence[np.ndarr
 
         def function(task: np.ndarray) -> Result:
             slots.acquire()
+            token = _SLOTS.set(None)  # (a batch nested in the task runs in the slot the task holds)
             try:
                 return ungated(task)
             finally:
+                _SLOTS.reset(token)
                 slots.release()
 
     if threads <= 1 or len(tasks) <= 1:
