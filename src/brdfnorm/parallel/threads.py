@@ -41,8 +41,8 @@ helpers that wait for a slot); the caller's tasks (E) run in the slots left. Bef
 E's two) shared two cores, and E_avg, starved, ended ~0.3 s after E (docs/performance.md, "Eighth round: the
 E_avg chain"). A task keeps its slot to its end (a compiled kernel cannot be stopped), so while E's costliest task (256
 grazing cells, ~0.7 s) runs, E_avg's batches run on its own slot alone: in effect E_avg has one core and E the
-other, and E_avg takes both wherever E's tasks leave a slot free. Which thread runs a task changes nothing in its
-result.
+other, and E_avg takes both wherever E's tasks leave a slot free; a batch nested in a task runs in the task's slot.
+Which thread runs a task changes nothing in its result.
 
 Only where it pays: :func:`local_threads` is 1 under the numpy backend (its numpy calls hold the lock between
 short array operations) and for a Dask cluster (its workers compute the cells).
