@@ -39,7 +39,6 @@ from .. import validate
 from ..engine.compiled.backend import scope as backend_scope
 from ..engine.machinery.interval import GaussKronrod, adaptive_interval
 from ..engine.methods import albedo
-from ..engine.routes.quadrature import isotropy_cache
 from ..errors import ArgumentError
 from ..models.base import Model
 from ..parallel.threads import albedo_warnings_ignored, beside, cell_tasks, current, local_threads, run_tasks, scoped
@@ -266,14 +265,8 @@ def average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: flo
     and the combination converges where their sum through the weights is within rtol. A node's estimate counts
     whether it converged or stopped rounding-limited; a combination with a node stopped otherwise (budget,
     stalled) is reported unconverged. Returns (value (M,), error estimate (M,), converged (M,), albedo integrals
-    computed). The chain's albedo calls share one :func:`brdfnorm.engine.routes.quadrature.isotropy_cache`.
+    computed).
     """
-    with isotropy_cache():
-        return _average_over_mu(model, params, rtol=rtol, method=method, max_panels=max_panels)
-
-
-def _average_over_mu(model: Model, params: Mapping[str, np.ndarray], *, rtol: float, method: str,
-                     max_panels: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     M = len(next(iter(params.values()))) if params else 1
     flat = {n: np.broadcast_to(np.asarray(v, dtype=float).ravel(), (M,)) for n, v in params.items()}
     n = CC_FIRST

@@ -11,9 +11,7 @@ reported at a real (L, V) pair.
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 
@@ -221,28 +219,8 @@ AXIAL = 1e-12
 ISOTROPY_PAIRS = 48
 
 
-#: The isotropy verdicts of the current stage (:func:`isotropy_cache`), None outside one.
-_ISOTROPY: contextvars.ContextVar[dict | None] = contextvars.ContextVar("brdfnorm_isotropy", default=None)
-
-
-@contextlib.contextmanager
-def isotropy_cache() -> Iterator[dict]:
-    """Within the block, :func:`_isotropic_cases` tests each distinct (model, parameter values, rtol) once: a stage
-    that asks many albedo calls of one model at the same parameter values (a table's E_avg chain: 38 calls, 32
-    roughnesses, ~1.3 ms of test per call) reuses its verdicts. The verdict of a set of values is what a fresh test
-    returns (the same random pairs, each set's values compared on their own), so nothing computed changes. The
-    cache lives in the block's context (its threads' tasks copy it), never beyond the block."""
-    verdicts: dict = {}
-    token = _ISOTROPY.set(verdicts)
-    try:
-        yield verdicts
-    finally:
-        _ISOTROPY.reset(token)
-
-
 def _isotropic_cases(problem, rtol: float) -> np.ndarray:
-    """Per case (K,): :func:`rotation_invariant` at its parameter values, tested once per distinct set (and once per
-    stage within :func:`isotropy_cache`)."""
+    """Per case (K,): :func:`rotation_invariant` at its parameter values, tested once per distinct set."""
     K = problem.fixed.shape[0]
     if problem.per_case:
         values = np.column_stack([np.asarray(problem.params[name], dtype=float).reshape(K, -1)
@@ -254,24 +232,7 @@ def _isotropic_cases(problem, rtol: float) -> np.ndarray:
     def brdf(L: np.ndarray, V: np.ndarray, case: np.ndarray) -> np.ndarray:
         return problem.model.evaluate(L, V, problem.case_params(case))
 
-    cache = _ISOTROPY.get()
-    if cache is None:
-        return rotation_invariant(brdf, first, rtol)[label.reshape(K)]
-    keys = [_isotropy_key(problem, int(case), rtol) for case in first]
-    missing = [i for i, key in enumerate(keys) if key not in cache]
-    if missing:
-        for i, verdict in zip(missing, rotation_invariant(brdf, first[missing], rtol), strict=True):
-            cache[keys[i]] = bool(verdict)
-    return np.array([cache[key] for key in keys], dtype=bool)[label.reshape(K)]
-
-
-def _isotropy_key(problem, case: int, rtol: float) -> tuple:
-    """What a case's isotropy verdict depends on: the model (its class, source, bound values), its parameter values
-    and rtol (the test's threshold)."""
-    values = problem.case_params(np.array([case]))
-    return (type(problem.model), problem.model.source_path, problem.model.name, rtol,
-            tuple((name, str(np.asarray(value).dtype), np.asarray(value).tobytes()) for name, value in
-                  sorted(values.items())))
+    return rotation_invariant(brdf, first, rtol)[label.reshape(K)]
 
 
 def rotation_invariant(brdf: Callable, cases: np.ndarray, rtol: float) -> np.ndarray:
