@@ -31,6 +31,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from brdfnorm.cli import BLAS_THREADS
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -77,6 +79,11 @@ def _run(caches: Path, out: Path, log: Path | None = None) -> dict:
         log.mkdir()
         (log / "sitecustomize.py").write_text(_HOOK, encoding="utf-8")
         env.update(PYTHONPATH=f"{log}{os.pathsep}{ROOT / 'src'}", BRDFNORM_BENCH_COMPILES=str(log))
+        # The hook imports numpy (through Numba) before the command line can ask for one BLAS thread
+        # (cli._one_blas_thread): asked here instead, so the logged run computes as the others do (the fits' residuals
+        # differ in their last bits with the BLAS threads, and the page with them).
+        if not any(name in os.environ for name in BLAS_THREADS):
+            env.update(OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start, started = time.perf_counter(), time.time()
