@@ -321,6 +321,9 @@ def w_backends(cfg, refs=None) -> dict:
     return {
         "title": "compiled backend (issue 39): numpy vs compiled vs dblquad",
         "status": "ok", "load_average": os.getloadavg()[0],
+        # The new processes' imports compile every module of the package from source where bytecode is not written
+        # (PYTHONDONTWRITEBYTECODE, set on some machines: ~0.13 s more of a CLI start, docs/performance.md).
+        "bytecode_cache": not sys.dont_write_bytecode,
         "generic_vs_dblquad": _generic_vs_dblquad(repeats),
         "generic_batch_vs_dblquad": _generic_batch_vs_dblquad(repeats),
         "dblquad_matched": _dblquad_matched(),

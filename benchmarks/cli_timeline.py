@@ -124,7 +124,8 @@ def timeline(src: Path, runs: int, workers: int | None) -> dict:
     rows["process ended (parent)"] = {"wall_median": statistics.median(r[1] for r in results),
                                       "wall_best": min(r[1] for r in results),
                                       "cpu_median": statistics.median(r[2] for r in results)}
-    return {"src": str(src), "runs": runs, "workers": workers, "load_average": os.getloadavg(), "marks": rows}
+    return {"src": str(src), "runs": runs, "workers": workers, "load_average": os.getloadavg(),
+            "bytecode_cache": not sys.dont_write_bytecode, "marks": rows}
 
 
 def main() -> None:
@@ -139,7 +140,7 @@ def main() -> None:
         print(json.dumps(result, indent=1))
         return
     print(f"{result['src']}, {options.runs} runs, workers {options.workers or 'default'}, load average "
-          f"{result['load_average'][0]:.2f}")
+          f"{result['load_average'][0]:.2f}, bytecode cache {'on' if result['bytecode_cache'] else 'off'}")
     print(f"{'mark':40s} {'wall median':>12s} {'wall best':>10s} {'CPU median':>11s}")
     for label, row in result["marks"].items():
         print(f"{label:40s} {row['wall_median']:12.3f} {row['wall_best']:10.3f} {row['cpu_median']:11.3f}")
