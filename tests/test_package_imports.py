@@ -6,12 +6,12 @@ whatever the other tests imported)."""
 
 from __future__ import annotations
 
-import json
 import os
 import subprocess
 import sys
 
 import pytest
+from helpers.imports import imported
 from helpers.paths import SRC
 
 #: What ``import brdfnorm`` must not import: each costs the start of a command that does not use it (the engine,
@@ -22,13 +22,10 @@ HEAVY = ("brdfnorm.engine", "brdfnorm.models", "brdfnorm.materials", "brdfnorm.m
 
 
 def _run(code: str) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    probe = f"import sys, json\n{code}\nprint(json.dumps({{m: m in sys.modules for m in {list(HEAVY)!r}}}))"
-    done = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return imported(code, HEAVY)
 
 
-def test_import_brdfnorm_imports_none_of_the_heavy_modules():
+def test_import_brdfnorm_imports_none_of_the_heavyimported():
     assert _run("import brdfnorm") == dict.fromkeys(HEAVY, False)
 
 
@@ -87,20 +84,13 @@ def test_load_still_finds_each_kind_of_model(tmp_path):
     subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True)
 
 
-def _modules(code: str, names: tuple[str, ...]) -> dict[str, bool]:
-    env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    probe = f"import sys, json\n{code}\nprint(json.dumps({{m: m in sys.modules for m in {list(names)!r}}}))"
-    done = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 POOL = ("brdfnorm.parallel.executors", "brdfnorm.parallel.job", "brdfnorm.parallel.checkpoint", "multiprocessing")
 
 
 def test_a_table_on_threads_does_not_import_the_process_pool():
     # brdfnorm.parallel's names are imported at first use: lut.table (threads, the glass tables' pool in a function)
-    assert _modules("import brdfnorm.lut.table, brdfnorm.parallel.threads", POOL) == dict.fromkeys(POOL, False)
-    assert _modules("from brdfnorm.parallel import albedo_cells", POOL) == dict.fromkeys(POOL, True)
+    assert imported("import brdfnorm.lut.table, brdfnorm.parallel.threads", POOL) == dict.fromkeys(POOL, False)
+    assert imported("from brdfnorm.parallel import albedo_cells", POOL) == dict.fromkeys(POOL, True)
 
 
 def test_the_parallel_package_exports_the_same_names():

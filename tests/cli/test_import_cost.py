@@ -5,22 +5,14 @@ printer (markdown, syntax highlighting) are imported where a command uses them. 
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
-
-from helpers.paths import SRC
+from helpers.imports import imported
 
 LAZY = ("brdfnorm.lut.anisotropy", "brdfnorm.engine.routes.anisotropic", "brdfnorm.lut.certified", "scipy.optimize",
         "typer.rich_utils")
 
 
 def _imported(code: str) -> dict[str, bool]:
-    env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    probe = f"import sys, json\n{code}\nprint(json.dumps({{m: m in sys.modules for m in {list(LAZY)!r}}}))"
-    done = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return imported(code, LAZY)
 
 
 def test_the_command_line_starts_without_the_optional_routes():
