@@ -12,13 +12,12 @@ Frame: N = +z, X = +x, Y = +y; angles in radians in the API, degrees on the comm
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .errors import ArgumentTypeError, BrdfnormError, ModelNotFoundError, ParameterError
+from .registry import lazy_exports
 from .version import __version__ as __version__  # re-exported: brdfnorm.__version__
 
 if TYPE_CHECKING:  # (imported on first use below: PEP 562's module __getattr__)
@@ -29,28 +28,12 @@ if TYPE_CHECKING:  # (imported on first use below: PEP 562's module __getattr__)
 __all__ = ["AlbedoResult", "BrdfnormError", "Model", "NormalizationResult", "REGISTRY", "albedo", "load",
            "load_text", "normalize"]
 
-#: The public names imported on first use, by the module that defines them: ``import brdfnorm`` (and the command
-#: line's start) then costs what a command uses, not the engine, the models, scipy.special and the materials.
-_LAZY = {
+#: The public names imported on first use, by the module that defines them (PEP 562), and every subpackage
+#: (``brdfnorm.materials``, ``brdfnorm.lut``, ...) as it is asked for.
+__getattr__, __dir__ = lazy_exports(__name__, {
     "AlbedoResult": "engine.methods", "albedo": "engine.methods", "REGISTRY": "models", "Model": "models",
     "NormalizationResult": "normalization", "normalize": "normalization",
-}
-
-
-def __getattr__(name: str) -> object:
-    """A public name of :data:`_LAZY`, or a subpackage (``brdfnorm.materials``, ``brdfnorm.lut``, ...), imported
-    when first asked for (PEP 562)."""
-    if name in _LAZY:
-        value = getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
-        globals()[name] = value
-        return value
-    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
-        return importlib.import_module(f"{__name__}.{name}")  # (the import binds it as an attribute, too)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *_LAZY})
+}, subpackages=True)
 
 
 def load(name_or_path: str | Path, **params: object) -> Model:

@@ -14,6 +14,7 @@ being imported. :meth:`Registry.register` adds an entry from outside (a user's o
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
@@ -83,3 +84,27 @@ class Registry(Mapping[str, T], Generic[T]):
 
     def __repr__(self) -> str:
         return f"Registry({self.kind!r}, {list(self._entries)})"
+
+
+def lazy_exports(package: str, names: Mapping[str, str], *, subpackages: bool = False,
+                 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """A package's PEP 562 ``__getattr__`` and ``__dir__`` for its public ``names`` (name -> the module that defines
+    it, relative to ``package``; a name that is that module itself is the submodule), each imported when first
+    asked for and then bound in the package (so asked once): ``import brdfnorm`` and the command line's start pay
+    for what a command uses, not for the engine, the models, scipy and the materials (docs/performance.md, eighth
+    round). With ``subpackages``, any other public name that is a module of the package is imported as asked."""
+
+    def __getattr__(name: str) -> Any:
+        if name in names:
+            module = importlib.import_module(f"{package}.{names[name]}")
+            value = module if module.__name__ == f"{package}.{name}" else getattr(module, name)
+            setattr(importlib.import_module(package), name, value)
+            return value
+        if subpackages and not name.startswith("_") and importlib.util.find_spec(f"{package}.{name}") is not None:
+            return importlib.import_module(f"{package}.{name}")  # (the import binds it as an attribute, too)
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    def __dir__() -> list[str]:
+        return sorted({*vars(importlib.import_module(package)), *names})
+
+    return __getattr__, __dir__

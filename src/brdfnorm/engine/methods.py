@@ -261,13 +261,6 @@ def _reciprocal_microfacet(applies):
     return lambda model, over: applies(model, over) and not (over == "view" and model.params.get("ms") == "turquin")
 
 
-#: The albedo methods. Besides the generic quadrature and the closed forms: seed 002's hypergeometric form for the
-#: built-in Blinn-Phong lobe (reciprocal, so over the light and the view alike; exact to 1e-12 and far faster);
-#: isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables) by a 1-D integral with the azimuth
-#: in closed form; the microfacet lobes over the half vector with the distribution as the measure (exact to the
-#: mirror limit, where the hemisphere coordinates fail); rough dielectrics (BSDFs), reflection and refraction over
-#: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
-#: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
 _MATERIAL_APPLIES = Reference("brdfnorm.materials.route:applies").call()
 
 
@@ -279,6 +272,13 @@ def _material_applies(model: Model, over: Over) -> bool:
         _MATERIAL_APPLIES(model, over)
 
 
+#: The albedo methods. Besides the generic quadrature and the closed forms: seed 002's hypergeometric form for the
+#: built-in Blinn-Phong lobe (reciprocal, so over the light and the view alike; exact to 1e-12 and far faster);
+#: isotropic GGX and Beckmann with F = 1 (the lobes of energy-compensation tables) by a 1-D integral with the azimuth
+#: in closed form; the microfacet lobes over the half vector with the distribution as the measure (exact to the
+#: mirror limit, where the hemisphere coordinates fail); rough dielectrics (BSDFs), reflection and refraction over
+#: the facet normal, both parts reported; and rigorous enclosures by Arb ball arithmetic (python-flint, an
+#: optional extra), never chosen by "auto": slower, and a different question (a guaranteed interval).
 METHODS: Registry[Method] = Registry("method", "method", {
     "quadrature": Method("quadrature", lambda model, over: True, quadrature.albedo_method,
                          "adaptive Gauss-Kronrod cubature in lobe-aligned coordinates"),

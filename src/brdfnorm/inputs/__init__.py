@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..registry import lazy_exports
 from .guard import element_count, parsing, read_bounded, regular_file, shorten
 
 if TYPE_CHECKING:
@@ -29,15 +30,6 @@ if TYPE_CHECKING:
 __all__ = ["element_count", "npz_arrays", "parsing", "read_bounded", "regular_file", "shorten"]
 
 
-def __getattr__(name: str) -> object:
-    """``npz_arrays`` imported on first use (PEP 562): a ``.brdf`` file's load reads with :func:`read_bounded`
-    and needs no numpy archive decoder."""
-    if name == "npz_arrays":
-        from .npz import npz_arrays
-
-        return npz_arrays
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+#: ``npz_arrays`` imported on first use (PEP 562): a ``.brdf`` file's load reads with :func:`read_bounded` and
+#: needs no numpy archive decoder.
+__getattr__, __dir__ = lazy_exports(__name__, {"npz_arrays": "npz"})

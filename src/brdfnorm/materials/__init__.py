@@ -11,8 +11,9 @@ package registers nothing.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from ..registry import lazy_exports
 
 if TYPE_CHECKING:
     from . import files
@@ -21,17 +22,6 @@ if TYPE_CHECKING:
 __all__ = ["OpenPBR", "files"]
 
 
-def __getattr__(name: str) -> object:
-    """``OpenPBR`` and ``files`` imported on first use (PEP 562): a ``.brdf`` file's load reads
-    :func:`.files.is_material_file` without importing the material model, its lobes and the engine."""
-    if name == "OpenPBR":
-        from .model import OpenPBR
-
-        return OpenPBR
-    if name == "files":
-        return importlib.import_module(f"{__name__}.files")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+#: ``OpenPBR`` and ``files`` imported on first use (PEP 562): a ``.brdf`` file's load reads
+#: :func:`.files.is_material_file` without importing the material model, its lobes and the engine.
+__getattr__, __dir__ = lazy_exports(__name__, {"OpenPBR": "model", "files": "files"})

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..registry import lazy_exports
+
 if TYPE_CHECKING:
     from .cells import CellsResult, albedo_cells, run_job, sigterm_as_interrupt
     from .cores import local_cores
@@ -34,22 +36,12 @@ __all__ = ["AlbedoSettings", "CellsJob", "CellsResult", "ChunkPlan", "ChunkResul
            "Workers", "albedo_cells", "chunk_plan", "local_cores", "run_chunk", "run_job", "sigterm_as_interrupt"]
 
 
-def __getattr__(name: str) -> object:
-    """The names of :data:`__all__`, imported at first use (PEP 562): a table on this process's threads imports
-    :mod:`.threads` (and through it this package) without the process pool, the Dask client, the checkpoints and
-    :mod:`multiprocessing` (~0.03 s of a command's start, docs/performance.md, eighth round)."""
-    if name in ("CellsResult", "albedo_cells", "run_job", "sigterm_as_interrupt"):
-        from . import cells as module
-    elif name == "local_cores":
-        from . import cores as module
-    elif name in ("ChunkResult", "Scheduler", "Workers", "run_chunk"):
-        from . import executors as module
-    elif name in ("AlbedoSettings", "CellsJob", "ChunkPlan", "ModelSource", "chunk_plan"):
-        from . import job as module
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(module, name)
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+#: The names of :data:`__all__`, imported at first use (PEP 562): a table on this process's threads imports
+#: :mod:`.threads` (and through it this package) without the process pool, the Dask client, the checkpoints and
+#: :mod:`multiprocessing` (~0.03 s of a command's start, docs/performance.md, eighth round).
+__getattr__, __dir__ = lazy_exports(__name__, {
+    **dict.fromkeys(("CellsResult", "albedo_cells", "run_job", "sigterm_as_interrupt"), "cells"),
+    "local_cores": "cores",
+    **dict.fromkeys(("ChunkResult", "Scheduler", "Workers", "run_chunk"), "executors"),
+    **dict.fromkeys(("AlbedoSettings", "CellsJob", "ChunkPlan", "ModelSource", "chunk_plan"), "job"),
+})
